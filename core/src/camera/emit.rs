@@ -1,0 +1,197 @@
+//! Index emission: each active polygon's three vertex indices, found through the vertex
+//! table, appended to the index list of its surface, in slot order (deterministic for a
+//! given history of operations). Output goes into caller-provided slices; too little room
+//! is an error naming the surface, never a panic.
+
+use super::CameraState;
+use crate::hierarchy::Hierarchy;
+use crate::ids::PolyId;
+
+/// Why indices could not be emitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmitError {
+    /// The camera was made for another hierarchy.
+    WrongHierarchy,
+    /// Fewer output lists (or offsets) than the hierarchy has surfaces (plus one).
+    TooFewOutputs {
+        /// Needed.
+        needed: usize,
+        /// Given.
+        given: usize,
+    },
+    /// An output list is too short.
+    OutputTooSmall {
+        /// The surface.
+        surface: u16,
+        /// Indices needed.
+        needed: usize,
+        /// Room given.
+        given: usize,
+    },
+    /// A corner has no vertex in its surface group: connectivity contradicts the hierarchy
+    /// (corrupt data that validation cannot see).
+    MissingVertex {
+        /// The polygon.
+        poly: PolyId,
+        /// Its corner.
+        corner: u8,
+    },
+}
+
+impl core::fmt::Display for EmitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::WrongHierarchy => write!(f, "camera state belongs to another hierarchy"),
+            Self::TooFewOutputs { needed, given } => {
+                write!(f, "{given} index outputs given, {needed} needed")
+            }
+            Self::OutputTooSmall {
+                surface,
+                needed,
+                given,
+            } => {
+                write!(
+                    f,
+                    "index list of surface {surface}: room for {given}, {needed} needed"
+                )
+            }
+            Self::MissingVertex { poly, corner } => {
+                write!(
+                    f,
+                    "polygon {} corner {corner}: no vertex for its surface group",
+                    poly.0
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for EmitError {}
+
+impl CameraState<'_> {
+    /// Indices each surface's list needs: `3 ×` its active polygons.
+    pub fn index_count(&self, surface: usize) -> usize {
+        self.front
+            .surface_polygons
+            .get(surface)
+            .map_or(0, |&n| 3 * n as usize)
+    }
+
+    /// Calls `sink(surface, [i0, i1, i2])` for every active polygon in emission order.
+    #[inline]
+    fn for_each_triangle(
+        &self,
+        h: &Hierarchy<'_>,
+        mut sink: impl FnMut(usize, [u32; 3]),
+    ) -> Result<(), EmitError> {
+        let f = &self.front;
+        let polys = h.polygons();
+        let nodes = h.nodes();
+        let live = (f.base + 2 * f.pairs) as usize;
+        for (slot, ps) in f.slots[..live.min(f.slots.len())].iter().enumerate() {
+            let Some(id) = f.poly_at(h, slot as u32) else {
+                continue;
+            };
+            let Some(poly) = polys.get(id.index()) else {
+                continue;
+            };
+            let mut tri = [0u32; 3];
+            for k in 0..3 {
+                let missing = EmitError::MissingVertex {
+                    poly: id,
+                    corner: k as u8,
+                };
+                let node = f.node_of(ps.corners[k]).ok_or(missing)?;
+                let pos = nodes.get(node.index()).ok_or(missing)?.position;
+                tri[k] = h.vertex_index(poly.group, pos).ok_or(missing)?;
+            }
+            sink(poly.surface.index(), tri);
+        }
+        Ok(())
+    }
+
+    /// Writes each surface's indices to the start of `out[surface]` and its index count to
+    /// `written[surface]`. Returns the total number of indices.
+    pub fn emit_indices(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [&mut [u32]],
+        written: &mut [u32],
+    ) -> Result<usize, EmitError> {
+        if !self.is_for(h) {
+            return Err(EmitError::WrongHierarchy);
+        }
+        let ns = h.surface_count();
+        if out.len() < ns || written.len() < ns {
+            return Err(EmitError::TooFewOutputs {
+                needed: ns,
+                given: out.len().min(written.len()),
+            });
+        }
+        for (s, o) in out.iter().enumerate().take(ns) {
+            let needed = self.index_count(s);
+            if o.len() < needed {
+                return Err(EmitError::OutputTooSmall {
+                    surface: s as u16,
+                    needed,
+                    given: o.len(),
+                });
+            }
+        }
+        written[..ns].fill(0);
+        let mut total = 0;
+        self.for_each_triangle(h, |s, tri| {
+            let at = written[s] as usize;
+            if let Some(dst) = out[s].get_mut(at..at + 3) {
+                dst.copy_from_slice(&tri);
+                written[s] += 3;
+                total += 3;
+            }
+        })?;
+        Ok(total)
+    }
+
+    /// Writes every surface's indices back to back into `out`; `offsets` (surfaces + 1
+    /// entries) receives the ranges: surface `s` is `out[offsets[s]..offsets[s + 1]]`.
+    /// Returns the total number of indices.
+    pub fn emit_indices_packed(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [u32],
+        offsets: &mut [u32],
+    ) -> Result<usize, EmitError> {
+        if !self.is_for(h) {
+            return Err(EmitError::WrongHierarchy);
+        }
+        let ns = h.surface_count();
+        if offsets.len() < ns + 1 {
+            return Err(EmitError::TooFewOutputs {
+                needed: ns + 1,
+                given: offsets.len(),
+            });
+        }
+        let total: usize = (0..ns).map(|s| self.index_count(s)).sum();
+        if out.len() < total {
+            return Err(EmitError::OutputTooSmall {
+                surface: u16::MAX,
+                needed: total,
+                given: out.len(),
+            });
+        }
+        // offsets[s + 1] is surface s's cursor during the pass and its end afterwards.
+        offsets[0] = 0;
+        let mut start = 0u32;
+        for s in 0..ns {
+            offsets[s + 1] = start;
+            start += self.index_count(s) as u32;
+        }
+        self.for_each_triangle(h, |s, tri| {
+            let at = offsets[s + 1] as usize;
+            if let Some(dst) = out.get_mut(at..at + 3) {
+                dst.copy_from_slice(&tri);
+                offsets[s + 1] += 3;
+            }
+        })?;
+        Ok(total)
+    }
+}

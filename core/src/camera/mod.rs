@@ -1,0 +1,430 @@
+//! Per-camera refinement state in caller-owned memory.
+//!
+//! One [`CameraState`] is the paper's "camera refinement" structure: the active front of one
+//! camera over a shared [`Hierarchy`]. It lives in a `&mut [u32]` the caller provides (sized
+//! by [`CameraState::words_needed`]), so a console-style runtime can place cameras in fixed
+//! pools, and it never allocates.
+//!
+//! # Layout (words)
+//!
+//! | array | length | what |
+//! |---|---|---|
+//! | `pair_of` | splittable nodes | the face pair a split node's split created, or `NONE` |
+//! | `owner` | `max_pairs` | the node whose split created each live pair |
+//! | `active` | roots + `max_pairs` | the active node list: active-vertex records with a free list |
+//! | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
+//! | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
+//! | `stack` | `stack_len` | the explicit stack of forced splits |
+//!
+//! Design decisions:
+//! - **Activity is one word per split node.** Following Hoppe, a node is active iff it has
+//!   been created (its parent is split) and not split; a polygon is active iff its creator is
+//!   split. `pair_of` answers both in O(1) and doubles as the map from a split to the slots of
+//!   the two polygons it created, so there is no per-polygon or per-leaf array at all.
+//! - **Polygons live in slot pairs**, base polygons first, then two slots per live split,
+//!   kept dense (a collapse moves the last pair into the hole and patches the at most six
+//!   neighbour links that point at it), so emission is one linear scan.
+//! - **Corners point at active-vertex records**, not at nodes, as in Hoppe's `SrAVertex`:
+//!   a split hands the record of `vs` to its stationary child, so only the polygons that move
+//!   to the floating child are touched. Records freed by collapses are reused through a free
+//!   list; the record array is the active node list that refinement walks.
+//! - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
+//!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
+//!   memory gets a hard polygon budget for free.
+
+mod emit;
+mod ops;
+mod refine;
+
+pub use emit::EmitError;
+pub use ops::OpError;
+pub use refine::{RefineParams, RefineStats};
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::hierarchy::Hierarchy;
+use crate::ids::{NodeId, PolyId};
+
+/// Absent link / empty entry.
+pub(crate) const NONE: u32 = u32::MAX;
+/// Tag of a free active-vertex record; the low bits chain the free list.
+pub(crate) const FREE: u32 = 1 << 31;
+
+/// The current state of one active polygon.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub(crate) struct PolySlot {
+    /// Active-vertex records of the three corners.
+    pub corners: [u32; 3],
+    /// Slots of the neighbours; `neighbours[j]` lies across the edge opposite corner `j`.
+    pub neighbours: [u32; 3],
+}
+
+const SLOT_WORDS: usize = core::mem::size_of::<PolySlot>() / 4;
+
+/// How much a camera can hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraConfig {
+    /// Most splits that may be applied at once. Each adds one active node and one or two
+    /// active polygons; the full hierarchy needs `split_count`.
+    pub max_pairs: u32,
+    /// Entries of the forced-split stack.
+    pub stack_len: u32,
+}
+
+impl CameraConfig {
+    /// Room for every split of `h`: the camera can reach full resolution anywhere.
+    pub fn full(h: &Hierarchy<'_>) -> Self {
+        Self {
+            max_pairs: h.splits().len() as u32,
+            stack_len: Self::default_stack(h),
+        }
+    }
+
+    /// Room for at most `max_active_polygons` active polygons (at least the base mesh).
+    pub fn with_polygon_budget(h: &Hierarchy<'_>, max_active_polygons: u32) -> Self {
+        let extra = max_active_polygons.saturating_sub(h.base_polygon_count() as u32);
+        Self {
+            max_pairs: extra.min(h.splits().len() as u32),
+            stack_len: Self::default_stack(h),
+        }
+    }
+
+    /// A forced split pushes at most a few nodes per level; 32 per level of depth (and at
+    /// least 256) has never been exceeded in our tests. Overflow is reported, not fatal.
+    pub fn default_stack(h: &Hierarchy<'_>) -> u32 {
+        (h.meta().max_depth + 1).saturating_mul(32).max(256)
+    }
+}
+
+/// Why a camera could not be created.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// The memory given is too small.
+    Capacity {
+        /// Words needed.
+        needed: usize,
+        /// Words given.
+        given: usize,
+    },
+    /// The configuration asks for more splits than the hierarchy has.
+    TooManyPairs {
+        /// Asked for.
+        max_pairs: u32,
+        /// Splits in the hierarchy.
+        split_count: u32,
+    },
+}
+
+impl core::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Capacity { needed, given } => {
+                write!(
+                    f,
+                    "camera memory too small: {needed} words needed, {given} given"
+                )
+            }
+            Self::TooManyPairs {
+                max_pairs,
+                split_count,
+            } => {
+                write!(
+                    f,
+                    "max_pairs {max_pairs} exceeds the hierarchy's {split_count} splits"
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for CameraError {}
+
+/// The active front of one camera over a shared hierarchy. See the [module docs](self).
+#[derive(Debug)]
+pub struct CameraState<'m> {
+    pub(crate) front: Front<'m>,
+    pub(crate) stack: &'m mut [NodeId],
+}
+
+/// Everything but the stack, so operations can borrow the stack separately.
+#[derive(Debug)]
+pub(crate) struct Front<'m> {
+    pub hierarchy: u64,
+    pub base: u32,
+    pub pair_of: &'m mut [u32],
+    pub owner: &'m mut [NodeId],
+    pub active: &'m mut [u32],
+    pub slots: &'m mut [PolySlot],
+    pub surface_polygons: &'m mut [u32],
+    pub pairs: u32,
+    /// High-water mark of `active`.
+    pub active_len: u32,
+    /// Head of the free list of `active` (`NONE` when empty).
+    pub free_head: u32,
+    pub active_nodes: u32,
+    pub active_polygons: u32,
+}
+
+fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
+    let ns = h.splits().len();
+    let mp = c.max_pairs as usize;
+    ns + mp
+        + (h.roots().len() + mp)
+        + SLOT_WORDS * (h.base_polygon_count() + 2 * mp)
+        + h.surface_count()
+        + c.stack_len as usize
+}
+
+impl<'m> CameraState<'m> {
+    /// Words of memory a camera needs for full resolution anywhere ([`CameraConfig::full`]).
+    pub fn words_needed(h: &Hierarchy<'_>) -> usize {
+        words(h, &CameraConfig::full(h))
+    }
+
+    /// Words of memory a camera with `config` needs.
+    pub fn words_needed_for(h: &Hierarchy<'_>, config: &CameraConfig) -> usize {
+        words(h, config)
+    }
+
+    /// A camera at the base mesh, able to reach full resolution, in `memory`
+    /// (at least [`words_needed`](Self::words_needed) words; extra words are left unused).
+    pub fn new(h: &Hierarchy<'_>, memory: &'m mut [u32]) -> Result<Self, CameraError> {
+        Self::with_config(h, memory, &CameraConfig::full(h))
+    }
+
+    /// A camera at the base mesh with the given capacity.
+    pub fn with_config(
+        h: &Hierarchy<'_>,
+        memory: &'m mut [u32],
+        config: &CameraConfig,
+    ) -> Result<Self, CameraError> {
+        let ns = h.splits().len();
+        if config.max_pairs as usize > ns {
+            return Err(CameraError::TooManyPairs {
+                max_pairs: config.max_pairs,
+                split_count: ns as u32,
+            });
+        }
+        let needed = words(h, config);
+        if memory.len() < needed {
+            return Err(CameraError::Capacity {
+                needed,
+                given: memory.len(),
+            });
+        }
+        let mp = config.max_pairs as usize;
+        let (pair_of, rest) = memory.split_at_mut(ns);
+        let (owner, rest) = rest.split_at_mut(mp);
+        let (active, rest) = rest.split_at_mut(h.roots().len() + mp);
+        let (slots, rest) = rest.split_at_mut(SLOT_WORDS * (h.base_polygon_count() + 2 * mp));
+        let (surface_polygons, rest) = rest.split_at_mut(h.surface_count());
+        let (stack, _) = rest.split_at_mut(config.stack_len as usize);
+        let mut cam = Self {
+            front: Front {
+                hierarchy: h.checksum(),
+                base: h.base_polygon_count() as u32,
+                pair_of,
+                owner: bytemuck::cast_slice_mut(owner),
+                active,
+                slots: bytemuck::cast_slice_mut(slots),
+                surface_polygons,
+                pairs: 0,
+                active_len: 0,
+                free_head: NONE,
+                active_nodes: 0,
+                active_polygons: 0,
+            },
+            stack: bytemuck::cast_slice_mut(stack),
+        };
+        cam.reset(h);
+        Ok(cam)
+    }
+
+    /// Back to the base mesh.
+    pub fn reset(&mut self, h: &Hierarchy<'_>) {
+        let f = &mut self.front;
+        f.pair_of.fill(NONE);
+        f.pairs = 0;
+        f.free_head = NONE;
+        f.surface_polygons.fill(0);
+        // Active-vertex record `i` of the base mesh is root `i`.
+        for (i, r) in h.roots().iter().enumerate() {
+            f.active[i] = r.0;
+        }
+        f.active_len = h.roots().len() as u32;
+        f.active_nodes = f.active_len;
+        for (i, b) in h.base().iter().enumerate() {
+            let mut corners = [NONE; 3];
+            for (k, c) in b.corners.iter().enumerate() {
+                // Validated at load: every corner is a root; roots are sorted.
+                corners[k] = h.roots().binary_search(c).map_or(NONE, |x| x as u32);
+            }
+            f.slots[i] = PolySlot {
+                corners,
+                neighbours: b.neighbours.map(|n| n.0),
+            };
+            let s = h.polygons()[i].surface.index();
+            f.surface_polygons[s] += 1;
+        }
+        f.active_polygons = f.base;
+    }
+
+    /// `true` if this camera was made for `h`.
+    pub fn is_for(&self, h: &Hierarchy<'_>) -> bool {
+        self.front.hierarchy == h.checksum()
+    }
+
+    /// Number of active nodes.
+    pub fn active_node_count(&self) -> u32 {
+        self.front.active_nodes
+    }
+
+    /// Number of active polygons.
+    pub fn active_polygon_count(&self) -> u32 {
+        self.front.active_polygons
+    }
+
+    /// Number of splits currently applied.
+    pub fn split_count(&self) -> u32 {
+        self.front.pairs
+    }
+
+    /// Most splits this camera can hold at once.
+    pub fn max_pairs(&self) -> u32 {
+        self.front.owner.len() as u32
+    }
+
+    /// Active polygons per surface: index list `s` needs `3 * surface_polygons()[s]` indices.
+    pub fn surface_polygons(&self) -> &[u32] {
+        self.front.surface_polygons
+    }
+
+    /// Bytes this camera occupies: its words plus the struct itself.
+    pub fn bytes(&self) -> usize {
+        let f = &self.front;
+        4 * (f.pair_of.len()
+            + f.owner.len()
+            + f.active.len()
+            + f.surface_polygons.len()
+            + self.stack.len())
+            + core::mem::size_of_val(&*f.slots)
+            + core::mem::size_of::<Self>()
+    }
+
+    /// `true` if `node` is on this camera's active front (O(1)).
+    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        self.front.is_node_active(h, node)
+    }
+
+    /// `true` if `node`'s split is applied in this camera (O(1)).
+    pub fn is_split(&self, node: NodeId) -> bool {
+        self.front.is_split(node)
+    }
+
+    /// `true` if `poly` is active in this camera (O(1)).
+    pub fn is_polygon_active(&self, h: &Hierarchy<'_>, poly: PolyId) -> bool {
+        self.front.slot_of(h, poly).is_some()
+    }
+
+    /// The active nodes, in active-list order.
+    pub fn active_nodes(&self) -> impl Iterator<Item = NodeId> + '_ {
+        self.front.active[..self.front.active_len as usize]
+            .iter()
+            .filter(|&&a| a & FREE == 0)
+            .map(|&a| NodeId(a))
+    }
+
+    /// The active polygons, in slot (emission) order.
+    pub fn active_polygons<'s>(
+        &'s self,
+        h: &'s Hierarchy<'_>,
+    ) -> impl Iterator<Item = PolyId> + 's {
+        let f = &self.front;
+        (0..f.base + 2 * f.pairs).filter_map(move |s| f.poly_at(h, s))
+    }
+
+    /// The current corners of an active polygon, in the polygon's order; `None` if inactive.
+    pub fn polygon_corners(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[NodeId; 3]> {
+        let f = &self.front;
+        let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
+        let mut out = [NodeId::NONE; 3];
+        for k in 0..3 {
+            out[k] = f.node_of(s.corners[k])?;
+        }
+        Some(out)
+    }
+
+    /// The current neighbours of an active polygon (`neighbours[j]` across the edge opposite
+    /// corner `j`, `NONE` on a border); `None` if inactive.
+    pub fn polygon_neighbours(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[PolyId; 3]> {
+        let f = &self.front;
+        let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
+        let mut out = [PolyId::NONE; 3];
+        for k in 0..3 {
+            if s.neighbours[k] != NONE {
+                out[k] = f.poly_at(h, s.neighbours[k])?;
+            }
+        }
+        Some(out)
+    }
+}
+
+impl Front<'_> {
+    #[inline]
+    pub fn is_split(&self, node: NodeId) -> bool {
+        self.pair_of.get(node.index()).is_some_and(|&p| p != NONE)
+    }
+
+    #[inline]
+    pub fn is_created(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        match h.node(node) {
+            Some(n) => n.parent.is_none() || self.is_split(n.parent),
+            None => false,
+        }
+    }
+
+    #[inline]
+    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        self.is_created(h, node) && !self.is_split(node)
+    }
+
+    /// The slot of an active polygon.
+    #[inline]
+    pub fn slot_of(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<u32> {
+        if poly.0 < self.base {
+            return Some(poly.0);
+        }
+        let c = h.polygons().get(poly.index())?.creator;
+        let pair = *self.pair_of.get(c.index())?;
+        if pair == NONE {
+            return None;
+        }
+        let s = h.split(c)?;
+        let side = if s.f_l == poly { 0 } else { 1 };
+        Some(self.base + 2 * pair + side)
+    }
+
+    /// The polygon in a slot, if the slot is live.
+    #[inline]
+    pub fn poly_at(&self, h: &Hierarchy<'_>, slot: u32) -> Option<PolyId> {
+        if slot < self.base {
+            return Some(PolyId(slot));
+        }
+        let rel = slot - self.base;
+        let (pair, side) = (rel / 2, rel % 2);
+        if pair >= self.pairs {
+            return None;
+        }
+        let s = h.split(*self.owner.get(pair as usize)?)?;
+        let p = if side == 0 { s.f_l } else { s.f_r };
+        p.get()
+    }
+
+    /// The node an active-vertex record holds.
+    #[inline]
+    pub fn node_of(&self, record: u32) -> Option<NodeId> {
+        let a = *self.active.get(record as usize)?;
+        (a & FREE == 0).then_some(NodeId(a))
+    }
+}

@@ -1,0 +1,552 @@
+//! Vertex split and edge collapse on one camera's front, with Hoppe's preconditions, and the
+//! iterative forced split.
+//!
+//! The rules (SIGGRAPH 97; `libHh/SrMesh.cpp`): a split of active `vs` is legal iff every
+//! present neighbour `fn0..fn3` is active; a collapse back into `vs` is legal iff both children
+//! are active and `f_l`, `f_r` still have exactly the neighbours the split gave them. Applying
+//! a split hands `vs`'s active-vertex record to the stationary child, walks from `fl_clw`
+//! around it to `fr_ccw` moving those corners to the floating child, and links `f_l`, `f_r`
+//! in; a collapse undoes exactly that. Every walk is bounded, and every slot read is checked,
+//! so a hierarchy that passed validation but has contradictory connectivity produces
+//! [`OpError::Inconsistent`], never a panic or an endless loop.
+
+use super::{CameraState, Front, PolySlot, FREE, NONE};
+use crate::hierarchy::Hierarchy;
+use crate::ids::{NodeId, PolyId};
+
+/// Why an operation was not applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OpError {
+    /// The camera was made for another hierarchy.
+    WrongHierarchy,
+    /// The node is not on the camera's active front (or is out of range).
+    NotActive {
+        /// The node.
+        node: NodeId,
+    },
+    /// The node is a leaf: it has no split.
+    Leaf {
+        /// The node.
+        node: NodeId,
+    },
+    /// Collapse of a node whose split is not applied.
+    NotSplit {
+        /// The node.
+        node: NodeId,
+    },
+    /// Hoppe's preconditions do not hold (use a forced split, or wait for the collapse).
+    Illegal {
+        /// The node.
+        node: NodeId,
+    },
+    /// The camera holds `max_pairs` splits already.
+    CapacityFull {
+        /// Its capacity.
+        max_pairs: u32,
+    },
+    /// The forced-split stack is full.
+    StackFull {
+        /// Its length.
+        len: u32,
+    },
+    /// The hierarchy's connectivity contradicts the camera's state: the data is corrupt in a
+    /// way validation cannot see. The camera should be [`reset`](CameraState::reset).
+    Inconsistent {
+        /// The node being split or collapsed.
+        node: NodeId,
+    },
+}
+
+impl core::fmt::Display for OpError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::WrongHierarchy => write!(f, "camera state belongs to another hierarchy"),
+            Self::NotActive { node } => write!(f, "node {} is not active", node.0),
+            Self::Leaf { node } => write!(f, "node {} is a leaf and cannot be split", node.0),
+            Self::NotSplit { node } => write!(f, "node {} is not split", node.0),
+            Self::Illegal { node } => write!(f, "preconditions for node {} do not hold", node.0),
+            Self::CapacityFull { max_pairs } => {
+                write!(f, "camera full: {max_pairs} splits applied")
+            }
+            Self::StackFull { len } => write!(f, "forced-split stack of {len} entries is full"),
+            Self::Inconsistent { node } => {
+                write!(
+                    f,
+                    "hierarchy connectivity contradicts the camera at node {} (corrupt data)",
+                    node.0
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for OpError {}
+
+#[inline]
+fn next(j: usize) -> usize {
+    if j == 2 {
+        0
+    } else {
+        j + 1
+    }
+}
+
+#[inline]
+fn prev(j: usize) -> usize {
+    if j == 0 {
+        2
+    } else {
+        j - 1
+    }
+}
+
+impl Front<'_> {
+    /// Slot of a neighbour that must be active, or `NONE` for an absent one; `None` if a
+    /// present neighbour is inactive.
+    #[inline]
+    fn want(&self, h: &Hierarchy<'_>, f: PolyId) -> Option<u32> {
+        if f.is_none() {
+            Some(NONE)
+        } else {
+            self.slot_of(h, f)
+        }
+    }
+
+    #[inline]
+    fn slot(&self, slot: u32, node: NodeId) -> Result<&PolySlot, OpError> {
+        self.slots
+            .get(slot as usize)
+            .ok_or(OpError::Inconsistent { node })
+    }
+
+    #[inline]
+    fn slot_mut(&mut self, slot: u32, node: NodeId) -> Result<&mut PolySlot, OpError> {
+        self.slots
+            .get_mut(slot as usize)
+            .ok_or(OpError::Inconsistent { node })
+    }
+
+    /// Corner index of active-vertex record `record` in `slot`.
+    #[inline]
+    fn corner(&self, slot: u32, record: u32, node: NodeId) -> Result<usize, OpError> {
+        let s = self.slot(slot, node)?;
+        s.corners
+            .iter()
+            .position(|&c| c == record)
+            .ok_or(OpError::Inconsistent { node })
+    }
+
+    /// Replaces the link of `slot` that points to `from` with `to`.
+    #[inline]
+    fn relink(&mut self, slot: u32, from: u32, to: u32, node: NodeId) -> Result<(), OpError> {
+        let s = self.slot_mut(slot, node)?;
+        let j = s
+            .neighbours
+            .iter()
+            .position(|&n| n == from)
+            .ok_or(OpError::Inconsistent { node })?;
+        s.neighbours[j] = to;
+        Ok(())
+    }
+
+    pub fn can_split(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
+        match h.split(v) {
+            Some(s) => {
+                self.is_node_active(h, v)
+                    && s.neighbours
+                        .iter()
+                        .all(|&f| f.is_none() || self.slot_of(h, f).is_some())
+            }
+            None => false,
+        }
+    }
+
+    pub fn can_collapse(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
+        let (Some(s), Some(&pair)) = (h.split(v), self.pair_of.get(v.index())) else {
+            return false;
+        };
+        if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
+            return false;
+        }
+        let fl = self.base + 2 * pair;
+        let (Some(fla), Some(fra)) = (self.slots.get(fl as usize), self.slots.get(fl as usize + 1))
+        else {
+            return false;
+        };
+        let n = &s.neighbours;
+        if Some(fla.neighbours[1]) != self.want(h, n[0])
+            || Some(fla.neighbours[0]) != self.want(h, n[1])
+        {
+            return false;
+        }
+        s.f_r.is_none()
+            || (Some(fra.neighbours[2]) == self.want(h, n[2])
+                && Some(fra.neighbours[0]) == self.want(h, n[3]))
+    }
+
+    /// Applies the split of `v`; the caller has checked [`can_split`](Self::can_split).
+    pub fn apply_split(&mut self, h: &Hierarchy<'_>, v: NodeId) -> Result<(), OpError> {
+        let bad = OpError::Inconsistent { node: v };
+        let s = h.split(v).ok_or(OpError::Leaf { node: v })?;
+        if self.pairs as usize >= self.owner.len() {
+            return Err(OpError::CapacityFull {
+                max_pairs: self.owner.len() as u32,
+            });
+        }
+        let n = &s.neighbours;
+        let slot = |f: PolyId| {
+            if f.is_none() {
+                Ok(NONE)
+            } else {
+                self.slot_of(h, f).ok_or(bad)
+            }
+        };
+        let (ccw, clw, rclw, rccw) = (slot(n[0])?, slot(n[1])?, slot(n[2])?, slot(n[3])?);
+        // The active-vertex record of v: a corner of fl_clw.
+        let clw_slot = *self.slot(clw, v)?;
+        let j0 = (0..3)
+            .find(|&k| self.node_of(clw_slot.corners[k]) == Some(v))
+            .ok_or(bad)?;
+        let rv = clw_slot.corners[j0];
+        let ru = self.alloc_record(s.floating).ok_or(bad)?;
+        self.active[rv as usize] = s.stationary.0;
+        let k = self.pairs;
+        let fl = self.base + 2 * k;
+        let fr = fl + 1;
+        // Walk from fl_clw around v to fr_ccw, moving corners to the floating child.
+        let mut fa = clw;
+        let mut j = j0;
+        let first = self.slot_mut(fa, v)?;
+        first.neighbours[next(j)] = fl;
+        let vl = first.corners[prev(j)];
+        first.corners[j] = ru;
+        let mut vr = NONE;
+        let mut steps = 0u32;
+        loop {
+            if fa == rccw {
+                let last = self.slot_mut(fa, v)?;
+                last.neighbours[prev(j)] = fr;
+                vr = last.corners[next(j)];
+                break;
+            }
+            let nx = self.slot(fa, v)?.neighbours[prev(j)];
+            if nx == NONE {
+                break;
+            }
+            fa = nx;
+            j = self.corner(fa, rv, v)?;
+            self.slot_mut(fa, v)?.corners[j] = ru;
+            steps += 1;
+            if steps > self.active_polygons {
+                return Err(bad);
+            }
+        }
+        if s.f_r.is_some() && vr == NONE {
+            return Err(bad);
+        }
+        if ccw != NONE {
+            self.relink(ccw, clw, fl, v)?;
+        }
+        if rclw != NONE {
+            self.relink(rclw, rccw, fr, v)?;
+        }
+        let r_link = if s.f_r.is_some() { fr } else { NONE };
+        *self.slot_mut(fl, v)? = PolySlot {
+            corners: [rv, ru, vl],
+            neighbours: [clw, ccw, r_link],
+        };
+        *self.slot_mut(fr, v)? = if s.f_r.is_some() {
+            PolySlot {
+                corners: [rv, vr, ru],
+                neighbours: [rccw, fl, rclw],
+            }
+        } else {
+            PolySlot {
+                corners: [NONE; 3],
+                neighbours: [NONE; 3],
+            }
+        };
+        self.owner[k as usize] = v;
+        self.pair_of[v.index()] = k;
+        self.pairs += 1;
+        self.active_nodes += 1;
+        for f in [s.f_l, s.f_r] {
+            if let Some(p) = h.polygons().get(f.index()) {
+                self.active_polygons += 1;
+                if let Some(c) = self.surface_polygons.get_mut(p.surface.index()) {
+                    *c += 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies the collapse into `v`; the caller has checked
+    /// [`can_collapse`](Self::can_collapse).
+    pub fn apply_collapse(&mut self, h: &Hierarchy<'_>, v: NodeId) -> Result<(), OpError> {
+        let bad = OpError::Inconsistent { node: v };
+        let s = h.split(v).ok_or(OpError::Leaf { node: v })?;
+        let k = *self.pair_of.get(v.index()).ok_or(bad)?;
+        if k == NONE || k >= self.pairs {
+            return Err(OpError::NotSplit { node: v });
+        }
+        let fl = self.base + 2 * k;
+        let fr = fl + 1;
+        let n = &s.neighbours;
+        let slot = |f: PolyId| {
+            if f.is_none() {
+                Ok(NONE)
+            } else {
+                self.slot_of(h, f).ok_or(bad)
+            }
+        };
+        let (ccw, clw, rclw, rccw) = (slot(n[0])?, slot(n[1])?, slot(n[2])?, slot(n[3])?);
+        let fla = *self.slot(fl, v)?;
+        let (rv, ru) = (fla.corners[0], fla.corners[1]);
+        if ccw != NONE {
+            self.relink(ccw, fl, clw, v)?;
+        }
+        if rclw != NONE {
+            self.relink(rclw, fr, rccw, v)?;
+        }
+        let mut fa = clw;
+        let mut j = self.corner(fa, ru, v)?;
+        let first = self.slot_mut(fa, v)?;
+        first.neighbours[next(j)] = ccw;
+        first.corners[j] = rv;
+        let mut steps = 0u32;
+        loop {
+            if fa == rccw {
+                self.slot_mut(fa, v)?.neighbours[prev(j)] = rclw;
+                break;
+            }
+            let nx = self.slot(fa, v)?.neighbours[prev(j)];
+            if nx == NONE {
+                break;
+            }
+            fa = nx;
+            j = self.corner(fa, ru, v)?;
+            self.slot_mut(fa, v)?.corners[j] = rv;
+            steps += 1;
+            if steps > self.active_polygons {
+                return Err(bad);
+            }
+        }
+        *self.active.get_mut(rv as usize).ok_or(bad)? = v.0;
+        self.free_record(ru);
+        self.pair_of[v.index()] = NONE;
+        self.active_nodes -= 1;
+        for f in [s.f_l, s.f_r] {
+            if let Some(p) = h.polygons().get(f.index()) {
+                self.active_polygons -= 1;
+                if let Some(c) = self.surface_polygons.get_mut(p.surface.index()) {
+                    *c -= 1;
+                }
+            }
+        }
+        self.remove_pair(k, v)
+    }
+
+    /// Fills the hole of pair `k` with the last pair and patches the links to it.
+    fn remove_pair(&mut self, k: u32, v: NodeId) -> Result<(), OpError> {
+        let last = self.pairs - 1;
+        self.pairs = last;
+        if k == last {
+            return Ok(());
+        }
+        let (old_l, new_l) = (self.base + 2 * last, self.base + 2 * k);
+        let (old_r, new_r) = (old_l + 1, new_l + 1);
+        let map = |x: u32| {
+            if x == old_l {
+                new_l
+            } else if x == old_r {
+                new_r
+            } else {
+                x
+            }
+        };
+        for (old, new) in [(old_l, new_l), (old_r, new_r)] {
+            let mut moved = *self.slot(old, v)?;
+            moved.neighbours = moved.neighbours.map(map);
+            *self.slot_mut(new, v)? = moved;
+        }
+        for (old, new) in [(old_l, new_l), (old_r, new_r)] {
+            let nbrs = self.slot(new, v)?.neighbours;
+            for m in nbrs {
+                if m != NONE && m != new_l && m != new_r {
+                    self.relink(m, old, new, v)?;
+                }
+            }
+        }
+        let owner = self.owner[last as usize];
+        self.owner[k as usize] = owner;
+        *self
+            .pair_of
+            .get_mut(owner.index())
+            .ok_or(OpError::Inconsistent { node: v })? = k;
+        Ok(())
+    }
+
+    fn alloc_record(&mut self, node: NodeId) -> Option<u32> {
+        let r = if self.free_head != NONE {
+            let r = self.free_head;
+            let link = *self.active.get(r as usize)? & !FREE;
+            self.free_head = if link == FREE - 1 { NONE } else { link };
+            r
+        } else {
+            let r = self.active_len;
+            if r as usize >= self.active.len() {
+                return None;
+            }
+            self.active_len += 1;
+            r
+        };
+        self.active[r as usize] = node.0;
+        Some(r)
+    }
+
+    fn free_record(&mut self, r: u32) {
+        // FREE | (FREE - 1) marks the end of the free list.
+        let link = if self.free_head == NONE {
+            FREE - 1
+        } else {
+            self.free_head
+        };
+        if let Some(a) = self.active.get_mut(r as usize) {
+            *a = FREE | link;
+            self.free_head = r;
+        }
+    }
+
+    /// Hoppe's `force_vsplit`, iteratively with the caller's stack. Returns the number of
+    /// splits applied (the last one is `v`'s).
+    pub fn force_split(
+        &mut self,
+        h: &Hierarchy<'_>,
+        v: NodeId,
+        stack: &mut [NodeId],
+    ) -> Result<u32, OpError> {
+        if h.split(v).is_none() {
+            return Err(OpError::Leaf { node: v });
+        }
+        if !self.is_created(h, v) {
+            return Err(OpError::NotActive { node: v });
+        }
+        let len = stack.len() as u32;
+        let full = OpError::StackFull { len };
+        let mut top = 0usize;
+        *stack.first_mut().ok_or(full)? = v;
+        top += 1;
+        let mut applied = 0;
+        while top > 0 {
+            let u = stack[top - 1];
+            if self.is_split(u) {
+                top -= 1;
+                continue;
+            }
+            if !self.is_created(h, u) {
+                let p = h
+                    .node(u)
+                    .map(|n| n.parent)
+                    .ok_or(OpError::Inconsistent { node: v })?;
+                *stack.get_mut(top).ok_or(full)? = p;
+                top += 1;
+                continue;
+            }
+            let s = h.split(u).ok_or(OpError::Inconsistent { node: v })?;
+            let mut pushed = false;
+            for &f in &s.neighbours {
+                if f.is_some() && self.slot_of(h, f).is_none() {
+                    *stack.get_mut(top).ok_or(full)? = h.creator(f);
+                    top += 1;
+                    pushed = true;
+                }
+            }
+            if !pushed {
+                top -= 1;
+                self.apply_split(h, u)?;
+                applied += 1;
+            }
+        }
+        Ok(applied)
+    }
+}
+
+impl CameraState<'_> {
+    fn check(&self, h: &Hierarchy<'_>) -> Result<(), OpError> {
+        if self.is_for(h) {
+            Ok(())
+        } else {
+            Err(OpError::WrongHierarchy)
+        }
+    }
+
+    /// `true` if `node` is active, can be split, and every present `fn0..fn3` is active.
+    pub fn can_split(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        self.is_for(h) && self.front.can_split(h, node)
+    }
+
+    /// `true` if `node` is split, both children are active, and `f_l`, `f_r` have exactly
+    /// the neighbours the split gave them.
+    pub fn can_collapse(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        self.is_for(h) && self.front.can_collapse(h, node)
+    }
+
+    /// Splits active `node` if [`can_split`](Self::can_split).
+    pub fn split(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Result<(), OpError> {
+        self.check(h)?;
+        if h.split(node).is_none() {
+            return Err(if h.node(node).is_some() {
+                OpError::Leaf { node }
+            } else {
+                OpError::NotActive { node }
+            });
+        }
+        if !self.front.is_node_active(h, node) {
+            return Err(OpError::NotActive { node });
+        }
+        if !self.front.can_split(h, node) {
+            return Err(OpError::Illegal { node });
+        }
+        self.front.apply_split(h, node)
+    }
+
+    /// Collapses the children of `node` back into it if [`can_collapse`](Self::can_collapse).
+    pub fn collapse(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Result<(), OpError> {
+        self.check(h)?;
+        if h.split(node).is_none() {
+            return Err(OpError::Leaf { node });
+        }
+        if !self.front.is_split(node) {
+            return Err(OpError::NotSplit { node });
+        }
+        if !self.front.can_collapse(h, node) {
+            return Err(OpError::Illegal { node });
+        }
+        self.front.apply_collapse(h, node)
+    }
+
+    /// Splits `node`, first forcing the splits that activate its missing neighbours
+    /// (Hoppe's `force_vsplit`), with an explicit stack in `stack`. Returns the number of
+    /// splits applied; 0 if `node` was already split. On error the splits already applied
+    /// stay (the front is valid, just not yet refined at `node`).
+    pub fn force_split(
+        &mut self,
+        h: &Hierarchy<'_>,
+        node: NodeId,
+        stack: &mut [NodeId],
+    ) -> Result<u32, OpError> {
+        self.check(h)?;
+        self.front.force_split(h, node, stack)
+    }
+
+    /// [`force_split`](Self::force_split) with the camera's own stack.
+    pub fn force_split_own_stack(
+        &mut self,
+        h: &Hierarchy<'_>,
+        node: NodeId,
+    ) -> Result<u32, OpError> {
+        self.check(h)?;
+        self.front.force_split(h, node, self.stack)
+    }
+}

@@ -1,0 +1,179 @@
+//! Selective refinement of one camera's front (Hoppe's `adapt_refinement`).
+//!
+//! One pass walks the active node list once. An active node that can be split, is visible
+//! (bounding sphere against the frustum, normal cone against the eye) and whose projected
+//! error exceeds the tolerance is force-split; an active stationary child whose sibling is
+//! active and whose parent no longer needs its split is collapsed when legal. A node changed
+//! by an operation is looked at again at once, so a pass settles deep changes; all other work
+//! is proportional to the front, not the hierarchy (temporal coherence).
+
+use glam::Vec3;
+
+use super::{CameraState, OpError, FREE};
+use crate::hierarchy::Hierarchy;
+use crate::ids::NodeId;
+use crate::records::Split;
+use crate::view::View;
+
+/// Knobs of [`CameraState::refine`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineParams {
+    /// Screen-space tolerance in pixels: split while a node's error projects larger.
+    pub tolerance_px: f32,
+    /// Most splits + collapses in one call (amortisation over frames); `u32::MAX` for none.
+    pub max_ops: u32,
+    /// Coarsen outside the view frustum.
+    pub frustum_culling: bool,
+    /// Coarsen where the normal cone faces away from the eye.
+    pub backface_culling: bool,
+}
+
+impl Default for RefineParams {
+    fn default() -> Self {
+        Self {
+            tolerance_px: 1.0,
+            max_ops: u32::MAX,
+            frustum_culling: true,
+            backface_culling: true,
+        }
+    }
+}
+
+/// What one refinement pass did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RefineStats {
+    /// Splits applied, forced ones included.
+    pub splits: u32,
+    /// Splits applied only to make a wanted split legal.
+    pub forced_splits: u32,
+    /// Collapses applied.
+    pub collapses: u32,
+    /// Active-node visits.
+    pub nodes_visited: u32,
+    /// Active nodes after the pass.
+    pub active_nodes: u32,
+    /// Active polygons after the pass.
+    pub active_polygons: u32,
+    /// Wanted splits refused because the camera was full.
+    pub capacity_refusals: u32,
+    /// Wanted splits abandoned because the forced-split stack was full.
+    pub stack_overflows: u32,
+}
+
+impl RefineStats {
+    /// Splits plus collapses.
+    pub fn operations(&self) -> u32 {
+        self.splits + self.collapses
+    }
+}
+
+/// The refinement criterion: does node `s` (at `p`) want its split?
+struct Criterion {
+    eye: Vec3,
+    tz2: f32,
+    view: View,
+    frustum: bool,
+    backface: bool,
+}
+
+impl Criterion {
+    #[inline]
+    fn wants_split(&self, p: Vec3, s: &Split) -> bool {
+        if self.frustum && !self.view.sphere_visible(p, s.radius) {
+            return false;
+        }
+        let pe = p - self.eye;
+        let pem2 = pe.length_squared();
+        let vdot = pe.dot(Vec3::from_array(s.cone_normal));
+        if self.backface && vdot > 0.0 && vdot * vdot > pem2 * s.cone_sin2 {
+            return false;
+        }
+        let rhs = self.tz2 * pem2;
+        s.uni_error * s.uni_error >= rhs
+            || s.dir_error * s.dir_error * (pem2 - vdot * vdot) >= rhs * pem2
+    }
+}
+
+impl CameraState<'_> {
+    /// One refinement pass of this camera against `view`. Allocates nothing.
+    pub fn refine(
+        &mut self,
+        h: &Hierarchy<'_>,
+        view: &View,
+        params: &RefineParams,
+    ) -> Result<RefineStats, OpError> {
+        if !self.is_for(h) {
+            return Err(OpError::WrongHierarchy);
+        }
+        let scale = if view.pixels_per_radian > 0.0 {
+            params.tolerance_px / view.pixels_per_radian
+        } else {
+            f32::INFINITY
+        };
+        let c = Criterion {
+            eye: view.eye,
+            tz2: scale * scale,
+            view: *view,
+            frustum: params.frustum_culling,
+            backface: params.backface_culling,
+        };
+        // A hard bound on work, whatever the data: no pass applies more operations than four
+        // per split record.
+        let max_ops = params.max_ops.min(
+            (h.splits().len() as u32)
+                .saturating_mul(4)
+                .saturating_add(1024),
+        );
+        let point = |v: NodeId| Vec3::from_array(h.node_point(v).unwrap_or([0.0; 3]));
+        let mut st = RefineStats::default();
+        let f = &mut self.front;
+        let mut i = 0usize;
+        while i < f.active_len as usize && st.operations() < max_ops {
+            let a = f.active[i];
+            if a & FREE != 0 {
+                i += 1;
+                continue;
+            }
+            let v = NodeId(a);
+            st.nodes_visited += 1;
+            if let Some(s) = h.split(v) {
+                if c.wants_split(point(v), s) {
+                    if f.pairs as usize >= f.owner.len() {
+                        st.capacity_refusals += 1;
+                        i += 1;
+                        continue;
+                    }
+                    match f.force_split(h, v, self.stack) {
+                        Ok(n) => {
+                            st.splits += n;
+                            st.forced_splits += n.saturating_sub(1);
+                            continue; // look at the stationary child in this record again
+                        }
+                        Err(OpError::StackFull { .. }) => st.stack_overflows += 1,
+                        Err(OpError::CapacityFull { .. }) => st.capacity_refusals += 1,
+                        Err(e) => return Err(e),
+                    }
+                    i += 1;
+                    continue;
+                }
+            }
+            // Coarsen: v is a stationary child whose parent no longer wants its split.
+            let parent = h.nodes().get(v.index()).map_or(NodeId::NONE, |n| n.parent);
+            if let Some(ps) = h.split(parent) {
+                if ps.stationary == v
+                    && !f.is_split(ps.floating)
+                    && !c.wants_split(point(parent), ps)
+                    && f.can_collapse(h, parent)
+                {
+                    f.apply_collapse(h, parent)?;
+                    st.collapses += 1;
+                    continue; // the record now holds the parent: look again
+                }
+            }
+            i += 1;
+        }
+        st.active_nodes = f.active_nodes;
+        st.active_polygons = f.active_polygons;
+        Ok(st)
+    }
+}

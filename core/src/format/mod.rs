@@ -1,0 +1,134 @@
+//! The baked `.clod` file format.
+//!
+//! ```text
+//! offset 0   FileHeader (64 bytes): magic "CAVECLOD", version, file length, section count,
+//!            checksum of every byte after the header
+//! offset 64  SectionEntry x section_count (24 bytes each): tag, record size, offset, count
+//! ...        sections, each starting at a multiple of 16, zero padding between them
+//! ```
+//!
+//! All integers are little-endian; the records are the `#[repr(C)]` types of
+//! [`records`](crate::records), so on a little-endian machine a section is a slice of records
+//! cast in place ([`Hierarchy::from_bytes`](crate::Hierarchy::from_bytes) never copies).
+//! Sections are found by tag; a reader skips tags it does not know, so later versions can add
+//! sections (g-mesh levels, out-of-core octrees, materials) without breaking older readers.
+//! A change to a known section's record size or meaning bumps the major version.
+//!
+//! The writer side ([`serialized_len`], [`write_into`]) needs no allocation either: a std
+//! caller sizes a buffer with `serialized_len`, fills it with `write_into`, and writes it to
+//! disk through a temporary file and a rename.
+
+mod error;
+pub(crate) mod validate;
+mod writer;
+
+pub use error::{FormatError, WriteError};
+pub use writer::{serialized_len, write_into, ExtraSection, HierarchyParts};
+
+use bytemuck::{Pod, Zeroable};
+
+/// The file's first eight bytes.
+pub const MAGIC: [u8; 8] = *b"CAVECLOD";
+/// The major version this crate reads and writes. Files of another major version are refused.
+pub const VERSION_MAJOR: u16 = 1;
+/// The minor version this crate writes. Readers accept any minor version of their major.
+pub const VERSION_MINOR: u16 = 0;
+/// Alignment of every section's start, in bytes.
+pub const SECTION_ALIGN: usize = 16;
+/// The most sections a file may list.
+pub const MAX_SECTIONS: u32 = 1024;
+
+/// A four-byte section tag, e.g. `b"NODE"`.
+#[repr(transparent)]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Pod, Zeroable)]
+pub struct Tag(pub [u8; 4]);
+
+impl core::fmt::Debug for Tag {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        core::fmt::Display::fmt(self, f)
+    }
+}
+
+impl core::fmt::Display for Tag {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for &b in &self.0 {
+            if b.is_ascii_graphic() {
+                write!(f, "{}", b as char)?;
+            } else {
+                write!(f, "\\x{b:02x}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Tags of the sections this version defines.
+pub mod tags {
+    use super::Tag;
+    /// [`Meta`](crate::Meta): counts and bounds.
+    pub const META: Tag = Tag(*b"META");
+    /// [`Position`](crate::Position) per node position.
+    pub const POSITIONS: Tag = Tag(*b"POSN");
+    /// [`Node`](crate::Node) per node.
+    pub const NODES: Tag = Tag(*b"NODE");
+    /// [`Split`](crate::Split) per node that can be split.
+    pub const SPLITS: Tag = Tag(*b"SPLT");
+    /// [`Polygon`](crate::Polygon) per full-resolution polygon.
+    pub const POLYGONS: Tag = Tag(*b"POLY");
+    /// [`NodeId`](crate::NodeId) per root, ascending.
+    pub const ROOTS: Tag = Tag(*b"ROOT");
+    /// [`BaseFace`](crate::BaseFace) per base polygon.
+    pub const BASE: Tag = Tag(*b"BASE");
+    /// `u32` per position plus one: where each position's vertex-table entries start.
+    pub const VERTEX_TABLE_OFFSETS: Tag = Tag(*b"VTOF");
+    /// [`VertexKey`](crate::VertexKey) per vertex-table entry.
+    pub const VERTEX_TABLE: Tag = Tag(*b"VTAB");
+    /// [`Vertex`](crate::Vertex) per vertex.
+    pub const VERTICES: Tag = Tag(*b"VERT");
+}
+
+/// The fixed header at offset 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct FileHeader {
+    /// [`MAGIC`].
+    pub magic: [u8; 8],
+    /// [`VERSION_MAJOR`].
+    pub version_major: u16,
+    /// [`VERSION_MINOR`] of the writer.
+    pub version_minor: u16,
+    /// `size_of::<FileHeader>()` (64).
+    pub header_len: u32,
+    /// Length of the whole file in bytes.
+    pub file_len: u64,
+    /// Entries in the section table.
+    pub section_count: u32,
+    /// Zero.
+    pub flags: u32,
+    /// [`checksum64`](crate::checksum64) of bytes `header_len..file_len`.
+    pub checksum: u64,
+    /// Zero.
+    pub reserved: [u32; 6],
+}
+
+/// One entry of the section table.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct SectionEntry {
+    /// What the section holds.
+    pub tag: Tag,
+    /// Size of one record in bytes.
+    pub record_size: u32,
+    /// Byte offset from the start of the file; a multiple of [`SECTION_ALIGN`].
+    pub offset: u64,
+    /// Number of records.
+    pub record_count: u64,
+}
+
+const _: () = assert!(core::mem::size_of::<FileHeader>() == 64);
+const _: () = assert!(core::mem::size_of::<SectionEntry>() == 24);
+
+/// Rounds `n` up to a multiple of [`SECTION_ALIGN`].
+pub(crate) const fn align_up(n: usize) -> usize {
+    (n + SECTION_ALIGN - 1) & !(SECTION_ALIGN - 1)
+}

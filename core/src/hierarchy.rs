@@ -1,0 +1,218 @@
+//! The shared, static hierarchy: a read-only view of a baked file's sections.
+//!
+//! A [`Hierarchy`] borrows its arrays (from the file bytes, or from a builder's vectors) and
+//! never changes them, so it is `Sync`: any number of cameras, on any threads, refine over one
+//! hierarchy at once. Everything a camera changes lives in its own
+//! [`CameraState`](crate::CameraState).
+
+use crate::format::{self, FormatError, HierarchyParts, Tag};
+use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};
+use crate::records::{BaseFace, Meta, Node, Polygon, Position, Split, Vertex, VertexKey};
+
+/// A validated view-dependent hierarchy of vertex splits over a full-resolution mesh.
+#[derive(Clone, Copy, Debug)]
+pub struct Hierarchy<'a> {
+    parts: HierarchyParts<'a>,
+    meta: Meta,
+    checksum: u64,
+    file: &'a [u8],
+}
+
+impl<'a> Hierarchy<'a> {
+    /// Views the sections of a `.clod` file in place and validates every index, count and
+    /// invariant. `bytes` must be 4-byte aligned (any `Vec<u32>`-backed or allocator-provided
+    /// buffer is); a misaligned buffer is an error, never a copy.
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let parsed = format::validate::parse(bytes)?;
+        let meta = format::validate::validate(&parsed.parts, Some(&parsed.meta))?;
+        Ok(Self {
+            parts: parsed.parts,
+            meta,
+            checksum: parsed.checksum,
+            file: bytes,
+        })
+    }
+
+    /// Validates arrays held in memory (for example a builder's) exactly as
+    /// [`from_bytes`](Self::from_bytes) validates a file.
+    pub fn from_parts(parts: HierarchyParts<'a>) -> Result<Self, FormatError> {
+        let meta = format::validate::validate(&parts, None)?;
+        // An in-memory hierarchy is identified by its counts: mix them into a checksum so a
+        // camera made for one hierarchy is refused by another.
+        let checksum = crate::checksum::checksum64(bytemuck::bytes_of(&meta));
+        Ok(Self {
+            parts,
+            meta,
+            checksum,
+            file: &[],
+        })
+    }
+
+    /// The arrays.
+    pub fn parts(&self) -> &HierarchyParts<'a> {
+        &self.parts
+    }
+
+    /// Counts and bounds.
+    pub fn meta(&self) -> &Meta {
+        &self.meta
+    }
+
+    /// The file's checksum (or, for [`from_parts`](Self::from_parts), a hash of the counts):
+    /// cameras record it to refuse a hierarchy they were not made for.
+    pub fn checksum(&self) -> u64 {
+        self.checksum
+    }
+
+    /// The bytes of a section this version does not define (or any section), by tag.
+    /// `None` for hierarchies made with [`from_parts`](Self::from_parts).
+    pub fn section(&self, tag: Tag) -> Option<&'a [u8]> {
+        let (table, _) = format::validate::section_table(self.file).ok()?;
+        let e = table.iter().find(|e| e.tag == tag)?;
+        let start = e.offset as usize;
+        self.file
+            .get(start..start + e.record_size as usize * e.record_count as usize)
+    }
+
+    /// All node positions.
+    #[inline]
+    pub fn positions(&self) -> &'a [Position] {
+        self.parts.positions
+    }
+
+    /// All nodes.
+    #[inline]
+    pub fn nodes(&self) -> &'a [Node] {
+        self.parts.nodes
+    }
+
+    /// The split records; record `i` belongs to node `i`.
+    #[inline]
+    pub fn splits(&self) -> &'a [Split] {
+        self.parts.splits
+    }
+
+    /// All full-resolution polygons, base polygons first.
+    #[inline]
+    pub fn polygons(&self) -> &'a [Polygon] {
+        self.parts.polygons
+    }
+
+    /// The roots, ascending.
+    #[inline]
+    pub fn roots(&self) -> &'a [NodeId] {
+        self.parts.roots
+    }
+
+    /// The base mesh: polygon `i` of it is polygon `PolyId(i)`.
+    #[inline]
+    pub fn base(&self) -> &'a [BaseFace] {
+        self.parts.base
+    }
+
+    /// The persistent vertex buffer's contents.
+    #[inline]
+    pub fn vertices(&self) -> &'a [Vertex] {
+        self.parts.vertices
+    }
+
+    /// Number of nodes (`n`).
+    #[inline]
+    pub fn node_count(&self) -> usize {
+        self.parts.nodes.len()
+    }
+
+    /// Number of full-resolution polygons (`p`).
+    #[inline]
+    pub fn polygon_count(&self) -> usize {
+        self.parts.polygons.len()
+    }
+
+    /// Number of base polygons.
+    #[inline]
+    pub fn base_polygon_count(&self) -> usize {
+        self.parts.base.len()
+    }
+
+    /// Number of surfaces (index lists).
+    #[inline]
+    pub fn surface_count(&self) -> usize {
+        self.parts.surface_count as usize
+    }
+
+    /// The split record of `node`, or `None` for a leaf or an id out of range.
+    #[inline]
+    pub fn split(&self, node: NodeId) -> Option<&'a Split> {
+        self.parts.splits.get(node.index())
+    }
+
+    /// The node record, or `None` for an id out of range.
+    #[inline]
+    pub fn node(&self, node: NodeId) -> Option<&'a Node> {
+        self.parts.nodes.get(node.index())
+    }
+
+    /// The point of a node.
+    #[inline]
+    pub fn node_point(&self, node: NodeId) -> Option<[f32; 3]> {
+        let n = self.node(node)?;
+        self.parts.positions.get(n.position.index()).map(|p| p.xyz)
+    }
+
+    /// The vertex-table entries of a position: one per surface group with a vertex there.
+    #[inline]
+    pub fn vertex_keys(&self, position: PositionId) -> &'a [VertexKey] {
+        let o = self.parts.vertex_table_offsets;
+        match (o.get(position.index()), o.get(position.index() + 1)) {
+            (Some(&a), Some(&b)) => self
+                .parts
+                .vertex_table
+                .get(a as usize..b as usize)
+                .unwrap_or(&[]),
+            _ => &[],
+        }
+    }
+
+    /// The vertex table: the vertex-buffer index of surface group `group` at `position`.
+    /// O(log k) in the k groups meeting at the position (k = 1 inside a group).
+    #[inline]
+    pub fn vertex_index(&self, group: SurfaceGroupId, position: PositionId) -> Option<u32> {
+        let keys = self.vertex_keys(position);
+        if let [only] = keys {
+            return (only.group == group).then_some(only.vertex);
+        }
+        keys.binary_search_by_key(&group, |k| k.group)
+            .ok()
+            .map(|i| keys[i].vertex)
+    }
+
+    /// The number of (group, position) pairs the table could hold and how many it holds:
+    /// the paper's "21-26% populated".
+    pub fn vertex_table_fill(&self) -> (u64, u64) {
+        (
+            self.parts.surface_group_count as u64 * self.parts.positions.len() as u64,
+            self.parts.vertex_table.len() as u64,
+        )
+    }
+
+    /// The polygon a split creates on one side, for `PolyId` look-ups.
+    #[inline]
+    pub(crate) fn creator(&self, poly: PolyId) -> NodeId {
+        self.parts.polygons[poly.index()].creator
+    }
+
+    /// Bytes of static data: every section's records.
+    pub fn static_bytes(&self) -> usize {
+        let p = &self.parts;
+        core::mem::size_of::<Meta>()
+            + core::mem::size_of_val(p.positions)
+            + core::mem::size_of_val(p.nodes)
+            + core::mem::size_of_val(p.splits)
+            + core::mem::size_of_val(p.polygons)
+            + core::mem::size_of_val(p.roots)
+            + core::mem::size_of_val(p.base)
+            + core::mem::size_of_val(p.vertex_table_offsets)
+            + core::mem::size_of_val(p.vertex_table)
+            + core::mem::size_of_val(p.vertices)
+    }
+}

@@ -1,0 +1,58 @@
+//! # caveclod-core
+//!
+//! The allocation-free runtime of caveclod: view-dependent continuous level of detail over a
+//! hierarchy of vertex splits (Hoppe's view-dependent progressive meshes, organised as in
+//! Kram & Shaw's CAVECLOD), with one static [`Hierarchy`] shared by any number of cameras,
+//! each keeping its own [`CameraState`] for temporal coherence.
+//!
+//! - `#![no_std]`, no `alloc`: every array is borrowed — the hierarchy from the baked file's
+//!   bytes, each camera from a `&mut [u32]` the caller sizes with
+//!   [`CameraState::words_needed`].
+//! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
+//!   operations that meet contradictions return errors.
+//! - The `.clod` format ([`format`]) is defined here, reader and writer.
+//!
+//! ```no_run
+//! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
+//! use caveclod_core::{CameraState, Hierarchy, RefineParams, View};
+//! let h = Hierarchy::from_bytes(bytes)?;
+//! let mut memory = vec![0u32; CameraState::words_needed(&h)];
+//! let mut cam = CameraState::new(&h, &mut memory)?;
+//! let view = View::perspective(
+//!     glam::Vec3::new(0.0, 50.0, 200.0), glam::Vec3::ZERO, glam::Vec3::Y,
+//!     1.0, 16.0 / 9.0, 0.1, 1e4, 1080.0,
+//! );
+//! let stats = cam.refine(&h, &view, &RefineParams::default())?;
+//! let mut indices = vec![0u32; (0..h.surface_count()).map(|s| cam.index_count(s)).sum()];
+//! let mut offsets = vec![0u32; h.surface_count() + 1];
+//! cam.emit_indices_packed(&h, &mut indices, &mut offsets)?;
+//! # let _ = stats; Ok(()) }
+//! ```
+#![no_std]
+#![deny(missing_docs)]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![forbid(unsafe_code)]
+#![allow(clippy::needless_range_loop)]
+
+pub mod camera;
+mod checksum;
+pub mod format;
+mod hierarchy;
+mod ids;
+mod memory;
+mod records;
+mod view;
+
+pub use camera::{
+    CameraConfig, CameraError, CameraState, EmitError, OpError, RefineParams, RefineStats,
+};
+pub use checksum::checksum64;
+pub use format::{FormatError, HierarchyParts, WriteError};
+pub use glam;
+pub use hierarchy::Hierarchy;
+pub use ids::{NodeId, PolyId, PositionId, SurfaceGroupId, SurfaceId};
+pub use memory::MemoryReport;
+pub use records::{
+    BaseFace, Meta, Node, Polygon, Position, PositionClass, Split, Vertex, VertexKey,
+};
+pub use view::View;

@@ -1,0 +1,1 @@
+//! Runnable examples of caveclod live in `examples/`.
