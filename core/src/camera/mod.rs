@@ -83,7 +83,8 @@ impl CameraConfig {
 
     /// Room for at most `max_active_polygons` active polygons (at least the base mesh).
     pub fn with_polygon_budget(h: &Hierarchy<'_>, max_active_polygons: u32) -> Self {
-        let extra = max_active_polygons.saturating_sub(h.base_polygon_count() as u32);
+        // Each split adds at most two polygons.
+        let extra = max_active_polygons.saturating_sub(h.base_polygon_count() as u32) / 2;
         Self {
             max_pairs: extra.min(h.splits().len() as u32),
             stack_len: Self::default_stack(h),

@@ -418,13 +418,14 @@ impl Front<'_> {
         }
     }
 
-    /// Hoppe's `force_vsplit`, iteratively with the caller's stack. Returns the number of
-    /// splits applied (the last one is `v`'s).
+    /// Hoppe's `force_vsplit`, iteratively with the caller's stack, applying at most `budget`
+    /// splits. Returns the number applied (if `v` is split, the last one was `v`'s).
     pub fn force_split(
         &mut self,
         h: &Hierarchy<'_>,
         v: NodeId,
         stack: &mut [NodeId],
+        budget: u32,
     ) -> Result<u32, OpError> {
         if h.split(v).is_none() {
             return Err(OpError::Leaf { node: v });
@@ -463,6 +464,9 @@ impl Front<'_> {
                 }
             }
             if !pushed {
+                if applied == budget {
+                    return Ok(applied);
+                }
                 top -= 1;
                 self.apply_split(h, u)?;
                 applied += 1;
@@ -537,7 +541,7 @@ impl CameraState<'_> {
         stack: &mut [NodeId],
     ) -> Result<u32, OpError> {
         self.check(h)?;
-        self.front.force_split(h, node, stack)
+        self.front.force_split(h, node, stack, u32::MAX)
     }
 
     /// [`force_split`](Self::force_split) with the camera's own stack.
@@ -547,6 +551,6 @@ impl CameraState<'_> {
         node: NodeId,
     ) -> Result<u32, OpError> {
         self.check(h)?;
-        self.front.force_split(h, node, self.stack)
+        self.front.force_split(h, node, self.stack, u32::MAX)
     }
 }

@@ -143,11 +143,13 @@ impl CameraState<'_> {
                         i += 1;
                         continue;
                     }
-                    match f.force_split(h, v, self.stack) {
+                    match f.force_split(h, v, self.stack, max_ops - st.operations()) {
                         Ok(n) => {
                             st.splits += n;
                             st.forced_splits += n.saturating_sub(1);
-                            continue; // look at the stationary child in this record again
+                            if f.is_split(v) {
+                                continue; // look at the stationary child in this record again
+                            }
                         }
                         Err(OpError::StackFull { .. }) => st.stack_overflows += 1,
                         Err(OpError::CapacityFull { .. }) => st.capacity_refusals += 1,

@@ -1,0 +1,183 @@
+//! Invariant checks of a camera's front against the hierarchy, derived from scratch.
+
+use std::collections::HashSet;
+
+use caveclod_core::{CameraState, Hierarchy, NodeId, PolyId};
+
+/// Checks every invariant of `cam` over `h`; returns a description of the first violation.
+pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), String> {
+    // The active front derived from scratch from the split state alone.
+    let split = |v: NodeId| cam.is_split(v);
+    let mut want_nodes = HashSet::new();
+    for (i, n) in h.nodes().iter().enumerate() {
+        let v = NodeId(i as u32);
+        let created = n.parent.is_none() || split(n.parent);
+        if created && !(h.split(v).is_some() && split(v)) {
+            want_nodes.insert(v);
+        }
+    }
+    let mut want_polys: HashSet<PolyId> = (0..h.base_polygon_count() as u32).map(PolyId).collect();
+    for (i, s) in h.splits().iter().enumerate() {
+        if split(NodeId(i as u32)) {
+            want_polys.insert(s.f_l);
+            if s.f_r.is_some() {
+                want_polys.insert(s.f_r);
+            }
+        }
+    }
+    let nodes: HashSet<NodeId> = cam.active_nodes().collect();
+    if nodes.len() != cam.active_node_count() as usize || nodes != want_nodes {
+        return Err(format!(
+            "active nodes {} (count {}) differ from the derived {}",
+            nodes.len(),
+            cam.active_node_count(),
+            want_nodes.len()
+        ));
+    }
+    let polys: Vec<PolyId> = cam.active_polygons(h).collect();
+    let poly_set: HashSet<PolyId> = polys.iter().copied().collect();
+    if polys.len() != poly_set.len()
+        || poly_set != want_polys
+        || polys.len() != cam.active_polygon_count() as usize
+    {
+        return Err(format!(
+            "active polygons {} differ from the derived {}",
+            polys.len(),
+            want_polys.len()
+        ));
+    }
+    for v in h.nodes().iter().enumerate().map(|(i, _)| NodeId(i as u32)) {
+        if cam.is_node_active(h, v) != want_nodes.contains(&v) {
+            return Err(format!("is_node_active({v}) wrong"));
+        }
+    }
+    for &f in &polys {
+        let corners = cam
+            .polygon_corners(h, f)
+            .ok_or(format!("{f} has no corners"))?;
+        let full = h.polygons()[f.index()].nodes;
+        for k in 0..3 {
+            if !want_nodes.contains(&corners[k]) {
+                return Err(format!("{f} corner {k} = {} is not active", corners[k]));
+            }
+            // The current corner is the active ancestor of the full-resolution corner.
+            let mut a = full[k];
+            while a != corners[k] {
+                a = h.nodes()[a.index()].parent;
+                if a.is_none() {
+                    return Err(format!(
+                        "{f} corner {k} = {} is not above its leaf {}",
+                        corners[k], full[k]
+                    ));
+                }
+            }
+        }
+        let nbrs = cam
+            .polygon_neighbours(h, f)
+            .ok_or(format!("{f} has no neighbours"))?;
+        for j in 0..3 {
+            let g = nbrs[j];
+            if g.is_none() {
+                continue;
+            }
+            let (a, b) = (corners[(j + 1) % 3], corners[(j + 2) % 3]);
+            let gc = cam
+                .polygon_corners(h, g)
+                .ok_or(format!("{f} neighbour {g} inactive"))?;
+            let gn = cam
+                .polygon_neighbours(h, g)
+                .ok_or(format!("{g} has no neighbours"))?;
+            let back = (0..3).find(|&m| gc[m] != a && gc[m] != b);
+            if !gc.contains(&a) || !gc.contains(&b) || back.map(|m| gn[m]) != Some(f) {
+                return Err(format!(
+                    "neighbour link {f} -> {g} across ({a}, {b}) not symmetric"
+                ));
+            }
+        }
+    }
+    // Emission: every index is the vertex of the polygon's group at the corner's position.
+    let ns = h.surface_count();
+    let total: usize = (0..ns).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![0u32; total];
+    let mut offsets = vec![0u32; ns + 1];
+    cam.emit_indices_packed(h, &mut out, &mut offsets)
+        .map_err(|e| e.to_string())?;
+    let mut cursor = offsets.clone();
+    for &f in &polys {
+        let poly = h.polygons()[f.index()];
+        let s = poly.surface.index();
+        let corners = cam.polygon_corners(h, f).ok_or("corners")?;
+        for k in 0..3 {
+            let idx = out[cursor[s] as usize + k];
+            let pos = h.nodes()[corners[k].index()].position;
+            let keys = h.vertex_keys(pos);
+            if !keys
+                .iter()
+                .any(|key| key.vertex == idx && key.group == poly.group)
+            {
+                return Err(format!(
+                    "{f} corner {k}: index {idx} is not group {}'s vertex at {pos}",
+                    poly.group.0
+                ));
+            }
+            if h.vertices()[idx as usize].position != h.positions()[pos.index()].xyz {
+                return Err(format!(
+                    "{f} corner {k}: vertex {idx} not at the corner's position"
+                ));
+            }
+        }
+        cursor[s] += 3;
+    }
+    for s in 0..ns {
+        if cursor[s] != offsets[s + 1] {
+            return Err(format!(
+                "surface {s}: emitted {} indices, {} expected",
+                offsets[s + 1] - offsets[s],
+                cursor[s] - offsets[s]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Splits everything (forcing as needed) until no active node can be split.
+pub fn split_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) {
+    let mut stack = vec![NodeId::NONE; 4096];
+    loop {
+        let todo: Vec<NodeId> = cam
+            .active_nodes()
+            .filter(|&v| h.split(v).is_some())
+            .collect();
+        if todo.is_empty() {
+            return;
+        }
+        for v in todo {
+            if !cam.is_split(v) {
+                if let Err(e) = cam.force_split(h, v, &mut stack) {
+                    panic!("force_split({v}): {e}");
+                }
+            }
+        }
+    }
+}
+
+/// Collapses until no collapse is legal; returns the number applied.
+pub fn collapse_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> usize {
+    let mut n = 0;
+    loop {
+        let mut any = false;
+        for i in 0..h.splits().len() {
+            let v = NodeId(i as u32);
+            if cam.can_collapse(h, v) {
+                if let Err(e) = cam.collapse(h, v) {
+                    panic!("collapse({v}): {e}");
+                }
+                n += 1;
+                any = true;
+            }
+        }
+        if !any {
+            return n;
+        }
+    }
+}

@@ -1,0 +1,108 @@
+//! proptest: random legal split / collapse / forced-split sequences and random camera paths on
+//! three generated meshes. After every step the front passes every invariant of
+//! `check_front` (active sets equal the sets derived from scratch, neighbour links symmetric,
+//! corners above their leaves, emitted indices in the right surface group), and a second
+//! camera over the same hierarchy never changes.
+
+use std::sync::OnceLock;
+
+use caveclod_core::glam::Vec3;
+use caveclod_core::{CameraState, NodeId, RefineParams, View};
+use caveclod_tests::check::check_front;
+use caveclod_tests::{build, meshes, Built};
+use proptest::prelude::*;
+
+fn meshes_built() -> &'static [Built; 3] {
+    static B: OnceLock<[Built; 3]> = OnceLock::new();
+    B.get_or_init(|| {
+        [
+            build(&meshes::terrain(10, 8, 5)),
+            build(&meshes::sphere(2)),
+            build(&meshes::holed_terrain(12, 12, 9)),
+        ]
+    })
+}
+
+#[derive(Clone, Debug)]
+enum Step {
+    Split(u32),
+    ForceSplit(u32),
+    Collapse(u32),
+    Refine {
+        eye: [f32; 3],
+        target: [f32; 3],
+        tolerance: f32,
+        max_ops: u32,
+    },
+}
+
+fn step() -> impl Strategy<Value = Step> {
+    prop_oneof![
+        3 => any::<u32>().prop_map(Step::Split),
+        2 => any::<u32>().prop_map(Step::ForceSplit),
+        3 => any::<u32>().prop_map(Step::Collapse),
+        1 => (prop::array::uniform3(-20.0f32..20.0), prop::array::uniform3(-5.0f32..15.0), 0.05f32..20.0, prop_oneof![Just(u32::MAX), 1u32..50])
+            .prop_map(|(eye, target, tolerance, max_ops)| Step::Refine { eye, target, tolerance, max_ops }),
+    ]
+}
+
+fn snapshot(
+    h: &caveclod_core::Hierarchy<'_>,
+    cam: &CameraState<'_>,
+) -> (Vec<NodeId>, Vec<Option<[NodeId; 3]>>) {
+    let nodes = cam.active_nodes().collect();
+    let polys = (0..h.polygon_count() as u32)
+        .map(|f| cam.polygon_corners(h, caveclod_core::PolyId(f)))
+        .collect();
+    (nodes, polys)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_steps_keep_every_invariant(which in 0usize..3, steps in prop::collection::vec(step(), 1..120)) {
+        let built = &meshes_built()[which];
+        let h = built.hierarchy();
+        let mut mem = vec![0u32; CameraState::words_needed(&h)];
+        let mut other_mem = vec![0u32; CameraState::words_needed(&h)];
+        let mut cam = CameraState::new(&h, &mut mem).expect("sized");
+        let mut other = CameraState::new(&h, &mut other_mem).expect("sized");
+        let far = View::perspective(Vec3::new(500.0, 300.0, 500.0), Vec3::ZERO, Vec3::Y, 1.0, 1.0, 0.1, 1e4, 512.0);
+        other.refine(&h, &far, &RefineParams::default()).expect("refine");
+        let other_before = snapshot(&h, &other);
+        let mut stack = vec![NodeId::NONE; 1024];
+        let ns = h.splits().len() as u32;
+        for s in steps {
+            match s {
+                Step::Split(x) => {
+                    let v = NodeId(x % ns);
+                    let legal = cam.can_split(&h, v);
+                    prop_assert_eq!(cam.split(&h, v).is_ok(), legal);
+                }
+                Step::ForceSplit(x) => {
+                    let v = NodeId(x % ns);
+                    if cam.is_node_active(&h, v) {
+                        cam.force_split(&h, v, &mut stack).expect("force split of an active node");
+                        prop_assert!(cam.is_split(v));
+                    }
+                }
+                Step::Collapse(x) => {
+                    let v = NodeId(x % ns);
+                    let legal = cam.can_collapse(&h, v);
+                    prop_assert_eq!(cam.collapse(&h, v).is_ok(), legal);
+                }
+                Step::Refine { eye, target, tolerance, max_ops } => {
+                    let view = View::perspective(Vec3::from(eye), Vec3::from(target), Vec3::Y, 1.0, 1.3, 0.05, 1e3, 400.0);
+                    let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
+                    let st = cam.refine(&h, &view, &params).expect("refine");
+                    prop_assert!(st.operations() <= max_ops);
+                }
+            }
+            if let Err(e) = check_front(&h, &cam) {
+                prop_assert!(false, "{}", e);
+            }
+        }
+        prop_assert_eq!(snapshot(&h, &other), other_before);
+    }
+}
