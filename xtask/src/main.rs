@@ -1,1 +1,437 @@
-fn main() {}
+//! Project tasks, run as `cargo xtask <command>` (the alias lives in `.cargo/config.toml`).
+//!
+//! - `setup [--with-miri]`: checks for, and installs when running as root, what the tests
+//!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
+//!   `spirv-val`), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
+//!   the pinned nightly with miri.
+//! - `test [--miri-full]`: setup, then formatting, clippy, the workspace tests, the no_std
+//!   build for a microcontroller target, and the core crate's tests under miri. Every step
+//!   prints a header and its wall time; the run ends with `N passed, M failed`.
+//! - `demo [ARGS..]`: the fly-over example in release mode, with `ARGS` forwarded.
+//!
+//! Only std: the tool must build before anything else is installed.
+
+use std::env;
+use std::ffi::OsStr;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::{Duration, Instant};
+
+/// The nightly that miri runs on; pinned so a miri or nightly change cannot break CI.
+const NIGHTLY: &str = "nightly-2026-08-15";
+/// A target without `std`: building the core crate for it proves it is `no_std`.
+const NO_STD_TARGET: &str = "thumbv7em-none-eabihf";
+/// Debian packages that provide the Vulkan pieces `setup` checks for.
+const APT_PACKAGES: &[&str] = &[
+    "mesa-vulkan-drivers",
+    "libvulkan1",
+    "vulkan-validationlayers",
+    "spirv-tools",
+];
+
+const USAGE: &str = "\
+usage: cargo xtask <command>
+
+commands:
+  setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
+                        spirv-val and the thumbv7em-none-eabihf target; --with-miri also
+                        installs the pinned nightly with miri
+  test [--miri-full]    setup, then fmt, clippy, tests, no_std build, miri
+                        (--miri-full: every core test under miri, not the CI subset)
+  demo [ARGS..]         cargo run --release -p caveclod-examples --example flyover -- ARGS
+";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = env::args().skip(1).collect();
+    let Some((cmd, rest)) = args.split_first() else {
+        eprint!("{USAGE}");
+        return ExitCode::FAILURE;
+    };
+    let result = match cmd.as_str() {
+        "setup" => {
+            parse_flags(rest, &["--with-miri"]).and_then(|f| setup(f.contains(&"--with-miri")))
+        }
+        "test" => {
+            parse_flags(rest, &["--miri-full"]).and_then(|f| test(f.contains(&"--miri-full")))
+        }
+        "demo" => demo(rest),
+        "help" | "--help" | "-h" => {
+            print!("{USAGE}");
+            Ok(())
+        }
+        other => Err(format!("unknown command `{other}`\n{USAGE}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The flags given, each checked against `known`.
+fn parse_flags<'a>(args: &'a [String], known: &[&str]) -> Result<Vec<&'a str>, String> {
+    args.iter()
+        .map(|a| {
+            if known.contains(&a.as_str()) {
+                Ok(a.as_str())
+            } else {
+                Err(format!("unknown argument `{a}`\n{USAGE}"))
+            }
+        })
+        .collect()
+}
+
+/// The workspace root: the parent of this package's directory.
+fn workspace_root() -> PathBuf {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest.parent().unwrap_or(manifest).to_path_buf()
+}
+
+/// A command run from the workspace root, with the variables that `cargo run` and the
+/// rustup proxy set for this process removed, so a nested `cargo +toolchain` picks its own
+/// toolchain and tools.
+fn cmd(program: &str, args: &[&str]) -> Command {
+    let mut c = Command::new(program);
+    c.args(args).current_dir(workspace_root());
+    for var in [
+        "RUSTUP_TOOLCHAIN",
+        "RUSTC",
+        "RUSTDOC",
+        "CARGO",
+        "RUSTC_WRAPPER",
+    ] {
+        c.env_remove(var);
+    }
+    c
+}
+
+/// Runs a command, echoing it; `Err` names it if it cannot start or exits non-zero.
+fn run(mut c: Command) -> Result<(), String> {
+    let shown = show(&c);
+    println!("$ {shown}");
+    let status = c
+        .status()
+        .map_err(|e| format!("could not start `{shown}`: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{shown}` failed ({status})"))
+    }
+}
+
+/// `true` if the command starts and exits 0; its output is discarded.
+fn succeeds(mut c: Command) -> bool {
+    c.stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+fn show(c: &Command) -> String {
+    let mut s = c.get_program().to_string_lossy().into_owned();
+    for a in c.get_args() {
+        s.push(' ');
+        s.push_str(&a.to_string_lossy());
+    }
+    s
+}
+
+// ---------------------------------------------------------------------------------------
+// setup
+
+/// One thing `setup` looks for.
+struct Requirement {
+    what: &'static str,
+    found: Option<PathBuf>,
+}
+
+fn requirements() -> Vec<Requirement> {
+    vec![
+        Requirement {
+            what: "lavapipe ICD (/usr/share/vulkan/icd.d/lvp_icd*.json)",
+            found: glob_in(Path::new("/usr/share/vulkan/icd.d"), "lvp_icd", ".json"),
+        },
+        Requirement {
+            what: "Vulkan loader (libvulkan.so.1)",
+            found: find_library("libvulkan.so.1"),
+        },
+        Requirement {
+            what: "Khronos validation layer (VkLayer_khronos_validation.json)",
+            found: Some(PathBuf::from(
+                "/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json",
+            ))
+            .filter(|p| p.is_file()),
+        },
+        Requirement {
+            what: "spirv-val",
+            found: find_in_path("spirv-val"),
+        },
+    ]
+}
+
+/// The first file in `dir` whose name starts with `prefix` and ends with `suffix`.
+fn glob_in(dir: &Path, prefix: &str, suffix: &str) -> Option<PathBuf> {
+    let mut hits: Vec<PathBuf> = fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .and_then(OsStr::to_str)
+                .is_some_and(|n| n.starts_with(prefix) && n.ends_with(suffix))
+        })
+        .collect();
+    hits.sort();
+    hits.into_iter().next()
+}
+
+/// A shared library the dynamic loader can find: `ldconfig -p` first, then the usual
+/// library directories.
+fn find_library(name: &str) -> Option<PathBuf> {
+    for ldconfig in ["ldconfig", "/sbin/ldconfig", "/usr/sbin/ldconfig"] {
+        if let Ok(out) = Command::new(ldconfig).arg("-p").output() {
+            let text = String::from_utf8_lossy(&out.stdout);
+            for line in text.lines() {
+                let line = line.trim();
+                if line.starts_with(&format!("{name} ")) {
+                    if let Some((_, path)) = line.rsplit_once(" => ") {
+                        return Some(PathBuf::from(path));
+                    }
+                }
+            }
+            break;
+        }
+    }
+    let dirs = [
+        "/usr/lib/x86_64-linux-gnu",
+        "/usr/lib/aarch64-linux-gnu",
+        "/usr/lib64",
+        "/usr/lib",
+        "/lib/x86_64-linux-gnu",
+        "/lib64",
+        "/lib",
+        "/usr/local/lib",
+    ];
+    dirs.iter()
+        .map(|d| Path::new(d).join(name))
+        .find(|p| p.exists())
+}
+
+fn find_in_path(program: &str) -> Option<PathBuf> {
+    env::split_paths(&env::var_os("PATH")?)
+        .map(|d| d.join(program))
+        .find(|p| p.is_file())
+}
+
+/// `true` when running as root (uid 0), read from `/proc/self/status`, else from `id -u`.
+fn is_root() -> bool {
+    if let Ok(status) = fs::read_to_string("/proc/self/status") {
+        if let Some(line) = status.lines().find(|l| l.starts_with("Uid:")) {
+            return line.split_whitespace().nth(2) == Some("0");
+        }
+    }
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+fn setup(with_miri: bool) -> Result<(), String> {
+    let missing: Vec<&'static str> = requirements()
+        .into_iter()
+        .filter_map(|r| match r.found {
+            Some(p) => {
+                println!("found   {}: {}", r.what, p.display());
+                None
+            }
+            None => {
+                println!("missing {}", r.what);
+                Some(r.what)
+            }
+        })
+        .collect();
+    if !missing.is_empty() {
+        let packages = APT_PACKAGES.join(" ");
+        if find_in_path("apt-get").is_none() && !Path::new("/usr/bin/apt-get").is_file() {
+            return Err(format!(
+                "missing: {}; this is not a Debian-like system (no apt-get): install the \
+                 equivalents of the Debian packages {packages}",
+                missing.join(", ")
+            ));
+        }
+        if !is_root() {
+            return Err(format!(
+                "missing: {}; as root, run:\n    sudo apt-get update && sudo apt-get install -y {packages}",
+                missing.join(", ")
+            ));
+        }
+        run(cmd("apt-get", &["update"]))?;
+        let mut install = cmd("apt-get", &["install", "-y"]);
+        install
+            .args(APT_PACKAGES)
+            .env("DEBIAN_FRONTEND", "noninteractive");
+        run(install)?;
+        let still: Vec<_> = requirements()
+            .into_iter()
+            .filter(|r| r.found.is_none())
+            .map(|r| r.what)
+            .collect();
+        if !still.is_empty() {
+            return Err(format!(
+                "still missing after apt-get install: {}",
+                still.join(", ")
+            ));
+        }
+    }
+    run(cmd("rustup", &["target", "add", NO_STD_TARGET]))?;
+    if with_miri {
+        install_miri()?;
+    }
+    Ok(())
+}
+
+/// Installs the pinned nightly with miri and rust-src (a no-op when present), then builds
+/// miri's sysroot so the first `cargo miri test` does not.
+fn install_miri() -> Result<(), String> {
+    run(cmd(
+        "rustup",
+        &[
+            "toolchain",
+            "install",
+            NIGHTLY,
+            "--profile",
+            "minimal",
+            "--component",
+            "miri,rust-src",
+        ],
+    ))?;
+    run(cmd("cargo", &[&format!("+{NIGHTLY}"), "miri", "setup"]))
+}
+
+fn miri_installed() -> bool {
+    succeeds(cmd("cargo", &[&format!("+{NIGHTLY}"), "miri", "--version"]))
+}
+
+// ---------------------------------------------------------------------------------------
+// test
+
+/// Runs each step, timing it; returns the number of steps that passed and failed.
+fn test(miri_full: bool) -> Result<(), String> {
+    let nightly = format!("+{NIGHTLY}");
+    type Step = Box<dyn Fn() -> Result<(), String>>;
+    let mut steps: Vec<(String, Step)> = vec![
+        ("setup".into(), Box::new(|| setup(false))),
+        (
+            "cargo fmt --all -- --check".into(),
+            Box::new(|| run(cmd("cargo", &["fmt", "--all", "--", "--check"]))),
+        ),
+        (
+            "cargo clippy --workspace --all-targets -- -D warnings".into(),
+            Box::new(|| {
+                run(cmd(
+                    "cargo",
+                    &[
+                        "clippy",
+                        "--workspace",
+                        "--all-targets",
+                        "--",
+                        "-D",
+                        "warnings",
+                    ],
+                ))
+            }),
+        ),
+        (
+            "cargo test --workspace".into(),
+            Box::new(|| run(cmd("cargo", &["test", "--workspace"]))),
+        ),
+        (
+            format!("cargo build -p caveclod-core --target {NO_STD_TARGET}"),
+            Box::new(|| {
+                run(cmd(
+                    "cargo",
+                    &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
+                ))
+            }),
+        ),
+    ];
+    let miri_title = if miri_full {
+        format!("cargo {nightly} miri test -p caveclod-core")
+    } else {
+        format!("cargo {nightly} miri test -p caveclod-core (CI subset: {MIRI_SUBSET_NOTE})")
+    };
+    steps.push((
+        miri_title,
+        Box::new(move || {
+            if !miri_installed() {
+                install_miri()?;
+            }
+            let nightly = format!("+{NIGHTLY}");
+            let mut args = vec![nightly.as_str(), "miri", "test", "-p", "caveclod-core"];
+            if !miri_full {
+                args.extend_from_slice(MIRI_SUBSET_ARGS);
+            }
+            run(cmd("cargo", &args))
+        }),
+    ));
+
+    let total = Instant::now();
+    let mut results: Vec<(String, Duration, bool)> = Vec::new();
+    for (title, step) in &steps {
+        println!("\n==> {title}");
+        let start = Instant::now();
+        let outcome = step();
+        let took = start.elapsed();
+        match &outcome {
+            Ok(()) => println!("<== ok in {}", secs(took)),
+            Err(e) => println!("<== FAILED in {}: {e}", secs(took)),
+        }
+        results.push((title.clone(), took, outcome.is_ok()));
+    }
+    println!("\nsteps:");
+    for (title, took, ok) in &results {
+        let mark = if *ok { "ok    " } else { "FAILED" };
+        println!("  {mark} {:>8}  {title}", secs(*took));
+    }
+    println!("  total  {:>8}", secs(total.elapsed()));
+    let passed = results.iter().filter(|r| r.2).count();
+    let failed = results.len() - passed;
+    println!("{passed} passed, {failed} failed");
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("{failed} step(s) failed"))
+    }
+}
+
+/// What CI runs under miri by default (see `MIRI_SUBSET_ARGS`).
+const MIRI_SUBSET_NOTE: &str = "every core test, with the sampled robustness test";
+/// Extra arguments to `cargo miri test` for the CI subset.
+const MIRI_SUBSET_ARGS: &[&str] = &[];
+
+fn secs(d: Duration) -> String {
+    format!("{:.1}s", d.as_secs_f64())
+}
+
+// ---------------------------------------------------------------------------------------
+// demo
+
+fn demo(args: &[String]) -> Result<(), String> {
+    let mut c = cmd(
+        "cargo",
+        &[
+            "run",
+            "--release",
+            "-p",
+            "caveclod-examples",
+            "--example",
+            "flyover",
+            "--",
+        ],
+    );
+    c.args(args);
+    run(c)
+}

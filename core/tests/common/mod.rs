@@ -1,0 +1,236 @@
+//! Shared by the integration tests of caveclod-core: the golden file in aligned memory,
+//! views around a hierarchy, and a short exercise of every runtime entry point.
+//!
+//! The golden file `data/terrain6.clod` is the test builder's output for
+//! `meshes::terrain(6, 6, 1)`; the `caveclod-tests` package's `golden` test checks that it
+//! is current (and rewrites it with `CAVECLOD_UPDATE_GOLDEN=1`).
+
+#![allow(dead_code)] // each test binary uses a part of this module
+
+use caveclod_core::format::FileHeader;
+use caveclod_core::glam::Vec3;
+use caveclod_core::{checksum64, CameraConfig, CameraState, Hierarchy, NodeId, RefineParams, View};
+
+/// The golden file's bytes as `include_bytes!` gives them (alignment 1).
+pub static GOLDEN: &[u8] = include_bytes!("../data/terrain6.clod");
+
+/// Bytes in 8-byte aligned storage: what a reader gets from a `Vec<u64>` or an allocator.
+#[derive(Clone)]
+pub struct Aligned {
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl Aligned {
+    /// A copy of `bytes`, starting at an 8-byte aligned address.
+    pub fn new(bytes: &[u8]) -> Self {
+        Self::with_offset(bytes, 0)
+    }
+
+    /// A copy of `bytes` starting `offset` bytes after an 8-byte aligned address.
+    pub fn with_offset(bytes: &[u8], offset: usize) -> Self {
+        let mut a = Self {
+            words: vec![0; (offset + bytes.len()).div_ceil(8)],
+            len: offset + bytes.len(),
+        };
+        a.all_mut()[offset..].copy_from_slice(bytes);
+        a
+    }
+
+    fn all_mut(&mut self) -> &mut [u8] {
+        &mut bytemuck::cast_slice_mut(&mut self.words)[..self.len]
+    }
+
+    /// The bytes from `offset` on.
+    pub fn at(&self, offset: usize) -> &[u8] {
+        &bytemuck::cast_slice(&self.words)[offset..self.len]
+    }
+
+    /// All the bytes.
+    pub fn bytes(&self) -> &[u8] {
+        self.at(0)
+    }
+
+    /// All the bytes, mutably.
+    pub fn bytes_mut(&mut self) -> &mut [u8] {
+        self.all_mut()
+    }
+}
+
+/// The golden file in aligned memory.
+pub fn golden() -> Aligned {
+    Aligned::new(GOLDEN)
+}
+
+/// The header of `bytes` (at least 64 of them).
+pub fn header(bytes: &[u8]) -> FileHeader {
+    bytemuck::pod_read_unaligned(&bytes[..size_of::<FileHeader>()])
+}
+
+/// Writes `h` over the first 64 bytes.
+pub fn set_header(bytes: &mut [u8], h: &FileHeader) {
+    bytes[..size_of::<FileHeader>()].copy_from_slice(bytemuck::bytes_of(h));
+}
+
+/// Recomputes the checksum of everything after the header and stores it in the header, so
+/// that a corruption reaches the validator instead of stopping at the checksum.
+pub fn fix_checksum(bytes: &mut [u8]) {
+    let mut h = header(bytes);
+    h.checksum = checksum64(&bytes[size_of::<FileHeader>()..]);
+    set_header(bytes, &h);
+}
+
+/// A small deterministic generator (SplitMix64): the tests need reproducible corruption,
+/// not statistical quality.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `0..n` (n > 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+/// Views from all around the hierarchy's bounding box: far, near, inside, grazing, plus
+/// views without frustum planes. Deterministic; `count` of them.
+pub fn views(h: &Hierarchy<'_>, count: usize) -> Vec<View> {
+    let m = h.meta();
+    let lo = Vec3::from_array(m.bounds_min);
+    let hi = Vec3::from_array(m.bounds_max);
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let mut out = Vec::with_capacity(count);
+    for i in 0..count {
+        let t = i as f32 / count.max(1) as f32;
+        let angle = t * std::f32::consts::TAU * 3.0;
+        // Distances from inside the box to far away, elevations from below to above.
+        let distance = radius * [0.05, 0.6, 1.5, 4.0, 20.0][i % 5];
+        let elevation = [-0.4f32, 0.1, 0.5, 1.2][i % 4];
+        let dir = Vec3::new(angle.cos(), elevation, angle.sin()).normalize();
+        let eye = centre + dir * distance;
+        let target = centre + Vec3::new(0.0, 0.0, radius * 0.1 * t);
+        if i % 7 == 6 {
+            out.push(View::without_frustum(eye, 500.0 + 100.0 * i as f32));
+        } else {
+            out.push(View::perspective(
+                eye,
+                target,
+                Vec3::Y,
+                0.9,
+                16.0 / 9.0,
+                radius * 1e-3,
+                radius * 100.0,
+                720.0,
+            ));
+        }
+    }
+    out
+}
+
+/// Refinement parameters the exercises cycle through.
+pub fn params(i: usize) -> RefineParams {
+    [
+        RefineParams::default(),
+        RefineParams {
+            tolerance_px: 0.25,
+            ..RefineParams::default()
+        },
+        RefineParams {
+            tolerance_px: 4.0,
+            max_ops: 7,
+            ..RefineParams::default()
+        },
+        RefineParams {
+            tolerance_px: 0.5,
+            frustum_culling: false,
+            backface_culling: false,
+            ..RefineParams::default()
+        },
+    ][i % 4]
+}
+
+/// Emits the camera's indices into exactly sized buffers and checks what can be checked of
+/// any hierarchy that loaded: offsets partition the output, and every index names a vertex.
+/// Errors the runtime reports for data it cannot make sense of are accepted.
+pub fn emit_checked(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
+    let total: usize = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![u32::MAX; total];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    if let Ok(n) = cam.emit_indices_packed(h, &mut out, &mut offsets) {
+        assert_eq!(n, total);
+        assert_eq!(offsets[0], 0);
+        for s in 0..h.surface_count() {
+            assert!(offsets[s] <= offsets[s + 1]);
+            assert_eq!((offsets[s + 1] - offsets[s]) as usize, cam.index_count(s));
+        }
+        assert_eq!(offsets[h.surface_count()] as usize, total);
+        for &i in &out {
+            assert!((i as usize) < h.vertices().len(), "index {i} out of range");
+        }
+    }
+}
+
+/// Collapses every legal collapse until none is left; returns the number applied.
+pub fn collapse_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> usize {
+    let ns = h.splits().len();
+    let mut applied = 0;
+    // Each productive round removes at least one split; `ns + 1` rounds bound the loop even
+    // if the runtime misbehaves.
+    for _ in 0..=ns {
+        let mut progress = false;
+        for v in (0..ns as u32).rev().map(NodeId) {
+            if cam.can_collapse(h, v) && cam.collapse(h, v).is_ok() {
+                applied += 1;
+                progress = true;
+            }
+        }
+        if !progress {
+            break;
+        }
+    }
+    applied
+}
+
+/// A short run of every runtime entry point over a hierarchy that loaded. It must not panic;
+/// errors are fine (corrupt-but-valid data may make operations report `Inconsistent`).
+pub fn exercise(h: &Hierarchy<'_>, view_count: usize) {
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = CameraState::new(h, &mut memory).expect("words_needed words are enough");
+    assert!(cam.is_for(h));
+    assert_eq!(cam.active_polygon_count() as usize, h.base_polygon_count());
+    for (i, view) in views(h, view_count).iter().enumerate() {
+        let _ = cam.refine(h, view, &params(i));
+        emit_checked(h, &cam);
+    }
+    let ns = h.splits().len() as u32;
+    for v in (0..ns.min(32)).map(NodeId) {
+        let _ = cam.force_split_own_stack(h, v);
+    }
+    emit_checked(h, &cam);
+    collapse_all(h, &mut cam);
+    emit_checked(h, &cam);
+    cam.reset(h);
+    assert_eq!(cam.split_count(), 0);
+
+    // A camera with a small budget: refinement is refused, not failed.
+    let config = CameraConfig::with_polygon_budget(h, h.base_polygon_count() as u32 + 6);
+    let mut small = vec![0u32; CameraState::words_needed_for(h, &config)];
+    let mut cam = CameraState::with_config(h, &mut small, &config).expect("words_needed_for words");
+    for (i, view) in views(h, view_count.min(3)).iter().enumerate() {
+        let _ = cam.refine(h, view, &params(i));
+        assert!(cam.split_count() <= config.max_pairs);
+        emit_checked(h, &cam);
+    }
+}

@@ -1,0 +1,399 @@
+//! `Hierarchy::from_bytes` on damaged files: every truncation, thousands of seeded byte
+//! flips (with and without the checksum rewritten, so the validator itself is reached), and
+//! targeted corruptions that must be refused with the right typed error. A damaged file must
+//! give `Err`, or `Ok` with a hierarchy the runtime can use without panicking.
+//!
+//! Under miri only a sample runs (the full sweep would take hours there).
+
+mod common;
+
+use std::collections::BTreeMap;
+
+use caveclod_core::format::{tags, FileHeader, SectionEntry, Tag};
+use caveclod_core::{FormatError, Hierarchy, Node, Position};
+use common::{exercise, fix_checksum, golden, header, set_header, Aligned, Rng};
+
+const HEADER_LEN: usize = size_of::<FileHeader>();
+
+/// Truncations tried: all of them, or an even sample under miri.
+fn truncation_lengths(len: usize) -> Vec<usize> {
+    if cfg!(miri) {
+        let step = len.div_ceil(50).max(1);
+        (0..len).step_by(step).collect()
+    } else {
+        (0..len).collect()
+    }
+}
+
+fn flip_count() -> usize {
+    if cfg!(miri) {
+        50
+    } else {
+        10_000
+    }
+}
+
+/// Views each `Ok` exercise refines from.
+fn exercise_views() -> usize {
+    if cfg!(miri) {
+        2
+    } else {
+        4
+    }
+}
+
+/// A short name for an error's variant, for the tallies printed with `--nocapture`.
+fn kind(e: &FormatError) -> &'static str {
+    match e {
+        FormatError::Truncated { .. } => "Truncated",
+        FormatError::BadMagic => "BadMagic",
+        FormatError::UnsupportedVersion { .. } => "UnsupportedVersion",
+        FormatError::BadHeader { .. } => "BadHeader",
+        FormatError::LengthMismatch { .. } => "LengthMismatch",
+        FormatError::ChecksumMismatch { .. } => "ChecksumMismatch",
+        FormatError::Misaligned { .. } => "Misaligned",
+        FormatError::SectionTable { .. } => "SectionTable",
+        FormatError::MissingSection { .. } => "MissingSection",
+        FormatError::DuplicateSection { .. } => "DuplicateSection",
+        FormatError::RecordSize { .. } => "RecordSize",
+        FormatError::Count { .. } => "Count",
+        FormatError::Invalid { .. } => "Invalid",
+    }
+}
+
+#[test]
+fn the_golden_file_loads_and_runs() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("the golden file is valid");
+    assert!(!h.splits().is_empty(), "the golden hierarchy has splits");
+    assert!(
+        h.surface_count() >= 2,
+        "the golden terrain has two surfaces"
+    );
+    assert_eq!(h.checksum(), header(file.bytes()).checksum);
+    exercise(&h, exercise_views());
+}
+
+#[test]
+fn every_truncation_is_refused() {
+    let file = golden();
+    let full = file.bytes();
+    for len in truncation_lengths(full.len()) {
+        let cut = Aligned::new(&full[..len]);
+        let expected = if len < HEADER_LEN {
+            FormatError::Truncated {
+                needed: HEADER_LEN as u64,
+                len: len as u64,
+            }
+        } else {
+            FormatError::LengthMismatch {
+                header: full.len() as u64,
+                actual: len as u64,
+            }
+        };
+        assert_eq!(
+            Hierarchy::from_bytes(cut.bytes()).err(),
+            Some(expected),
+            "length {len}"
+        );
+    }
+}
+
+/// Truncations whose header is rewritten to agree (length and checksum): the section table
+/// must catch every section that no longer fits.
+#[test]
+fn every_truncation_with_a_consistent_header_is_refused() {
+    let file = golden();
+    let full = file.bytes();
+    for len in truncation_lengths(full.len()) {
+        if len < HEADER_LEN {
+            continue;
+        }
+        let mut cut = Aligned::new(&full[..len]);
+        let mut h = header(cut.bytes());
+        h.file_len = len as u64;
+        set_header(cut.bytes_mut(), &h);
+        fix_checksum(cut.bytes_mut());
+        match Hierarchy::from_bytes(cut.bytes()) {
+            Err(
+                FormatError::Truncated { .. }
+                | FormatError::SectionTable { .. }
+                | FormatError::MissingSection { .. },
+            ) => {}
+            // Only trailing zero padding after the last section can go without harm.
+            Ok(h) => {
+                assert!(
+                    full[len..].iter().all(|&b| b == 0),
+                    "length {len}: a file missing data loaded"
+                );
+                exercise(&h, 1);
+            }
+            Err(e) => panic!("length {len}: unexpected error {e:?}"),
+        }
+    }
+}
+
+#[test]
+fn seeded_byte_flips_never_panic() {
+    let file = golden();
+    let len = file.bytes().len();
+    let mut rng = Rng::new(0x5eed_c1a0_d000_0001);
+    let mut tally: BTreeMap<String, usize> = BTreeMap::new();
+    for round in 0..flip_count() {
+        let mut damaged = file.clone();
+        let bytes = damaged.bytes_mut();
+        // Rounds 0, 1 of every 5: no checksum fix (the checksum must catch body damage);
+        // rounds 2, 3, 4: checksum rewritten, so the damage reaches the validator.
+        let fix = round % 5 >= 2;
+        let flips = if round % 2 == 0 { 1 } else { 2 + rng.below(7) };
+        let mut body_touched = false;
+        let mut header_touched = false;
+        for _ in 0..flips {
+            let at = rng.below(len);
+            let xor = 1 + rng.below(255) as u8;
+            bytes[at] ^= xor;
+            if at >= HEADER_LEN {
+                body_touched = true;
+            } else {
+                header_touched = true;
+            }
+        }
+        if fix && len >= HEADER_LEN {
+            fix_checksum(bytes);
+        }
+        let result = Hierarchy::from_bytes(damaged.bytes());
+        let label = match &result {
+            Ok(_) => "Ok".to_string(),
+            Err(e) => kind(e).to_string(),
+        };
+        let key = format!("{}{label}", if fix { "fixed:" } else { "raw:" });
+        *tally.entry(key).or_default() += 1;
+        if !fix && body_touched && !header_touched {
+            assert!(
+                matches!(result, Err(FormatError::ChecksumMismatch { .. })),
+                "round {round}: body damage without a checksum fix gave {result:?}"
+            );
+        }
+        if let Ok(h) = result {
+            exercise(&h, exercise_views());
+        }
+    }
+    eprintln!("outcomes of {} flips: {tally:#?}", flip_count());
+    // The sweep must reach the validator, not stop at the checksum every time.
+    let reached_validator: usize = tally
+        .iter()
+        .filter(|(k, _)| k.starts_with("fixed:") && !k.ends_with("ChecksumMismatch"))
+        .map(|(_, n)| n)
+        .sum();
+    assert!(reached_validator > 0, "{tally:?}");
+}
+
+// ---------------------------------------------------------------------------------------
+// Targeted corruptions: each must be refused with its own typed error.
+
+/// The section table of a valid file.
+fn table(bytes: &[u8]) -> Vec<SectionEntry> {
+    let count = header(bytes).section_count as usize;
+    (0..count)
+        .map(|i| {
+            let at = HEADER_LEN + i * size_of::<SectionEntry>();
+            bytemuck::pod_read_unaligned(&bytes[at..at + size_of::<SectionEntry>()])
+        })
+        .collect()
+}
+
+/// The byte range of section `tag`.
+fn section_range(bytes: &[u8], tag: Tag) -> std::ops::Range<usize> {
+    let e = table(bytes)
+        .into_iter()
+        .find(|e| e.tag == tag)
+        .expect("section present");
+    let start = e.offset as usize;
+    start..start + e.record_size as usize * e.record_count as usize
+}
+
+#[test]
+fn bad_magic_is_refused() {
+    let mut f = golden();
+    f.bytes_mut()[0] = b'X';
+    assert_eq!(
+        Hierarchy::from_bytes(f.bytes()).err(),
+        Some(FormatError::BadMagic)
+    );
+}
+
+#[test]
+fn another_major_version_is_refused() {
+    let mut f = golden();
+    let mut h = header(f.bytes());
+    h.version_major += 1;
+    h.version_minor = 3;
+    set_header(f.bytes_mut(), &h);
+    assert_eq!(
+        Hierarchy::from_bytes(f.bytes()).err(),
+        Some(FormatError::UnsupportedVersion {
+            major: h.version_major,
+            minor: 3
+        })
+    );
+}
+
+#[test]
+fn another_minor_version_is_accepted() {
+    let mut f = golden();
+    let mut h = header(f.bytes());
+    h.version_minor += 1;
+    set_header(f.bytes_mut(), &h);
+    assert!(Hierarchy::from_bytes(f.bytes()).is_ok());
+}
+
+#[test]
+fn a_wrong_length_is_refused() {
+    let f = golden();
+    let len = f.bytes().len() as u64;
+    let mut longer = f.bytes().to_vec();
+    longer.extend_from_slice(&[0; 16]);
+    let longer = Aligned::new(&longer);
+    assert_eq!(
+        Hierarchy::from_bytes(longer.bytes()).err(),
+        Some(FormatError::LengthMismatch {
+            header: len,
+            actual: len + 16
+        })
+    );
+    let mut lying = f.clone();
+    let mut h = header(lying.bytes());
+    h.file_len = len - 8;
+    set_header(lying.bytes_mut(), &h);
+    assert_eq!(
+        Hierarchy::from_bytes(lying.bytes()).err(),
+        Some(FormatError::LengthMismatch {
+            header: len - 8,
+            actual: len
+        })
+    );
+}
+
+#[test]
+fn a_wrong_checksum_is_refused() {
+    let mut f = golden();
+    let stored = header(f.bytes()).checksum;
+    let last = f.bytes().len() - 1;
+    f.bytes_mut()[last] ^= 0x40;
+    match Hierarchy::from_bytes(f.bytes()) {
+        Err(FormatError::ChecksumMismatch {
+            stored: s,
+            computed,
+        }) => {
+            assert_eq!(s, stored);
+            assert_ne!(computed, stored);
+        }
+        other => panic!("expected ChecksumMismatch, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_node_parent_out_of_range_is_refused() {
+    let mut f = golden();
+    let range = section_range(f.bytes(), tags::NODES);
+    let nodes: &[Node] = bytemuck::cast_slice(&f.bytes()[range.clone()]);
+    let i = nodes
+        .iter()
+        .position(|n| n.parent.is_some())
+        .expect("a node with a parent");
+    let bad = nodes.len() as u32 + 5;
+    let at = range.start + i * size_of::<Node>();
+    f.bytes_mut()[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+    // Without the checksum fixed, the checksum catches it first.
+    assert!(matches!(
+        Hierarchy::from_bytes(f.bytes()),
+        Err(FormatError::ChecksumMismatch { .. })
+    ));
+    fix_checksum(f.bytes_mut());
+    match Hierarchy::from_bytes(f.bytes()) {
+        Err(FormatError::Invalid {
+            tag,
+            record,
+            field,
+            value,
+            ..
+        }) => {
+            assert_eq!(tag, tags::NODES);
+            assert_eq!(record, i as u64);
+            assert_eq!(field, "parent");
+            assert_eq!(value, u64::from(bad));
+        }
+        other => panic!("expected Invalid NODE parent, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_nan_position_is_refused() {
+    let mut f = golden();
+    let range = section_range(f.bytes(), tags::POSITIONS);
+    let count = range.len() / size_of::<Position>();
+    let i = count / 2;
+    let at = range.start + i * size_of::<Position>() + 4; // the y coordinate
+    f.bytes_mut()[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    fix_checksum(f.bytes_mut());
+    match Hierarchy::from_bytes(f.bytes()) {
+        Err(FormatError::Invalid {
+            tag,
+            record,
+            field,
+            value,
+            ..
+        }) => {
+            assert_eq!(tag, tags::POSITIONS);
+            assert_eq!(record, i as u64);
+            assert_eq!(field, "xyz");
+            assert_eq!(value, u64::from(f32::NAN.to_bits()));
+        }
+        other => panic!("expected Invalid POSN xyz, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_misaligned_buffer_is_refused_not_copied() {
+    let f = Aligned::with_offset(common::GOLDEN, 1);
+    let bytes = f.at(1);
+    assert_eq!(bytes.as_ptr() as usize % 2, 1);
+    assert!(matches!(
+        Hierarchy::from_bytes(bytes),
+        Err(FormatError::Misaligned { .. })
+    ));
+}
+
+/// `Hierarchy::from_bytes` documents that a 4-byte aligned buffer is enough ("any
+/// `Vec<u32>`-backed ... buffer is"), but the section table is cast to `SectionEntry`,
+/// whose `u64` fields need 8-byte alignment, so a buffer at an address that is 4 but not 8
+/// modulo 8 is refused with `Misaligned { tag: "SECT" }`. Reported as a core bug; run with
+/// `--ignored` to check a fix.
+#[test]
+#[ignore = "core bug: from_bytes needs 8-byte alignment, its docs promise 4"]
+fn a_four_byte_aligned_buffer_is_accepted_as_documented() {
+    let f = Aligned::with_offset(common::GOLDEN, 4);
+    let bytes = f.at(4);
+    assert_eq!(bytes.as_ptr() as usize % 8, 4);
+    let h = Hierarchy::from_bytes(bytes);
+    assert!(h.is_ok(), "{:?}", h.err());
+}
+
+#[test]
+fn a_section_past_the_end_is_refused() {
+    let mut f = golden();
+    let entries = table(f.bytes());
+    let i = entries
+        .iter()
+        .position(|e| e.tag == tags::VERTICES)
+        .expect("VERT section");
+    let mut e = entries[i];
+    e.record_count += 1_000;
+    let at = HEADER_LEN + i * size_of::<SectionEntry>();
+    f.bytes_mut()[at..at + size_of::<SectionEntry>()].copy_from_slice(bytemuck::bytes_of(&e));
+    fix_checksum(f.bytes_mut());
+    assert!(matches!(
+        Hierarchy::from_bytes(f.bytes()),
+        Err(FormatError::SectionTable { index, tag, .. }) if index == i as u32 && tag == tags::VERTICES
+    ));
+}

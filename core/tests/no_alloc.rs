@@ -1,0 +1,123 @@
+//! The runtime allocates nothing: with a counting global allocator, refinement from 20
+//! views, forced splits, collapses, and index emission leave the count unchanged once the
+//! hierarchy, the camera memory and the output buffers exist.
+//!
+//! Allocations are counted per thread (the test harness allocates on its own threads), and
+//! the test shows the counter works by watching one `Vec::with_capacity(1)` change it.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::hint::black_box;
+
+use caveclod_core::{CameraState, Hierarchy, NodeId};
+use common::{golden, params, views};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn count() {
+    // `try_with`: during thread teardown the slot may be gone; such allocations are not ours.
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
+
+// SAFETY: every method forwards to `System` with the caller's arguments unchanged; the
+// counter is a thread-local `Cell` with a const initialiser, which never allocates.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: forwarded; the caller upholds `alloc`'s contract.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: forwarded; the caller upholds `alloc_zeroed`'s contract.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        // SAFETY: forwarded; `ptr` came from this allocator, hence from `System`.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: forwarded; `ptr` came from this allocator, hence from `System`.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn the_runtime_does_not_allocate() {
+    // Set-up: everything that may allocate.
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let mut memory = vec![0u32; CameraState::words_needed(&h)];
+    let views = views(&h, 20);
+    let all_params: Vec<_> = (0..views.len()).map(params).collect();
+    let max_indices = 3 * h.polygon_count();
+    let mut packed = vec![0u32; max_indices];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    let mut lists: Vec<Vec<u32>> = (0..h.surface_count())
+        .map(|_| vec![0u32; max_indices])
+        .collect();
+    let mut slices: Vec<&mut [u32]> = lists.iter_mut().map(|l| l.as_mut_slice()).collect();
+    let mut written = vec![0u32; h.surface_count()];
+
+    // The counter works: one small allocation changes it.
+    let before = allocations();
+    let probe: Vec<u8> = Vec::with_capacity(1);
+    black_box(&probe);
+    assert!(allocations() > before, "the counting allocator saw nothing");
+    drop(probe);
+
+    let before = allocations();
+    let mut cam = CameraState::new(&h, &mut memory).expect("memory");
+    let mut work = 0u64;
+    for (view, p) in views.iter().zip(&all_params) {
+        let stats = cam.refine(&h, view, p).expect("refine");
+        work += u64::from(stats.operations());
+        let n = cam
+            .emit_indices_packed(&h, &mut packed, &mut offsets)
+            .expect("emit packed");
+        let m = cam
+            .emit_indices(&h, &mut slices, &mut written)
+            .expect("emit lists");
+        assert_eq!(n, m);
+    }
+    for v in (0..h.splits().len() as u32).map(NodeId) {
+        if cam.is_node_active(&h, v) {
+            work += u64::from(cam.force_split_own_stack(&h, v).expect("force split"));
+        }
+    }
+    cam.emit_indices_packed(&h, &mut packed, &mut offsets)
+        .expect("emit packed");
+    for v in (0..h.splits().len() as u32).rev().map(NodeId) {
+        if cam.can_collapse(&h, v) {
+            cam.collapse(&h, v).expect("collapse");
+            work += 1;
+        }
+    }
+    cam.reset(&h);
+    let after = allocations();
+    black_box(work);
+    assert!(work > 0, "the views must make the runtime do something");
+    assert_eq!(
+        after,
+        before,
+        "the runtime allocated {} times",
+        after - before
+    );
+}
