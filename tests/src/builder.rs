@@ -631,12 +631,31 @@ fn finish(
     let np = mesh.positions.len();
     let nt = mesh.triangles.len();
     let created = w.recs.len();
-    // Splittable nodes in reverse creation order (parents first), then leaves.
+    // Splittable nodes in depth-first preorder, stationary child first, roots in position
+    // order: a subtree is a contiguous id range and a stationary child follows its parent, so
+    // the records a refinement pass reads together lie together. Then the leaves, in
+    // position order.
+    let mut split_new = vec![u32::MAX; created];
+    let mut by_new = Vec::with_capacity(created);
+    let mut stack: Vec<u32> = (0..(np + created) as u32)
+        .filter(|&o| w.parent[o as usize] == NONE && o as usize >= np)
+        .collect();
+    stack.sort_unstable_by_key(|&o| std::cmp::Reverse(w.node_pos[o as usize]));
+    while let Some(o) = stack.pop() {
+        let c = o as usize - np;
+        split_new[c] = by_new.len() as u32;
+        by_new.push(c);
+        for child in [w.recs[c].u, w.recs[c].t] {
+            if child as usize >= np {
+                stack.push(child);
+            }
+        }
+    }
     let new_id = |old: u32| -> u32 {
         if (old as usize) < np {
             (created + old as usize) as u32
         } else {
-            (created - 1 - (old as usize - np)) as u32
+            split_new[old as usize - np]
         }
     };
     let total_nodes = np + created;
@@ -668,7 +687,7 @@ fn finish(
         }
     }
     let base_count = order.len();
-    for c in (0..created).rev() {
+    for &c in &by_new {
         let r = w.recs[c];
         poly_new[r.fl as usize] = order.len() as u32;
         order.push((r.fl, r.rot_l));

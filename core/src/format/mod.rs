@@ -4,7 +4,7 @@
 //! offset 0   FileHeader (64 bytes): magic "CAVECLOD", version, file length, section count,
 //!            checksum of every byte after the header
 //! offset 64  SectionEntry x section_count (24 bytes each): tag, record size, offset, count
-//! ...        sections, each starting at a multiple of 16, zero padding between them
+//! ...        sections, each starting at a multiple of 64, zero padding between them
 //! ```
 //!
 //! All integers are little-endian; the records are the `#[repr(C)]` types of
@@ -34,7 +34,7 @@ pub const VERSION_MAJOR: u16 = 1;
 /// The minor version this crate writes. Readers accept any minor version of their major.
 pub const VERSION_MINOR: u16 = 0;
 /// Alignment of every section's start, in bytes.
-pub const SECTION_ALIGN: usize = 16;
+pub const SECTION_ALIGN: usize = 64;
 /// The most sections a file may list.
 pub const MAX_SECTIONS: u32 = 1024;
 

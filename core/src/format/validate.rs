@@ -117,7 +117,7 @@ pub(crate) fn section_table(bytes: &[u8]) -> Result<(&[SectionEntry], u64), Form
             return Err(problem("record size is zero"));
         }
         if e.offset % SECTION_ALIGN as u64 != 0 {
-            return Err(problem("offset is not a multiple of 16"));
+            return Err(problem("offset is not a multiple of 64"));
         }
         if e.offset < end_of_previous {
             return Err(problem("overlaps the table or the previous section"));
