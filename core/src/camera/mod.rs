@@ -170,11 +170,20 @@ pub(crate) struct Front<'m> {
 fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
     let ns = h.splits().len();
     let mp = c.max_pairs as usize;
-    ns + mp
-        + (h.roots().len() + mp)
-        + SLOT_WORDS * (h.base_polygon_count() + 2 * mp)
-        + h.surface_count()
-        + c.stack_len as usize
+    let slots = h
+        .base_polygon_count()
+        .saturating_add(mp.saturating_mul(2))
+        .saturating_mul(SLOT_WORDS);
+    [
+        ns,
+        mp,
+        h.roots().len().saturating_add(mp),
+        slots,
+        h.surface_count(),
+        c.stack_len as usize,
+    ]
+    .iter()
+    .fold(0usize, |a, &b| a.saturating_add(b))
 }
 
 impl<'m> CameraState<'m> {

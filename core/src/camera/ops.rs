@@ -335,12 +335,12 @@ impl Front<'_> {
         *self.active.get_mut(rv as usize).ok_or(bad)? = v.0;
         self.free_record(ru);
         self.pair_of[v.index()] = NONE;
-        self.active_nodes -= 1;
+        self.active_nodes = self.active_nodes.saturating_sub(1);
         for f in [s.f_l, s.f_r] {
             if let Some(p) = h.polygons().get(f.index()) {
-                self.active_polygons -= 1;
+                self.active_polygons = self.active_polygons.saturating_sub(1);
                 if let Some(c) = self.surface_polygons.get_mut(p.surface.index()) {
-                    *c -= 1;
+                    *c = c.saturating_sub(1);
                 }
             }
         }
@@ -429,9 +429,6 @@ impl Front<'_> {
     ) -> Result<u32, OpError> {
         if h.split(v).is_none() {
             return Err(OpError::Leaf { node: v });
-        }
-        if !self.is_created(h, v) {
-            return Err(OpError::NotActive { node: v });
         }
         let len = stack.len() as u32;
         let full = OpError::StackFull { len };
@@ -530,8 +527,9 @@ impl CameraState<'_> {
         self.front.apply_collapse(h, node)
     }
 
-    /// Splits `node`, first forcing the splits that activate its missing neighbours
-    /// (Hoppe's `force_vsplit`), with an explicit stack in `stack`. Returns the number of
+    /// Splits `node`, first forcing the splits that create it (if it is not yet on the
+    /// front) and that activate its missing neighbours (Hoppe's `force_vsplit`), with an
+    /// explicit stack in `stack`. Returns the number of
     /// splits applied; 0 if `node` was already split. On error the splits already applied
     /// stay (the front is valid, just not yet refined at `node`).
     pub fn force_split(
