@@ -1,16 +1,25 @@
 //! The golden file `core/tests/data/terrain6.clod`, which the core crate's integration tests
-//! and the fuzz seed use, is exactly what the test builder makes of `terrain(6, 6, 1)`.
+//! use, and its copy `fuzz/seeds/from_bytes/terrain6.clod`, the fuzzer's seed, are exactly
+//! what the test builder makes of `terrain(6, 6, 1)`.
 //!
-//! After an intended change to the builder or the format, regenerate it with
-//! `CAVECLOD_UPDATE_GOLDEN=1 cargo test -p caveclod-tests --test golden` and commit it.
+//! After an intended change to the builder or the format, regenerate both with
+//! `CAVECLOD_UPDATE_GOLDEN=1 cargo test -p caveclod-tests --test golden` and commit them.
 
 use std::path::PathBuf;
 
 use caveclod_core::Hierarchy;
 use caveclod_tests::{build, meshes};
 
-fn golden_path() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../core/tests/data/terrain6.clod")
+/// The golden file and its copies, relative to the workspace root.
+const GOLDEN_FILES: [&str; 2] = [
+    "core/tests/data/terrain6.clod",
+    "fuzz/seeds/from_bytes/terrain6.clod",
+];
+
+fn workspace_path(relative: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(relative)
 }
 
 fn updating() -> bool {
@@ -24,35 +33,33 @@ fn terrain6_matches_the_golden_file() {
     // Whatever is committed must load.
     Hierarchy::from_bytes(&bytes).expect("the builder's bytes are a valid hierarchy");
 
-    let path = golden_path();
-    if updating() {
-        std::fs::create_dir_all(path.parent().expect("a parent directory")).expect("mkdir");
-        let tmp = path.with_extension("clod.tmp");
-        std::fs::write(&tmp, &bytes[..]).expect("write the golden file");
-        std::fs::rename(&tmp, &path).expect("rename the golden file");
-        eprintln!("wrote {} ({} bytes)", path.display(), bytes.len());
-        return;
-    }
-    let golden = std::fs::read(&path).unwrap_or_else(|e| {
-        panic!(
-            "cannot read {}: {e}; create it with CAVECLOD_UPDATE_GOLDEN=1",
-            path.display()
-        )
-    });
-    if golden[..] != bytes[..] {
-        let first = golden
-            .iter()
-            .zip(bytes.iter())
-            .position(|(a, b)| a != b)
-            .unwrap_or(golden.len().min(bytes.len()));
-        panic!(
-            "the builder's output for terrain(6, 6, 1) differs from {}: {} bytes built, {} \
-             golden, first difference at byte {first}. If the change is intended, rerun with \
-             CAVECLOD_UPDATE_GOLDEN=1 and commit the file.",
-            path.display(),
-            bytes.len(),
-            golden.len()
-        );
+    for relative in GOLDEN_FILES {
+        let path = workspace_path(relative);
+        if updating() {
+            std::fs::create_dir_all(path.parent().expect("a parent directory")).expect("mkdir");
+            let tmp = path.with_extension("clod.tmp");
+            std::fs::write(&tmp, &bytes[..]).expect("write the golden file");
+            std::fs::rename(&tmp, &path).expect("rename the golden file");
+            eprintln!("wrote {relative} ({} bytes)", bytes.len());
+            continue;
+        }
+        let golden = std::fs::read(&path).unwrap_or_else(|e| {
+            panic!("cannot read {relative}: {e}; create it with CAVECLOD_UPDATE_GOLDEN=1")
+        });
+        if golden[..] != bytes[..] {
+            let first = golden
+                .iter()
+                .zip(bytes.iter())
+                .position(|(a, b)| a != b)
+                .unwrap_or(golden.len().min(bytes.len()));
+            panic!(
+                "the builder's output for terrain(6, 6, 1) differs from {relative}: {} bytes \
+                 built, {} golden, first difference at byte {first}. If the change is \
+                 intended, rerun with CAVECLOD_UPDATE_GOLDEN=1 and commit the files.",
+                bytes.len(),
+                golden.len()
+            );
+        }
     }
 }
 

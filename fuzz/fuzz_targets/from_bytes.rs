@@ -1,0 +1,121 @@
+//! `Hierarchy::from_bytes` on arbitrary bytes, then a camera over whatever loads.
+//!
+//! A 64-bit checksum stops nearly every mutation before the validator, so each input is
+//! tried twice: as given (header, length and checksum checks), and, when it fails on its
+//! length or checksum, again with the header's file length and checksum rewritten to match
+//! (the validator and the runtime). Loading must return `Err` or a hierarchy that every
+//! runtime entry point can use without panicking.
+#![no_main]
+
+use caveclod_core::format::FileHeader;
+use caveclod_core::glam::Vec3;
+use caveclod_core::{
+    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, RefineParams, View,
+};
+use libfuzzer_sys::fuzz_target;
+
+const HEADER_LEN: usize = size_of::<FileHeader>();
+
+/// `bytes` copied to the start of 8-byte aligned storage.
+fn aligned(bytes: &[u8]) -> Vec<u64> {
+    let mut words = vec![0u64; bytes.len().div_ceil(8)];
+    bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+    words
+}
+
+fn as_bytes(words: &[u64], len: usize) -> &[u8] {
+    &bytemuck::cast_slice(words)[..len]
+}
+
+fn views(h: &Hierarchy<'_>) -> [View; 4] {
+    let m = h.meta();
+    let lo = Vec3::from_array(m.bounds_min);
+    let hi = Vec3::from_array(m.bounds_max);
+    let centre = (lo + hi) * 0.5;
+    let r = ((hi - lo).length() * 0.5).max(1e-3);
+    let persp = |eye: Vec3| {
+        View::perspective(eye, centre, Vec3::Y, 0.9, 1.5, r * 1e-3, r * 100.0, 720.0)
+    };
+    [
+        persp(centre + Vec3::new(0.3, 0.8, 2.0) * r),
+        persp(centre + Vec3::new(-0.1, 0.05, 0.2) * r),
+        View::without_frustum(centre + Vec3::new(0.0, 0.5, 0.1) * r, 1e5),
+        persp(centre + Vec3::new(20.0, 3.0, -20.0) * r),
+    ]
+}
+
+fn emit(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
+    let total: usize = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![0u32; total];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    if let Ok(n) = cam.emit_indices_packed(h, &mut out, &mut offsets) {
+        assert_eq!(n, total);
+        assert!(out.iter().all(|&i| (i as usize) < h.vertices().len()));
+    }
+}
+
+fn exercise(h: &Hierarchy<'_>) {
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = CameraState::new(h, &mut memory).expect("words_needed words are enough");
+    let params = [
+        RefineParams::default(),
+        RefineParams {
+            tolerance_px: 0.1,
+            frustum_culling: false,
+            backface_culling: false,
+            ..RefineParams::default()
+        },
+    ];
+    for (i, view) in views(h).iter().enumerate() {
+        let _ = cam.refine(h, view, &params[i % 2]);
+        emit(h, &cam);
+    }
+    let ns = h.splits().len() as u32;
+    for v in (0..ns.min(16)).map(NodeId) {
+        let _ = cam.force_split_own_stack(h, v);
+    }
+    emit(h, &cam);
+    // Collapse everything legal, in bounded rounds.
+    for _ in 0..=ns {
+        let mut progress = false;
+        for v in (0..ns).rev().map(NodeId) {
+            if cam.can_collapse(h, v) && cam.collapse(h, v).is_ok() {
+                progress = true;
+            }
+        }
+        if !progress {
+            break;
+        }
+    }
+    emit(h, &cam);
+    cam.reset(h);
+
+    let config = CameraConfig::with_polygon_budget(h, h.base_polygon_count() as u32 + 4);
+    let mut small = vec![0u32; CameraState::words_needed_for(h, &config)];
+    let mut cam = CameraState::with_config(h, &mut small, &config).expect("words_needed_for");
+    let _ = cam.refine(h, &views(h)[2], &params[1]);
+    assert!(cam.split_count() <= config.max_pairs);
+    emit(h, &cam);
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut words = aligned(data);
+    let retry = match Hierarchy::from_bytes(as_bytes(&words, data.len())) {
+        Ok(h) => {
+            exercise(&h);
+            false
+        }
+        Err(FormatError::LengthMismatch { .. } | FormatError::ChecksumMismatch { .. }) => true,
+        Err(_) => false,
+    };
+    if retry && data.len() >= HEADER_LEN {
+        let bytes = &mut bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..data.len()];
+        let mut header: FileHeader = bytemuck::pod_read_unaligned(&bytes[..HEADER_LEN]);
+        header.file_len = data.len() as u64;
+        header.checksum = checksum64(&bytes[HEADER_LEN..]);
+        bytes[..HEADER_LEN].copy_from_slice(bytemuck::bytes_of(&header));
+        if let Ok(h) = Hierarchy::from_bytes(as_bytes(&words, data.len())) {
+            exercise(&h);
+        }
+    }
+});
