@@ -1,0 +1,358 @@
+//! Criterion benchmarks of the runtime on a terrain of about a million polygons
+//! (`terrain(708, 708)`: 1,002,528 triangles), built once per run outside the timed code.
+//!
+//! - `ops/split_collapse`: a precomputed legal sequence of every split of the hierarchy,
+//!   then the collapses in reverse order (throughput: operations).
+//! - `ops/refine_near_far`: refinement from the settled far front to the settled near front
+//!   and back: splits (forced ones included) and collapses in the order refinement makes
+//!   them, with the visits around them (throughput: operations).
+//! - `refine/settled_pass`: one refine pass over the settled near front (at least 100k active
+//!   polygons) from the same view: temporal coherence at rest (throughput: active polygons).
+//! - `refine/moving_pass`: one refine pass per iteration while the camera flies a small step
+//!   per iteration (throughput: active polygons).
+//! - `emit/packed`: index emission of the settled near front (throughput: polygons).
+//! - `frame/moving_refine_emit`: a moving refine pass plus emission, Hoppe's "faces per
+//!   second including refinement" (throughput: active polygons).
+//!
+//! `cargo bench -p caveclod-benches`; `CAVECLOD_BENCH_SIZE=N` changes the terrain. Without
+//! `--bench` (as `cargo test --benches` runs it) each benchmark runs once on a small terrain.
+
+use std::cell::Cell;
+use std::time::{Duration, Instant};
+
+use caveclod_core::glam::Vec3;
+use caveclod_core::{CameraState, Hierarchy, NodeId, RefineParams, RefineStats, View};
+use caveclod_tests::{build, meshes};
+use criterion::{Criterion, Throughput};
+
+const SEED: u64 = 7;
+const HEIGHT: f32 = 720.0;
+const ASPECT: f32 = 1280.0 / 720.0;
+const FOV_Y_DEG: f32 = 60.0;
+
+/// Terrain heights on the grid.
+struct Ground {
+    n: u32,
+    heights: Vec<f32>,
+}
+
+impl Ground {
+    fn at(&self, x: f32, z: f32) -> f32 {
+        let i = (x.round().max(0.0) as u32).min(self.n);
+        let j = (z.round().max(0.0) as u32).min(self.n);
+        self.heights
+            .get((j * (self.n + 1) + i) as usize)
+            .copied()
+            .unwrap_or(0.0)
+    }
+}
+
+/// A low camera at fraction `u` of the terrain's diagonal, flying along it, looking ahead
+/// and 15 degrees down: the flyover's straight pass.
+fn view_at(u: f32, size: f32, ground: &Ground) -> View {
+    let p = size * (0.15 + 0.7 * u);
+    let forward = Vec3::new(1.0, 0.0, 1.0).normalize();
+    let mut floor = f32::MIN;
+    for k in 0..=6 {
+        let d = 0.03 * size * k as f32 / 6.0;
+        floor = floor.max(ground.at(p + forward.x * d, p + forward.z * d));
+    }
+    let eye = Vec3::new(p, floor + 0.015 * size, p);
+    let pitch = 15f32.to_radians();
+    let dir = forward * pitch.cos() - Vec3::Y * pitch.sin();
+    View::perspective(
+        eye,
+        eye + dir,
+        Vec3::Y,
+        FOV_Y_DEG.to_radians(),
+        ASPECT,
+        0.1,
+        2.0 * size,
+        HEIGHT,
+    )
+}
+
+/// A view from far above the terrain's centre, where the base mesh is nearly enough.
+fn far_view(size: f32) -> View {
+    let c = 0.5 * size;
+    let eye = Vec3::new(c, 40.0 * size, c + 1.0);
+    View::perspective(
+        eye,
+        Vec3::new(c, 0.0, c),
+        Vec3::Y,
+        FOV_Y_DEG.to_radians(),
+        ASPECT,
+        1.0,
+        100.0 * size,
+        HEIGHT,
+    )
+}
+
+/// Refines until a pass changes nothing; returns the operations applied.
+fn settle(cam: &mut CameraState<'_>, h: &Hierarchy<'_>, view: &View, p: &RefineParams) -> u64 {
+    let mut ops = 0;
+    for _ in 0..1000 {
+        let st = must(cam.refine(h, view, p));
+        ops += u64::from(st.operations());
+        if st.operations() == 0 {
+            return ops;
+        }
+    }
+    panic!("refinement did not settle in 1000 passes");
+}
+
+/// Refines once at every view of `moving` in turn (untimed, back to the first view's
+/// neighbourhood); returns the mean number of active polygons.
+fn lap(cam: &mut CameraState<'_>, h: &Hierarchy<'_>, moving: &[View], p: &RefineParams) -> u64 {
+    let mut sum = 0u64;
+    for v in moving.iter().skip(1).chain(moving.first()) {
+        sum += u64::from(must(cam.refine(h, v, p)).active_polygons);
+    }
+    eprintln!(
+        "moving path: {} views, {:.0} active polygons on average",
+        moving.len(),
+        sum as f64 / moving.len() as f64
+    );
+    sum / moving.len().max(1) as u64
+}
+
+fn must<T, E: std::fmt::Display>(r: Result<T, E>) -> T {
+    r.unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every split of the hierarchy in a legal order: rounds over the waiting nodes, splitting
+/// each one whose neighbours are active (no forced splits needed).
+fn split_sequence(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> Vec<NodeId> {
+    cam.reset(h);
+    let mut seq = Vec::with_capacity(h.splits().len());
+    let mut waiting: Vec<NodeId> = h.roots().to_vec();
+    loop {
+        let mut next = Vec::with_capacity(waiting.len() * 2);
+        let before = seq.len();
+        for v in waiting {
+            let Some(s) = h.split(v) else { continue };
+            if cam.can_split(h, v) {
+                must(cam.split(h, v));
+                seq.push(v);
+                next.push(s.stationary);
+                next.push(s.floating);
+            } else {
+                next.push(v);
+            }
+        }
+        waiting = next;
+        if seq.len() == before {
+            break;
+        }
+    }
+    cam.reset(h);
+    seq
+}
+
+fn bench_ops(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, far: &View) {
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = must(CameraState::new(h, &mut memory));
+    let t = Instant::now();
+    let seq = split_sequence(h, &mut cam);
+    eprintln!(
+        "split sequence: {} of {} splits, found in {:.2} s",
+        seq.len(),
+        h.splits().len(),
+        t.elapsed().as_secs_f64()
+    );
+    let mut g = c.benchmark_group("ops");
+    g.throughput(Throughput::Elements(2 * seq.len() as u64));
+    g.bench_function("split_collapse", |b| {
+        b.iter(|| {
+            let mut failed = 0u32;
+            for &v in &seq {
+                failed += u32::from(cam.split(h, v).is_err());
+            }
+            for &v in seq.iter().rev() {
+                failed += u32::from(cam.collapse(h, v).is_err());
+            }
+            failed
+        })
+    });
+    // Correctness of what was timed, checked outside the timing.
+    for &v in &seq {
+        must(cam.split(h, v));
+    }
+    assert_eq!(cam.split_count() as usize, seq.len());
+    for &v in seq.iter().rev() {
+        must(cam.collapse(h, v));
+    }
+    assert_eq!(cam.split_count(), 0);
+
+    // Refinement-driven operations: far front <-> near front.
+    let p = RefineParams::default();
+    cam.reset(h);
+    settle(&mut cam, h, far, &p);
+    let round = |cam: &mut CameraState<'_>| settle(cam, h, near, &p) + settle(cam, h, far, &p);
+    let ops_per_round = round(&mut cam);
+    let total = Cell::new((0u64, Duration::ZERO));
+    g.throughput(Throughput::Elements(ops_per_round));
+    g.bench_function("refine_near_far", |b| {
+        b.iter_custom(|iters| {
+            let start = Instant::now();
+            let mut ops = 0;
+            for _ in 0..iters {
+                ops += round(&mut cam);
+            }
+            let el = start.elapsed();
+            let (o, d) = total.get();
+            total.set((o + ops, d + el));
+            el
+        })
+    });
+    g.finish();
+    let (ops, d) = total.get();
+    if ops > 0 {
+        eprintln!(
+            "ops/refine_near_far: {ops_per_round} ops per round (far -> near -> far); measured \
+             over all iterations: {:.2} M ops/s",
+            ops as f64 / d.as_secs_f64() / 1e6
+        );
+    }
+}
+
+fn bench_refine(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[View]) {
+    let p = RefineParams::default();
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = must(CameraState::new(h, &mut memory));
+    let t = Instant::now();
+    let ops = settle(&mut cam, h, near, &p);
+    let active = cam.active_polygon_count();
+    eprintln!(
+        "settled near front: {active} active polygons, {} active nodes ({ops} ops, {:.3} s)",
+        cam.active_node_count(),
+        t.elapsed().as_secs_f64()
+    );
+    let mut g = c.benchmark_group("refine");
+    g.throughput(Throughput::Elements(u64::from(active)));
+    g.bench_function("settled_pass", |b| b.iter(|| must(cam.refine(h, near, &p))));
+
+    // Moving camera: start settled at the first view, then one step per iteration. One
+    // untimed lap of the path measures the front it carries on average.
+    cam.reset(h);
+    settle(&mut cam, h, &moving[0], &p);
+    let mean_front = lap(&mut cam, h, moving, &p);
+    g.throughput(Throughput::Elements(mean_front));
+    let mut k = 0usize;
+    let acc = Cell::new((0u64, 0u64, 0u64));
+    let mut step = |cam: &mut CameraState<'_>| -> RefineStats {
+        k = (k + 1) % moving.len();
+        let st = must(cam.refine(h, &moving[k], &p));
+        let (n, o, a) = acc.get();
+        acc.set((
+            n + 1,
+            o + u64::from(st.operations()),
+            a + u64::from(st.active_polygons),
+        ));
+        st
+    };
+    g.bench_function("moving_pass", |b| b.iter(|| step(&mut cam)));
+    g.finish();
+    let (n, o, a) = acc.get();
+    if n > 0 {
+        eprintln!(
+            "refine/moving_pass: {:.1} ops and {:.0} active polygons per pass on average ({n} \
+             passes)",
+            o as f64 / n as f64,
+            a as f64 / n as f64
+        );
+    }
+}
+
+fn bench_emit(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[View]) {
+    let p = RefineParams::default();
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = must(CameraState::new(h, &mut memory));
+    settle(&mut cam, h, near, &p);
+    let polys = cam.active_polygon_count();
+    let mut out = vec![0u32; 3 * h.polygon_count()];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    let mut g = c.benchmark_group("emit");
+    g.throughput(Throughput::Elements(u64::from(polys)));
+    g.bench_function("packed", |b| {
+        b.iter(|| must(cam.emit_indices_packed(h, &mut out, &mut offsets)))
+    });
+    g.finish();
+    assert_eq!(
+        must(cam.emit_indices_packed(h, &mut out, &mut offsets)),
+        3 * polys as usize
+    );
+
+    // A whole frame of a moving camera: refine, then emit.
+    cam.reset(h);
+    settle(&mut cam, h, &moving[0], &p);
+    let mean_front = lap(&mut cam, h, moving, &p);
+    let mut k = 0usize;
+    let acc = Cell::new((0u64, 0u64));
+    let mut g = c.benchmark_group("frame");
+    g.throughput(Throughput::Elements(mean_front));
+    g.bench_function("moving_refine_emit", |b| {
+        b.iter(|| {
+            k = (k + 1) % moving.len();
+            must(cam.refine(h, &moving[k], &p));
+            let n = must(cam.emit_indices_packed(h, &mut out, &mut offsets));
+            let (f, t) = acc.get();
+            acc.set((f + 1, t + n as u64 / 3));
+            n
+        })
+    });
+    g.finish();
+    let (f, t) = acc.get();
+    if f > 0 {
+        eprintln!(
+            "frame/moving_refine_emit: {:.0} polygons emitted per frame on average (throughput \
+             above uses the lap's mean front, {mean_front})",
+            t as f64 / f as f64
+        );
+    }
+}
+
+fn main() {
+    let benchmarking = std::env::args().any(|a| a == "--bench");
+    let size: u32 = std::env::var("CAVECLOD_BENCH_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(if benchmarking { 708 } else { 48 });
+    let t = Instant::now();
+    let mesh = meshes::terrain(size, size, SEED);
+    let ground = Ground {
+        n: size,
+        heights: mesh.positions.iter().map(|p| p[1]).collect(),
+    };
+    let built = build(&mesh);
+    let polygons = mesh.triangles.len();
+    drop(mesh);
+    let h = built.hierarchy();
+    eprintln!(
+        "terrain {size} x {size}: {polygons} polygons, {} nodes, {} splits; built in {:.2} s",
+        h.node_count(),
+        h.splits().len(),
+        t.elapsed().as_secs_f64()
+    );
+    let s = size as f32;
+    let near = view_at(0.0, s, &ground);
+    let far = far_view(s);
+    // Ping-pong along the diagonal, about s / 600 world units per step (the flyover's speed).
+    let steps = 600;
+    let moving: Vec<View> = (0..2 * steps)
+        .map(|i| {
+            let u = if i < steps { i } else { 2 * steps - i } as f32 / steps as f32;
+            view_at(u, s, &ground)
+        })
+        .collect();
+
+    let mut c = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4))
+        .configure_from_args();
+    bench_ops(&mut c, &h, &near, &far);
+    bench_refine(&mut c, &h, &near, &moving);
+    bench_emit(&mut c, &h, &near, &moving);
+    c.final_summary();
+}
