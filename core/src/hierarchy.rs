@@ -7,7 +7,9 @@
 
 use crate::format::{self, FormatError, HierarchyParts, Tag};
 use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};
-use crate::records::{BaseFace, Meta, Node, Polygon, Position, Split, Vertex, VertexKey};
+use crate::records::{
+    BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
+};
 
 /// A validated view-dependent hierarchy of vertex splits over a full-resolution mesh.
 #[derive(Clone, Copy, Debug)]
@@ -92,6 +94,12 @@ impl<'a> Hierarchy<'a> {
         self.parts.splits
     }
 
+    /// The refinement bounds; record `i` belongs to node `i`.
+    #[inline]
+    pub fn bounds(&self) -> &'a [SplitBounds] {
+        self.parts.bounds
+    }
+
     /// All full-resolution polygons, base polygons first.
     #[inline]
     pub fn polygons(&self) -> &'a [Polygon] {
@@ -146,6 +154,12 @@ impl<'a> Hierarchy<'a> {
         self.parts.splits.get(node.index())
     }
 
+    /// The refinement bounds of `node`, or `None` for a leaf or an id out of range.
+    #[inline]
+    pub fn split_bounds(&self, node: NodeId) -> Option<&'a SplitBounds> {
+        self.parts.bounds.get(node.index())
+    }
+
     /// The node record, or `None` for an id out of range.
     #[inline]
     pub fn node(&self, node: NodeId) -> Option<&'a Node> {
@@ -195,10 +209,13 @@ impl<'a> Hierarchy<'a> {
         )
     }
 
-    /// The polygon a split creates on one side, for `PolyId` look-ups.
+    /// The node whose split creates `poly`; `NONE` for a base polygon.
     #[inline]
     pub(crate) fn creator(&self, poly: PolyId) -> NodeId {
-        self.parts.polygons[poly.index()].creator
+        self.parts.polygons[poly.index()]
+            .creator
+            .node()
+            .unwrap_or(NodeId::NONE)
     }
 
     /// Bytes of static data: every section's records.
@@ -208,6 +225,7 @@ impl<'a> Hierarchy<'a> {
             + core::mem::size_of_val(p.positions)
             + core::mem::size_of_val(p.nodes)
             + core::mem::size_of_val(p.splits)
+            + core::mem::size_of_val(p.bounds)
             + core::mem::size_of_val(p.polygons)
             + core::mem::size_of_val(p.roots)
             + core::mem::size_of_val(p.base)

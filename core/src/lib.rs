@@ -32,7 +32,6 @@
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 #![forbid(unsafe_code)]
-#![allow(clippy::needless_range_loop)]
 
 pub mod camera;
 mod checksum;
@@ -53,6 +52,7 @@ pub use hierarchy::Hierarchy;
 pub use ids::{NodeId, PolyId, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
 pub use records::{
-    BaseFace, Meta, Node, Polygon, Position, PositionClass, Split, Vertex, VertexKey,
+    octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
+    PositionClass, Split, SplitBounds, Vertex, VertexKey,
 };
 pub use view::View;

@@ -71,11 +71,12 @@ pub struct Node {
     pub position: PositionId,
 }
 
-/// The vertex split of an internal node (Hoppe's `SrVsplit`), and the bounds the
-/// refinement criteria use. Node `i` owns split record `i`: nodes that can be split come
-/// first in id order.
+/// The vertex split of an internal node (Hoppe's `SrVsplit`): its topology. Node `i` owns
+/// split record `i`: nodes that can be split come first in id order. What refinement reads
+/// every frame lives apart, in [`SplitBounds`], so a refinement pass touches 32 bytes per node
+/// and the operations touch these 32.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct Split {
     /// The child that keeps this node's position (Hoppe's `vt`, the left child).
     pub stationary: NodeId,
@@ -88,21 +89,133 @@ pub struct Split {
     /// The neighbours the split needs: `[fl_ccw, fl_clw, fr_clw, fr_ccw]`. `fl_clw` always
     /// exists; the others are `NONE` on a border, and `fr_ccw` exists iff `f_r` does.
     pub neighbours: [PolyId; 4],
-    /// Centre direction of the cone bounding the normals of the polygons this node
-    /// influences (unit length, or zero when the cone is disabled).
-    pub cone_normal: [f32; 3],
-    /// `sin²` of the cone's half angle plus the normals' spread, as in Hoppe's `sin2alpha`;
-    /// `>= 1` disables the backface test.
-    pub cone_sin2: f32,
-    /// Radius of the sphere, centred on the node's position, bounding everything its
+}
+
+/// What the refinement criteria of a splittable node read: its point, bounding sphere,
+/// normal cone and error bounds, 32 bytes (two per cache line).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SplitBounds {
+    /// The node's point (equal to its position's; kept here so one record answers).
+    pub point: [f32; 3],
+    /// Radius of the sphere, centred on `point`, bounding everything the node's
     /// descendants touch.
     pub radius: f32,
+    /// Centre direction of the cone bounding the normals below the node, octahedral-encoded
+    /// as two signed-normalised 16-bit numbers ([`SplitBounds::cone_normal`]).
+    pub cone_axis: [i16; 2],
+    /// `sin²` of the cone's half angle, as in Hoppe's `sin2alpha`; `>= 1` disables the
+    /// backface test.
+    pub cone_sin2: f32,
     /// Uniform error bound (world units): how far the surface may move by this split.
     pub uni_error: f32,
     /// Directional error bound (world units) along the surface normal.
     pub dir_error: f32,
-    /// Reserved, zero.
-    pub reserved: u32,
+}
+
+impl SplitBounds {
+    /// Bounds with the cone axis encoded from a unit vector (zero for a disabled cone).
+    pub fn new(
+        point: [f32; 3],
+        radius: f32,
+        cone_normal: [f32; 3],
+        cone_sin2: f32,
+        uni_error: f32,
+        dir_error: f32,
+    ) -> Self {
+        Self {
+            point,
+            radius,
+            cone_axis: octahedral_encode(cone_normal),
+            cone_sin2,
+            uni_error,
+            dir_error,
+        }
+    }
+
+    /// The decoded cone axis (unit length, or zero when encoded from zero).
+    #[inline]
+    pub fn cone_normal(&self) -> [f32; 3] {
+        octahedral_decode(self.cone_axis)
+    }
+}
+
+fn snorm16(x: f32) -> i16 {
+    let v = x.clamp(-1.0, 1.0) * 32767.0;
+    (if v >= 0.0 { v + 0.5 } else { v - 0.5 }) as i16
+}
+
+/// Octahedral encoding of a unit vector (Meyer et al. 2010) in two snorm16 numbers; the zero
+/// vector encodes as `[0, 0]`... which decodes to +z, so a disabled cone is marked by
+/// `cone_sin2 >= 1` instead.
+pub fn octahedral_encode(n: [f32; 3]) -> [i16; 2] {
+    let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+    if l1.is_nan() || l1 <= 0.0 {
+        return [0, 0];
+    }
+    let (x, y, z) = (n[0] / l1, n[1] / l1, n[2] / l1);
+    let (u, v) = if z >= 0.0 {
+        (x, y)
+    } else {
+        (
+            (1.0 - y.abs()) * if x >= 0.0 { 1.0 } else { -1.0 },
+            (1.0 - x.abs()) * if y >= 0.0 { 1.0 } else { -1.0 },
+        )
+    };
+    [snorm16(u), snorm16(v)]
+}
+
+/// Decodes [`octahedral_encode`].
+pub fn octahedral_decode(e: [i16; 2]) -> [f32; 3] {
+    let (u, v) = (e[0] as f32 / 32767.0, e[1] as f32 / 32767.0);
+    let z = 1.0 - u.abs() - v.abs();
+    let (x, y) = if z >= 0.0 {
+        (u, v)
+    } else {
+        (
+            (1.0 - v.abs()) * if u >= 0.0 { 1.0 } else { -1.0 },
+            (1.0 - u.abs()) * if v >= 0.0 { 1.0 } else { -1.0 },
+        )
+    };
+    let l = libm::sqrtf(x * x + y * y + z * z);
+    if l > 0.0 {
+        [x / l, y / l, z / l]
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+/// Which split creates a polygon, and on which side: `2 · node + side` (side 1 for `f_r`), or
+/// [`Creator::BASE`] for a base-mesh polygon. Finding a polygon's slot in a camera then reads
+/// no split record.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Pod, Zeroable)]
+pub struct Creator(pub u32);
+
+impl Creator {
+    /// A base-mesh polygon.
+    pub const BASE: Self = Self(u32::MAX);
+
+    /// Created by `node`'s split, as `f_r` if `right`, else `f_l`.
+    pub const fn new(node: NodeId, right: bool) -> Self {
+        Self((node.0 << 1) | right as u32)
+    }
+
+    /// The node whose split creates the polygon; `None` for a base polygon.
+    #[inline]
+    pub const fn node(self) -> Option<NodeId> {
+        if self.0 == u32::MAX {
+            None
+        } else {
+            Some(NodeId(self.0 >> 1))
+        }
+    }
+
+    /// `true` for the right polygon (`f_r`).
+    #[inline]
+    pub const fn is_right(self) -> bool {
+        self.0 & 1 == 1
+    }
 }
 
 /// A polygon of the full-resolution mesh.
@@ -113,8 +226,9 @@ pub struct Polygon {
     /// creates, corner 0 descends from the split's stationary child, and corner 1 (of `f_l`)
     /// or corner 2 (of `f_r`) from its floating child.
     pub nodes: [NodeId; 3],
-    /// The node whose split creates this polygon; `NONE` for a base-mesh polygon.
-    pub creator: NodeId,
+    /// The split that creates this polygon and its side; [`Creator::BASE`] for a base-mesh
+    /// polygon.
+    pub creator: Creator,
     /// The surface (material): selects the index list.
     pub surface: SurfaceId,
     /// The surface-group id: selects the vertex-table row.
@@ -200,11 +314,48 @@ mod tests {
     fn record_sizes_are_the_documented_ones() {
         assert_eq!(core::mem::size_of::<Position>(), 16);
         assert_eq!(core::mem::size_of::<Node>(), 8);
-        assert_eq!(core::mem::size_of::<Split>(), 64);
+        assert_eq!(core::mem::size_of::<Split>(), 32);
+        assert_eq!(core::mem::size_of::<SplitBounds>(), 32);
         assert_eq!(core::mem::size_of::<Polygon>(), 20);
         assert_eq!(core::mem::size_of::<BaseFace>(), 24);
         assert_eq!(core::mem::size_of::<VertexKey>(), 8);
         assert_eq!(core::mem::size_of::<Vertex>(), 32);
         assert_eq!(core::mem::size_of::<Meta>(), 88);
+    }
+}
+
+#[cfg(test)]
+mod octahedral_tests {
+    use super::*;
+
+    #[test]
+    fn octahedral_round_trip_within_a_tenth_of_a_degree() {
+        let mut worst = 1.0f32;
+        for i in 0..40 {
+            for j in 0..80 {
+                let (t, p) = (
+                    i as f32 / 39.0 * core::f32::consts::PI,
+                    j as f32 / 80.0 * core::f32::consts::TAU,
+                );
+                let n = [
+                    libm::sinf(t) * libm::cosf(p),
+                    libm::sinf(t) * libm::sinf(p),
+                    libm::cosf(t),
+                ];
+                let d = octahedral_decode(octahedral_encode(n));
+                worst = worst.min(n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
+            }
+        }
+        // cos(0.1°) = 1 - 1.5e-6; f32 dot products resolve about 1e-7.
+        assert!(worst > 1.0 - 1.5e-6, "{worst}");
+    }
+
+    #[test]
+    fn creator_packs_node_and_side() {
+        let c = Creator::new(NodeId(12345), true);
+        assert_eq!((c.node(), c.is_right()), (Some(NodeId(12345)), true));
+        assert_eq!(Creator::new(NodeId(7), false).node(), Some(NodeId(7)));
+        assert_eq!(Creator::BASE.node(), None);
+        assert_ne!(Creator::new(NodeId((1 << 31) - 2), true), Creator::BASE);
     }
 }

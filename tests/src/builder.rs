@@ -10,8 +10,8 @@ use std::collections::HashMap;
 
 use caveclod_core::format::{serialized_len, write_into};
 use caveclod_core::{
-    BaseFace, Hierarchy, HierarchyParts, Node, NodeId, PolyId, Polygon, Position, PositionClass,
-    PositionId, Split, SurfaceGroupId, SurfaceId, Vertex, VertexKey,
+    BaseFace, Creator, Hierarchy, HierarchyParts, Node, NodeId, PolyId, Polygon, Position,
+    PositionClass, PositionId, Split, SplitBounds, SurfaceGroupId, SurfaceId, Vertex, VertexKey,
 };
 
 use crate::meshes::TestMesh;
@@ -64,6 +64,8 @@ pub struct Built {
     pub nodes: Vec<Node>,
     /// Split records.
     pub splits: Vec<Split>,
+    /// Refinement bounds.
+    pub bounds: Vec<SplitBounds>,
     /// Polygons, base first.
     pub polygons: Vec<Polygon>,
     /// Roots, ascending.
@@ -91,6 +93,7 @@ impl Built {
             positions: &self.positions,
             nodes: &self.nodes,
             splits: &self.splits,
+            bounds: &self.bounds,
             polygons: &self.polygons,
             roots: &self.roots,
             base: &self.base,
@@ -697,12 +700,12 @@ fn finish(
         }
     }
     let creator_of = {
-        let mut v = vec![NodeId::NONE; nt];
+        let mut v = vec![Creator::BASE; nt];
         for (c, r) in w.recs.iter().enumerate() {
             let s = NodeId(new_id((np + c) as u32));
-            v[r.fl as usize] = s;
+            v[r.fl as usize] = Creator::new(s, false);
             if r.fr != NONE {
-                v[r.fr as usize] = s;
+                v[r.fr as usize] = Creator::new(s, true);
             }
         }
         v
@@ -729,6 +732,7 @@ fn finish(
         }
     };
     let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
+    let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];
     for (c, r) in w.recs.iter().enumerate() {
         let old = (np + c) as u32;
         let (axis, angle) = w.cone[old as usize];
@@ -743,13 +747,15 @@ fn finish(
             f_l: pid(r.fl),
             f_r: pid(r.fr),
             neighbours: r.fns.map(pid),
-            cone_normal: if sin2 >= 1.0 { [0.0; 3] } else { axis },
-            cone_sin2: sin2,
-            radius: w.radius[old as usize],
-            uni_error: w.error[old as usize],
-            dir_error: 0.0,
-            reserved: 0,
         };
+        bounds[new_id(old) as usize] = SplitBounds::new(
+            mesh.positions[w.node_pos[old as usize] as usize],
+            w.radius[old as usize],
+            if sin2 >= 1.0 { [0.0; 3] } else { axis },
+            sin2,
+            w.error[old as usize],
+            0.0,
+        );
     }
     let mut roots: Vec<NodeId> = (0..total_nodes as u32)
         .filter(|&o| w.parent[o as usize] == NONE)
@@ -805,6 +811,7 @@ fn finish(
         positions,
         nodes,
         splits,
+        bounds,
         polygons,
         roots,
         base,

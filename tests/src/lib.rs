@@ -5,8 +5,6 @@
 //! shortest-edge half-edge collapses in passes of independent sets, a crude error bound, no
 //! attribute-aware quadrics. It is not the product's builder and is not published.
 
-#![allow(clippy::needless_range_loop)]
-
 pub mod builder;
 pub mod check;
 pub mod meshes;

@@ -80,15 +80,15 @@ fn the_writer_refuses_invalid_parts_and_short_buffers() {
 #[test]
 fn errors_name_section_record_and_field() {
     let built = build(&meshes::terrain(4, 4, 1));
-    let mut splits = built.splits.clone();
-    splits[0].uni_error = f32::NAN;
+    let mut bounds = built.bounds.clone();
+    bounds[0].uni_error = f32::NAN;
     let mut parts = built.parts();
-    parts.splits = &splits;
+    parts.bounds = &bounds;
     let e = Hierarchy::from_parts(parts).expect_err("NaN error bound");
     assert_eq!(
         e.to_string(),
         format!(
-            "section SPLT record 0 field `uni_error`: not a finite, non-negative number (value {})",
+            "section BNDS record 0 field `uni_error`: not a finite, non-negative number (value {})",
             f32::NAN.to_bits()
         )
     );

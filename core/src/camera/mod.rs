@@ -399,20 +399,19 @@ impl Front<'_> {
         self.is_created(h, node) && !self.is_split(node)
     }
 
-    /// The slot of an active polygon.
+    /// The slot of an active polygon: base polygons sit in the first slots, others in their
+    /// creator's pair (two reads: the polygon's creator and the camera's `pair_of`).
     #[inline]
     pub fn slot_of(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<u32> {
         if poly.0 < self.base {
             return Some(poly.0);
         }
         let c = h.polygons().get(poly.index())?.creator;
-        let pair = *self.pair_of.get(c.index())?;
+        let pair = *self.pair_of.get(c.node()?.index())?;
         if pair == NONE {
             return None;
         }
-        let s = h.split(c)?;
-        let side = if s.f_l == poly { 0 } else { 1 };
-        Some(self.base + 2 * pair + side)
+        Some(self.base + 2 * pair + c.is_right() as u32)
     }
 
     /// The polygon in a slot, if the slot is live.

@@ -365,11 +365,20 @@ impl Front<'_> {
                 x
             }
         };
+        // Move the pair and its ownership first, so the camera's bookkeeping (which pair
+        // belongs to which split, and the counts) stays exact even if a link below turns out
+        // to contradict the hierarchy.
         for (old, new) in [(old_l, new_l), (old_r, new_r)] {
             let mut moved = *self.slot(old, v)?;
             moved.neighbours = moved.neighbours.map(map);
             *self.slot_mut(new, v)? = moved;
         }
+        let owner = self.owner[last as usize];
+        self.owner[k as usize] = owner;
+        *self
+            .pair_of
+            .get_mut(owner.index())
+            .ok_or(OpError::Inconsistent { node: v })? = k;
         for (old, new) in [(old_l, new_l), (old_r, new_r)] {
             let nbrs = self.slot(new, v)?.neighbours;
             for m in nbrs {
@@ -378,12 +387,6 @@ impl Front<'_> {
                 }
             }
         }
-        let owner = self.owner[last as usize];
-        self.owner[k as usize] = owner;
-        *self
-            .pair_of
-            .get_mut(owner.index())
-            .ok_or(OpError::Inconsistent { node: v })? = k;
         Ok(())
     }
 

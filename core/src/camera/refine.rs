@@ -12,7 +12,7 @@ use glam::Vec3;
 use super::{CameraState, OpError, FREE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
-use crate::records::Split;
+use crate::records::SplitBounds;
 use crate::view::View;
 
 /// Knobs of [`CameraState::refine`].
@@ -67,7 +67,7 @@ impl RefineStats {
     }
 }
 
-/// The refinement criterion: does node `s` (at `p`) want its split?
+/// The refinement criterion: does a node with these bounds want its split?
 struct Criterion {
     eye: Vec3,
     tz2: f32,
@@ -78,19 +78,27 @@ struct Criterion {
 
 impl Criterion {
     #[inline]
-    fn wants_split(&self, p: Vec3, s: &Split) -> bool {
-        if self.frustum && !self.view.sphere_visible(p, s.radius) {
+    fn wants_split(&self, b: &SplitBounds) -> bool {
+        let p = Vec3::from_array(b.point);
+        if self.frustum && !self.view.sphere_visible(p, b.radius) {
             return false;
         }
         let pe = p - self.eye;
         let pem2 = pe.length_squared();
-        let vdot = pe.dot(Vec3::from_array(s.cone_normal));
-        if self.backface && vdot > 0.0 && vdot * vdot > pem2 * s.cone_sin2 {
+        let rhs = self.tz2 * pem2;
+        let big_uniform = b.uni_error * b.uni_error >= rhs;
+        if b.cone_sin2 >= 1.0 {
+            // No cone: no backface test, and the directional error counts in full.
+            return big_uniform || b.dir_error * b.dir_error >= rhs;
+        }
+        if !self.backface && b.dir_error <= 0.0 {
+            return big_uniform;
+        }
+        let vdot = pe.dot(Vec3::from_array(b.cone_normal()));
+        if self.backface && vdot > 0.0 && vdot * vdot > pem2 * b.cone_sin2 {
             return false;
         }
-        let rhs = self.tz2 * pem2;
-        s.uni_error * s.uni_error >= rhs
-            || s.dir_error * s.dir_error * (pem2 - vdot * vdot) >= rhs * pem2
+        big_uniform || b.dir_error * b.dir_error * (pem2 - vdot * vdot) >= rhs * pem2
     }
 }
 
@@ -124,9 +132,9 @@ impl CameraState<'_> {
                 .saturating_mul(4)
                 .saturating_add(1024),
         );
-        let point = |v: NodeId| Vec3::from_array(h.node_point(v).unwrap_or([0.0; 3]));
         let mut st = RefineStats::default();
         let f = &mut self.front;
+        let nodes = h.nodes();
         let mut i = 0usize;
         while i < f.active_len as usize && st.operations() < max_ops {
             let a = f.active[i];
@@ -136,8 +144,8 @@ impl CameraState<'_> {
             }
             let v = NodeId(a);
             st.nodes_visited += 1;
-            if let Some(s) = h.split(v) {
-                if c.wants_split(point(v), s) {
+            if let Some(b) = h.split_bounds(v) {
+                if c.wants_split(b) {
                     if f.pairs as usize >= f.owner.len() {
                         st.capacity_refusals += 1;
                         i += 1;
@@ -159,14 +167,16 @@ impl CameraState<'_> {
                     continue;
                 }
             }
-            // Coarsen: v is a stationary child whose parent no longer wants its split.
-            let parent = h.nodes().get(v.index()).map_or(NodeId::NONE, |n| n.parent);
-            if let Some(ps) = h.split(parent) {
-                if ps.stationary == v
-                    && !f.is_split(ps.floating)
-                    && !c.wants_split(point(parent), ps)
-                    && f.can_collapse(h, parent)
-                {
+            // Coarsen: v is a stationary child (it shares its parent's position) whose parent
+            // no longer wants its split. Only node records and the parent's bounds are read
+            // unless the collapse is wanted.
+            let Some(node) = nodes.get(v.index()) else {
+                i += 1;
+                continue;
+            };
+            let parent = node.parent;
+            if let (Some(pn), Some(pb)) = (nodes.get(parent.index()), h.split_bounds(parent)) {
+                if pn.position == node.position && !c.wants_split(pb) && f.can_collapse(h, parent) {
                     f.apply_collapse(h, parent)?;
                     st.collapses += 1;
                     continue; // the record now holds the parent: look again

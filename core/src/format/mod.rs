@@ -73,6 +73,8 @@ pub mod tags {
     pub const NODES: Tag = Tag(*b"NODE");
     /// [`Split`](crate::Split) per node that can be split.
     pub const SPLITS: Tag = Tag(*b"SPLT");
+    /// [`SplitBounds`](crate::SplitBounds) per node that can be split.
+    pub const BOUNDS: Tag = Tag(*b"BNDS");
     /// [`Polygon`](crate::Polygon) per full-resolution polygon.
     pub const POLYGONS: Tag = Tag(*b"POLY");
     /// [`NodeId`](crate::NodeId) per root, ascending.

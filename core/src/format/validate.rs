@@ -14,7 +14,7 @@ use super::{
 };
 use crate::checksum::checksum64;
 use crate::ids::{NodeId, PolyId, PositionId};
-use crate::records::{BaseFace, Meta, Node, PositionClass, VertexKey};
+use crate::records::{BaseFace, Creator, Meta, Node, PositionClass, VertexKey};
 
 fn invalid(
     tag: Tag,
@@ -185,6 +185,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed<'_>, FormatError> {
         positions: section(bytes, table, tags::POSITIONS)?,
         nodes: section(bytes, table, tags::NODES)?,
         splits: section(bytes, table, tags::SPLITS)?,
+        bounds: section(bytes, table, tags::BOUNDS)?,
         polygons: section(bytes, table, tags::POLYGONS)?,
         roots: section(bytes, table, tags::ROOTS)?,
         base: section(bytes, table, tags::BASE)?,
@@ -561,7 +562,7 @@ pub(crate) fn validate(
                         f.0.into(),
                     ));
                 }
-                if parts.polygons[f.index()].creator.index() != i {
+                if parts.polygons[f.index()].creator.node() != Some(NodeId(i as u32)) {
                     return Err(invalid(
                         t,
                         i,
@@ -619,19 +620,27 @@ pub(crate) fn validate(
                 s.neighbours[2].0.into(),
             ));
         }
-        if !finite(&s.cone_normal) || !s.cone_sin2.is_finite() || s.cone_sin2 < 0.0 {
+    }
+
+    // Bounds.
+    count(tags::BOUNDS, ns, parts.bounds.len())?;
+    for (i, b) in parts.bounds.iter().enumerate() {
+        let t = tags::BOUNDS;
+        let pos = parts.nodes[i].position;
+        if b.point.map(f32::to_bits) != parts.positions[pos.index()].xyz.map(f32::to_bits) {
             return Err(invalid(
                 t,
                 i,
-                "cone",
-                "not finite or negative",
-                s.cone_sin2.to_bits().into(),
+                "point",
+                "differs from the node's position",
+                pos.0.into(),
             ));
         }
         for (field, x) in [
-            ("radius", s.radius),
-            ("uni_error", s.uni_error),
-            ("dir_error", s.dir_error),
+            ("radius", b.radius),
+            ("cone_sin2", b.cone_sin2),
+            ("uni_error", b.uni_error),
+            ("dir_error", b.dir_error),
         ] {
             if !x.is_finite() || x < 0.0 {
                 return Err(invalid(
@@ -642,9 +651,6 @@ pub(crate) fn validate(
                     x.to_bits().into(),
                 ));
             }
-        }
-        if s.reserved != 0 {
-            return Err(invalid(t, i, "reserved", "not zero", s.reserved.into()));
         }
     }
 
@@ -694,7 +700,7 @@ pub(crate) fn validate(
             ));
         }
         if i < nb {
-            if poly.creator.is_some() {
+            if poly.creator != Creator::BASE {
                 return Err(invalid(
                     t,
                     i,
@@ -705,25 +711,26 @@ pub(crate) fn validate(
             }
             continue;
         }
-        let c = poly.creator;
-        if c.index() >= ns {
+        let Some(c) = poly.creator.node().filter(|c| c.index() < ns) else {
             return Err(invalid(
                 t,
                 i,
                 "creator",
                 "not a splittable node",
-                c.0.into(),
+                poly.creator.0.into(),
             ));
-        }
+        };
         let s = &parts.splits[c.index()];
-        let (float_corner, id) = (if s.f_l.index() == i { 1 } else { 2 }, PolyId(i as u32));
-        if s.f_l != id && s.f_r != id {
+        let id = PolyId(i as u32);
+        let right = poly.creator.is_right();
+        let float_corner = if right { 2 } else { 1 };
+        if (if right { s.f_r } else { s.f_l }) != id {
             return Err(invalid(
                 t,
                 i,
                 "creator",
-                "the creator's split does not name this polygon",
-                c.0.into(),
+                "the creator's split does not name this polygon on that side",
+                poly.creator.0.into(),
             ));
         }
         if !descends(parts.nodes, poly.nodes[0], s.stationary) {

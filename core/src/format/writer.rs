@@ -8,7 +8,9 @@ use super::{
 };
 use crate::checksum::checksum64;
 use crate::ids::NodeId;
-use crate::records::{BaseFace, Meta, Node, Polygon, Position, Split, Vertex, VertexKey};
+use crate::records::{
+    BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
+};
 
 /// The arrays of a hierarchy, borrowed: what a builder produces and what
 /// [`Hierarchy`](crate::Hierarchy) views.
@@ -20,6 +22,8 @@ pub struct HierarchyParts<'a> {
     pub nodes: &'a [Node],
     /// One per node that can be split.
     pub splits: &'a [Split],
+    /// One per node that can be split.
+    pub bounds: &'a [SplitBounds],
     /// One per full-resolution polygon; base polygons first.
     pub polygons: &'a [Polygon],
     /// The roots (nodes without parent), ascending.
@@ -63,7 +67,7 @@ fn known<'a, T: Pod>(tag: Tag, records: &'a [T]) -> Planned<'a> {
     }
 }
 
-const KNOWN: usize = 10;
+const KNOWN: usize = 11;
 
 fn plan<'a>(parts: &HierarchyParts<'a>, meta: &'a Meta) -> [Planned<'a>; KNOWN] {
     [
@@ -71,6 +75,7 @@ fn plan<'a>(parts: &HierarchyParts<'a>, meta: &'a Meta) -> [Planned<'a>; KNOWN] 
         known(tags::POSITIONS, parts.positions),
         known(tags::NODES, parts.nodes),
         known(tags::SPLITS, parts.splits),
+        known(tags::BOUNDS, parts.bounds),
         known(tags::POLYGONS, parts.polygons),
         known(tags::ROOTS, parts.roots),
         known(tags::BASE, parts.base),
