@@ -1,0 +1,328 @@
+//! Turning a welded mesh and its collapse hierarchy into the `.clod` arrays, and writing them
+//! to disk safely.
+//!
+//! Node ids: splittable nodes first, in depth-first preorder (stationary child first, roots
+//! in position order), so a subtree is one id range and a stationary child sits next to its
+//! parent — the records a refinement pass reads together lie together. Leaves follow in
+//! position order. Polygons: the base mesh first, then each split's `f_l` and `f_r` in split
+//! order.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use caveclod_core::format::{serialized_len, write_into, ExtraSection, WriteError};
+use caveclod_core::{
+    BaseFace, Creator, Hierarchy, HierarchyParts, Node, NodeId, PolyId, Polygon, Position,
+    PositionId, Split, SplitBounds, SurfaceGroupId, SurfaceId, Vertex, VertexKey,
+};
+
+use crate::hierarchy::Hierarchy as Collapses;
+use crate::weld::Welded;
+
+const NONE: u32 = u32::MAX;
+
+/// The arrays of a baked hierarchy.
+#[derive(Clone, Debug, Default)]
+pub struct Baked {
+    /// Node positions.
+    pub positions: Vec<Position>,
+    /// Nodes.
+    pub nodes: Vec<Node>,
+    /// Split records.
+    pub splits: Vec<Split>,
+    /// Refinement bounds.
+    pub bounds: Vec<SplitBounds>,
+    /// Polygons, base first.
+    pub polygons: Vec<Polygon>,
+    /// Roots, ascending.
+    pub roots: Vec<NodeId>,
+    /// Base mesh.
+    pub base: Vec<BaseFace>,
+    /// Vertex-table offsets.
+    pub vertex_table_offsets: Vec<u32>,
+    /// Vertex-table entries.
+    pub vertex_table: Vec<VertexKey>,
+    /// Vertex buffer.
+    pub vertices: Vec<Vertex>,
+    /// Surfaces.
+    pub surface_count: u32,
+    /// Surface-group ids.
+    pub surface_group_count: u32,
+}
+
+/// Why writing failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeWriteError {
+    /// The arrays do not form a valid hierarchy (a baker bug; nothing was written).
+    #[error("internal error, nothing written: {0}")]
+    Invalid(#[from] WriteError),
+    /// The file system refused.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+impl Baked {
+    /// Assembles the arrays.
+    pub fn new(w: &Welded, h: &Collapses) -> Self {
+        let np = w.positions.len();
+        let nt = w.triangles.len();
+        let created = h.collapses.len();
+        let mut split_new = vec![NONE; created];
+        let mut by_new = Vec::with_capacity(created);
+        let mut stack: Vec<u32> = (np as u32..(np + created) as u32)
+            .filter(|&o| h.parent[o as usize] == NONE)
+            .collect();
+        stack.sort_unstable_by_key(|&o| std::cmp::Reverse(h.node_position[o as usize]));
+        while let Some(o) = stack.pop() {
+            let c = o as usize - np;
+            split_new[c] = by_new.len() as u32;
+            by_new.push(c);
+            for child in [h.collapses[c].u, h.collapses[c].t] {
+                if child as usize >= np {
+                    stack.push(child);
+                }
+            }
+        }
+        let new_id = |old: u32| -> u32 {
+            if (old as usize) < np {
+                (created + old as usize) as u32
+            } else {
+                split_new[old as usize - np]
+            }
+        };
+        let total = np + created;
+        let mut nodes = vec![
+            Node {
+                parent: NodeId::NONE,
+                position: PositionId(0)
+            };
+            total
+        ];
+        for old in 0..total as u32 {
+            let p = h.parent[old as usize];
+            nodes[new_id(old) as usize] = Node {
+                parent: if p == NONE {
+                    NodeId::NONE
+                } else {
+                    NodeId(new_id(p))
+                },
+                position: PositionId(h.node_position[old as usize]),
+            };
+        }
+        let mut poly_new = vec![NONE; nt];
+        let mut order: Vec<(u32, u8)> = Vec::with_capacity(nt);
+        for f in 0..nt {
+            if h.alive[f] {
+                poly_new[f] = order.len() as u32;
+                order.push((f as u32, 0));
+            }
+        }
+        let base_count = order.len();
+        let mut creator = vec![Creator::BASE; nt];
+        for &c in &by_new {
+            let col = h.collapses[c];
+            let s = NodeId(split_new[c]);
+            poly_new[col.fl as usize] = order.len() as u32;
+            order.push((col.fl, col.rot_l));
+            creator[col.fl as usize] = Creator::new(s, false);
+            if col.fr != NONE {
+                poly_new[col.fr as usize] = order.len() as u32;
+                order.push((col.fr, col.rot_r));
+                creator[col.fr as usize] = Creator::new(s, true);
+            }
+        }
+        let polygons = order
+            .iter()
+            .map(|&(f, rot)| {
+                let t = &w.triangles[f as usize];
+                let k = rot as usize;
+                Polygon {
+                    nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(new_id(p))),
+                    creator: creator[f as usize],
+                    surface: SurfaceId(t.surface),
+                    group: SurfaceGroupId(w.group_ids[t.group as usize]),
+                }
+            })
+            .collect();
+        let pid = |f: u32| {
+            if f == NONE {
+                PolyId::NONE
+            } else {
+                PolyId(poly_new[f as usize])
+            }
+        };
+        let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
+        let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];
+        for (c, col) in h.collapses.iter().enumerate() {
+            let old = np + c;
+            let (axis, angle) = h.cone[old];
+            let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
+                1.0
+            } else {
+                angle.sin() * angle.sin()
+            };
+            splits[split_new[c] as usize] = Split {
+                stationary: NodeId(new_id(col.t)),
+                floating: NodeId(new_id(col.u)),
+                f_l: pid(col.fl),
+                f_r: pid(col.fr),
+                neighbours: col.neighbours.map(pid),
+            };
+            bounds[split_new[c] as usize] = SplitBounds::new(
+                w.positions[h.node_position[old] as usize],
+                h.radius[old],
+                if sin2 >= 1.0 { [0.0; 3] } else { axis },
+                sin2,
+                h.error[old],
+                0.0,
+            );
+        }
+        let mut roots: Vec<NodeId> = (0..total as u32)
+            .filter(|&o| h.parent[o as usize] == NONE)
+            .map(|o| NodeId(new_id(o)))
+            .collect();
+        roots.sort_unstable();
+        // Base adjacency from the final corners.
+        let mut directed = std::collections::HashMap::with_capacity(3 * base_count);
+        for &(f, _) in &order[..base_count] {
+            let c = h.corners[f as usize];
+            for k in 0..3 {
+                directed.insert((c[k], c[(k + 1) % 3]), f);
+            }
+        }
+        let base = order[..base_count]
+            .iter()
+            .map(|&(f, _)| {
+                let c = h.corners[f as usize];
+                BaseFace {
+                    corners: c.map(|x| NodeId(new_id(x))),
+                    neighbours: [0, 1, 2].map(|k| {
+                        let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
+                        directed.get(&(b, a)).map_or(PolyId::NONE, |&g| pid(g))
+                    }),
+                }
+            })
+            .collect();
+        let mut vertex_table_offsets = vec![0u32];
+        let mut vertex_table = Vec::new();
+        let mut vertices = Vec::new();
+        for (p, vs) in w.vertices.iter().enumerate() {
+            let mut keys: Vec<(u16, u32)> = vs
+                .iter()
+                .map(|&(g, a)| (w.group_ids[g as usize], a))
+                .collect();
+            keys.sort_unstable();
+            for (group, a) in keys {
+                let attrs = &w.attributes[a as usize];
+                vertex_table.push(VertexKey {
+                    group: SurfaceGroupId(group),
+                    reserved: 0,
+                    vertex: vertices.len() as u32,
+                });
+                vertices.push(Vertex {
+                    position: w.positions[p],
+                    normal: attrs.normal,
+                    uv: attrs.uv,
+                });
+            }
+            vertex_table_offsets.push(vertex_table.len() as u32);
+        }
+        let positions = w
+            .positions
+            .iter()
+            .zip(&w.classes)
+            .map(|(&xyz, &c)| Position {
+                xyz,
+                class: c as u32,
+            })
+            .collect();
+        Self {
+            positions,
+            nodes,
+            splits,
+            bounds,
+            polygons,
+            roots,
+            base,
+            vertex_table_offsets,
+            vertex_table,
+            vertices,
+            surface_count: w.surface_count,
+            surface_group_count: w.group_id_count,
+        }
+    }
+
+    /// Borrowed arrays.
+    pub fn parts(&self) -> HierarchyParts<'_> {
+        HierarchyParts {
+            positions: &self.positions,
+            nodes: &self.nodes,
+            splits: &self.splits,
+            bounds: &self.bounds,
+            polygons: &self.polygons,
+            roots: &self.roots,
+            base: &self.base,
+            vertex_table_offsets: &self.vertex_table_offsets,
+            vertex_table: &self.vertex_table,
+            vertices: &self.vertices,
+            surface_count: self.surface_count,
+            surface_group_count: self.surface_group_count,
+        }
+    }
+
+    /// The validated hierarchy over these arrays.
+    pub fn hierarchy(&self) -> Result<Hierarchy<'_>, caveclod_core::FormatError> {
+        Hierarchy::from_parts(self.parts())
+    }
+
+    /// The `.clod` bytes with `extra` sections (validated before writing).
+    pub fn to_bytes(&self, extra: &[ExtraSection<'_>]) -> Result<Vec<u8>, WriteError> {
+        let parts = self.parts();
+        let mut out = vec![0u8; serialized_len(&parts, extra)];
+        write_into(&parts, extra, &mut out)?;
+        Ok(out)
+    }
+
+    /// Writes the file through a temporary file in the same directory and a rename, so a
+    /// reader never sees a partial file and an existing file is replaced only by a complete
+    /// one.
+    pub fn write(&self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
+        let bytes = self.to_bytes(extra)?;
+        write_atomically(path, &bytes)?;
+        Ok(bytes.len() as u64)
+    }
+}
+
+/// Writes `bytes` to `path` via a temporary sibling and a rename; the temporary file is
+/// removed on failure.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeWriteError> {
+    let io = |source| BakeWriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(e));
+    }
+    Ok(())
+}

@@ -1,0 +1,175 @@
+//! `caveclod`: bake meshes into view-dependent hierarchies, inspect and export them.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use caveclod_bake::baked::write_atomically;
+use caveclod_bake::export::{self, Level};
+use caveclod_bake::import::ImportOptions;
+use caveclod_bake::pipeline::{bake_file, Stage};
+use caveclod_bake::report::{self, BakeInfo};
+use caveclod_core::Hierarchy;
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+#[derive(Parser)]
+#[command(
+    name = "caveclod",
+    version,
+    about = "View-dependent continuous level of detail: bake, inspect, export"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Bake a mesh (.gltf .glb .obj .ply .dem .npy) into a .clod hierarchy.
+    Bake {
+        /// The input mesh.
+        input: PathBuf,
+        /// The .clod file to write (replaced only once complete).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Grid spacing in metres for heightfields (.npy needs it; overrides a .dem's).
+        #[arg(long)]
+        spacing: Option<f32>,
+        /// Print the report as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Counts, sizes and validation status of a .clod file.
+    Info {
+        /// The file.
+        file: PathBuf,
+        /// Print the report as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write one level of a .clod file as Wavefront OBJ.
+    Export {
+        /// The file.
+        file: PathBuf,
+        /// Which level.
+        #[arg(long, value_enum, default_value = "full")]
+        level: LevelArg,
+        /// The OBJ file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LevelArg {
+    Full,
+    Base,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("caveclod: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Reads a .clod file into 8-byte aligned memory.
+fn read_clod(path: &Path) -> Result<Vec<u64>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut words = vec![0u64; bytes.len().div_ceil(8)];
+    bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
+    words.push(bytes.len() as u64);
+    Ok(words)
+}
+
+fn with_hierarchy<T>(
+    path: &Path,
+    f: impl FnOnce(&Hierarchy<'_>) -> Result<T, String>,
+) -> Result<T, String> {
+    let mut words = read_clod(path)?;
+    let len = words.pop().unwrap_or(0) as usize;
+    let bytes = &bytemuck::cast_slice::<u64, u8>(&words)[..len];
+    let h = Hierarchy::from_bytes(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    f(&h)
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Bake {
+            input,
+            output,
+            spacing,
+            json,
+        } => {
+            let bar = ProgressBar::new(0);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})",
+                )
+                .map_err(|e| e.to_string())?
+                .progress_chars("=> "),
+            );
+            let mut on_stage = |s: Stage| match s {
+                Stage::Import => bar.set_message("importing"),
+                Stage::Weld => bar.set_message("welding"),
+                Stage::Collapse(done, most) => {
+                    bar.set_message("collapsing");
+                    bar.set_length(most);
+                    bar.set_position(done);
+                }
+                Stage::Assemble => bar.set_message("assembling"),
+            };
+            let result = bake_file(&input, &ImportOptions { spacing }, &mut on_stage);
+            bar.finish_and_clear();
+            let (baked, info) = result.map_err(|e| e.to_string())?;
+            let json_info = info.to_json();
+            baked
+                .write(&output, &[BakeInfo::section(&json_info)])
+                .map_err(|e| e.to_string())?;
+            with_hierarchy(&output, |h| {
+                let mut r = report::report(h, Some(&info));
+                r.insert("bake_seconds".into(), serde_json::json!(info.bake_seconds));
+                if json {
+                    println!("{}", serde_json::Value::Object(r));
+                } else {
+                    println!(
+                        "baked {} -> {}\n{}",
+                        input.display(),
+                        output.display(),
+                        report::human(&r)
+                    );
+                }
+                Ok(())
+            })
+        }
+        Command::Info { file, json } => with_hierarchy(&file, |h| {
+            let info = BakeInfo::read(h);
+            let mut r = report::report(h, info.as_ref());
+            r.insert("valid".into(), serde_json::json!(true));
+            if let Some(i) = &info {
+                r.insert("bake_seconds".into(), serde_json::json!(i.bake_seconds));
+            }
+            if json {
+                println!("{}", serde_json::Value::Object(r));
+            } else {
+                println!("{}: valid\n{}", file.display(), report::human(&r));
+            }
+            Ok(())
+        }),
+        Command::Export {
+            file,
+            level,
+            output,
+        } => with_hierarchy(&file, |h| {
+            let level = match level {
+                LevelArg::Full => Level::Full,
+                LevelArg::Base => Level::Base,
+            };
+            let text = export::obj(h, level);
+            write_atomically(&output, text.as_bytes()).map_err(|e| e.to_string())
+        }),
+    }
+}

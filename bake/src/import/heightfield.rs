@@ -1,0 +1,281 @@
+//! Regular grids of heights (DEM, npy) to a triangle mesh, shared by both heightfield
+//! importers.
+//!
+//! Axes: x east, y up, z **south**, origin at the north-west post of the grid (so every x and
+//! z is ≥ 0), all in metres. Row 0 of a grid is its northern edge.
+//!
+//! A missing post (NaN height) removes the four cells around it: a cell becomes two triangles
+//! only when all four of its posts exist, so irregular borders and voids become mesh borders
+//! and holes, never spikes to a fill value. Each post that some emitted cell uses becomes one
+//! position with its own normal (central differences of the grid, one-sided next to borders
+//! and holes) and UV (`u` west to east, `v` north to south, both 0..=1 over the grid's extent);
+//! posts that no cell uses are not emitted at all.
+
+use super::{next_index, push_surface, HeightfieldInfo, ImportReport, Source};
+use crate::import::ImportError;
+use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+
+/// A grid of heights in metres.
+pub(crate) struct Heightfield {
+    /// Posts per row (along x, east).
+    pub width: usize,
+    /// Rows (along z, south).
+    pub depth: usize,
+    /// Metres between neighbouring posts along x and along z.
+    pub spacing: [f32; 2],
+    /// `width * depth` heights in metres, row-major, row 0 the northern edge; NaN marks a
+    /// missing post. Infinite heights are errors.
+    pub heights: Vec<f32>,
+}
+
+impl Heightfield {
+    fn height(&self, col: usize, row: usize) -> Option<f32> {
+        let h = self.heights[row * self.width + col];
+        (!h.is_nan()).then_some(h)
+    }
+
+    fn cell_complete(&self, col: usize, row: usize) -> bool {
+        self.height(col, row).is_some()
+            && self.height(col + 1, row).is_some()
+            && self.height(col, row + 1).is_some()
+            && self.height(col + 1, row + 1).is_some()
+    }
+
+    /// Slope `dh/dx` (or `dh/dz` with `along_z`) at a post, from the neighbours that exist.
+    fn slope(&self, col: usize, row: usize, along_z: bool) -> f32 {
+        let (len, i, step) = if along_z {
+            (self.depth, row, self.spacing[1])
+        } else {
+            (self.width, col, self.spacing[0])
+        };
+        let at = |j: usize| {
+            if along_z {
+                self.height(col, j)
+            } else {
+                self.height(j, row)
+            }
+        };
+        let here = at(i);
+        let before = if i > 0 { at(i - 1) } else { None };
+        let after = if i + 1 < len { at(i + 1) } else { None };
+        match (before, here, after) {
+            (Some(b), _, Some(a)) => (a - b) / (2.0 * step),
+            (None, Some(h), Some(a)) => (a - h) / step,
+            (Some(b), Some(h), None) => (h - b) / step,
+            _ => 0.0,
+        }
+    }
+}
+
+/// Builds the mesh of `grid` with one surface named `surface_name`; notes missing posts in
+/// `report`.
+pub(crate) fn heightfield_to_mesh(
+    source: &Source,
+    grid: &Heightfield,
+    surface_name: &str,
+    report: &mut ImportReport,
+) -> Result<Mesh, ImportError> {
+    let posts = grid
+        .width
+        .checked_mul(grid.depth)
+        .filter(|&n| n == grid.heights.len())
+        .ok_or_else(|| {
+            source.malformed(
+                "grid",
+                format!(
+                    "{} x {} posts but {} heights",
+                    grid.width,
+                    grid.depth,
+                    grid.heights.len()
+                ),
+            )
+        })?;
+    if let Some(i) = grid.heights.iter().position(|h| h.is_infinite()) {
+        return Err(source.non_finite(
+            format!("row {} column {}", i / grid.width, i % grid.width),
+            "height",
+            f64::from(grid.heights[i]),
+        ));
+    }
+    let missing = grid.heights.iter().filter(|h| h.is_nan()).count();
+    let (low, high) = grid
+        .heights
+        .iter()
+        .filter(|h| !h.is_nan())
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    report.heightfield = Some(HeightfieldInfo {
+        columns: grid.width,
+        rows: grid.depth,
+        posts: posts - missing,
+        spacing: grid.spacing,
+        height_range: [low, high],
+    });
+
+    let mut mesh = Mesh::default();
+    let surface = push_surface(
+        source,
+        &mut mesh,
+        Surface {
+            name: surface_name.to_owned(),
+            base_color: [1.0; 4],
+            texture: None,
+        },
+    )?;
+    if grid.width < 2 || grid.depth < 2 {
+        return Ok(mesh);
+    }
+
+    // Which posts some complete cell uses.
+    let mut used = vec![false; posts];
+    for row in 0..grid.depth - 1 {
+        for col in 0..grid.width - 1 {
+            if grid.cell_complete(col, row) {
+                for (c, r) in [
+                    (col, row),
+                    (col + 1, row),
+                    (col, row + 1),
+                    (col + 1, row + 1),
+                ] {
+                    used[r * grid.width + c] = true;
+                }
+            }
+        }
+    }
+
+    let mut index = vec![NO_ATTRIBUTE; posts];
+    let u_scale = 1.0 / (grid.width - 1) as f32;
+    let v_scale = 1.0 / (grid.depth - 1) as f32;
+    for row in 0..grid.depth {
+        for col in 0..grid.width {
+            let i = row * grid.width + col;
+            if !used[i] {
+                continue;
+            }
+            index[i] = next_index(source, mesh.positions.len(), "posts")?;
+            let h = grid.heights[i];
+            mesh.positions.push([
+                col as f32 * grid.spacing[0],
+                h,
+                row as f32 * grid.spacing[1],
+            ]);
+            let n = [
+                -grid.slope(col, row, false),
+                1.0,
+                -grid.slope(col, row, true),
+            ];
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            mesh.normals.push([n[0] / len, n[1] / len, n[2] / len]);
+            mesh.uvs.push([col as f32 * u_scale, row as f32 * v_scale]);
+        }
+    }
+
+    let mut skipped_cells = 0usize;
+    for row in 0..grid.depth - 1 {
+        for col in 0..grid.width - 1 {
+            if !grid.cell_complete(col, row) {
+                skipped_cells += 1;
+                continue;
+            }
+            let nw = index[row * grid.width + col];
+            let ne = index[row * grid.width + col + 1];
+            let sw = index[(row + 1) * grid.width + col];
+            let se = index[(row + 1) * grid.width + col + 1];
+            // Counter-clockwise seen from above (+y) with z pointing south.
+            for corners in [[nw, sw, se], [nw, se, ne]] {
+                mesh.triangles.push(Triangle {
+                    position: corners,
+                    normal: corners,
+                    uv: corners,
+                    color: [NO_ATTRIBUTE; 3],
+                    surface,
+                });
+            }
+        }
+    }
+    if missing > 0 {
+        report.notes.push(format!(
+            "{}: {missing} of {posts} grid posts are missing; the {skipped_cells} cells that \
+             touch them are left out (holes and borders)",
+            source.name
+        ));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(width: usize, depth: usize, heights: Vec<f32>) -> Heightfield {
+        Heightfield {
+            width,
+            depth,
+            spacing: [2.0, 3.0],
+            heights,
+        }
+    }
+
+    fn source() -> Source {
+        Source {
+            name: "grid.test".to_owned(),
+        }
+    }
+
+    #[test]
+    fn full_grid_is_two_triangles_per_cell_facing_up() {
+        let g = grid(3, 2, vec![0.0, 1.0, 2.0, 0.0, 1.0, 2.0]);
+        let mut report = ImportReport::default();
+        let mesh = heightfield_to_mesh(&source(), &g, "t", &mut report).unwrap();
+        mesh.validate().unwrap();
+        assert_eq!(mesh.positions.len(), 6);
+        assert_eq!(mesh.triangles.len(), 4);
+        assert!(report.notes.is_empty());
+        assert_eq!(mesh.positions[5], [4.0, 2.0, 3.0]);
+        assert_eq!(mesh.uvs[5], [1.0, 1.0]);
+        let info = report.heightfield.unwrap();
+        assert_eq!((info.columns, info.rows, info.posts), (3, 2, 6));
+        assert_eq!(info.height_range, [0.0, 2.0]);
+        for t in &mesh.triangles {
+            let [a, b, c] = t.position.map(|i| mesh.positions[i as usize]);
+            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let ny = e1[2] * e2[0] - e1[0] * e2[2];
+            assert!(ny > 0.0, "triangle {t:?} faces down");
+        }
+        // Height rises 1 m per 2 m east: the normal leans west.
+        let n = mesh.normals[0];
+        assert!((n[0] - (-0.5 / 1.25f32.sqrt())).abs() < 1e-6, "{n:?}");
+        assert!(n[2].abs() < 1e-6);
+    }
+
+    #[test]
+    fn missing_post_removes_its_cells_and_is_noted() {
+        let nan = f32::NAN;
+        // 3 x 3 posts, the centre missing: no complete cell remains.
+        let g = grid(3, 3, vec![0.0, 0.0, 0.0, 0.0, nan, 0.0, 0.0, 0.0, 0.0]);
+        let mut report = ImportReport::default();
+        let mesh = heightfield_to_mesh(&source(), &g, "t", &mut report).unwrap();
+        assert!(mesh.triangles.is_empty());
+        assert!(mesh.positions.is_empty());
+        assert_eq!(report.notes.len(), 1);
+        assert!(report.notes[0].contains("1 of 9"), "{:?}", report.notes);
+
+        // A missing corner removes only its cell.
+        let g = grid(3, 3, vec![nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let mesh = heightfield_to_mesh(&source(), &g, "t", &mut report).unwrap();
+        assert_eq!(mesh.triangles.len(), 6);
+        assert_eq!(mesh.positions.len(), 8);
+        mesh.validate().unwrap();
+    }
+
+    #[test]
+    fn infinite_height_is_an_error() {
+        let g = grid(2, 2, vec![0.0, 0.0, f32::INFINITY, 0.0]);
+        let err = heightfield_to_mesh(&source(), &g, "t", &mut ImportReport::default())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(err, "grid.test: row 1 column 0: height is inf");
+    }
+}

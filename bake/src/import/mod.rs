@@ -1,0 +1,198 @@
+//! Importers: files on disk to a [`Mesh`].
+//!
+//! [`import`] picks the importer from the file's extension (case-insensitive):
+//!
+//! | extension | format | source file |
+//! |---|---|---|
+//! | `.gltf`, `.glb` | glTF 2.0, JSON or binary | `import/gltf.rs` |
+//! | `.obj` | Wavefront OBJ (+ MTL) | `import/obj.rs` |
+//! | `.ply` | Stanford PLY, ascii and binary (either endianness) | `import/ply.rs` |
+//! | `.dem` | USGS ASCII DEM | `import/dem.rs` |
+//! | `.npy` | numpy array of heights (needs [`ImportOptions::spacing`]) | `import/npy.rs` |
+//!
+//! Each of those files documents what it supports and what it rejects.
+//!
+//! Every importer validates its input completely: a bad file gives an [`ImportError`] naming
+//! the file and the element at fault, never a panic, and never a mesh with out-of-range
+//! indices or non-finite numbers ([`Mesh::validate`] holds for every mesh returned).
+//!
+//! Conventions shared by all importers: positions in the file's units (heightfields: metres,
+//! x east, y up, z south); UVs with `v = 0` at the top row of the image (glTF's convention; OBJ
+//! and PLY `v` is flipped); colours linear RGBA (8- and 16-bit colours are taken as sRGB and
+//! converted); triangles counter-clockwise seen from the front.
+
+mod dem;
+mod error;
+mod gltf;
+mod heightfield;
+mod npy;
+mod obj;
+mod ply;
+
+use std::panic::{self, AssertUnwindSafe};
+use std::path::Path;
+
+pub use error::ImportError;
+pub(crate) use error::Source;
+
+use crate::mesh::Mesh;
+
+/// Options that formats without units or scale need.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImportOptions {
+    /// Metres per grid cell: required for `.npy` heightfields; for `.dem` it overrides the
+    /// spacing the header gives (and is required when the header's ground units are
+    /// arc-seconds or radians). Ignored by mesh formats.
+    pub spacing: Option<f32>,
+}
+
+/// What an import skipped or wants the user to know, beside the mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImportReport {
+    /// Primitives that are not triangles and were skipped: glTF primitives in `POINTS` or
+    /// `LINE*` modes, OBJ `p` and `l` statements, PLY faces with fewer than three vertices.
+    pub skipped_primitives: usize,
+    /// Human-readable notes (a missing MTL file, holes in a heightfield, ...), each a sentence.
+    pub notes: Vec<String>,
+    /// The grid, for heightfields (`.dem`, `.npy`).
+    pub heightfield: Option<HeightfieldInfo>,
+}
+
+/// The grid a heightfield was read into.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeightfieldInfo {
+    /// Posts along x (east).
+    pub columns: usize,
+    /// Posts along z (south).
+    pub rows: usize,
+    /// Posts with a height (the grid's other posts are missing: voids, irregular corners).
+    pub posts: usize,
+    /// Metres between neighbouring posts along x and z.
+    pub spacing: [f32; 2],
+    /// Lowest and highest height over all posts, in metres.
+    pub height_range: [f32; 2],
+}
+
+/// Reads the mesh in `path`, choosing the importer by extension.
+///
+/// See [`import_with_report`] for what was skipped along the way.
+pub fn import(path: &Path, options: &ImportOptions) -> Result<Mesh, ImportError> {
+    import_with_report(path, options).map(|(mesh, _)| mesh)
+}
+
+/// Like [`import`], and also returns what was skipped and any notes.
+pub fn import_with_report(
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<(Mesh, ImportReport), ImportError> {
+    let source = Source::new(path);
+    type Importer =
+        fn(&Source, &Path, &ImportOptions, &mut ImportReport) -> Result<Mesh, ImportError>;
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let importer: Importer = match extension.as_deref() {
+        Some("gltf") | Some("glb") => gltf::import_gltf,
+        Some("obj") => obj::import_obj,
+        Some("ply") => ply::import_ply,
+        Some("dem") => dem::import_dem,
+        Some("npy") => npy::import_npy,
+        other => {
+            return Err(ImportError::UnknownFormat {
+                file: source.name.clone(),
+                extension: match other {
+                    Some(e) => format!(".{e}"),
+                    None => "(no extension)".to_owned(),
+                },
+            })
+        }
+    };
+    if let Some(spacing) = options.spacing {
+        if !(spacing.is_finite() && spacing > 0.0) {
+            return Err(ImportError::MissingOption {
+                file: source.name.clone(),
+                message: format!("spacing must be a positive number of metres, not {spacing}"),
+            });
+        }
+    }
+
+    let mut report = ImportReport::default();
+    // Every importer validates its input and returns errors; this only turns a bug (ours or a
+    // dependency's) into an error instead of taking the caller down.
+    let result = panic::catch_unwind(AssertUnwindSafe(|| {
+        importer(&source, path, options, &mut report)
+    }));
+    let mesh = match result {
+        Ok(result) => result?,
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "panic".to_owned());
+            return Err(ImportError::Internal {
+                file: source.name,
+                message: format!("panicked: {message}"),
+            });
+        }
+    };
+    if let Err(message) = mesh.validate() {
+        return Err(ImportError::Internal {
+            file: source.name,
+            message,
+        });
+    }
+    if mesh.triangles.is_empty() {
+        let detail = if report.skipped_primitives > 0 {
+            format!(
+                ": {} non-triangle primitives skipped",
+                report.skipped_primitives
+            )
+        } else {
+            String::new()
+        };
+        return Err(ImportError::Empty {
+            file: source.name,
+            detail,
+        });
+    }
+    Ok((mesh, report))
+}
+
+/// Reads the whole file, naming it in the error.
+pub(crate) fn read_file(source: &Source, path: &Path) -> Result<Vec<u8>, ImportError> {
+    std::fs::read(path).map_err(|e| source.io("cannot read", e))
+}
+
+/// sRGB-encoded component in 0..=1 to linear.
+pub(crate) fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Adds a surface, failing when a triangle could no longer name it (`u16` ids).
+pub(crate) fn push_surface(
+    source: &Source,
+    mesh: &mut Mesh,
+    surface: crate::mesh::Surface,
+) -> Result<u16, ImportError> {
+    let id = u16::try_from(mesh.surfaces.len()).map_err(|_| {
+        source.unsupported(
+            format!("material '{}'", surface.name),
+            "more than 65,536 materials",
+        )
+    })?;
+    mesh.surfaces.push(surface);
+    Ok(id)
+}
+
+/// `u32` index for the next element of a stream of length `len`.
+pub(crate) fn next_index(source: &Source, len: usize, what: &str) -> Result<u32, ImportError> {
+    u32::try_from(len)
+        .ok()
+        .filter(|&i| i != crate::mesh::NO_ATTRIBUTE)
+        .ok_or_else(|| source.unsupported("mesh", format!("more than 2^32 - 1 {what}")))
+}

@@ -1,0 +1,16 @@
+//! # caveclod-bake
+//!
+//! From real meshes to baked caveclod hierarchies: importers ([`import`]), welding, repairs
+//! and surface groups ([`weld`]), attribute-aware quadric simplification into a balanced
+//! hierarchy of half-edge collapses ([`hierarchy`], [`quadric`]), the `.clod` writer
+//! ([`baked`]), and the reports and exports of the `caveclod` command-line tool.
+
+pub mod baked;
+pub mod export;
+pub mod hierarchy;
+pub mod import;
+pub mod mesh;
+pub mod pipeline;
+pub mod quadric;
+pub mod report;
+pub mod weld;

@@ -1,0 +1,114 @@
+//! The imported mesh: what every importer produces and the baker consumes.
+//!
+//! Attributes are indexed per corner, as OBJ stores them, so a seam (one position, two
+//! normals or UVs) is represented exactly; formats with one index per vertex (glTF, PLY)
+//! use the same index in every stream.
+
+/// "No attribute" in a corner's attribute index.
+pub const NO_ATTRIBUTE: u32 = u32::MAX;
+
+/// A surface: one material, one index list at run time.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Surface {
+    /// Material name as the source names it (or a made-up one).
+    pub name: String,
+    /// Base colour (linear RGBA).
+    pub base_color: [f32; 4],
+    /// Base-colour texture, a path relative to the source file, if any.
+    pub texture: Option<String>,
+}
+
+/// One triangle: per-corner indices into the attribute streams.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Triangle {
+    /// Into [`Mesh::positions`].
+    pub position: [u32; 3],
+    /// Into [`Mesh::normals`], or [`NO_ATTRIBUTE`].
+    pub normal: [u32; 3],
+    /// Into [`Mesh::uvs`], or [`NO_ATTRIBUTE`].
+    pub uv: [u32; 3],
+    /// Into [`Mesh::colors`], or [`NO_ATTRIBUTE`].
+    pub color: [u32; 3],
+    /// Into [`Mesh::surfaces`].
+    pub surface: u16,
+}
+
+/// A triangle mesh with per-corner attributes and surfaces.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Points (world space: importers apply node transforms).
+    pub positions: Vec<[f32; 3]>,
+    /// Normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates, `(u, v)` with `v = 0` at the top row of the image (the glTF
+    /// convention); importers of formats with `v` pointing up (OBJ, PLY) store `1 - v`.
+    pub uvs: Vec<[f32; 2]>,
+    /// Linear RGBA colours.
+    pub colors: Vec<[f32; 4]>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<Triangle>,
+    /// Surfaces; every triangle's surface is below `surfaces.len()`.
+    pub surfaces: Vec<Surface>,
+}
+
+impl Mesh {
+    /// Checks the invariants every importer guarantees: every index in range (or
+    /// [`NO_ATTRIBUTE`] where allowed), every surface id below `surfaces.len()`, every number
+    /// finite. Returns a description of the first violation.
+    pub fn validate(&self) -> Result<(), String> {
+        fn finite<const N: usize>(name: &str, values: &[[f32; N]]) -> Result<(), String> {
+            match values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+                None => Ok(()),
+                Some(i) => Err(format!("{name}[{i}] is not finite: {:?}", values[i])),
+            }
+        }
+        finite("positions", &self.positions)?;
+        finite("normals", &self.normals)?;
+        finite("uvs", &self.uvs)?;
+        finite("colors", &self.colors)?;
+        let streams: [(&str, usize); 3] = [
+            ("normal", self.normals.len()),
+            ("uv", self.uvs.len()),
+            ("color", self.colors.len()),
+        ];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&p) = tri
+                .position
+                .iter()
+                .find(|&&p| p as usize >= self.positions.len())
+            {
+                return Err(format!(
+                    "triangle {t}: position {p} out of range ({} positions)",
+                    self.positions.len()
+                ));
+            }
+            for ((name, len), indices) in streams.iter().zip([tri.normal, tri.uv, tri.color]) {
+                if let Some(&i) = indices
+                    .iter()
+                    .find(|&&i| i != NO_ATTRIBUTE && i as usize >= *len)
+                {
+                    return Err(format!("triangle {t}: {name} {i} out of range ({len})"));
+                }
+            }
+            if usize::from(tri.surface) >= self.surfaces.len() {
+                return Err(format!(
+                    "triangle {t}: surface {} out of range ({} surfaces)",
+                    tri.surface,
+                    self.surfaces.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Triangles per surface, indexed like [`Mesh::surfaces`].
+    pub fn triangles_per_surface(&self) -> Vec<usize> {
+        let mut counts = vec![0; self.surfaces.len()];
+        for tri in &self.triangles {
+            if let Some(c) = counts.get_mut(usize::from(tri.surface)) {
+                *c += 1;
+            }
+        }
+        counts
+    }
+}

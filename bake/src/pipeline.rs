@@ -1,0 +1,85 @@
+//! The whole bake: import, weld, build the hierarchy, assemble the arrays.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::baked::Baked;
+use crate::hierarchy::{self, AttributeWeights};
+use crate::import::{self, ImportError, ImportOptions};
+use crate::mesh::Mesh;
+use crate::report::BakeInfo;
+use crate::weld::{self, WeldError};
+
+/// Why a bake failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    /// Reading the input failed.
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    /// The input has nothing usable.
+    #[error("{path}: {source}")]
+    Weld {
+        /// The input.
+        path: String,
+        /// Why.
+        source: WeldError,
+    },
+    /// The baked arrays did not validate (a baker bug).
+    #[error("internal error: the baked hierarchy does not validate: {0}")]
+    Invalid(caveclod_core::FormatError),
+}
+
+/// Stages of a bake, for progress reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Reading the input.
+    Import,
+    /// Welding and grouping.
+    Weld,
+    /// Collapsing: `(done, at most)`.
+    Collapse(u64, u64),
+    /// Assembling the arrays.
+    Assemble,
+}
+
+/// Bakes an imported mesh.
+pub fn bake_mesh(
+    mesh: &Mesh,
+    name: &str,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo), BakeError> {
+    let start = Instant::now();
+    progress(Stage::Weld);
+    let w = weld::weld(mesh).map_err(|source| BakeError::Weld {
+        path: name.to_string(),
+        source,
+    })?;
+    let h = hierarchy::build(&w, &AttributeWeights::default(), &mut |done, most| {
+        progress(Stage::Collapse(done, most))
+    });
+    progress(Stage::Assemble);
+    let baked = Baked::new(&w, &h);
+    baked.hierarchy().map_err(BakeError::Invalid)?;
+    let info = BakeInfo {
+        input_triangles: mesh.triangles.len() as u64,
+        surface_groups: w.group_count as u64,
+        repairs: w.repairs,
+        bake_seconds: start.elapsed().as_secs_f64(),
+        passes: h.passes,
+    };
+    Ok((baked, info))
+}
+
+/// Imports and bakes a file; `bake_seconds` includes the import.
+pub fn bake_file(
+    path: &Path,
+    options: &ImportOptions,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo), BakeError> {
+    let start = Instant::now();
+    progress(Stage::Import);
+    let mesh = import::import(path, options)?;
+    let (baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
+    info.bake_seconds = start.elapsed().as_secs_f64();
+    Ok((baked, info))
+}

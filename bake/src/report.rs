@@ -1,0 +1,154 @@
+//! The figures `caveclod bake` and `caveclod info` print, with stable JSON keys for scripts.
+//!
+//! What the file cannot tell (the input's triangle count, the surface groups before
+//! colouring, the repairs, the bake time) travels in an `INFO` section of UTF-8 JSON, which
+//! readers that do not know it skip.
+
+use caveclod_core::format::{ExtraSection, Tag};
+use caveclod_core::{CameraState, Hierarchy, MemoryReport};
+use serde_json::{json, Map, Value};
+
+use crate::weld::Repairs;
+
+/// Tag of the bake-information section.
+pub const INFO: Tag = Tag(*b"INFO");
+
+/// What the bake knew that the hierarchy does not record.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BakeInfo {
+    /// Triangles read from the input.
+    pub input_triangles: u64,
+    /// Surface groups before colouring.
+    pub surface_groups: u64,
+    /// Repairs by kind.
+    pub repairs: Repairs,
+    /// Wall time of the bake.
+    pub bake_seconds: f64,
+    /// Independent-set passes of the hierarchy build.
+    pub passes: u32,
+}
+
+impl BakeInfo {
+    /// As the `INFO` section's JSON.
+    pub fn to_json(&self) -> String {
+        json!({
+            "input_triangles": self.input_triangles,
+            "surface_groups": self.surface_groups,
+            "repairs": repairs_json(&self.repairs),
+            "bake_seconds": self.bake_seconds,
+            "passes": self.passes,
+        })
+        .to_string()
+    }
+
+    /// The section to write.
+    pub fn section(json: &str) -> ExtraSection<'_> {
+        ExtraSection {
+            tag: INFO,
+            record_size: 1,
+            bytes: json.as_bytes(),
+        }
+    }
+
+    /// Reads the section of a hierarchy, if it has one.
+    pub fn read(h: &Hierarchy<'_>) -> Option<Self> {
+        let v: Value = serde_json::from_slice(h.section(INFO)?).ok()?;
+        let u = |k: &str| v.get(k).and_then(Value::as_u64).unwrap_or(0);
+        let r = |k: &str| {
+            v.get("repairs")
+                .and_then(|r| r.get(k))
+                .and_then(Value::as_u64)
+                .unwrap_or(0)
+        };
+        Some(Self {
+            input_triangles: u("input_triangles"),
+            surface_groups: u("surface_groups"),
+            repairs: Repairs {
+                welded_positions: r("welded_positions"),
+                degenerate_triangles: r("degenerate_triangles"),
+                duplicate_triangles: r("duplicate_triangles"),
+                non_manifold_edges: r("non_manifold_edges"),
+                non_manifold_vertices: r("non_manifold_vertices"),
+                computed_normals: r("computed_normals"),
+            },
+            bake_seconds: v.get("bake_seconds").and_then(Value::as_f64).unwrap_or(0.0),
+            passes: u("passes") as u32,
+        })
+    }
+}
+
+fn repairs_json(r: &Repairs) -> Value {
+    Value::Object(
+        r.entries()
+            .iter()
+            .map(|&(k, n)| (k.to_string(), json!(n)))
+            .collect::<Map<_, _>>(),
+    )
+}
+
+/// The report of a hierarchy (and its bake information, when known), as a JSON object with
+/// the stable keys.
+///
+/// `camera_bytes` is one camera able to reach full resolution anywhere; `paper_camera_bytes`
+/// is the paper's `4n + 4p + 16 + 12n_a + 36p_a` for the same case (every leaf and every
+/// polygon active), so the two compare like for like.
+pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> {
+    let m = h.meta();
+    let camera_bytes =
+        4 * CameraState::words_needed(h) + std::mem::size_of::<CameraState<'static>>();
+    let leaves = (m.node_count - m.split_count) as u64;
+    let mem = MemoryReport::new(h, camera_bytes, leaves, m.polygon_count as u64);
+    let mut o = Map::new();
+    let info = info.cloned();
+    o.insert(
+        "input_triangles".into(),
+        json!(info
+            .as_ref()
+            .map_or(m.polygon_count as u64, |i| i.input_triangles)),
+    );
+    o.insert("positions".into(), json!(m.position_count));
+    o.insert("nodes".into(), json!(m.node_count));
+    o.insert("polygons".into(), json!(m.polygon_count));
+    o.insert("vertices".into(), json!(m.vertex_count));
+    o.insert("surfaces".into(), json!(m.surface_count));
+    o.insert(
+        "surface_groups".into(),
+        json!(info.as_ref().map(|i| i.surface_groups)),
+    );
+    o.insert("surface_group_ids".into(), json!(m.surface_group_count));
+    o.insert("base_polygons".into(), json!(m.base_polygon_count));
+    o.insert("depth".into(), json!(m.max_depth));
+    o.insert("static_bytes".into(), json!(mem.static_bytes));
+    o.insert("camera_bytes".into(), json!(mem.camera_bytes));
+    o.insert("paper_static_bytes".into(), json!(mem.paper_static_bytes));
+    o.insert("paper_camera_bytes".into(), json!(mem.paper_camera_bytes));
+    o.insert(
+        "repairs".into(),
+        info.as_ref()
+            .map_or(Value::Null, |i| repairs_json(&i.repairs)),
+    );
+    let (cells, filled) = h.vertex_table_fill();
+    o.insert(
+        "vertex_table_fill".into(),
+        json!(filled as f64 / cells.max(1) as f64),
+    );
+    o
+}
+
+/// The report as aligned `key: value` lines for people.
+pub fn human(o: &Map<String, Value>) -> String {
+    let mut s = String::new();
+    for (k, v) in o {
+        let v = match v {
+            Value::Object(m) => m
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            Value::Null => "unknown".to_string(),
+            v => v.to_string(),
+        };
+        s.push_str(&format!("{k:>20}: {v}\n"));
+    }
+    s
+}

@@ -1,0 +1,500 @@
+//! From an imported [`Mesh`] to a clean, manifold, welded mesh with surface groups.
+//!
+//! Steps, each counted in [`Repairs`]:
+//! 1. positions with identical coordinates are welded into one node position;
+//! 2. degenerate triangles (a repeated position or zero area) and duplicate triangles (the
+//!    same three positions, either orientation) are dropped;
+//! 3. an edge used by more than two triangles, or twice in one direction, is cut: the later
+//!    triangle gets its own copies of the edge's two positions;
+//! 4. a position whose triangles form several fans (a non-manifold vertex) is split, one
+//!    copy per extra fan;
+//! 5. surface groups grow over edges where the surface and the attributes at both ends match,
+//!    never taking a triangle that would give the group a second attribute set at one
+//!    position (a UV seam that closes on itself, as on a cylinder, is cut open instead);
+//! 6. positions are classified FREE / SHARP / RIGID by the boundary edges through them (mesh
+//!    borders and surface-group changes), and groups that share no position share an id
+//!    (greedy colouring, largest groups first).
+//!
+//! Missing normals are computed (area-weighted, per position), missing UVs are zero and
+//! missing colours white.
+
+use std::collections::{HashMap, HashSet};
+
+use caveclod_core::PositionClass;
+
+use crate::mesh::{Mesh, NO_ATTRIBUTE};
+
+/// Counts of what welding repaired.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Repairs {
+    /// Input positions merged into an identical one.
+    pub welded_positions: u64,
+    /// Triangles dropped for a repeated position or zero area.
+    pub degenerate_triangles: u64,
+    /// Triangles dropped as duplicates.
+    pub duplicate_triangles: u64,
+    /// Edges cut because more than two triangles (or two in one direction) shared them.
+    pub non_manifold_edges: u64,
+    /// Positions split because their triangles formed several fans.
+    pub non_manifold_vertices: u64,
+    /// Corners without a normal that got a computed one.
+    pub computed_normals: u64,
+}
+
+impl Repairs {
+    /// `(name, count)` pairs, for reports.
+    pub fn entries(&self) -> [(&'static str, u64); 6] {
+        [
+            ("welded_positions", self.welded_positions),
+            ("degenerate_triangles", self.degenerate_triangles),
+            ("duplicate_triangles", self.duplicate_triangles),
+            ("non_manifold_edges", self.non_manifold_edges),
+            ("non_manifold_vertices", self.non_manifold_vertices),
+            ("computed_normals", self.computed_normals),
+        ]
+    }
+}
+
+/// The attributes of one vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attributes {
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Texture coordinates.
+    pub uv: [f32; 2],
+    /// Linear RGBA.
+    pub color: [f32; 4],
+}
+
+impl Attributes {
+    fn key(&self) -> [u32; 9] {
+        let n = self.normal.map(|x| (x + 0.0).to_bits());
+        let u = self.uv.map(|x| (x + 0.0).to_bits());
+        let c = self.color.map(|x| (x + 0.0).to_bits());
+        [n[0], n[1], n[2], u[0], u[1], c[0], c[1], c[2], c[3]]
+    }
+}
+
+/// One welded triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WeldedTri {
+    /// Position ids, counter-clockwise.
+    pub p: [u32; 3],
+    /// Per-corner attribute ids into [`Welded::attributes`].
+    pub a: [u32; 3],
+    /// Surface.
+    pub surface: u16,
+    /// Surface group (before colouring).
+    pub group: u32,
+}
+
+/// A manifold mesh with surface groups, classes and the vertex table's contents.
+#[derive(Clone, Debug, Default)]
+pub struct Welded {
+    /// Node positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Their classes.
+    pub classes: Vec<PositionClass>,
+    /// Distinct attribute sets.
+    pub attributes: Vec<Attributes>,
+    /// Triangles.
+    pub triangles: Vec<WeldedTri>,
+    /// Number of surface groups.
+    pub group_count: u32,
+    /// Surface-group id of each group (the colouring).
+    pub group_ids: Vec<u16>,
+    /// Number of surface-group ids.
+    pub group_id_count: u32,
+    /// Number of surfaces.
+    pub surface_count: u32,
+    /// Per position: `(group, attribute id)` of each group with a vertex there, by group.
+    pub vertices: Vec<Vec<(u32, u32)>>,
+    /// What was repaired.
+    pub repairs: Repairs,
+}
+
+/// Why welding failed.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum WeldError {
+    /// Nothing left after dropping degenerate and duplicate triangles.
+    #[error("no triangle left after dropping {degenerate} degenerate and {duplicate} duplicate triangles")]
+    Empty {
+        /// Degenerate triangles dropped.
+        degenerate: u64,
+        /// Duplicates dropped.
+        duplicate: u64,
+    },
+    /// More surface-group ids than the format's 16 bits.
+    #[error("{0} surface-group ids needed, at most 65535 supported")]
+    TooManyGroups(u32),
+    /// More surfaces than the format's 16 bits.
+    #[error("{0} surfaces, at most 65535 supported")]
+    TooManySurfaces(usize),
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f64; 3] {
+    [
+        (a[0] - b[0]) as f64,
+        (a[1] - b[1]) as f64,
+        (a[2] - b[2]) as f64,
+    ]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalize(v: [f64; 3]) -> [f32; 3] {
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if l > 0.0 {
+        [(v[0] / l) as f32, (v[1] / l) as f32, (v[2] / l) as f32]
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+/// Welds, repairs and groups `mesh`.
+pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
+    if mesh.surfaces.len() > u16::MAX as usize {
+        return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
+    }
+    let mut repairs = Repairs::default();
+    // 1. Weld identical positions.
+    let mut by_bits: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
+    let mut positions: Vec<[f32; 3]> = Vec::with_capacity(mesh.positions.len());
+    let remap: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let key = p.map(|x| (x + 0.0).to_bits());
+            *by_bits.entry(key).or_insert_with(|| {
+                positions.push(*p);
+                positions.len() as u32 - 1
+            })
+        })
+        .collect();
+    repairs.welded_positions = (mesh.positions.len() - positions.len()) as u64;
+
+    // 2. Drop degenerate and duplicate triangles; keep the source triangle for attributes.
+    let mut kept: Vec<([u32; 3], usize)> = Vec::with_capacity(mesh.triangles.len());
+    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(mesh.triangles.len());
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        let p = t
+            .position
+            .map(|x| remap.get(x as usize).copied().unwrap_or(u32::MAX));
+        if p.contains(&u32::MAX) || p[0] == p[1] || p[1] == p[2] || p[0] == p[2] {
+            repairs.degenerate_triangles += 1;
+            continue;
+        }
+        let [a, b, c] = p.map(|x| positions[x as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        if n == [0.0; 3] {
+            repairs.degenerate_triangles += 1;
+            continue;
+        }
+        let mut key = p;
+        key.sort_unstable();
+        if !seen.insert(key) {
+            repairs.duplicate_triangles += 1;
+            continue;
+        }
+        kept.push((p, i));
+    }
+    if kept.is_empty() {
+        return Err(WeldError::Empty {
+            degenerate: repairs.degenerate_triangles,
+            duplicate: repairs.duplicate_triangles,
+        });
+    }
+
+    // 3. Cut non-manifold edges.
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * kept.len());
+    let mut copies: Vec<u32> = (0..positions.len() as u32).collect(); // copy -> original
+    for f in 0..kept.len() {
+        let p = kept[f].0;
+        let conflict: Vec<usize> = (0..3)
+            .filter(|&k| {
+                let (a, b) = (p[k], p[(k + 1) % 3]);
+                directed.contains_key(&(a, b))
+                    || (directed.contains_key(&(b, a)) && edge_faces(&directed, a, b) >= 2)
+            })
+            .collect();
+        let mut q = p;
+        if !conflict.is_empty() {
+            repairs.non_manifold_edges += conflict.len() as u64;
+            let mut fresh: HashMap<u32, u32> = HashMap::new();
+            for &k in &conflict {
+                for j in [k, (k + 1) % 3] {
+                    let orig = p[j];
+                    q[j] = *fresh.entry(orig).or_insert_with(|| {
+                        positions.push(positions[orig as usize]);
+                        copies.push(copies[orig as usize]);
+                        positions.len() as u32 - 1
+                    });
+                }
+            }
+            kept[f].0 = q;
+        }
+        for k in 0..3 {
+            directed.insert((q[k], q[(k + 1) % 3]), f as u32);
+        }
+    }
+
+    // 4. Split non-manifold vertices: one position per fan.
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); positions.len()];
+    for (f, (p, _)) in kept.iter().enumerate() {
+        for &v in p {
+            faces_of[v as usize].push(f as u32);
+        }
+    }
+    for v in 0..faces_of.len() as u32 {
+        let fans = fans_around(v, &faces_of[v as usize], &kept, &directed);
+        for fan in fans.iter().skip(1) {
+            repairs.non_manifold_vertices += 1;
+            let copy = positions.len() as u32;
+            positions.push(positions[v as usize]);
+            copies.push(copies[v as usize]);
+            for &f in fan {
+                let p = &mut kept[f as usize].0;
+                let k = p.iter().position(|&x| x == v).unwrap_or(0);
+                let (prev, next) = (p[(k + 2) % 3], p[(k + 1) % 3]);
+                directed.remove(&(v, next));
+                directed.remove(&(prev, v));
+                p[k] = copy;
+                directed.insert((copy, next), f);
+                directed.insert((prev, copy), f);
+            }
+        }
+    }
+
+    // 5. Attributes per corner.
+    let has_normals = |i: usize| {
+        mesh.triangles[i]
+            .normal
+            .iter()
+            .all(|&n| (n as usize) < mesh.normals.len())
+    };
+    let mut computed = vec![[0f64; 3]; positions.len()];
+    if kept.iter().any(|&(_, i)| !has_normals(i)) {
+        for &(p, _) in &kept {
+            let [a, b, c] = p.map(|x| positions[x as usize]);
+            let n = cross(sub(b, a), sub(c, a));
+            for &v in &p {
+                for k in 0..3 {
+                    computed[v as usize][k] += n[k];
+                }
+            }
+        }
+    }
+    let mut attr_ids: HashMap<[u32; 9], u32> = HashMap::new();
+    let mut attributes: Vec<Attributes> = Vec::new();
+    let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
+    for &(p, i) in &kept {
+        let t = &mesh.triangles[i];
+        let mut a = [0u32; 3];
+        for k in 0..3 {
+            let normal = match mesh
+                .normals
+                .get(t.normal[k] as usize)
+                .filter(|_| t.normal[k] != NO_ATTRIBUTE)
+            {
+                Some(n) => *n,
+                None => {
+                    repairs.computed_normals += 1;
+                    normalize(computed[p[k] as usize])
+                }
+            };
+            let uv = mesh.uvs.get(t.uv[k] as usize).copied().unwrap_or([0.0; 2]);
+            let color = mesh
+                .colors
+                .get(t.color[k] as usize)
+                .copied()
+                .unwrap_or([1.0; 4]);
+            let attrs = Attributes { normal, uv, color };
+            a[k] = *attr_ids.entry(attrs.key()).or_insert_with(|| {
+                attributes.push(attrs);
+                attributes.len() as u32 - 1
+            });
+        }
+        tri_attrs.push(a);
+    }
+
+    // 6. Surface groups by region growing.
+    let nt = kept.len();
+    let surface = |f: usize| mesh.triangles[kept[f].1].surface;
+    let corner_attr = |f: usize, v: u32| {
+        let k = kept[f].0.iter().position(|&x| x == v).unwrap_or(0);
+        tri_attrs[f][k]
+    };
+    let mut group = vec![u32::MAX; nt];
+    let mut vertex_of: HashMap<(u32, u32), u32> = HashMap::with_capacity(nt);
+    let mut group_count = 0u32;
+    let mut group_size: Vec<u32> = Vec::new();
+    let mut queue = Vec::new();
+    for seed in 0..nt {
+        if group[seed] != u32::MAX {
+            continue;
+        }
+        let g = group_count;
+        group_count += 1;
+        group_size.push(0);
+        queue.clear();
+        queue.push(seed as u32);
+        while let Some(f) = queue.pop() {
+            let f = f as usize;
+            if group[f] != u32::MAX {
+                continue;
+            }
+            let p = kept[f].0;
+            let fits = (0..3).all(|k| {
+                vertex_of
+                    .get(&(g, p[k]))
+                    .is_none_or(|&a| a == tri_attrs[f][k])
+            });
+            if !fits {
+                continue;
+            }
+            group[f] = g;
+            group_size[g as usize] += 1;
+            for k in 0..3 {
+                vertex_of.insert((g, p[k]), tri_attrs[f][k]);
+            }
+            for k in 0..3 {
+                let (a, b) = (p[k], p[(k + 1) % 3]);
+                if let Some(&o) = directed.get(&(b, a)) {
+                    let o = o as usize;
+                    if group[o] == u32::MAX
+                        && surface(o) == surface(f)
+                        && corner_attr(o, a) == corner_attr(f, a)
+                        && corner_attr(o, b) == corner_attr(f, b)
+                    {
+                        queue.push(o as u32);
+                    }
+                }
+            }
+        }
+    }
+
+    // 7. Classes from boundary edges.
+    let mut boundary = vec![0u32; positions.len()];
+    for (&(a, b), &f) in &directed {
+        let counts = match directed.get(&(b, a)) {
+            None => true,
+            Some(&o) => f < o && group[f as usize] != group[o as usize],
+        };
+        if counts {
+            boundary[a as usize] += 1;
+            boundary[b as usize] += 1;
+        }
+    }
+    let classes = boundary
+        .iter()
+        .map(|&n| match n {
+            0 => PositionClass::Free,
+            2 => PositionClass::Sharp,
+            _ => PositionClass::Rigid,
+        })
+        .collect();
+
+    // 8. Vertices per position and the colouring of groups.
+    let mut vertices: Vec<Vec<(u32, u32)>> = vec![Vec::new(); positions.len()];
+    for (&(g, p), &a) in &vertex_of {
+        vertices[p as usize].push((g, a));
+    }
+    for v in &mut vertices {
+        v.sort_unstable();
+    }
+    let mut order: Vec<u32> = (0..group_count).collect();
+    order.sort_unstable_by_key(|&g| std::cmp::Reverse(group_size[g as usize]));
+    let mut positions_of: Vec<Vec<u32>> = vec![Vec::new(); group_count as usize];
+    for (p, vs) in vertices.iter().enumerate() {
+        for &(g, _) in vs {
+            positions_of[g as usize].push(p as u32);
+        }
+    }
+    let mut colour = vec![u32::MAX; group_count as usize];
+    let mut colour_count = 0u32;
+    let mut used: Vec<u32> = Vec::new();
+    for &g in &order {
+        used.clear();
+        for &p in &positions_of[g as usize] {
+            for &(o, _) in &vertices[p as usize] {
+                let c = colour[o as usize];
+                if c != u32::MAX && !used.contains(&c) {
+                    used.push(c);
+                }
+            }
+        }
+        let c = (0..).find(|c| !used.contains(c)).unwrap_or(0);
+        colour[g as usize] = c;
+        colour_count = colour_count.max(c + 1);
+    }
+    if colour_count > u16::MAX as u32 {
+        return Err(WeldError::TooManyGroups(colour_count));
+    }
+    let triangles = kept
+        .iter()
+        .zip(&tri_attrs)
+        .enumerate()
+        .map(|(f, (&(p, i), &a))| WeldedTri {
+            p,
+            a,
+            surface: mesh.triangles[i].surface,
+            group: group[f],
+        })
+        .collect();
+    Ok(Welded {
+        positions,
+        classes,
+        attributes,
+        triangles,
+        group_count,
+        group_ids: colour.iter().map(|&c| c as u16).collect(),
+        group_id_count: colour_count,
+        surface_count: mesh.surfaces.len().max(1) as u32,
+        vertices,
+        repairs,
+    })
+}
+
+/// Triangles on the undirected edge `a`–`b` so far.
+fn edge_faces(directed: &HashMap<(u32, u32), u32>, a: u32, b: u32) -> usize {
+    usize::from(directed.contains_key(&(a, b))) + usize::from(directed.contains_key(&(b, a)))
+}
+
+/// The fans of triangles around `v`: triangles joined across edges through `v`.
+fn fans_around(
+    v: u32,
+    faces: &[u32],
+    kept: &[([u32; 3], usize)],
+    directed: &HashMap<(u32, u32), u32>,
+) -> Vec<Vec<u32>> {
+    let mut fans: Vec<Vec<u32>> = Vec::new();
+    let mut done: HashSet<u32> = HashSet::new();
+    for &start in faces {
+        if !done.insert(start) {
+            continue;
+        }
+        let mut fan = vec![start];
+        let mut i = 0;
+        while i < fan.len() {
+            let f = fan[i];
+            let p = kept[f as usize].0;
+            let k = p.iter().position(|&x| x == v).unwrap_or(0);
+            for (a, b) in [(v, p[(k + 1) % 3]), (p[(k + 2) % 3], v)] {
+                if let Some(&o) = directed.get(&(b, a)) {
+                    if faces.contains(&o) && done.insert(o) {
+                        fan.push(o);
+                    }
+                }
+            }
+            i += 1;
+        }
+        fans.push(fan);
+    }
+    fans
+}
