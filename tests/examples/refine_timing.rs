@@ -40,6 +40,15 @@ fn main() {
         st
     );
     let t0 = std::time::Instant::now();
+    cam.refine(&h, &view(0.0), &p).unwrap();
+    println!(
+        "settled pass before compaction {:.3} ms",
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+    let t0 = std::time::Instant::now();
+    cam.compact(&h);
+    println!("compaction {:.3} ms", t0.elapsed().as_secs_f64() * 1e3);
+    let t0 = std::time::Instant::now();
     let st = cam.refine(&h, &view(0.0), &p).unwrap();
     println!(
         "settled pass {:.3} ms {:?}",

@@ -28,6 +28,7 @@ enum Step {
     Split(u32),
     ForceSplit(u32),
     Collapse(u32),
+    Compact,
     Refine {
         eye: [f32; 3],
         target: [f32; 3],
@@ -41,6 +42,7 @@ fn step() -> impl Strategy<Value = Step> {
         3 => any::<u32>().prop_map(Step::Split),
         2 => any::<u32>().prop_map(Step::ForceSplit),
         3 => any::<u32>().prop_map(Step::Collapse),
+        1 => Just(Step::Compact),
         1 => (prop::array::uniform3(-20.0f32..20.0), prop::array::uniform3(-5.0f32..15.0), 0.05f32..20.0, prop_oneof![Just(u32::MAX), 1u32..50])
             .prop_map(|(eye, target, tolerance, max_ops)| Step::Refine { eye, target, tolerance, max_ops }),
     ]
@@ -54,6 +56,31 @@ fn snapshot(
     let polys = (0..h.polygon_count() as u32)
         .map(|f| cam.polygon_corners(h, caveclod_core::PolyId(f)))
         .collect();
+    (nodes, polys)
+}
+
+/// The front as sets: active nodes, and every active polygon with its corners and
+/// neighbours (independent of record and slot order).
+fn snapshot_sorted(
+    h: &caveclod_core::Hierarchy<'_>,
+    cam: &CameraState<'_>,
+) -> (
+    Vec<NodeId>,
+    Vec<(u32, [NodeId; 3], [caveclod_core::PolyId; 3])>,
+) {
+    let mut nodes: Vec<NodeId> = cam.active_nodes().collect();
+    nodes.sort_unstable();
+    let mut polys: Vec<_> = cam
+        .active_polygons(h)
+        .map(|f| {
+            (
+                f.0,
+                cam.polygon_corners(h, f).expect("active"),
+                cam.polygon_neighbours(h, f).expect("active"),
+            )
+        })
+        .collect();
+    polys.sort_unstable();
     (nodes, polys)
 }
 
@@ -91,6 +118,11 @@ proptest! {
                     let v = NodeId(x % ns);
                     let legal = cam.can_collapse(&h, v);
                     prop_assert_eq!(cam.collapse(&h, v).is_ok(), legal);
+                }
+                Step::Compact => {
+                    let before = snapshot_sorted(&h, &cam);
+                    cam.compact(&h);
+                    prop_assert_eq!(snapshot_sorted(&h, &cam), before);
                 }
                 Step::Refine { eye, target, tolerance, max_ops } => {
                     let view = View::perspective(Vec3::from(eye), Vec3::from(target), Vec3::Y, 1.0, 1.3, 0.05, 1e3, 400.0);

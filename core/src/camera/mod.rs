@@ -32,6 +32,7 @@
 //!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 //!   memory gets a hard polygon budget for free.
 
+mod compact;
 mod emit;
 mod ops;
 mod refine;
@@ -165,6 +166,8 @@ pub(crate) struct Front<'m> {
     pub free_head: u32,
     pub active_nodes: u32,
     pub active_polygons: u32,
+    /// Operations since the last [`compact`](CameraState::compact).
+    pub churn: u32,
 }
 
 fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
@@ -244,6 +247,7 @@ impl<'m> CameraState<'m> {
                 free_head: NONE,
                 active_nodes: 0,
                 active_polygons: 0,
+                churn: 0,
             },
             stack: bytemuck::cast_slice_mut(stack),
         };
@@ -278,6 +282,7 @@ impl<'m> CameraState<'m> {
             f.surface_polygons[s] += 1;
         }
         f.active_polygons = f.base;
+        f.churn = 0;
     }
 
     /// `true` if this camera was made for `h`.

@@ -270,6 +270,7 @@ impl Front<'_> {
         self.pair_of[v.index()] = k;
         self.pairs += 1;
         self.active_nodes += 1;
+        self.churn = self.churn.saturating_add(1);
         for f in [s.f_l, s.f_r] {
             if let Some(p) = h.polygons().get(f.index()) {
                 self.active_polygons += 1;
@@ -336,6 +337,7 @@ impl Front<'_> {
         self.free_record(ru);
         self.pair_of[v.index()] = NONE;
         self.active_nodes = self.active_nodes.saturating_sub(1);
+        self.churn = self.churn.saturating_add(1);
         for f in [s.f_l, s.f_r] {
             if let Some(p) = h.polygons().get(f.index()) {
                 self.active_polygons = self.active_polygons.saturating_sub(1);

@@ -9,7 +9,9 @@
 
 use caveclod_core::format::FileHeader;
 use caveclod_core::glam::Vec3;
-use caveclod_core::{checksum64, CameraConfig, CameraState, Hierarchy, NodeId, RefineParams, View};
+use caveclod_core::{
+    checksum64, CameraConfig, CameraState, Hierarchy, NodeId, OpError, RefineParams, View,
+};
 
 /// The golden file's bytes as `include_bytes!` gives them (alignment 1).
 pub static GOLDEN: &[u8] = include_bytes!("../data/terrain6.clod");
@@ -182,7 +184,20 @@ pub fn emit_checked(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
     }
 }
 
-/// Collapses every legal collapse until none is left; returns the number applied.
+/// The documented recovery from an error: `OpError::Inconsistent` (data contradicting the
+/// camera, which validation cannot see) leaves the camera to be reset; other errors leave a
+/// valid front. Returns `true` if the camera was reset.
+pub fn recover<T>(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, r: &Result<T, OpError>) -> bool {
+    if let Err(OpError::Inconsistent { .. }) = r {
+        cam.reset(h);
+        true
+    } else {
+        false
+    }
+}
+
+/// Collapses every legal collapse until none is left; returns the number applied. An
+/// `Inconsistent` collapse resets the camera, which ends the loop.
 pub fn collapse_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> usize {
     let ns = h.splits().len();
     let mut applied = 0;
@@ -191,9 +206,13 @@ pub fn collapse_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> usize {
     for _ in 0..=ns {
         let mut progress = false;
         for v in (0..ns as u32).rev().map(NodeId) {
-            if cam.can_collapse(h, v) && cam.collapse(h, v).is_ok() {
-                applied += 1;
-                progress = true;
+            if cam.can_collapse(h, v) {
+                let r = cam.collapse(h, v);
+                if r.is_ok() {
+                    applied += 1;
+                    progress = true;
+                }
+                recover(h, cam, &r);
             }
         }
         if !progress {
@@ -204,19 +223,23 @@ pub fn collapse_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> usize {
 }
 
 /// A short run of every runtime entry point over a hierarchy that loaded. It must not panic;
-/// errors are fine (corrupt-but-valid data may make operations report `Inconsistent`).
+/// errors are fine (corrupt-but-valid data may make operations report `Inconsistent`, after
+/// which the camera is reset as documented). Between operations, emission must agree with
+/// the camera's counts.
 pub fn exercise(h: &Hierarchy<'_>, view_count: usize) {
     let mut memory = vec![0u32; CameraState::words_needed(h)];
     let mut cam = CameraState::new(h, &mut memory).expect("words_needed words are enough");
     assert!(cam.is_for(h));
     assert_eq!(cam.active_polygon_count() as usize, h.base_polygon_count());
     for (i, view) in views(h, view_count).iter().enumerate() {
-        let _ = cam.refine(h, view, &params(i));
+        let r = cam.refine(h, view, &params(i));
+        recover(h, &mut cam, &r);
         emit_checked(h, &cam);
     }
     let ns = h.splits().len() as u32;
     for v in (0..ns.min(32)).map(NodeId) {
-        let _ = cam.force_split_own_stack(h, v);
+        let r = cam.force_split_own_stack(h, v);
+        recover(h, &mut cam, &r);
     }
     emit_checked(h, &cam);
     collapse_all(h, &mut cam);
@@ -229,7 +252,8 @@ pub fn exercise(h: &Hierarchy<'_>, view_count: usize) {
     let mut small = vec![0u32; CameraState::words_needed_for(h, &config)];
     let mut cam = CameraState::with_config(h, &mut small, &config).expect("words_needed_for words");
     for (i, view) in views(h, view_count.min(3)).iter().enumerate() {
-        let _ = cam.refine(h, view, &params(i));
+        let r = cam.refine(h, view, &params(i));
+        recover(h, &mut cam, &r);
         assert!(cam.split_count() <= config.max_pairs);
         emit_checked(h, &cam);
     }
