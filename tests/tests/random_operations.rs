@@ -59,15 +59,15 @@ fn snapshot(
     (nodes, polys)
 }
 
+/// An active polygon with its corners and neighbours.
+type PolyState = (u32, [NodeId; 3], [caveclod_core::PolyId; 3]);
+
 /// The front as sets: active nodes, and every active polygon with its corners and
 /// neighbours (independent of record and slot order).
 fn snapshot_sorted(
     h: &caveclod_core::Hierarchy<'_>,
     cam: &CameraState<'_>,
-) -> (
-    Vec<NodeId>,
-    Vec<(u32, [NodeId; 3], [caveclod_core::PolyId; 3])>,
-) {
+) -> (Vec<NodeId>, Vec<PolyState>) {
     let mut nodes: Vec<NodeId> = cam.active_nodes().collect();
     nodes.sort_unstable();
     let mut polys: Vec<_> = cam
