@@ -312,6 +312,14 @@ fn parse_ply(
             return Err(source.malformed("element 'vertex'", format!("no '{axis}' property")));
         }
     }
+    for (name, property) in &vertex_def.properties {
+        if vertex_slot(name).is_some() && !matches!(property.data_type, PropertyType::Scalar(_)) {
+            return Err(source.malformed(
+                "element 'vertex'",
+                format!("property '{name}' is a list, not a number"),
+            ));
+        }
+    }
     let has_normals = has("nx") && has("ny") && has("nz");
     let has_uvs = has("u") && has("v");
     let has_colors = has("red") && has("green") && has("blue");
@@ -789,6 +797,10 @@ mod tests {
                 .contains("truncated")
         );
         assert!(err("not a ply").contains("header"));
+        assert!(err("ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nproperty float y\nproperty float z\nend_header\n1 0 0 0\n")
+            .contains("property 'x' is a list"));
+        assert!(err("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+            .contains("element 'face'"));
         // A huge count in a small binary file is caught before parsing.
         let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\n\
                     property float x\nproperty float y\nproperty float z\nend_header\n";
