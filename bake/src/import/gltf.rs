@@ -886,7 +886,7 @@ impl Importer<'_> {
                 if accessor.sparse.is_none() {
                     return Err(source.malformed(at, "no bufferView and no sparse data"));
                 }
-                if total > (1 << 28) {
+                if total > (1 << 24) {
                     return Err(source.malformed(at, format!("count {count} without a bufferView")));
                 }
                 vec![0.0; total]
