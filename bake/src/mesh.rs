@@ -2,7 +2,8 @@
 //!
 //! Attributes are indexed per corner, as OBJ stores them, so a seam (one position, two
 //! normals or UVs) is represented exactly; formats with one index per vertex (glTF, PLY)
-//! use the same index in every stream.
+//! point every stream of a corner at the same source vertex (glTF indices differ between
+//! streams by a per-stream offset when some primitives lack an attribute).
 
 /// "No attribute" in a corner's attribute index.
 pub const NO_ATTRIBUTE: u32 = u32::MAX;
