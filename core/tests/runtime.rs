@@ -431,3 +431,40 @@ fn operations_on_the_wrong_nodes_are_refused() {
     }
     assert_eq!(cam.split_count(), 0);
 }
+
+/// From the base mesh a pass only splits, so the splits it reports must be the splits the
+/// camera holds afterwards. With a small capacity, `refine` force-splits a node whose chain
+/// of forced splits runs into `CapacityFull` part-way: the splits applied before the refusal
+/// stay (as `force_split` documents) but are not added to `RefineStats::splits`, nor counted
+/// against `max_ops`. On the golden file, `max_pairs` 2 to 4 report 1 split for 2 to 4 applied.
+/// Reported as a core bug; run with `--ignored` to check a fix.
+#[test]
+#[ignore = "core bug: RefineStats::splits misses forced splits applied before CapacityFull"]
+fn refine_stats_count_every_split_applied() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let m = h.meta();
+    let centre = (caveclod_core::glam::Vec3::from_array(m.bounds_min)
+        + caveclod_core::glam::Vec3::from_array(m.bounds_max))
+        * 0.5;
+    let view = caveclod_core::View::without_frustum(centre, 1e6);
+    let params = RefineParams {
+        tolerance_px: 1e-6,
+        backface_culling: false,
+        ..RefineParams::default()
+    };
+    for max_pairs in 1..=8 {
+        let config = caveclod_core::CameraConfig {
+            max_pairs,
+            stack_len: 256,
+        };
+        let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+        let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
+        let stats = cam.refine(&h, &view, &params).expect("refine");
+        assert_eq!(
+            stats.splits,
+            cam.split_count(),
+            "max_pairs {max_pairs}: {stats:?}"
+        );
+    }
+}

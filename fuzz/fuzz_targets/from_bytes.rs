@@ -4,13 +4,15 @@
 //! tried twice: as given (header, length and checksum checks), and, when it fails on its
 //! length or checksum, again with the header's file length and checksum rewritten to match
 //! (the validator and the runtime). Loading must return `Err` or a hierarchy that every
-//! runtime entry point can use without panicking.
+//! runtime entry point can use without panicking, and whose emission agrees with the
+//! camera's counts (after an `Inconsistent` error the camera is reset, as documented).
 #![no_main]
 
 use caveclod_core::format::FileHeader;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, RefineParams, View,
+    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, OpError, RefineParams,
+    View,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -33,9 +35,8 @@ fn views(h: &Hierarchy<'_>) -> [View; 4] {
     let hi = Vec3::from_array(m.bounds_max);
     let centre = (lo + hi) * 0.5;
     let r = ((hi - lo).length() * 0.5).max(1e-3);
-    let persp = |eye: Vec3| {
-        View::perspective(eye, centre, Vec3::Y, 0.9, 1.5, r * 1e-3, r * 100.0, 720.0)
-    };
+    let persp =
+        |eye: Vec3| View::perspective(eye, centre, Vec3::Y, 0.9, 1.5, r * 1e-3, r * 100.0, 720.0);
     [
         persp(centre + Vec3::new(0.3, 0.8, 2.0) * r),
         persp(centre + Vec3::new(-0.1, 0.05, 0.2) * r),
@@ -44,13 +45,27 @@ fn views(h: &Hierarchy<'_>) -> [View; 4] {
     ]
 }
 
+/// Emission into exactly sized buffers: when it succeeds, the offsets must partition the
+/// output by the camera's per-surface counts and every index must name a vertex.
 fn emit(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
-    let total: usize = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
-    let mut out = vec![0u32; total];
-    let mut offsets = vec![0u32; h.surface_count() + 1];
+    let ns = h.surface_count();
+    let total: usize = (0..ns).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![u32::MAX; total];
+    let mut offsets = vec![0u32; ns + 1];
     if let Ok(n) = cam.emit_indices_packed(h, &mut out, &mut offsets) {
         assert_eq!(n, total);
+        assert_eq!(offsets[0], 0);
+        for s in 0..ns {
+            assert_eq!((offsets[s + 1] - offsets[s]) as usize, cam.index_count(s));
+        }
         assert!(out.iter().all(|&i| (i as usize) < h.vertices().len()));
+    }
+}
+
+/// The documented recovery: after `Inconsistent` the camera is to be reset.
+fn recover<T>(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, r: &Result<T, OpError>) {
+    if let Err(OpError::Inconsistent { .. }) = r {
+        cam.reset(h);
     }
 }
 
@@ -67,20 +82,24 @@ fn exercise(h: &Hierarchy<'_>) {
         },
     ];
     for (i, view) in views(h).iter().enumerate() {
-        let _ = cam.refine(h, view, &params[i % 2]);
+        let r = cam.refine(h, view, &params[i % 2]);
+        recover(h, &mut cam, &r);
         emit(h, &cam);
     }
     let ns = h.splits().len() as u32;
     for v in (0..ns.min(16)).map(NodeId) {
-        let _ = cam.force_split_own_stack(h, v);
+        let r = cam.force_split_own_stack(h, v);
+        recover(h, &mut cam, &r);
     }
     emit(h, &cam);
     // Collapse everything legal, in bounded rounds.
     for _ in 0..=ns {
         let mut progress = false;
         for v in (0..ns).rev().map(NodeId) {
-            if cam.can_collapse(h, v) && cam.collapse(h, v).is_ok() {
-                progress = true;
+            if cam.can_collapse(h, v) {
+                let r = cam.collapse(h, v);
+                progress |= r.is_ok();
+                recover(h, &mut cam, &r);
             }
         }
         if !progress {
@@ -93,7 +112,8 @@ fn exercise(h: &Hierarchy<'_>) {
     let config = CameraConfig::with_polygon_budget(h, h.base_polygon_count() as u32 + 4);
     let mut small = vec![0u32; CameraState::words_needed_for(h, &config)];
     let mut cam = CameraState::with_config(h, &mut small, &config).expect("words_needed_for");
-    let _ = cam.refine(h, &views(h)[2], &params[1]);
+    let r = cam.refine(h, &views(h)[2], &params[1]);
+    recover(h, &mut cam, &r);
     assert!(cam.split_count() <= config.max_pairs);
     emit(h, &cam);
 }

@@ -4,9 +4,9 @@
 //!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
 //!   `spirv-val`), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
-//! - `test [--miri-full]`: setup, then formatting, clippy, the workspace tests, the no_std
-//!   build for a microcontroller target, and the core crate's tests under miri. Every step
-//!   prints a header and its wall time; the run ends with `N passed, M failed`.
+//! - `test`: setup, then formatting, clippy, the workspace tests, the no_std build for a
+//!   microcontroller target, and the core crate's tests under miri. Every step prints a
+//!   header and its wall time; the run ends with `N passed, M failed`.
 //! - `demo [ARGS..]`: the fly-over example in release mode, with `ARGS` forwarded.
 //!
 //! Only std: the tool must build before anything else is installed.
@@ -37,8 +37,7 @@ commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
                         spirv-val and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
-  test [--miri-full]    setup, then fmt, clippy, tests, no_std build, miri
-                        (--miri-full: every core test under miri, not the CI subset)
+  test                  setup, then fmt, clippy, tests, no_std build, miri
   demo [ARGS..]         cargo run --release -p caveclod-examples --example flyover -- ARGS
 ";
 
@@ -52,9 +51,7 @@ fn main() -> ExitCode {
         "setup" => {
             parse_flags(rest, &["--with-miri"]).and_then(|f| setup(f.contains(&"--with-miri")))
         }
-        "test" => {
-            parse_flags(rest, &["--miri-full"]).and_then(|f| test(f.contains(&"--miri-full")))
-        }
+        "test" => parse_flags(rest, &[]).and_then(|_| test()),
         "demo" => demo(rest),
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
@@ -318,69 +315,76 @@ fn miri_installed() -> bool {
 // ---------------------------------------------------------------------------------------
 // test
 
-/// Runs each step, timing it; returns the number of steps that passed and failed.
-fn test(miri_full: bool) -> Result<(), String> {
-    let nightly = format!("+{NIGHTLY}");
-    type Step = Box<dyn Fn() -> Result<(), String>>;
-    let mut steps: Vec<(String, Step)> = vec![
-        ("setup".into(), Box::new(|| setup(false))),
-        (
-            "cargo fmt --all -- --check".into(),
-            Box::new(|| run(cmd("cargo", &["fmt", "--all", "--", "--check"]))),
+/// Features for the miri run. libm (through glam) computes `sqrtf` with inline `sqrtss` on
+/// x86, which miri cannot interpret; its `force-soft-floats` feature selects the portable
+/// implementation. Only the miri build uses it.
+const MIRI_FEATURES: &str = "libm/force-soft-floats";
+
+type Step = Box<dyn Fn() -> Result<(), String>>;
+
+/// The steps of `cargo xtask test`, in order.
+fn test_steps() -> Vec<(String, Step)> {
+    let step = |title: &str, args: &'static [&'static str]| -> (String, Step) {
+        (title.to_string(), Box::new(move || run(cmd("cargo", args))))
+    };
+    vec![
+        ("setup".to_string(), Box::new(|| setup(false))),
+        step(
+            "cargo fmt --all -- --check",
+            &["fmt", "--all", "--", "--check"],
+        ),
+        step(
+            "cargo clippy --workspace --all-targets -- -D warnings",
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        // The debug profile: the whole suite runs in well under a minute in debug, while a
+        // release build of the workspace and its dev-dependencies takes longer to compile
+        // than the tests take to run. `--no-fail-fast` reports every failing test binary.
+        step(
+            "cargo test --workspace",
+            &["test", "--workspace", "--no-fail-fast"],
+        ),
+        step(
+            "cargo build -p caveclod-core --target thumbv7em-none-eabihf",
+            &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
         ),
         (
-            "cargo clippy --workspace --all-targets -- -D warnings".into(),
+            format!("cargo +{NIGHTLY} miri test -p caveclod-core"),
             Box::new(|| {
+                if !miri_installed() {
+                    install_miri()?;
+                }
+                let nightly = format!("+{NIGHTLY}");
                 run(cmd(
                     "cargo",
                     &[
-                        "clippy",
-                        "--workspace",
-                        "--all-targets",
-                        "--",
-                        "-D",
-                        "warnings",
+                        &nightly,
+                        "miri",
+                        "test",
+                        "-p",
+                        "caveclod-core",
+                        "--no-fail-fast",
+                        "--features",
+                        MIRI_FEATURES,
                     ],
                 ))
             }),
         ),
-        (
-            "cargo test --workspace".into(),
-            Box::new(|| run(cmd("cargo", &["test", "--workspace"]))),
-        ),
-        (
-            format!("cargo build -p caveclod-core --target {NO_STD_TARGET}"),
-            Box::new(|| {
-                run(cmd(
-                    "cargo",
-                    &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
-                ))
-            }),
-        ),
-    ];
-    let miri_title = if miri_full {
-        format!("cargo {nightly} miri test -p caveclod-core")
-    } else {
-        format!("cargo {nightly} miri test -p caveclod-core (CI subset: {MIRI_SUBSET_NOTE})")
-    };
-    steps.push((
-        miri_title,
-        Box::new(move || {
-            if !miri_installed() {
-                install_miri()?;
-            }
-            let nightly = format!("+{NIGHTLY}");
-            let mut args = vec![nightly.as_str(), "miri", "test", "-p", "caveclod-core"];
-            if !miri_full {
-                args.extend_from_slice(MIRI_SUBSET_ARGS);
-            }
-            run(cmd("cargo", &args))
-        }),
-    ));
+    ]
+}
 
+/// Runs every step (a failure does not stop the others), timing each; `Err` if any failed.
+fn test() -> Result<(), String> {
     let total = Instant::now();
     let mut results: Vec<(String, Duration, bool)> = Vec::new();
-    for (title, step) in &steps {
+    for (title, step) in test_steps() {
         println!("\n==> {title}");
         let start = Instant::now();
         let outcome = step();
@@ -389,7 +393,7 @@ fn test(miri_full: bool) -> Result<(), String> {
             Ok(()) => println!("<== ok in {}", secs(took)),
             Err(e) => println!("<== FAILED in {}: {e}", secs(took)),
         }
-        results.push((title.clone(), took, outcome.is_ok()));
+        results.push((title, took, outcome.is_ok()));
     }
     println!("\nsteps:");
     for (title, took, ok) in &results {
@@ -406,11 +410,6 @@ fn test(miri_full: bool) -> Result<(), String> {
         Err(format!("{failed} step(s) failed"))
     }
 }
-
-/// What CI runs under miri by default (see `MIRI_SUBSET_ARGS`).
-const MIRI_SUBSET_NOTE: &str = "every core test, with the sampled robustness test";
-/// Extra arguments to `cargo miri test` for the CI subset.
-const MIRI_SUBSET_ARGS: &[&str] = &[];
 
 fn secs(d: Duration) -> String {
     format!("{:.1}s", d.as_secs_f64())
