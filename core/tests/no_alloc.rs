@@ -1,6 +1,6 @@
 //! The runtime allocates nothing: with a counting global allocator, refinement from 20
-//! views, forced splits, collapses, and index emission leave the count unchanged once the
-//! hierarchy, the camera memory and the output buffers exist.
+//! views, compaction, forced splits, collapses, and index emission leave the count unchanged
+//! once the hierarchy, the camera memory and the output buffers exist.
 //!
 //! Allocations are counted per thread (the test harness allocates on its own threads), and
 //! the test shows the counter works by watching one `Vec::with_capacity(1)` change it.
@@ -96,6 +96,7 @@ fn the_runtime_does_not_allocate() {
             .emit_indices(&h, &mut slices, &mut written)
             .expect("emit lists");
         assert_eq!(n, m);
+        cam.compact(&h);
     }
     for v in (0..h.splits().len() as u32).map(NodeId) {
         if cam.is_node_active(&h, v) {

@@ -86,6 +86,11 @@ fn exercise(h: &Hierarchy<'_>) {
         recover(h, &mut cam, &r);
         emit(h, &cam);
     }
+    // Compaction re-orders the camera's arrays; the counts stay.
+    let counts = (cam.active_polygon_count(), cam.split_count());
+    cam.compact(h);
+    assert_eq!(counts, (cam.active_polygon_count(), cam.split_count()));
+    emit(h, &cam);
     let ns = h.splits().len() as u32;
     for v in (0..ns.min(16)).map(NodeId) {
         let r = cam.force_split_own_stack(h, v);

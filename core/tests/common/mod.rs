@@ -164,23 +164,58 @@ pub fn params(i: usize) -> RefineParams {
 }
 
 /// Emits the camera's indices into exactly sized buffers and checks what can be checked of
-/// any hierarchy that loaded: offsets partition the output, and every index names a vertex.
-/// Errors the runtime reports for data it cannot make sense of are accepted.
-pub fn emit_checked(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
+/// any hierarchy that loaded: offsets partition the output by the camera's per-surface counts,
+/// and every index names a vertex. Returns each surface's triangles, sorted (an
+/// order-independent picture of the front), or `None` if emission reported an error, which is
+/// accepted for data the runtime cannot make sense of.
+pub fn emit_checked(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Option<Vec<Vec<[u32; 3]>>> {
     let total: usize = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
     let mut out = vec![u32::MAX; total];
     let mut offsets = vec![0u32; h.surface_count() + 1];
-    if let Ok(n) = cam.emit_indices_packed(h, &mut out, &mut offsets) {
-        assert_eq!(n, total);
-        assert_eq!(offsets[0], 0);
-        for s in 0..h.surface_count() {
-            assert!(offsets[s] <= offsets[s + 1]);
-            assert_eq!((offsets[s + 1] - offsets[s]) as usize, cam.index_count(s));
-        }
-        assert_eq!(offsets[h.surface_count()] as usize, total);
-        for &i in &out {
-            assert!((i as usize) < h.vertices().len(), "index {i} out of range");
-        }
+    let n = cam.emit_indices_packed(h, &mut out, &mut offsets).ok()?;
+    assert_eq!(n, total);
+    assert_eq!(offsets[0], 0);
+    for s in 0..h.surface_count() {
+        assert!(offsets[s] <= offsets[s + 1]);
+        assert_eq!((offsets[s + 1] - offsets[s]) as usize, cam.index_count(s));
+    }
+    assert_eq!(offsets[h.surface_count()] as usize, total);
+    for &i in &out {
+        assert!((i as usize) < h.vertices().len(), "index {i} out of range");
+    }
+    let surfaces = (0..h.surface_count())
+        .map(|s| {
+            let range = &out[offsets[s] as usize..offsets[s + 1] as usize];
+            let mut tris: Vec<[u32; 3]> =
+                range.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+            tris.sort_unstable();
+            tris
+        })
+        .collect();
+    Some(surfaces)
+}
+
+/// Compacts the camera; the front must be the same afterwards (same triangles per surface,
+/// same counts).
+pub fn compact_checked(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) {
+    let (nodes, polys, splits) = (
+        cam.active_node_count(),
+        cam.active_polygon_count(),
+        cam.split_count(),
+    );
+    let before = emit_checked(h, cam);
+    cam.compact(h);
+    assert_eq!(
+        (nodes, polys, splits),
+        (
+            cam.active_node_count(),
+            cam.active_polygon_count(),
+            cam.split_count()
+        )
+    );
+    let after = emit_checked(h, cam);
+    if before.is_some() {
+        assert_eq!(before, after, "compaction changed the front");
     }
 }
 
@@ -236,12 +271,13 @@ pub fn exercise(h: &Hierarchy<'_>, view_count: usize) {
         recover(h, &mut cam, &r);
         emit_checked(h, &cam);
     }
+    compact_checked(h, &mut cam);
     let ns = h.splits().len() as u32;
     for v in (0..ns.min(32)).map(NodeId) {
         let r = cam.force_split_own_stack(h, v);
         recover(h, &mut cam, &r);
     }
-    emit_checked(h, &cam);
+    compact_checked(h, &mut cam);
     collapse_all(h, &mut cam);
     emit_checked(h, &cam);
     cam.reset(h);
