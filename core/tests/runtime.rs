@@ -442,9 +442,8 @@ fn operations_on_the_wrong_nodes_are_refused() {
 /// of forced splits runs into `CapacityFull` part-way: the splits applied before the refusal
 /// stay (as `force_split` documents) but are not added to `RefineStats::splits`, nor counted
 /// against `max_ops`. On the golden file, `max_pairs` 2 to 4 report 1 split for 2 to 4 applied.
-/// Reported as a core bug; run with `--ignored` to check a fix.
+/// (Found as a bug, fixed: forced splits before an error are counted.)
 #[test]
-#[ignore = "core bug: RefineStats::splits misses forced splits applied before CapacityFull"]
 fn refine_stats_count_every_split_applied() {
     let file = golden();
     let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");

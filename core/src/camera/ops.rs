@@ -432,6 +432,21 @@ impl Front<'_> {
         stack: &mut [NodeId],
         budget: u32,
     ) -> Result<u32, OpError> {
+        let mut applied = 0;
+        self.force_split_counted(h, v, stack, budget, &mut applied)
+            .map(|()| applied)
+    }
+
+    /// [`force_split`](Self::force_split) that counts the splits it applies in `applied`,
+    /// also when it stops with an error (the splits applied before the error stay).
+    pub fn force_split_counted(
+        &mut self,
+        h: &Hierarchy<'_>,
+        v: NodeId,
+        stack: &mut [NodeId],
+        budget: u32,
+        applied: &mut u32,
+    ) -> Result<(), OpError> {
         if h.split(v).is_none() {
             return Err(OpError::Leaf { node: v });
         }
@@ -440,7 +455,7 @@ impl Front<'_> {
         let mut top = 0usize;
         *stack.first_mut().ok_or(full)? = v;
         top += 1;
-        let mut applied = 0;
+        let start = *applied;
         while top > 0 {
             let u = stack[top - 1];
             if self.is_split(u) {
@@ -466,15 +481,15 @@ impl Front<'_> {
                 }
             }
             if !pushed {
-                if applied == budget {
-                    return Ok(applied);
+                if *applied - start == budget {
+                    return Ok(());
                 }
                 top -= 1;
                 self.apply_split(h, u)?;
-                applied += 1;
+                *applied += 1;
             }
         }
-        Ok(applied)
+        Ok(())
     }
 }
 

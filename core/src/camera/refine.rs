@@ -151,17 +151,26 @@ impl CameraState<'_> {
                         i += 1;
                         continue;
                     }
-                    match f.force_split(h, v, self.stack, max_ops - st.operations()) {
-                        Ok(n) => {
-                            st.splits += n;
-                            st.forced_splits += n.saturating_sub(1);
+                    let mut applied = 0;
+                    let budget = max_ops - st.operations();
+                    let result = f.force_split_counted(h, v, self.stack, budget, &mut applied);
+                    // Every split applied counts, also those forced before an error.
+                    st.splits += applied;
+                    match result {
+                        Ok(()) => {
+                            st.forced_splits += applied.saturating_sub(u32::from(f.is_split(v)));
                             if f.is_split(v) {
                                 continue; // look at the stationary child in this record again
                             }
                         }
-                        Err(OpError::StackFull { .. }) => st.stack_overflows += 1,
-                        Err(OpError::CapacityFull { .. }) => st.capacity_refusals += 1,
-                        Err(e) => return Err(e),
+                        Err(e) => {
+                            st.forced_splits += applied;
+                            match e {
+                                OpError::StackFull { .. } => st.stack_overflows += 1,
+                                OpError::CapacityFull { .. } => st.capacity_refusals += 1,
+                                e => return Err(e),
+                            }
+                        }
                     }
                     i += 1;
                     continue;
