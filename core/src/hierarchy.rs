@@ -71,6 +71,7 @@ impl<'a> Hierarchy<'a> {
     pub fn section(&self, tag: Tag) -> Option<&'a [u8]> {
         let (table, _) = format::validate::section_table(self.file).ok()?;
         let e = table.iter().find(|e| e.tag == tag)?;
+        let e = &e;
         let start = e.offset as usize;
         self.file
             .get(start..start + e.record_size as usize * e.record_count as usize)

@@ -370,7 +370,6 @@ fn a_misaligned_buffer_is_refused_not_copied() {
 /// modulo 8 is refused with `Misaligned { tag: "SECT" }`. Reported as a core bug; run with
 /// `--ignored` to check a fix.
 #[test]
-#[ignore = "core bug: from_bytes needs 8-byte alignment, its docs promise 4"]
 fn a_four_byte_aligned_buffer_is_accepted_as_documented() {
     let f = Aligned::with_offset(common::GOLDEN, 4);
     let bytes = f.at(4);

@@ -41,7 +41,7 @@ pub(crate) struct Parsed<'a> {
 
 /// The section table of `bytes` after its header checks; entry `i` is valid if the function
 /// returned `Ok`.
-pub(crate) fn section_table(bytes: &[u8]) -> Result<(&[SectionEntry], u64), FormatError> {
+pub(crate) fn section_table(bytes: &[u8]) -> Result<(SectionTable<'_>, u64), FormatError> {
     let header_len = core::mem::size_of::<FileHeader>();
     if bytes.len() < header_len {
         return Err(FormatError::Truncated {
@@ -103,9 +103,9 @@ pub(crate) fn section_table(bytes: &[u8]) -> Result<(&[SectionEntry], u64), Form
             computed,
         });
     }
-    let table: &[SectionEntry] =
-        bytemuck::try_cast_slice(&bytes[header_len..header_len + table_len])
-            .map_err(|_| FormatError::Misaligned { tag: Tag(*b"SECT") })?;
+    let table = SectionTable {
+        bytes: &bytes[header_len..header_len + table_len],
+    };
     let mut end_of_previous = (header_len + table_len) as u64;
     for (i, e) in table.iter().enumerate() {
         let problem = |problem| FormatError::SectionTable {
@@ -137,13 +137,29 @@ pub(crate) fn section_table(bytes: &[u8]) -> Result<(&[SectionEntry], u64), Form
     Ok((table, header.checksum))
 }
 
+/// The section table, read entry by entry (its `u64` fields need no alignment from the
+/// caller's buffer: only the sections' own records, at most 4-byte aligned, are cast in
+/// place).
+#[derive(Clone, Copy)]
+pub(crate) struct SectionTable<'a> {
+    bytes: &'a [u8],
+}
+
+impl SectionTable<'_> {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = SectionEntry> + '_ {
+        self.bytes
+            .chunks_exact(core::mem::size_of::<SectionEntry>())
+            .map(bytemuck::pod_read_unaligned)
+    }
+}
+
 fn section<'a, T: Pod>(
     bytes: &'a [u8],
-    table: &[SectionEntry],
+    table: SectionTable<'_>,
     tag: Tag,
 ) -> Result<&'a [T], FormatError> {
-    let mut found: Option<&SectionEntry> = None;
-    for e in table {
+    let mut found: Option<SectionEntry> = None;
+    for e in table.iter() {
         if e.tag == tag {
             if found.is_some() {
                 return Err(FormatError::DuplicateSection { tag });
