@@ -126,16 +126,36 @@ struct Wedge {
     q: Quadric,
 }
 
+/// A legal collapse as a pass ranks it: `(cost, t, u)`.
+type Candidate = (f64, u32, u32);
+
+/// Per-thread scratch space of [`Work::check`].
+#[derive(Default)]
+struct Scratch {
+    ring_t: Vec<u32>,
+    ring_u: Vec<u32>,
+}
+
+/// The mesh being simplified: triangles with their current corners and, per edge, the
+/// triangle across it (the mesh stays an oriented manifold, so "the triangle across" is
+/// well defined and its edge runs the other way).
 struct Work<'w> {
     w: &'w Welded,
     p: Vec<V3>,
     corners: Vec<[u32; 3]>,
+    /// `opp[f][k]`: the triangle across edge `corners[f][k] → corners[f][k + 1]`, or `NONE`.
+    opp: Vec<[u32; 3]>,
     alive: Vec<bool>,
     faces_of: Vec<Vec<u32>>,
     node_pos: Vec<u32>,
-    wedges: Vec<Vec<Wedge>>,
+    /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
+    wedges: Vec<Wedge>,
+    wedge_start: Vec<u32>,
     h: Hierarchy,
+    /// Pass in which a node's neighbourhood was last taken by a collapse.
     stamp: Vec<u32>,
+    /// Pass in which a node's star (triangles, their corners and neighbours) last changed.
+    changed: Vec<u32>,
 }
 
 impl Work<'_> {
@@ -144,44 +164,57 @@ impl Work<'_> {
         self.p[self.node_pos[node as usize] as usize]
     }
 
-    fn corner(&self, f: u32, v: u32) -> Option<usize> {
-        self.corners[f as usize].iter().position(|&c| c == v)
+    #[inline]
+    fn wedges_at(&self, pos: usize) -> &[Wedge] {
+        &self.wedges[self.wedge_start[pos] as usize..self.wedge_start[pos + 1] as usize]
     }
 
-    fn dir_face(&self, a: u32, b: u32) -> Option<u32> {
-        self.faces_of[a as usize].iter().copied().find(|&f| {
+    /// The triangle with the directed edge `a → b` and the corner of `a` in it.
+    #[inline]
+    fn dir_face(&self, a: u32, b: u32) -> Option<(u32, usize)> {
+        for &f in &self.faces_of[a as usize] {
             let c = self.corners[f as usize];
-            (0..3).any(|j| c[j] == a && c[(j + 1) % 3] == b)
-        })
-    }
-
-    fn across(&self, f: u32, a: u32, b: u32) -> u32 {
-        self.faces_of[a as usize]
-            .iter()
-            .copied()
-            .find(|&g| g != f && self.corners[g as usize].contains(&b))
-            .unwrap_or(NONE)
-    }
-
-    fn ring(&self, v: u32, out: &mut Vec<u32>) {
-        out.clear();
-        for &f in &self.faces_of[v as usize] {
-            for c in self.corners[f as usize] {
-                if c != v && !out.contains(&c) {
-                    out.push(c);
-                }
+            let j = corner_of(c, a);
+            if c[next(j)] == b {
+                return Some((f, j));
             }
         }
+        None
     }
 
-    fn on_border(&self, v: u32) -> bool {
-        self.faces_of[v as usize].iter().any(|&f| {
+    /// The distinct neighbours of `v` into `out`; returns whether `v` is on a border.
+    ///
+    /// Every neighbour `x` is reached once: through the triangle with the edge `v → x`, or,
+    /// when there is none, through the border triangle with `x → v`.
+    fn ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
+        out.clear();
+        let mut border = false;
+        for &f in &self.faces_of[v as usize] {
             let c = self.corners[f as usize];
-            let j = c.iter().position(|&x| x == v).unwrap_or(0);
-            self.across(f, v, c[(j + 1) % 3]) == NONE || self.across(f, v, c[(j + 2) % 3]) == NONE
-        })
+            let o = self.opp[f as usize];
+            let j = corner_of(c, v);
+            out.push(c[next(j)]);
+            if o[prev(j)] == NONE {
+                out.push(c[prev(j)]);
+                border = true;
+            }
+            border |= o[j] == NONE;
+        }
+        border
     }
 
+    /// Number of distinct neighbours of `v` (see [`Work::ring`]).
+    fn valence(&self, v: u32) -> usize {
+        self.faces_of[v as usize]
+            .iter()
+            .map(|&f| {
+                let j = corner_of(self.corners[f as usize], v);
+                1 + usize::from(self.opp[f as usize][prev(j)] == NONE)
+            })
+            .sum()
+    }
+
+    #[inline]
     fn normal(&self, c: [u32; 3]) -> V3 {
         let [a, b, d] = c.map(|n| self.pt(n));
         cross(sub(b, a), sub(d, a))
@@ -193,8 +226,8 @@ impl Work<'_> {
             self.node_pos[t as usize] as usize,
             self.node_pos[u as usize] as usize,
         );
-        let at = &self.wedges[pt];
-        self.wedges[pu]
+        let at = self.wedges_at(pt);
+        self.wedges_at(pu)
             .iter()
             .map(|wu| match at.iter().find(|wt| wt.group == wu.group) {
                 Some(wt) => wu.q.eval(self.p[pt], &wt.attrs),
@@ -204,13 +237,7 @@ impl Work<'_> {
     }
 
     /// Checks the collapse of `u` into `t`; returns it with its cost and error increment.
-    fn check(
-        &self,
-        t: u32,
-        u: u32,
-        ring_t: &mut Vec<u32>,
-        ring_u: &mut Vec<u32>,
-    ) -> Option<(Collapse, f64, f64)> {
+    fn check(&self, t: u32, u: u32, s: &mut Scratch) -> Option<(Collapse, f64, f64)> {
         let (pt, pu) = (
             self.node_pos[t as usize] as usize,
             self.node_pos[u as usize] as usize,
@@ -219,8 +246,9 @@ impl Work<'_> {
         if class_u == PositionClass::Rigid {
             return None;
         }
-        let fl = self.dir_face(t, u)?;
-        let fr = self.dir_face(u, t).unwrap_or(NONE);
+        let (fl, jl) = self.dir_face(t, u)?;
+        let ol = self.opp[fl as usize];
+        let fr = ol[jl];
         let group = |f: u32| self.w.triangles[f as usize].group;
         let boundary = fr == NONE || group(fl) != group(fr);
         if class_u != PositionClass::Free
@@ -232,38 +260,37 @@ impl Work<'_> {
         if !vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g)) {
             return None;
         }
-        let jl = self.corner(fl, t)?;
-        let l = self.corners[fl as usize][(jl + 2) % 3];
-        let fn0 = self.across(fl, l, t);
-        let fn1 = self.across(fl, u, l);
+        let l = self.corners[fl as usize][prev(jl)];
+        let fn0 = ol[prev(jl)];
+        let fn1 = ol[next(jl)];
         if fn1 == NONE {
             return None;
         }
         let (mut r, mut fn2, mut fn3, mut jr) = (NONE, NONE, NONE, 0);
         if fr != NONE {
-            jr = self.corner(fr, t)?;
-            r = self.corners[fr as usize][(jr + 1) % 3];
-            fn2 = self.across(fr, t, r);
-            fn3 = self.across(fr, r, u);
+            let cr = self.corners[fr as usize];
+            jr = corner_of(cr, t);
+            r = cr[next(jr)];
+            let or = self.opp[fr as usize];
+            fn2 = or[jr];
+            fn3 = or[next(jr)];
             if fn3 == NONE {
                 return None;
             }
         }
-        self.ring(t, ring_t);
-        self.ring(u, ring_u);
-        let shared = ring_t.iter().filter(|x| ring_u.contains(x)).count();
+        // Link condition: the edge's ends share exactly the neighbours `l` and `r`.
+        let border_t = self.ring(t, &mut s.ring_t);
+        let border_u = self.ring(u, &mut s.ring_u);
+        let shared = s.ring_t.iter().filter(|x| s.ring_u.contains(x)).count();
         if shared != 1 + usize::from(r != NONE) {
             return None;
         }
-        if fr != NONE && self.on_border(t) && self.on_border(u) {
+        if fr != NONE && border_t && border_u {
             return None;
         }
         for x in [l, r] {
-            if x != NONE {
-                self.ring(x, ring_t);
-                if ring_t.len() <= 3 {
-                    return None;
-                }
+            if x != NONE && self.valence(x) <= 3 {
+                return None;
             }
         }
         let (p_t, p_u) = (self.pt(t), self.pt(u));
@@ -272,8 +299,9 @@ impl Work<'_> {
             if f == fl || f == fr {
                 continue;
             }
-            let before = self.normal(self.corners[f as usize]);
-            let after = self.normal(self.corners[f as usize].map(|c| if c == u { t } else { c }));
+            let c = self.corners[f as usize];
+            let before = self.normal(c);
+            let after = self.normal(c.map(|x| if x == u { t } else { x }));
             let (lb, la) = (len(before), len(after));
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;
@@ -296,6 +324,39 @@ impl Work<'_> {
         Some((c, cost, dev))
     }
 
+    /// The better collapse of the edge in slot `k` of triangle `f`, if the slot stands for
+    /// its edge (the lower-numbered end first, or a border edge) and the edge collapses:
+    /// `(cost, direction)`, direction 1 moving the edge's first end onto its second, 2 the
+    /// other way round, 0 none.
+    fn evaluate(&self, f: usize, k: usize, s: &mut Scratch) -> (f64, u8) {
+        let c = self.corners[f];
+        let (a, b) = (c[k], c[next(k)]);
+        if !(a < b || self.opp[f][k] == NONE) {
+            return (0.0, 0);
+        }
+        let x = self.check(b, a, s).map(|x| x.1);
+        let y = self.check(a, b, s).map(|y| y.1);
+        match (x, y) {
+            (Some(x), Some(y)) if y < x => (y, 2),
+            (Some(x), _) => (x, 1),
+            (None, Some(y)) => (y, 2),
+            (None, None) => (0.0, 0),
+        }
+    }
+
+    /// Whether slot `k` of triangle `f` must be evaluated again in pass `pass`: its edge's
+    /// checks read the stars of the corners of the two triangles on the edge, so it must
+    /// when one of those changed in the previous pass.
+    #[inline]
+    fn stale(&self, f: usize, k: usize, pass: u32) -> bool {
+        let changed = |c: [u32; 3]| c.iter().any(|&x| self.changed[x as usize] + 1 >= pass);
+        if changed(self.corners[f]) {
+            return true;
+        }
+        let g = self.opp[f][k];
+        g != NONE && changed(self.corners[g as usize])
+    }
+
     fn apply(&mut self, c: Collapse, dev: f64) -> u32 {
         let s = self.node_pos.len() as u32;
         let (t, u) = (c.t, c.u);
@@ -315,21 +376,39 @@ impl Work<'_> {
             self.h.cone[u as usize],
         ));
         // The removed position's wedges merge into the kept position's.
-        let moved = std::mem::take(&mut self.wedges[pu as usize]);
-        for wu in moved {
-            if let Some(wt) = self.wedges[pt as usize]
-                .iter_mut()
-                .find(|wt| wt.group == wu.group)
-            {
-                wt.q.add(&wu.q);
+        let (st, et) = (
+            self.wedge_start[pt as usize] as usize,
+            self.wedge_start[pt as usize + 1] as usize,
+        );
+        for i in self.wedge_start[pu as usize] as usize..self.wedge_start[pu as usize + 1] as usize
+        {
+            let g = self.wedges[i].group;
+            if let Some(j) = (st..et).find(|&j| self.wedges[j].group == g) {
+                let q = self.wedges[i].q;
+                self.wedges[j].q.add(&q);
             }
         }
+        // The triangles across each dying one's two other edges become neighbours.
         for f in [c.fl, c.fr] {
-            if f != NONE {
-                self.alive[f as usize] = false;
-                for x in self.corners[f as usize] {
-                    self.faces_of[x as usize].retain(|&g| g != f);
+            if f == NONE {
+                continue;
+            }
+            self.alive[f as usize] = false;
+            let o = self.opp[f as usize];
+            let j = corner_of(self.corners[f as usize], t);
+            // The edge t–u is slot j of f_l and slot prev(j) of f_r.
+            let on_edge = if f == c.fl { j } else { prev(j) };
+            let (x, y) = (o[next(on_edge)], o[prev(on_edge)]);
+            for (a, b) in [(x, y), (y, x)] {
+                if a != NONE {
+                    let oa = &mut self.opp[a as usize];
+                    if let Some(k) = oa.iter().position(|&g| g == f) {
+                        oa[k] = b;
+                    }
                 }
+            }
+            for x in self.corners[f as usize] {
+                self.faces_of[x as usize].retain(|&g| g != f);
             }
         }
         let mut star = std::mem::take(&mut self.faces_of[t as usize]);
@@ -343,8 +422,40 @@ impl Work<'_> {
         }
         self.faces_of.push(star);
         self.stamp.push(0);
+        self.changed.push(0);
         self.h.collapses.push(c);
         s
+    }
+}
+
+#[inline]
+fn next(k: usize) -> usize {
+    if k == 2 {
+        0
+    } else {
+        k + 1
+    }
+}
+
+#[inline]
+fn prev(k: usize) -> usize {
+    if k == 0 {
+        2
+    } else {
+        k - 1
+    }
+}
+
+/// The corner of `c` holding `v` (which it must hold).
+#[inline]
+fn corner_of(c: [u32; 3], v: u32) -> usize {
+    if c[0] == v {
+        0
+    } else if c[1] == v {
+        1
+    } else {
+        debug_assert_eq!(c[2], v);
+        2
     }
 }
 
@@ -420,66 +531,80 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         .iter()
         .map(|q| sub(q.map(f64::from), centre))
         .collect();
-    let mut wedges: Vec<Vec<Wedge>> = w
-        .vertices
-        .iter()
-        .map(|vs| {
-            vs.iter()
-                .map(|&(group, a)| Wedge {
-                    group,
-                    attrs: scaled_attributes(w, a, weights, diagonal),
-                    q: Quadric::default(),
-                })
-                .collect()
-        })
-        .collect();
+    let mut wedge_start = Vec::with_capacity(np + 1);
+    let mut wedges = Vec::with_capacity(np);
+    wedge_start.push(0u32);
+    for vs in &w.vertices {
+        wedges.extend(vs.iter().map(|&(group, a)| Wedge {
+            group,
+            attrs: scaled_attributes(w, a, weights, diagonal),
+            q: Quadric::default(),
+        }));
+        wedge_start.push(wedges.len() as u32);
+    }
+    let wedge_of = |wedges: &mut [Wedge], x: u32, group: u32| -> Option<usize> {
+        (wedge_start[x as usize] as usize..wedge_start[x as usize + 1] as usize)
+            .find(|&i| wedges[i].group == group)
+    };
     let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); np];
     for (f, t) in w.triangles.iter().enumerate() {
         let s = t.a.map(|a| scaled_attributes(w, a, weights, diagonal));
         let q = Quadric::triangle(t.p.map(|x| p[x as usize]), s);
         for &x in &t.p {
             faces_of[x as usize].push(f as u32);
-            if let Some(wd) = wedges[x as usize].iter_mut().find(|wd| wd.group == t.group) {
-                wd.q.add(&q);
+            if let Some(i) = wedge_of(&mut wedges, x, t.group) {
+                wedges[i].q.add(&q);
             }
         }
     }
+    // The triangle across each edge: the one with the reverse edge.
+    let corners: Vec<[u32; 3]> = w.triangles.iter().map(|t| t.p).collect();
+    let opp: Vec<[u32; 3]> = corners
+        .iter()
+        .map(|c| {
+            [0, 1, 2].map(|k| {
+                let (a, b) = (c[k], c[next(k)]);
+                faces_of[b as usize]
+                    .iter()
+                    .copied()
+                    .find(|&g| {
+                        let d = corners[g as usize];
+                        d[next(corner_of(d, b))] == a
+                    })
+                    .unwrap_or(NONE)
+            })
+        })
+        .collect();
     // Boundary planes: through each border or group-boundary edge, perpendicular to its
     // triangle, weighted by the edge's squared length.
-    let mut directed = std::collections::HashMap::with_capacity(3 * nt);
     for (f, t) in w.triangles.iter().enumerate() {
         for k in 0..3 {
-            directed.insert((t.p[k], t.p[(k + 1) % 3]), f as u32);
-        }
-    }
-    for (f, t) in w.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
-            let twin = directed.get(&(b, a)).copied();
-            if twin.is_some_and(|g| w.triangles[g as usize].group == t.group) {
+            let (a, b) = (t.p[k], t.p[next(k)]);
+            let twin = opp[f][k];
+            if twin != NONE && w.triangles[twin as usize].group == t.group {
                 continue;
             }
-            let (pa, pb, pc) = (p[a as usize], p[b as usize], p[t.p[(k + 2) % 3] as usize]);
+            let (pa, pb, pc) = (p[a as usize], p[b as usize], p[t.p[prev(k)] as usize]);
             let e = sub(pb, pa);
             let n = norm(cross(e, cross(sub(pc, pa), e)));
             let q = Quadric::plane(n, -dot(n, pa), dot(e, e));
             for x in [a, b] {
-                if let Some(wd) = wedges[x as usize].iter_mut().find(|wd| wd.group == t.group) {
-                    wd.q.add(&q);
+                if let Some(i) = wedge_of(&mut wedges, x, t.group) {
+                    wedges[i].q.add(&q);
                 }
             }
-            let _ = f;
         }
     }
-    drop(directed);
     let mut work = Work {
         w,
         p,
-        corners: w.triangles.iter().map(|t| t.p).collect(),
+        corners,
+        opp,
         alive: vec![true; nt],
         faces_of,
         node_pos: (0..np as u32).collect(),
         wedges,
+        wedge_start,
         h: Hierarchy {
             parent: vec![NONE; np],
             radius: vec![0.0; np],
@@ -488,21 +613,20 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             ..Hierarchy::default()
         },
         stamp: vec![0; np],
+        changed: vec![0; np],
     };
     let mut ring = Vec::new();
     for v in 0..np as u32 {
-        let normals: Vec<V3> = work.faces_of[v as usize]
+        let normals = work.faces_of[v as usize]
             .iter()
-            .map(|&f| norm(work.normal(work.corners[f as usize])))
-            .collect();
+            .map(|&f| norm(work.normal(work.corners[f as usize])));
         let axis = norm(
             normals
-                .iter()
+                .clone()
                 .fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]),
         );
         let angle = normals
-            .iter()
-            .map(|&n| dot(axis, n).clamp(-1.0, 1.0).acos())
+            .map(|n| dot(axis, n).clamp(-1.0, 1.0).acos())
             .fold(0.0f64, f64::max);
         let cone = if axis == [0.0; 3] {
             ([0.0; 3], std::f32::consts::PI)
@@ -511,59 +635,66 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         };
         work.h.cone.push(cone);
         work.ring(v, &mut ring);
+        let pv = work.pt(v);
         work.h.radius[v as usize] = ring
             .iter()
-            .map(|&o| len(sub(work.pt(o), work.pt(v))))
+            .map(|&o| len(sub(work.pt(o), pv)))
             .fold(0.0, f64::max) as f32;
     }
 
-    let (mut ring_t, mut ring_u) = (Vec::new(), Vec::new());
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(MAX_THREADS);
+    let mut scratch: Vec<Scratch> = (0..threads).map(|_| Scratch::default()).collect();
+    // Per edge slot (3 per triangle): the last evaluation, valid until its stars change.
+    let mut slot_cost = vec![0.0f64; 3 * nt];
+    let mut slot_dir = vec![0u8; 3 * nt];
+    let mut cands: Vec<Candidate> = Vec::new();
     let mut touched = Vec::new();
     let most = np.saturating_sub(1) as u64;
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        let mut cands: Vec<(f64, Collapse, f64)> = Vec::new();
+        evaluate_stale(&work, pass, &mut slot_cost, &mut slot_dir, &mut scratch);
+        cands.clear();
         for f in 0..nt {
             if !work.alive[f] {
                 continue;
             }
             let c = work.corners[f];
             for k in 0..3 {
-                let (a, b) = (c[k], c[(k + 1) % 3]);
-                if a < b || work.dir_face(b, a).is_none() {
-                    let x = work.check(b, a, &mut ring_t, &mut ring_u);
-                    let y = work.check(a, b, &mut ring_t, &mut ring_u);
-                    let best = match (x, y) {
-                        (Some(x), Some(y)) => Some(if y.1 < x.1 { y } else { x }),
-                        (x, y) => x.or(y),
-                    };
-                    if let Some((col, cost, dev)) = best {
-                        cands.push((cost, col, dev));
-                    }
+                let i = 3 * f + k;
+                let (a, b) = (c[k], c[next(k)]);
+                match slot_dir[i] {
+                    1 => cands.push((slot_cost[i], b, a)),
+                    2 => cands.push((slot_cost[i], a, b)),
+                    _ => {}
                 }
             }
         }
-        cands.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        // Stable, so that equal costs keep the order of the triangles.
+        cands.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut applied = 0u64;
-        for &(_, col, _) in &cands {
-            if work.stamp[col.t as usize] == pass || work.stamp[col.u as usize] == pass {
+        let s0 = &mut scratch[0];
+        for &(_, t, u) in &cands {
+            if work.stamp[t as usize] == pass || work.stamp[u as usize] == pass {
                 continue;
             }
             // Neighbourhoods of earlier collapses in this pass are stamped, so this one's
             // check at the start of the pass still holds; check again all the same, since a
             // shared neighbour's degree may have changed.
-            let Some((col, _, dev)) = work.check(col.t, col.u, &mut ring_t, &mut ring_u) else {
+            let Some((col, _, dev)) = work.check(t, u, s0) else {
                 continue;
             };
             touched.clear();
-            work.ring(col.t, &mut ring_t);
-            touched.extend_from_slice(&ring_t);
-            work.ring(col.u, &mut ring_u);
-            touched.extend_from_slice(&ring_u);
+            work.ring(col.t, &mut s0.ring_t);
+            touched.extend_from_slice(&s0.ring_t);
+            work.ring(col.u, &mut s0.ring_u);
+            touched.extend_from_slice(&s0.ring_u);
             let s = work.apply(col, dev);
             for &v in touched.iter().chain(&[col.t, col.u, s]) {
                 work.stamp[v as usize] = pass;
+                work.changed[v as usize] = pass;
             }
             applied += 1;
         }
@@ -576,4 +707,48 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
     work.h.corners = work.corners;
     work.h.alive = work.alive;
     work.h
+}
+
+/// Threads evaluating edges.
+const MAX_THREADS: usize = 8;
+
+/// Triangles below which a pass evaluates on one thread.
+const PARALLEL_MIN: usize = 4096;
+
+/// Evaluates every slot of a live triangle whose stars changed since its last evaluation,
+/// split over the threads by triangle ranges (each slot's result depends on the mesh alone,
+/// so the split does not change it).
+fn evaluate_stale(
+    work: &Work<'_>,
+    pass: u32,
+    slot_cost: &mut [f64],
+    slot_dir: &mut [u8],
+    scratch: &mut [Scratch],
+) {
+    let nt = work.corners.len();
+    let run = |first: usize, costs: &mut [f64], dirs: &mut [u8], s: &mut Scratch| {
+        for (i, (cost, dir)) in costs.iter_mut().zip(dirs.iter_mut()).enumerate() {
+            let (f, k) = (first + i / 3, i % 3);
+            if work.alive[f] && work.stale(f, k, pass) {
+                (*cost, *dir) = work.evaluate(f, k, s);
+            }
+        }
+    };
+    let threads = scratch.len();
+    if threads <= 1 || nt < PARALLEL_MIN {
+        run(0, slot_cost, slot_dir, &mut scratch[0]);
+        return;
+    }
+    let per = nt.div_ceil(threads);
+    std::thread::scope(|scope| {
+        let parts = slot_cost
+            .chunks_mut(3 * per)
+            .zip(slot_dir.chunks_mut(3 * per))
+            .zip(scratch.iter_mut())
+            .enumerate();
+        for (i, ((costs, dirs), s)) in parts {
+            let run = &run;
+            scope.spawn(move || run(i * per, costs, dirs, s));
+        }
+    });
 }
