@@ -149,43 +149,63 @@ impl Front<'_> {
         Ok(())
     }
 
-    pub fn can_split(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
-        match h.split(v) {
-            Some(s) => {
-                self.is_node_active(h, v)
-                    && s.neighbours
-                        .iter()
-                        .all(|&f| f.is_none() || self.slot_of(h, f).is_some())
-            }
-            None => false,
+    /// The slots of `v`'s present neighbours (`NONE` for absent ones) if its split is legal.
+    #[inline]
+    pub fn split_slots(&self, h: &Hierarchy<'_>, v: NodeId) -> Option<[u32; 4]> {
+        let s = h.split(v)?;
+        if !self.is_node_active(h, v) {
+            return None;
         }
+        let n = &s.neighbours;
+        Some([
+            self.want(h, n[0])?,
+            self.want(h, n[1])?,
+            self.want(h, n[2])?,
+            self.want(h, n[3])?,
+        ])
+    }
+
+    pub fn can_split(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
+        self.split_slots(h, v).is_some()
+    }
+
+    /// The slots of `v`'s neighbours (`NONE` for absent ones) if the collapse into `v` is
+    /// legal: both children active and `f_l`, `f_r` linked exactly as the split left them.
+    #[inline]
+    pub fn collapse_slots(&self, h: &Hierarchy<'_>, v: NodeId) -> Option<[u32; 4]> {
+        let s = h.split(v)?;
+        let pair = *self.pair_of.get(v.index())?;
+        if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
+            return None;
+        }
+        let fl = self.base + 2 * pair;
+        let fla = self.slots.get(fl as usize)?;
+        let fra = self.slots.get(fl as usize + 1)?;
+        let n = &s.neighbours;
+        let slots = [
+            self.want(h, n[0])?,
+            self.want(h, n[1])?,
+            self.want(h, n[2])?,
+            self.want(h, n[3])?,
+        ];
+        let left = fla.neighbours[1] == slots[0] && fla.neighbours[0] == slots[1];
+        let right =
+            s.f_r.is_none() || (fra.neighbours[2] == slots[2] && fra.neighbours[0] == slots[3]);
+        (left && right).then_some(slots)
     }
 
     pub fn can_collapse(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
-        let (Some(s), Some(&pair)) = (h.split(v), self.pair_of.get(v.index())) else {
-            return false;
-        };
-        if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
-            return false;
-        }
-        let fl = self.base + 2 * pair;
-        let (Some(fla), Some(fra)) = (self.slots.get(fl as usize), self.slots.get(fl as usize + 1))
-        else {
-            return false;
-        };
-        let n = &s.neighbours;
-        if Some(fla.neighbours[1]) != self.want(h, n[0])
-            || Some(fla.neighbours[0]) != self.want(h, n[1])
-        {
-            return false;
-        }
-        s.f_r.is_none()
-            || (Some(fra.neighbours[2]) == self.want(h, n[2])
-                && Some(fra.neighbours[0]) == self.want(h, n[3]))
+        self.collapse_slots(h, v).is_some()
     }
 
-    /// Applies the split of `v`; the caller has checked [`can_split`](Self::can_split).
-    pub fn apply_split(&mut self, h: &Hierarchy<'_>, v: NodeId) -> Result<(), OpError> {
+    /// Applies the split of `v` given its neighbours' slots from
+    /// [`split_slots`](Self::split_slots).
+    pub fn apply_split(
+        &mut self,
+        h: &Hierarchy<'_>,
+        v: NodeId,
+        slots: [u32; 4],
+    ) -> Result<(), OpError> {
         let bad = OpError::Inconsistent { node: v };
         let s = h.split(v).ok_or(OpError::Leaf { node: v })?;
         if self.pairs as usize >= self.owner.len() {
@@ -193,15 +213,7 @@ impl Front<'_> {
                 max_pairs: self.owner.len() as u32,
             });
         }
-        let n = &s.neighbours;
-        let slot = |f: PolyId| {
-            if f.is_none() {
-                Ok(NONE)
-            } else {
-                self.slot_of(h, f).ok_or(bad)
-            }
-        };
-        let (ccw, clw, rclw, rccw) = (slot(n[0])?, slot(n[1])?, slot(n[2])?, slot(n[3])?);
+        let [ccw, clw, rclw, rccw] = slots;
         // The active-vertex record of v: a corner of fl_clw.
         let clw_slot = *self.slot(clw, v)?;
         let j0 = (0..3)
@@ -282,9 +294,14 @@ impl Front<'_> {
         Ok(())
     }
 
-    /// Applies the collapse into `v`; the caller has checked
-    /// [`can_collapse`](Self::can_collapse).
-    pub fn apply_collapse(&mut self, h: &Hierarchy<'_>, v: NodeId) -> Result<(), OpError> {
+    /// Applies the collapse into `v` given its neighbours' slots from
+    /// [`collapse_slots`](Self::collapse_slots).
+    pub fn apply_collapse(
+        &mut self,
+        h: &Hierarchy<'_>,
+        v: NodeId,
+        slots: [u32; 4],
+    ) -> Result<(), OpError> {
         let bad = OpError::Inconsistent { node: v };
         let s = h.split(v).ok_or(OpError::Leaf { node: v })?;
         let k = *self.pair_of.get(v.index()).ok_or(bad)?;
@@ -293,15 +310,7 @@ impl Front<'_> {
         }
         let fl = self.base + 2 * k;
         let fr = fl + 1;
-        let n = &s.neighbours;
-        let slot = |f: PolyId| {
-            if f.is_none() {
-                Ok(NONE)
-            } else {
-                self.slot_of(h, f).ok_or(bad)
-            }
-        };
-        let (ccw, clw, rclw, rccw) = (slot(n[0])?, slot(n[1])?, slot(n[2])?, slot(n[3])?);
+        let [ccw, clw, rclw, rccw] = slots;
         let fla = *self.slot(fl, v)?;
         let (rv, ru) = (fla.corners[0], fla.corners[1]);
         if ccw != NONE {
@@ -473,11 +482,18 @@ impl Front<'_> {
             }
             let s = h.split(u).ok_or(OpError::Inconsistent { node: v })?;
             let mut pushed = false;
-            for &f in &s.neighbours {
-                if f.is_some() && self.slot_of(h, f).is_none() {
-                    *stack.get_mut(top).ok_or(full)? = h.creator(f);
-                    top += 1;
-                    pushed = true;
+            let mut slots = [NONE; 4];
+            for (k, &f) in s.neighbours.iter().enumerate() {
+                if f.is_none() {
+                    continue;
+                }
+                match self.slot_of(h, f) {
+                    Some(slot) => slots[k] = slot,
+                    None => {
+                        *stack.get_mut(top).ok_or(full)? = h.creator(f);
+                        top += 1;
+                        pushed = true;
+                    }
                 }
             }
             if !pushed {
@@ -485,7 +501,7 @@ impl Front<'_> {
                     return Ok(());
                 }
                 top -= 1;
-                self.apply_split(h, u)?;
+                self.apply_split(h, u, slots)?;
                 *applied += 1;
             }
         }
@@ -526,10 +542,11 @@ impl CameraState<'_> {
         if !self.front.is_node_active(h, node) {
             return Err(OpError::NotActive { node });
         }
-        if !self.front.can_split(h, node) {
-            return Err(OpError::Illegal { node });
-        }
-        self.front.apply_split(h, node)
+        let slots = self
+            .front
+            .split_slots(h, node)
+            .ok_or(OpError::Illegal { node })?;
+        self.front.apply_split(h, node, slots)
     }
 
     /// Collapses the children of `node` back into it if [`can_collapse`](Self::can_collapse).
@@ -541,10 +558,11 @@ impl CameraState<'_> {
         if !self.front.is_split(node) {
             return Err(OpError::NotSplit { node });
         }
-        if !self.front.can_collapse(h, node) {
-            return Err(OpError::Illegal { node });
-        }
-        self.front.apply_collapse(h, node)
+        let slots = self
+            .front
+            .collapse_slots(h, node)
+            .ok_or(OpError::Illegal { node })?;
+        self.front.apply_collapse(h, node, slots)
     }
 
     /// Splits `node`, first forcing the splits that create it (if it is not yet on the

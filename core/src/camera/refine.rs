@@ -185,8 +185,9 @@ impl CameraState<'_> {
             };
             let parent = node.parent;
             if let (Some(pn), Some(pb)) = (nodes.get(parent.index()), h.split_bounds(parent)) {
-                if pn.position == node.position && !c.wants_split(pb) && f.can_collapse(h, parent) {
-                    f.apply_collapse(h, parent)?;
+                let wanted = pn.position == node.position && !c.wants_split(pb);
+                if let Some(slots) = wanted.then(|| f.collapse_slots(h, parent)).flatten() {
+                    f.apply_collapse(h, parent, slots)?;
                     st.collapses += 1;
                     continue; // the record now holds the parent: look again
                 }
