@@ -129,24 +129,51 @@ struct Wedge {
 /// A legal collapse as a pass ranks it: `(cost, t, u)`.
 type Candidate = (f64, u32, u32);
 
-/// Per-thread scratch space of [`Work::check`].
-#[derive(Default)]
-struct Scratch {
-    ring_t: Vec<u32>,
-    ring_u: Vec<u32>,
+/// The last evaluation of one edge slot (3 per triangle).
+#[derive(Clone, Copy)]
+struct Slot {
+    /// The better collapse's cost.
+    cost: f64,
+    /// 0: none; 1: the slot's first corner moves onto its second; 2: the reverse.
+    dir: u8,
+    /// The edge's ends when `costs` were computed.
+    ends: [u32; 2],
+    /// Quadric costs of the two directions, NaN where not computed.
+    costs: [f64; 2],
+}
+
+impl Default for Slot {
+    fn default() -> Self {
+        Self {
+            cost: 0.0,
+            dir: 0,
+            ends: [NONE; 2],
+            costs: [f64::NAN; 2],
+        }
+    }
 }
 
 /// The mesh being simplified: triangles with their current corners and, per edge, the
 /// triangle across it (the mesh stays an oriented manifold, so "the triangle across" is
-/// well defined and its edge runs the other way).
+/// well defined and its edge runs the other way), and per node its star and ring.
 struct Work<'w> {
     w: &'w Welded,
+    /// Point of every position.
     p: Vec<V3>,
+    /// Point of every node (its position's).
+    pos: Vec<V3>,
     corners: Vec<[u32; 3]>,
     /// `opp[f][k]`: the triangle across edge `corners[f][k] → corners[f][k + 1]`, or `NONE`.
     opp: Vec<[u32; 3]>,
+    /// Unnormalised normal of every triangle at its current corners, and its length.
+    normal: Vec<(V3, f64)>,
     alive: Vec<bool>,
+    /// Triangles around every node.
     faces_of: Vec<Vec<u32>>,
+    /// Distinct neighbours of every live node.
+    ring_of: Vec<Vec<u32>>,
+    /// Whether a live node is on a border.
+    border: Vec<bool>,
     node_pos: Vec<u32>,
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
     wedges: Vec<Wedge>,
@@ -156,14 +183,11 @@ struct Work<'w> {
     stamp: Vec<u32>,
     /// Pass in which a node's star (triangles, their corners and neighbours) last changed.
     changed: Vec<u32>,
+    /// Pass in which a node last lost a neighbour (or was created).
+    shrunk: Vec<u32>,
 }
 
 impl Work<'_> {
-    #[inline]
-    fn pt(&self, node: u32) -> V3 {
-        self.p[self.node_pos[node as usize] as usize]
-    }
-
     #[inline]
     fn wedges_at(&self, pos: usize) -> &[Wedge] {
         &self.wedges[self.wedge_start[pos] as usize..self.wedge_start[pos + 1] as usize]
@@ -186,7 +210,7 @@ impl Work<'_> {
     ///
     /// Every neighbour `x` is reached once: through the triangle with the edge `v → x`, or,
     /// when there is none, through the border triangle with `x → v`.
-    fn ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
+    fn find_ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
         out.clear();
         let mut border = false;
         for &f in &self.faces_of[v as usize] {
@@ -203,20 +227,20 @@ impl Work<'_> {
         border
     }
 
-    /// Number of distinct neighbours of `v` (see [`Work::ring`]).
-    fn valence(&self, v: u32) -> usize {
-        self.faces_of[v as usize]
-            .iter()
-            .map(|&f| {
-                let j = corner_of(self.corners[f as usize], v);
-                1 + usize::from(self.opp[f as usize][prev(j)] == NONE)
-            })
-            .sum()
+    /// Recomputes the ring and border flag of `v`.
+    fn refresh(&mut self, v: u32) {
+        let mut ring = std::mem::take(&mut self.ring_of[v as usize]);
+        self.border[v as usize] = self.find_ring(v, &mut ring);
+        self.ring_of[v as usize] = ring;
     }
 
     #[inline]
-    fn normal(&self, c: [u32; 3]) -> V3 {
-        let [a, b, d] = c.map(|n| self.pt(n));
+    fn triangle_normal(&self, c: [u32; 3]) -> V3 {
+        let (a, b, d) = (
+            self.pos[c[0] as usize],
+            self.pos[c[1] as usize],
+            self.pos[c[2] as usize],
+        );
         cross(sub(b, a), sub(d, a))
     }
 
@@ -236,41 +260,80 @@ impl Work<'_> {
             .sum()
     }
 
-    /// Checks the collapse of `u` into `t`; returns it with its cost and error increment.
-    fn check(&self, t: u32, u: u32, s: &mut Scratch) -> Option<(Collapse, f64, f64)> {
+    /// The conditions on the edge `a`–`b` that hold for both directions: the link
+    /// condition (the ends share exactly the neighbours `l` and `r`, the third corners of
+    /// the triangles on the edge, `r` being `NONE` on a border), no interior edge between
+    /// two border nodes, and `l` and `r` keep at least three neighbours.
+    fn edge_ok(&self, a: u32, b: u32, l: u32, r: u32) -> bool {
+        if r != NONE && self.border[a as usize] && self.border[b as usize] {
+            return false;
+        }
+        if [l, r]
+            .iter()
+            .any(|&x| x != NONE && self.ring_of[x as usize].len() <= 3)
+        {
+            return false;
+        }
+        let (ra, rb) = (&self.ring_of[a as usize], &self.ring_of[b as usize]);
+        let mut shared = 0usize;
+        for &x in ra {
+            for &y in rb {
+                shared += usize::from(x == y);
+            }
+        }
+        shared == 1 + usize::from(r != NONE)
+    }
+
+    /// The surface-group rules for moving `u` onto `t` across an edge with the triangles
+    /// `fl` and `fr` (`NONE` on a border): a RIGID position never floats; a SHARP one
+    /// floats only along a boundary onto a non-FREE one; every group at `u` has a vertex
+    /// at `t`.
+    #[inline]
+    fn groups_ok(&self, t: u32, u: u32, fl: u32, fr: u32) -> bool {
         let (pt, pu) = (
             self.node_pos[t as usize] as usize,
             self.node_pos[u as usize] as usize,
         );
         let class_u = self.w.classes[pu];
         if class_u == PositionClass::Rigid {
-            return None;
+            return false;
         }
-        let (fl, jl) = self.dir_face(t, u)?;
-        let ol = self.opp[fl as usize];
-        let fr = ol[jl];
-        let group = |f: u32| self.w.triangles[f as usize].group;
-        let boundary = fr == NONE || group(fl) != group(fr);
-        if class_u != PositionClass::Free
-            && (!boundary || self.w.classes[pt] == PositionClass::Free)
-        {
-            return None;
+        if class_u != PositionClass::Free {
+            let group = |f: u32| self.w.triangles[f as usize].group;
+            let boundary = fr == NONE || group(fl) != group(fr);
+            if !boundary || self.w.classes[pt] == PositionClass::Free {
+                return false;
+            }
         }
         let (vu, vt) = (&self.w.vertices[pu], &self.w.vertices[pt]);
-        if !vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g)) {
-            return None;
+        match (vu.as_slice(), vt.as_slice()) {
+            ([(g, _)], [(h, _)]) => g == h,
+            _ => vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g)),
         }
-        let l = self.corners[fl as usize][prev(jl)];
+    }
+
+    /// The rest of the checks of the collapse of `u` into `t`, `fl` being the triangle
+    /// with the edge `t → u` (`t` at its corner `jl`) and `fr` the one across or `NONE`:
+    /// Hoppe's neighbours exist, no triangle flips or collapses. Returns the collapse and,
+    /// with `DEV`, its error increment (the largest distance of `u` from the planes of
+    /// the moved triangles), else 0.
+    fn moves<const DEV: bool>(
+        &self,
+        t: u32,
+        u: u32,
+        fl: u32,
+        jl: usize,
+        fr: u32,
+    ) -> Option<(Collapse, f64)> {
+        let ol = self.opp[fl as usize];
         let fn0 = ol[prev(jl)];
         let fn1 = ol[next(jl)];
         if fn1 == NONE {
             return None;
         }
-        let (mut r, mut fn2, mut fn3, mut jr) = (NONE, NONE, NONE, 0);
+        let (mut fn2, mut fn3, mut jr) = (NONE, NONE, 0);
         if fr != NONE {
-            let cr = self.corners[fr as usize];
-            jr = corner_of(cr, t);
-            r = cr[next(jr)];
+            jr = corner_of(self.corners[fr as usize], t);
             let or = self.opp[fr as usize];
             fn2 = or[jr];
             fn3 = or[next(jr)];
@@ -278,39 +341,33 @@ impl Work<'_> {
                 return None;
             }
         }
-        // Link condition: the edge's ends share exactly the neighbours `l` and `r`.
-        let border_t = self.ring(t, &mut s.ring_t);
-        let border_u = self.ring(u, &mut s.ring_u);
-        let shared = s.ring_t.iter().filter(|x| s.ring_u.contains(x)).count();
-        if shared != 1 + usize::from(r != NONE) {
-            return None;
-        }
-        if fr != NONE && border_t && border_u {
-            return None;
-        }
-        for x in [l, r] {
-            if x != NONE && self.valence(x) <= 3 {
-                return None;
-            }
-        }
-        let (p_t, p_u) = (self.pt(t), self.pt(u));
+        let (p_t, p_u) = (self.pos[t as usize], self.pos[u as usize]);
+        let d = sub(p_u, p_t);
         let mut dev = 0.0f64;
         for &f in &self.faces_of[u as usize] {
             if f == fl || f == fr {
                 continue;
             }
             let c = self.corners[f as usize];
-            let before = self.normal(c);
-            let after = self.normal(c.map(|x| if x == u { t } else { x }));
-            let (lb, la) = (len(before), len(after));
+            let q = |k: usize| {
+                if c[k] == u {
+                    p_t
+                } else {
+                    self.pos[c[k] as usize]
+                }
+            };
+            let (a, b, e) = (q(0), q(1), q(2));
+            let after = cross(sub(b, a), sub(e, a));
+            let (before, lb) = self.normal[f as usize];
+            let la = len(after);
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;
             }
-            dev = dev.max(dot(norm(after), sub(p_u, p_t)).abs());
-        }
-        let cost = self.cost(t, u);
-        if !cost.is_finite() {
-            return None;
+            if DEV {
+                // `norm(after)`, with its length known to be positive.
+                let n = [after[0] / la, after[1] / la, after[2] / la];
+                dev = dev.max(dot(n, d).abs());
+            }
         }
         let c = Collapse {
             t,
@@ -321,42 +378,103 @@ impl Work<'_> {
             rot_l: jl as u8,
             rot_r: jr as u8,
         };
-        Some((c, cost, dev))
+        Some((c, dev))
     }
 
-    /// The better collapse of the edge in slot `k` of triangle `f`, if the slot stands for
-    /// its edge (the lower-numbered end first, or a border edge) and the edge collapses:
-    /// `(cost, direction)`, direction 1 moving the edge's first end onto its second, 2 the
-    /// other way round, 0 none.
-    fn evaluate(&self, f: usize, k: usize, s: &mut Scratch) -> (f64, u8) {
+    /// Checks the collapse of `u` into `t`; returns it with its cost and error increment.
+    fn check(&self, t: u32, u: u32) -> Option<(Collapse, f64, f64)> {
+        let (fl, jl) = self.dir_face(t, u)?;
+        let fr = self.opp[fl as usize][jl];
+        let l = self.corners[fl as usize][prev(jl)];
+        let r = self.third(fr, t);
+        if !self.groups_ok(t, u, fl, fr) || !self.edge_ok(t, u, l, r) {
+            return None;
+        }
+        let (c, dev) = self.moves::<true>(t, u, fl, jl, fr)?;
+        let cost = self.cost(t, u);
+        cost.is_finite().then_some((c, cost, dev))
+    }
+
+    /// The corner of triangle `f` after `v` (for a triangle on the edge `u → v`, its third
+    /// corner), or `NONE` for no triangle.
+    #[inline]
+    fn third(&self, f: u32, v: u32) -> u32 {
+        if f == NONE {
+            return NONE;
+        }
+        let c = self.corners[f as usize];
+        c[next(corner_of(c, v))]
+    }
+
+    /// Evaluates the edge in slot `k` of triangle `f` if the slot stands for its edge (the
+    /// lower-numbered end first, or a border edge): stores in `slot` the better collapse
+    /// of the two [`Work::check`]s would find, keeping the costs of the last evaluation
+    /// when the edge's ends are the same nodes (a node's quadric never changes).
+    fn evaluate(&self, f: usize, k: usize, slot: &mut Slot) {
         let c = self.corners[f];
         let (a, b) = (c[k], c[next(k)]);
-        if !(a < b || self.opp[f][k] == NONE) {
-            return (0.0, 0);
+        let g = self.opp[f][k];
+        slot.dir = 0;
+        if !(a < b || g == NONE) {
+            return;
         }
-        let x = self.check(b, a, s).map(|x| x.1);
-        let y = self.check(a, b, s).map(|y| y.1);
-        match (x, y) {
+        if slot.ends != [a, b] {
+            slot.ends = [a, b];
+            slot.costs = [f64::NAN; 2];
+        }
+        // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
+        let x_ok = g != NONE && self.groups_ok(b, a, g, f as u32);
+        let y_ok = self.groups_ok(a, b, f as u32, g);
+        if !(x_ok || y_ok) || !self.edge_ok(a, b, c[prev(k)], self.third(g, a)) {
+            return;
+        }
+        let mut cost = |i: usize, t: u32, u: u32| {
+            if slot.costs[i].is_nan() {
+                slot.costs[i] = self.cost(t, u);
+            }
+            Some(slot.costs[i]).filter(|c| c.is_finite())
+        };
+        let x = if x_ok {
+            let jb = corner_of(self.corners[g as usize], b);
+            self.moves::<false>(b, a, g, jb, f as u32)
+                .and_then(|_| cost(0, b, a))
+        } else {
+            None
+        };
+        let y = if y_ok {
+            self.moves::<false>(a, b, f as u32, k, g)
+                .and_then(|_| cost(1, a, b))
+        } else {
+            None
+        };
+        (slot.cost, slot.dir) = match (x, y) {
             (Some(x), Some(y)) if y < x => (y, 2),
             (Some(x), _) => (x, 1),
             (None, Some(y)) => (y, 2),
             (None, None) => (0.0, 0),
-        }
+        };
     }
 
     /// Whether slot `k` of triangle `f` must be evaluated again in pass `pass`: its edge's
-    /// checks read the stars of the corners of the two triangles on the edge, so it must
-    /// when one of those changed in the previous pass.
+    /// checks read the stars of its ends (their triangles, those triangles' corners,
+    /// neighbours and points), the wedges of its ends, and the number of neighbours of the
+    /// third corners of the triangles on the edge; so it must when an end's star changed
+    /// or a third corner lost a neighbour in the previous pass.
     #[inline]
     fn stale(&self, f: usize, k: usize, pass: u32) -> bool {
-        let changed = |c: [u32; 3]| c.iter().any(|&x| self.changed[x as usize] + 1 >= pass);
-        if changed(self.corners[f]) {
+        let recent = |x: u32, v: &[u32]| v[x as usize] + 1 >= pass;
+        let c = self.corners[f];
+        if recent(c[k], &self.changed)
+            || recent(c[next(k)], &self.changed)
+            || recent(c[prev(k)], &self.shrunk)
+        {
             return true;
         }
         let g = self.opp[f][k];
-        g != NONE && changed(self.corners[g as usize])
+        g != NONE && recent(self.third(g, c[k]), &self.shrunk)
     }
 
+    /// Applies a checked collapse; returns the new node.
     fn apply(&mut self, c: Collapse, dev: f64) -> u32 {
         let s = self.node_pos.len() as u32;
         let (t, u) = (c.t, c.u);
@@ -365,7 +483,8 @@ impl Work<'_> {
         self.h.parent.push(NONE);
         self.h.parent[t as usize] = s;
         self.h.parent[u as usize] = s;
-        let (p_t, p_u) = (self.pt(t), self.pt(u));
+        let (p_t, p_u) = (self.pos[t as usize], self.pos[u as usize]);
+        self.pos.push(p_t);
         let e = (self.h.error[t as usize] as f64).max(self.h.error[u as usize] as f64 + dev);
         self.h.error.push(e as f32);
         let r = (self.h.radius[t as usize] as f64)
@@ -414,15 +533,30 @@ impl Work<'_> {
         let mut star = std::mem::take(&mut self.faces_of[t as usize]);
         star.append(&mut std::mem::take(&mut self.faces_of[u as usize]));
         for &f in &star {
-            for x in &mut self.corners[f as usize] {
+            let c = &mut self.corners[f as usize];
+            for x in c.iter_mut() {
                 if *x == t || *x == u {
                     *x = s;
                 }
             }
+            let c = *c;
+            let n = self.triangle_normal(c);
+            self.normal[f as usize] = (n, len(n));
         }
         self.faces_of.push(star);
         self.stamp.push(0);
         self.changed.push(0);
+        self.shrunk.push(0);
+        // Rings: the new node's, and its neighbours' (which had t or u).
+        let mut ring = std::mem::take(&mut self.ring_of[t as usize]);
+        drop(std::mem::take(&mut self.ring_of[u as usize]));
+        let border = self.find_ring(s, &mut ring);
+        self.ring_of.push(ring);
+        self.border.push(border);
+        for i in 0..self.ring_of[s as usize].len() {
+            let x = self.ring_of[s as usize][i];
+            self.refresh(x);
+        }
         self.h.collapses.push(c);
         s
     }
@@ -456,6 +590,46 @@ fn corner_of(c: [u32; 3], v: u32) -> usize {
     } else {
         debug_assert_eq!(c[2], v);
         2
+    }
+}
+
+/// Sorts candidates by cost, stably (equal costs keep their order): a least-significant-
+/// digit radix sort on the costs' bits, ordered as [`f64::total_cmp`] orders them.
+fn sort_candidates(cands: &mut Vec<Candidate>, tmp: &mut Vec<Candidate>) {
+    if cands.len() < 256 {
+        cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+        return;
+    }
+    let key = |c: &Candidate| {
+        let bits = c.0.to_bits();
+        // Negative numbers: all bits flipped; others: the sign bit set.
+        bits ^ (((bits as i64 >> 63) as u64) | (1 << 63))
+    };
+    const BITS: u32 = 11;
+    const BUCKETS: usize = 1 << BITS;
+    let mut counts = vec![[0u32; BUCKETS]; 64usize.div_ceil(BITS as usize)];
+    for c in cands.iter() {
+        let k = key(c);
+        for (d, count) in counts.iter_mut().enumerate() {
+            count[((k >> (BITS * d as u32)) as usize) & (BUCKETS - 1)] += 1;
+        }
+    }
+    tmp.clear();
+    tmp.resize(cands.len(), (0.0, 0, 0));
+    for (d, count) in counts.iter_mut().enumerate() {
+        if count.iter().any(|&n| n as usize == cands.len()) {
+            continue;
+        }
+        let mut sum = 0u32;
+        for n in count.iter_mut() {
+            (*n, sum) = (sum, sum + *n);
+        }
+        for c in cands.iter() {
+            let b = ((key(c) >> (BITS * d as u32)) as usize) & (BUCKETS - 1);
+            tmp[count[b] as usize] = *c;
+            count[b] += 1;
+        }
+        std::mem::swap(cands, tmp);
     }
 }
 
@@ -595,13 +769,26 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             }
         }
     }
+    let pos = p.clone();
+    let normal = corners
+        .iter()
+        .map(|c| {
+            let (a, b, d) = (pos[c[0] as usize], pos[c[1] as usize], pos[c[2] as usize]);
+            let n = cross(sub(b, a), sub(d, a));
+            (n, len(n))
+        })
+        .collect();
     let mut work = Work {
         w,
         p,
+        pos,
         corners,
         opp,
+        normal,
         alive: vec![true; nt],
         faces_of,
+        ring_of: vec![Vec::new(); np],
+        border: vec![false; np],
         node_pos: (0..np as u32).collect(),
         wedges,
         wedge_start,
@@ -614,12 +801,13 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         },
         stamp: vec![0; np],
         changed: vec![0; np],
+        shrunk: vec![0; np],
     };
-    let mut ring = Vec::new();
     for v in 0..np as u32 {
+        work.refresh(v);
         let normals = work.faces_of[v as usize]
             .iter()
-            .map(|&f| norm(work.normal(work.corners[f as usize])));
+            .map(|&f| norm(work.normal[f as usize].0));
         let axis = norm(
             normals
                 .clone()
@@ -634,28 +822,25 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             (axis.map(|x| x as f32), angle as f32)
         };
         work.h.cone.push(cone);
-        work.ring(v, &mut ring);
-        let pv = work.pt(v);
-        work.h.radius[v as usize] = ring
+        let pv = work.pos[v as usize];
+        work.h.radius[v as usize] = work.ring_of[v as usize]
             .iter()
-            .map(|&o| len(sub(work.pt(o), pv)))
+            .map(|&o| len(sub(work.pos[o as usize], pv)))
             .fold(0.0, f64::max) as f32;
     }
 
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(MAX_THREADS);
-    let mut scratch: Vec<Scratch> = (0..threads).map(|_| Scratch::default()).collect();
     // Per edge slot (3 per triangle): the last evaluation, valid until its stars change.
-    let mut slot_cost = vec![0.0f64; 3 * nt];
-    let mut slot_dir = vec![0u8; 3 * nt];
-    let mut cands: Vec<Candidate> = Vec::new();
+    let mut slots = vec![Slot::default(); 3 * nt];
+    let (mut cands, mut tmp): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
     let mut touched = Vec::new();
     let most = np.saturating_sub(1) as u64;
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        evaluate_stale(&work, pass, &mut slot_cost, &mut slot_dir, &mut scratch);
+        evaluate_stale(&work, pass, &mut slots, threads);
         cands.clear();
         for f in 0..nt {
             if !work.alive[f] {
@@ -663,19 +848,18 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             }
             let c = work.corners[f];
             for k in 0..3 {
-                let i = 3 * f + k;
+                let slot = &slots[3 * f + k];
                 let (a, b) = (c[k], c[next(k)]);
-                match slot_dir[i] {
-                    1 => cands.push((slot_cost[i], b, a)),
-                    2 => cands.push((slot_cost[i], a, b)),
+                match slot.dir {
+                    1 => cands.push((slot.cost, b, a)),
+                    2 => cands.push((slot.cost, a, b)),
                     _ => {}
                 }
             }
         }
         // Stable, so that equal costs keep the order of the triangles.
-        cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+        sort_candidates(&mut cands, &mut tmp);
         let mut applied = 0u64;
-        let s0 = &mut scratch[0];
         for &(_, t, u) in &cands {
             if work.stamp[t as usize] == pass || work.stamp[u as usize] == pass {
                 continue;
@@ -683,18 +867,23 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             // Neighbourhoods of earlier collapses in this pass are stamped, so this one's
             // check at the start of the pass still holds; check again all the same, since a
             // shared neighbour's degree may have changed.
-            let Some((col, _, dev)) = work.check(t, u, s0) else {
+            let Some((col, _, dev)) = work.check(t, u) else {
                 continue;
             };
+            let l = work.corners[col.fl as usize][prev(col.rot_l as usize)];
+            let r = work.third(col.fr, t);
             touched.clear();
-            work.ring(col.t, &mut s0.ring_t);
-            touched.extend_from_slice(&s0.ring_t);
-            work.ring(col.u, &mut s0.ring_u);
-            touched.extend_from_slice(&s0.ring_u);
+            touched.extend_from_slice(&work.ring_of[t as usize]);
+            touched.extend_from_slice(&work.ring_of[u as usize]);
             let s = work.apply(col, dev);
-            for &v in touched.iter().chain(&[col.t, col.u, s]) {
+            for &v in touched.iter().chain(&[t, u, s]) {
                 work.stamp[v as usize] = pass;
                 work.changed[v as usize] = pass;
+            }
+            for v in [l, r, s] {
+                if v != NONE {
+                    work.shrunk[v as usize] = pass;
+                }
             }
             applied += 1;
         }
@@ -718,37 +907,25 @@ const PARALLEL_MIN: usize = 4096;
 /// Evaluates every slot of a live triangle whose stars changed since its last evaluation,
 /// split over the threads by triangle ranges (each slot's result depends on the mesh alone,
 /// so the split does not change it).
-fn evaluate_stale(
-    work: &Work<'_>,
-    pass: u32,
-    slot_cost: &mut [f64],
-    slot_dir: &mut [u8],
-    scratch: &mut [Scratch],
-) {
+fn evaluate_stale(work: &Work<'_>, pass: u32, slots: &mut [Slot], threads: usize) {
     let nt = work.corners.len();
-    let run = |first: usize, costs: &mut [f64], dirs: &mut [u8], s: &mut Scratch| {
-        for (i, (cost, dir)) in costs.iter_mut().zip(dirs.iter_mut()).enumerate() {
+    let run = |first: usize, slots: &mut [Slot]| {
+        for (i, slot) in slots.iter_mut().enumerate() {
             let (f, k) = (first + i / 3, i % 3);
             if work.alive[f] && work.stale(f, k, pass) {
-                (*cost, *dir) = work.evaluate(f, k, s);
+                work.evaluate(f, k, slot);
             }
         }
     };
-    let threads = scratch.len();
     if threads <= 1 || nt < PARALLEL_MIN {
-        run(0, slot_cost, slot_dir, &mut scratch[0]);
+        run(0, slots);
         return;
     }
     let per = nt.div_ceil(threads);
     std::thread::scope(|scope| {
-        let parts = slot_cost
-            .chunks_mut(3 * per)
-            .zip(slot_dir.chunks_mut(3 * per))
-            .zip(scratch.iter_mut())
-            .enumerate();
-        for (i, ((costs, dirs), s)) in parts {
+        for (i, part) in slots.chunks_mut(3 * per).enumerate() {
             let run = &run;
-            scope.spawn(move || run(i * per, costs, dirs, s));
+            scope.spawn(move || run(i * per, part));
         }
     });
 }
