@@ -7,6 +7,7 @@
 
 pub mod baked;
 pub mod export;
+mod fxhash;
 pub mod hierarchy;
 pub mod import;
 pub mod mesh;

@@ -18,11 +18,16 @@
 //! Missing normals are computed (area-weighted, per position), missing UVs are zero and
 //! missing colours white.
 
-use std::collections::{HashMap, HashSet};
-
 use caveclod_core::PositionClass;
 
+use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
+
+/// Directed edge `a → b` as a map key.
+#[inline]
+fn ek(a: u32, b: u32) -> u64 {
+    (a as u64) << 32 | b as u64
+}
 
 /// Counts of what welding repaired.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -164,7 +169,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     }
     let mut repairs = Repairs::default();
     // 1. Weld identical positions.
-    let mut by_bits: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
+    let mut by_bits: FxHashMap<[u32; 3], u32> = map_with_capacity(mesh.positions.len());
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity(mesh.positions.len());
     let remap: Vec<u32> = mesh
         .positions
@@ -181,7 +186,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 
     // 2. Drop degenerate and duplicate triangles; keep the source triangle for attributes.
     let mut kept: Vec<([u32; 3], usize)> = Vec::with_capacity(mesh.triangles.len());
-    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(mesh.triangles.len());
+    let mut seen = set_with_capacity::<[u32; 3]>(mesh.triangles.len());
     for (i, t) in mesh.triangles.iter().enumerate() {
         let p = t
             .position
@@ -212,61 +217,59 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     }
 
     // 3. Cut non-manifold edges.
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * kept.len());
+    let mut directed: FxHashMap<u64, u32> = map_with_capacity(3 * kept.len());
     let mut copies: Vec<u32> = (0..positions.len() as u32).collect(); // copy -> original
     for f in 0..kept.len() {
         let p = kept[f].0;
         let conflict: Vec<usize> = (0..3)
             .filter(|&k| {
                 let (a, b) = (p[k], p[(k + 1) % 3]);
-                directed.contains_key(&(a, b))
-                    || (directed.contains_key(&(b, a)) && edge_faces(&directed, a, b) >= 2)
+                directed.contains_key(&ek(a, b))
+                    || (directed.contains_key(&ek(b, a)) && edge_faces(&directed, a, b) >= 2)
             })
             .collect();
         let mut q = p;
         if !conflict.is_empty() {
             repairs.non_manifold_edges += conflict.len() as u64;
-            let mut fresh: HashMap<u32, u32> = HashMap::new();
+            // Each of the triangle's positions on a cut edge gets one copy.
+            let mut fresh = [u32::MAX; 3];
             for &k in &conflict {
                 for j in [k, (k + 1) % 3] {
-                    let orig = p[j];
-                    q[j] = *fresh.entry(orig).or_insert_with(|| {
+                    if fresh[j] == u32::MAX {
+                        let orig = p[j];
                         positions.push(positions[orig as usize]);
                         copies.push(copies[orig as usize]);
-                        positions.len() as u32 - 1
-                    });
+                        fresh[j] = positions.len() as u32 - 1;
+                    }
+                    q[j] = fresh[j];
                 }
             }
             kept[f].0 = q;
         }
         for k in 0..3 {
-            directed.insert((q[k], q[(k + 1) % 3]), f as u32);
+            directed.insert(ek(q[k], q[(k + 1) % 3]), f as u32);
         }
     }
 
     // 4. Split non-manifold vertices: one position per fan.
-    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); positions.len()];
-    for (f, (p, _)) in kept.iter().enumerate() {
-        for &v in p {
-            faces_of[v as usize].push(f as u32);
-        }
-    }
+    let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
+    let mut fans = Fans::default();
     for v in 0..faces_of.len() as u32 {
-        let fans = fans_around(v, &faces_of[v as usize], &kept, &directed);
-        for fan in fans.iter().skip(1) {
+        fans.find(v, faces_of.get(v), &kept, &directed);
+        for fan in 1..fans.count() {
             repairs.non_manifold_vertices += 1;
             let copy = positions.len() as u32;
             positions.push(positions[v as usize]);
             copies.push(copies[v as usize]);
-            for &f in fan {
+            for &f in fans.fan(fan) {
                 let p = &mut kept[f as usize].0;
                 let k = p.iter().position(|&x| x == v).unwrap_or(0);
                 let (prev, next) = (p[(k + 2) % 3], p[(k + 1) % 3]);
-                directed.remove(&(v, next));
-                directed.remove(&(prev, v));
+                directed.remove(&ek(v, next));
+                directed.remove(&ek(prev, v));
                 p[k] = copy;
-                directed.insert((copy, next), f);
-                directed.insert((prev, copy), f);
+                directed.insert(ek(copy, next), f);
+                directed.insert(ek(prev, copy), f);
             }
         }
     }
@@ -290,7 +293,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             }
         }
     }
-    let mut attr_ids: HashMap<[u32; 9], u32> = HashMap::new();
+    let mut attr_ids: FxHashMap<[u32; 9], u32> = map_with_capacity(0);
     let mut attributes: Vec<Attributes> = Vec::new();
     let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
     for &(p, i) in &kept {
@@ -331,7 +334,8 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         tri_attrs[f][k]
     };
     let mut group = vec![u32::MAX; nt];
-    let mut vertex_of: HashMap<(u32, u32), u32> = HashMap::with_capacity(nt);
+    // (group, position) -> attribute id.
+    let mut vertex_of: FxHashMap<u64, u32> = map_with_capacity(nt);
     let mut group_count = 0u32;
     let mut group_size: Vec<u32> = Vec::new();
     let mut queue = Vec::new();
@@ -352,7 +356,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             let p = kept[f].0;
             let fits = (0..3).all(|k| {
                 vertex_of
-                    .get(&(g, p[k]))
+                    .get(&ek(g, p[k]))
                     .is_none_or(|&a| a == tri_attrs[f][k])
             });
             if !fits {
@@ -361,11 +365,11 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             group[f] = g;
             group_size[g as usize] += 1;
             for k in 0..3 {
-                vertex_of.insert((g, p[k]), tri_attrs[f][k]);
+                vertex_of.insert(ek(g, p[k]), tri_attrs[f][k]);
             }
             for k in 0..3 {
                 let (a, b) = (p[k], p[(k + 1) % 3]);
-                if let Some(&o) = directed.get(&(b, a)) {
+                if let Some(&o) = directed.get(&ek(b, a)) {
                     let o = o as usize;
                     if group[o] == u32::MAX
                         && surface(o) == surface(f)
@@ -381,8 +385,9 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 
     // 7. Classes from boundary edges.
     let mut boundary = vec![0u32; positions.len()];
-    for (&(a, b), &f) in &directed {
-        let counts = match directed.get(&(b, a)) {
+    for (&e, &f) in &directed {
+        let (a, b) = ((e >> 32) as u32, e as u32);
+        let counts = match directed.get(&ek(b, a)) {
             None => true,
             Some(&o) => f < o && group[f as usize] != group[o as usize],
         };
@@ -402,7 +407,8 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 
     // 8. Vertices per position and the colouring of groups.
     let mut vertices: Vec<Vec<(u32, u32)>> = vec![Vec::new(); positions.len()];
-    for (&(g, p), &a) in &vertex_of {
+    for (&e, &a) in &vertex_of {
+        let (g, p) = ((e >> 32) as u32, e as u32);
         vertices[p as usize].push((g, a));
     }
     for v in &mut vertices {
@@ -462,39 +468,106 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 }
 
 /// Triangles on the undirected edge `a`–`b` so far.
-fn edge_faces(directed: &HashMap<(u32, u32), u32>, a: u32, b: u32) -> usize {
-    usize::from(directed.contains_key(&(a, b))) + usize::from(directed.contains_key(&(b, a)))
+fn edge_faces(directed: &FxHashMap<u64, u32>, a: u32, b: u32) -> usize {
+    usize::from(directed.contains_key(&ek(a, b))) + usize::from(directed.contains_key(&ek(b, a)))
 }
 
-/// The fans of triangles around `v`: triangles joined across edges through `v`.
-fn fans_around(
-    v: u32,
-    faces: &[u32],
-    kept: &[([u32; 3], usize)],
-    directed: &HashMap<(u32, u32), u32>,
-) -> Vec<Vec<u32>> {
-    let mut fans: Vec<Vec<u32>> = Vec::new();
-    let mut done: HashSet<u32> = HashSet::new();
-    for &start in faces {
-        if !done.insert(start) {
-            continue;
+/// The triangles around every position, in triangle order, in one array.
+struct FacesOf {
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl FacesOf {
+    fn new(positions: usize, tris: impl Iterator<Item = [u32; 3]> + Clone, n: usize) -> Self {
+        let mut start = vec![0u32; positions + 1];
+        for p in tris.clone() {
+            for v in p {
+                start[v as usize + 1] += 1;
+            }
         }
-        let mut fan = vec![start];
-        let mut i = 0;
-        while i < fan.len() {
-            let f = fan[i];
-            let p = kept[f as usize].0;
-            let k = p.iter().position(|&x| x == v).unwrap_or(0);
-            for (a, b) in [(v, p[(k + 1) % 3]), (p[(k + 2) % 3], v)] {
-                if let Some(&o) = directed.get(&(b, a)) {
-                    if faces.contains(&o) && done.insert(o) {
-                        fan.push(o);
+        for i in 0..positions {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut faces = vec![0u32; 3 * n];
+        for (f, p) in tris.enumerate() {
+            for v in p {
+                faces[fill[v as usize] as usize] = f as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Self { start, faces }
+    }
+
+    fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    fn get(&self, v: u32) -> &[u32] {
+        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// The fans of triangles around a position: triangles joined across edges through it.
+#[derive(Default)]
+struct Fans {
+    /// Triangles, fan after fan.
+    order: Vec<u32>,
+    /// Where each fan starts in `order`, and its end.
+    bounds: Vec<usize>,
+    /// Per triangle of the position (by index in its list): taken by a fan.
+    done: Vec<bool>,
+}
+
+impl Fans {
+    /// Finds the fans around `v`, each grown breadth-first from the first triangle (in
+    /// `faces` order) that no earlier fan took.
+    fn find(
+        &mut self,
+        v: u32,
+        faces: &[u32],
+        kept: &[([u32; 3], usize)],
+        directed: &FxHashMap<u64, u32>,
+    ) {
+        self.order.clear();
+        self.bounds.clear();
+        self.done.clear();
+        self.done.resize(faces.len(), false);
+        for start in 0..faces.len() {
+            if self.done[start] {
+                continue;
+            }
+            self.done[start] = true;
+            self.bounds.push(self.order.len());
+            self.order.push(faces[start]);
+            let mut i = *self.bounds.last().unwrap_or(&0);
+            while i < self.order.len() {
+                let p = kept[self.order[i] as usize].0;
+                let k = p.iter().position(|&x| x == v).unwrap_or(0);
+                for (a, b) in [(v, p[(k + 1) % 3]), (p[(k + 2) % 3], v)] {
+                    if let Some(&o) = directed.get(&ek(b, a)) {
+                        if let Some(j) = faces.iter().position(|&g| g == o) {
+                            if !self.done[j] {
+                                self.done[j] = true;
+                                self.order.push(o);
+                            }
+                        }
                     }
                 }
+                i += 1;
             }
-            i += 1;
         }
-        fans.push(fan);
+        self.bounds.push(self.order.len());
     }
-    fans
+
+    /// Number of fans found.
+    fn count(&self) -> usize {
+        self.bounds.len() - 1
+    }
+
+    /// The triangles of fan `i`.
+    fn fan(&self, i: usize) -> &[u32] {
+        &self.order[self.bounds[i]..self.bounds[i + 1]]
+    }
 }
