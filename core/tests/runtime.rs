@@ -438,11 +438,10 @@ fn operations_on_the_wrong_nodes_are_refused() {
 }
 
 /// From the base mesh a pass only splits, so the splits it reports must be the splits the
-/// camera holds afterwards. With a small capacity, `refine` force-splits a node whose chain
-/// of forced splits runs into `CapacityFull` part-way: the splits applied before the refusal
-/// stay (as `force_split` documents) but are not added to `RefineStats::splits`, nor counted
-/// against `max_ops`. On the golden file, `max_pairs` 2 to 4 report 1 split for 2 to 4 applied.
-/// (Found as a bug, fixed: forced splits before an error are counted.)
+/// camera holds afterwards, also when a chain of forced splits runs into `CapacityFull`
+/// part-way (the splits applied before the refusal stay, as `force_split` documents). They
+/// used to be left out of `RefineStats::splits` and of the `max_ops` count: on the golden
+/// file, `max_pairs` 2 to 4 reported 1 split for 2 to 4 applied (found as a bug, fixed).
 #[test]
 fn refine_stats_count_every_split_applied() {
     let file = golden();
