@@ -36,6 +36,17 @@ pub enum EmitError {
         /// Its corner.
         corner: u8,
     },
+    /// A surface received a different number of indices than the camera counted: the camera
+    /// was used on after an [`OpError::Inconsistent`](crate::OpError::Inconsistent) without
+    /// a [`reset`](CameraState::reset). The output is not usable.
+    CountMismatch {
+        /// The surface.
+        surface: u16,
+        /// Indices counted.
+        expected: usize,
+        /// Indices found.
+        found: usize,
+    },
 }
 
 impl core::fmt::Display for EmitError {
@@ -62,6 +73,14 @@ impl core::fmt::Display for EmitError {
                     poly.0
                 )
             }
+            Self::CountMismatch {
+                surface,
+                expected,
+                found,
+            } => write!(
+                f,
+                "surface {surface}: {found} indices emitted, {expected} counted (reset the camera)"
+            ),
         }
     }
 }
@@ -148,6 +167,16 @@ impl CameraState<'_> {
                 total += 3;
             }
         })?;
+        for s in 0..ns {
+            let expected = self.index_count(s);
+            if written[s] as usize != expected {
+                return Err(EmitError::CountMismatch {
+                    surface: s as u16,
+                    expected,
+                    found: written[s] as usize,
+                });
+            }
+        }
         Ok(total)
     }
 
@@ -192,6 +221,19 @@ impl CameraState<'_> {
                 offsets[s + 1] += 3;
             }
         })?;
+        // Each cursor must have reached exactly the start of the next surface.
+        let mut end = 0usize;
+        for s in 0..ns {
+            let expected = self.index_count(s);
+            end += expected;
+            if offsets[s + 1] as usize != end {
+                return Err(EmitError::CountMismatch {
+                    surface: s as u16,
+                    expected,
+                    found: (offsets[s + 1] as usize).saturating_sub(end - expected),
+                });
+            }
+        }
         Ok(total)
     }
 }

@@ -4,8 +4,10 @@
 //! (bounding sphere against the frustum, normal cone against the eye) and whose projected
 //! error exceeds the tolerance is force-split; an active stationary child whose sibling is
 //! active and whose parent no longer needs its split is collapsed when legal. A node changed
-//! by an operation is looked at again at once, so a pass settles deep changes; all other work
-//! is proportional to the front, not the hierarchy (temporal coherence).
+//! by an operation is looked at again at once, so one pass settles refinement however deep;
+//! coarsening can take a few passes, because a collapse waits while a child is still split
+//! (as in Hoppe's). All other work is proportional to the front, not the hierarchy (temporal
+//! coherence).
 
 use glam::Vec3;
 
