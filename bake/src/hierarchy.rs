@@ -153,21 +153,41 @@ impl Default for Slot {
     }
 }
 
-/// The mesh being simplified: triangles with their current corners and, per edge, the
-/// triangle across it (the mesh stays an oriented manifold, so "the triangle across" is
-/// well defined and its edge runs the other way), and per node its star and ring.
+/// A triangle of the mesh being simplified, in one cache line.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Tri {
+    /// Current corners (nodes), counter-clockwise.
+    c: [u32; 3],
+    /// `o[k]`: the triangle across the edge `c[k] → c[k + 1]`, or `NONE`. The mesh stays
+    /// an oriented manifold, so that triangle holds the edge the other way round.
+    o: [u32; 3],
+    /// Surface group.
+    group: u32,
+    /// Unnormalised normal at the current corners.
+    n: V3,
+    /// Its length.
+    len: f64,
+}
+
+/// What the surface-group rules read of a position.
+#[derive(Clone, Copy)]
+struct PosInfo {
+    class: PositionClass,
+    /// The position's one surface group, or `NONE` when it has several.
+    group: u32,
+}
+
+/// The mesh being simplified, with per node its star and ring.
 struct Work<'w> {
     w: &'w Welded,
     /// Point of every position.
     p: Vec<V3>,
+    info: Vec<PosInfo>,
+    tris: Vec<Tri>,
+    alive: Vec<bool>,
     /// Point of every node (its position's).
     pos: Vec<V3>,
-    corners: Vec<[u32; 3]>,
-    /// `opp[f][k]`: the triangle across edge `corners[f][k] → corners[f][k + 1]`, or `NONE`.
-    opp: Vec<[u32; 3]>,
-    /// Unnormalised normal of every triangle at its current corners, and its length.
-    normal: Vec<(V3, f64)>,
-    alive: Vec<bool>,
     /// Triangles around every node.
     faces_of: Vec<Vec<u32>>,
     /// Distinct neighbours of every live node.
@@ -197,7 +217,7 @@ impl Work<'_> {
     #[inline]
     fn dir_face(&self, a: u32, b: u32) -> Option<(u32, usize)> {
         for &f in &self.faces_of[a as usize] {
-            let c = self.corners[f as usize];
+            let c = self.tris[f as usize].c;
             let j = corner_of(c, a);
             if c[next(j)] == b {
                 return Some((f, j));
@@ -214,24 +234,16 @@ impl Work<'_> {
         out.clear();
         let mut border = false;
         for &f in &self.faces_of[v as usize] {
-            let c = self.corners[f as usize];
-            let o = self.opp[f as usize];
-            let j = corner_of(c, v);
-            out.push(c[next(j)]);
-            if o[prev(j)] == NONE {
-                out.push(c[prev(j)]);
+            let t = &self.tris[f as usize];
+            let j = corner_of(t.c, v);
+            out.push(t.c[next(j)]);
+            if t.o[prev(j)] == NONE {
+                out.push(t.c[prev(j)]);
                 border = true;
             }
-            border |= o[j] == NONE;
+            border |= t.o[j] == NONE;
         }
         border
-    }
-
-    /// Recomputes the ring and border flag of `v`.
-    fn refresh(&mut self, v: u32) {
-        let mut ring = std::mem::take(&mut self.ring_of[v as usize]);
-        self.border[v as usize] = self.find_ring(v, &mut ring);
-        self.ring_of[v as usize] = ring;
     }
 
     #[inline]
@@ -275,12 +287,16 @@ impl Work<'_> {
             return false;
         }
         let (ra, rb) = (&self.ring_of[a as usize], &self.ring_of[b as usize]);
-        let mut shared = 0usize;
-        for &x in ra {
-            for &y in rb {
-                shared += usize::from(x == y);
-            }
-        }
+        let shared = if rb.len() <= 8 {
+            // No node is NONE, so the padding matches nothing.
+            let mut pad = [NONE; 8];
+            pad[..rb.len()].copy_from_slice(rb);
+            ra.iter()
+                .map(|&x| pad.iter().map(|&y| usize::from(x == y)).sum::<usize>())
+                .sum::<usize>()
+        } else {
+            ra.iter().filter(|x| rb.contains(x)).count()
+        };
         shared == 1 + usize::from(r != NONE)
     }
 
@@ -294,22 +310,23 @@ impl Work<'_> {
             self.node_pos[t as usize] as usize,
             self.node_pos[u as usize] as usize,
         );
-        let class_u = self.w.classes[pu];
-        if class_u == PositionClass::Rigid {
-            return false;
-        }
-        if class_u != PositionClass::Free {
-            let group = |f: u32| self.w.triangles[f as usize].group;
-            let boundary = fr == NONE || group(fl) != group(fr);
-            if !boundary || self.w.classes[pt] == PositionClass::Free {
-                return false;
+        let (it, iu) = (self.info[pt], self.info[pu]);
+        match iu.class {
+            PositionClass::Rigid => return false,
+            PositionClass::Sharp => {
+                let group = |f: u32| self.tris[f as usize].group;
+                let boundary = fr == NONE || group(fl) != group(fr);
+                if !boundary || it.class == PositionClass::Free {
+                    return false;
+                }
             }
+            PositionClass::Free => {}
+        }
+        if iu.group != NONE && it.group != NONE {
+            return iu.group == it.group;
         }
         let (vu, vt) = (&self.w.vertices[pu], &self.w.vertices[pt]);
-        match (vu.as_slice(), vt.as_slice()) {
-            ([(g, _)], [(h, _)]) => g == h,
-            _ => vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g)),
-        }
+        vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g))
     }
 
     /// The rest of the checks of the collapse of `u` into `t`, `fl` being the triangle
@@ -325,7 +342,7 @@ impl Work<'_> {
         jl: usize,
         fr: u32,
     ) -> Option<(Collapse, f64)> {
-        let ol = self.opp[fl as usize];
+        let ol = self.tris[fl as usize].o;
         let fn0 = ol[prev(jl)];
         let fn1 = ol[next(jl)];
         if fn1 == NONE {
@@ -333,10 +350,10 @@ impl Work<'_> {
         }
         let (mut fn2, mut fn3, mut jr) = (NONE, NONE, 0);
         if fr != NONE {
-            jr = corner_of(self.corners[fr as usize], t);
-            let or = self.opp[fr as usize];
-            fn2 = or[jr];
-            fn3 = or[next(jr)];
+            let r = &self.tris[fr as usize];
+            jr = corner_of(r.c, t);
+            fn2 = r.o[jr];
+            fn3 = r.o[next(jr)];
             if fn3 == NONE {
                 return None;
             }
@@ -348,17 +365,16 @@ impl Work<'_> {
             if f == fl || f == fr {
                 continue;
             }
-            let c = self.corners[f as usize];
-            let q = |k: usize| {
-                if c[k] == u {
-                    p_t
-                } else {
-                    self.pos[c[k] as usize]
-                }
-            };
-            let (a, b, e) = (q(0), q(1), q(2));
-            let after = cross(sub(b, a), sub(e, a));
-            let (before, lb) = self.normal[f as usize];
+            let tri = &self.tris[f as usize];
+            let c = tri.c;
+            let mut q = [
+                self.pos[c[0] as usize],
+                self.pos[c[1] as usize],
+                self.pos[c[2] as usize],
+            ];
+            q[corner_of(c, u)] = p_t;
+            let after = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+            let (before, lb) = (tri.n, tri.len);
             let la = len(after);
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;
@@ -384,8 +400,8 @@ impl Work<'_> {
     /// Checks the collapse of `u` into `t`; returns it with its cost and error increment.
     fn check(&self, t: u32, u: u32) -> Option<(Collapse, f64, f64)> {
         let (fl, jl) = self.dir_face(t, u)?;
-        let fr = self.opp[fl as usize][jl];
-        let l = self.corners[fl as usize][prev(jl)];
+        let fr = self.tris[fl as usize].o[jl];
+        let l = self.tris[fl as usize].c[prev(jl)];
         let r = self.third(fr, t);
         if !self.groups_ok(t, u, fl, fr) || !self.edge_ok(t, u, l, r) {
             return None;
@@ -402,7 +418,7 @@ impl Work<'_> {
         if f == NONE {
             return NONE;
         }
-        let c = self.corners[f as usize];
+        let c = self.tris[f as usize].c;
         c[next(corner_of(c, v))]
     }
 
@@ -410,10 +426,9 @@ impl Work<'_> {
     /// lower-numbered end first, or a border edge): stores in `slot` the better collapse
     /// of the two [`Work::check`]s would find, keeping the costs of the last evaluation
     /// when the edge's ends are the same nodes (a node's quadric never changes).
-    fn evaluate(&self, f: usize, k: usize, slot: &mut Slot) {
-        let c = self.corners[f];
-        let (a, b) = (c[k], c[next(k)]);
-        let g = self.opp[f][k];
+    fn evaluate(&self, f: u32, k: usize, slot: &mut Slot) {
+        let tri = &self.tris[f as usize];
+        let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
         slot.dir = 0;
         if !(a < b || g == NONE) {
             return;
@@ -423,9 +438,9 @@ impl Work<'_> {
             slot.costs = [f64::NAN; 2];
         }
         // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
-        let x_ok = g != NONE && self.groups_ok(b, a, g, f as u32);
-        let y_ok = self.groups_ok(a, b, f as u32, g);
-        if !(x_ok || y_ok) || !self.edge_ok(a, b, c[prev(k)], self.third(g, a)) {
+        let x_ok = g != NONE && self.groups_ok(b, a, g, f);
+        let y_ok = self.groups_ok(a, b, f, g);
+        if !(x_ok || y_ok) || !self.edge_ok(a, b, tri.c[prev(k)], self.third(g, a)) {
             return;
         }
         let mut cost = |i: usize, t: u32, u: u32| {
@@ -435,14 +450,14 @@ impl Work<'_> {
             Some(slot.costs[i]).filter(|c| c.is_finite())
         };
         let x = if x_ok {
-            let jb = corner_of(self.corners[g as usize], b);
-            self.moves::<false>(b, a, g, jb, f as u32)
+            let jb = corner_of(self.tris[g as usize].c, b);
+            self.moves::<false>(b, a, g, jb, f)
                 .and_then(|_| cost(0, b, a))
         } else {
             None
         };
         let y = if y_ok {
-            self.moves::<false>(a, b, f as u32, k, g)
+            self.moves::<false>(a, b, f, k, g)
                 .and_then(|_| cost(1, a, b))
         } else {
             None
@@ -461,16 +476,17 @@ impl Work<'_> {
     /// third corners of the triangles on the edge; so it must when an end's star changed
     /// or a third corner lost a neighbour in the previous pass.
     #[inline]
-    fn stale(&self, f: usize, k: usize, pass: u32) -> bool {
+    fn stale(&self, f: u32, k: usize, pass: u32) -> bool {
         let recent = |x: u32, v: &[u32]| v[x as usize] + 1 >= pass;
-        let c = self.corners[f];
+        let tri = &self.tris[f as usize];
+        let c = tri.c;
         if recent(c[k], &self.changed)
             || recent(c[next(k)], &self.changed)
             || recent(c[prev(k)], &self.shrunk)
         {
             return true;
         }
-        let g = self.opp[f][k];
+        let g = tri.o[k];
         g != NONE && recent(self.third(g, c[k]), &self.shrunk)
     }
 
@@ -513,49 +529,83 @@ impl Work<'_> {
                 continue;
             }
             self.alive[f as usize] = false;
-            let o = self.opp[f as usize];
-            let j = corner_of(self.corners[f as usize], t);
+            let Tri { c: fc, o, .. } = self.tris[f as usize];
+            let j = corner_of(fc, t);
             // The edge t–u is slot j of f_l and slot prev(j) of f_r.
             let on_edge = if f == c.fl { j } else { prev(j) };
             let (x, y) = (o[next(on_edge)], o[prev(on_edge)]);
             for (a, b) in [(x, y), (y, x)] {
                 if a != NONE {
-                    let oa = &mut self.opp[a as usize];
+                    let oa = &mut self.tris[a as usize].o;
                     if let Some(k) = oa.iter().position(|&g| g == f) {
                         oa[k] = b;
                     }
                 }
             }
-            for x in self.corners[f as usize] {
+            for x in fc {
                 self.faces_of[x as usize].retain(|&g| g != f);
             }
         }
         let mut star = std::mem::take(&mut self.faces_of[t as usize]);
         star.append(&mut std::mem::take(&mut self.faces_of[u as usize]));
+        let mut border = false;
         for &f in &star {
-            let c = &mut self.corners[f as usize];
-            for x in c.iter_mut() {
+            let mut tri = self.tris[f as usize];
+            for x in tri.c.iter_mut() {
                 if *x == t || *x == u {
                     *x = s;
                 }
             }
-            let c = *c;
-            let n = self.triangle_normal(c);
-            self.normal[f as usize] = (n, len(n));
+            tri.n = self.triangle_normal(tri.c);
+            tri.len = len(tri.n);
+            let j = corner_of(tri.c, s);
+            border |= tri.o[j] == NONE || tri.o[prev(j)] == NONE;
+            self.tris[f as usize] = tri;
         }
         self.faces_of.push(star);
         self.stamp.push(0);
         self.changed.push(0);
         self.shrunk.push(0);
-        // Rings: the new node's, and its neighbours' (which had t or u).
+        // Rings: the new node's is the union of its children's; its neighbours see it
+        // instead of t or u (l and r, which saw both, once). No neighbour's border changes.
+        let ring_u = std::mem::take(&mut self.ring_of[u as usize]);
         let mut ring = std::mem::take(&mut self.ring_of[t as usize]);
-        drop(std::mem::take(&mut self.ring_of[u as usize]));
-        let border = self.find_ring(s, &mut ring);
+        ring.retain(|&x| x != u);
+        let shared = ring.len();
+        for &x in &ring_u {
+            if x != t && !ring[..shared].contains(&x) {
+                ring.push(x);
+            }
+        }
+        for &x in &ring {
+            let rx = &mut self.ring_of[x as usize];
+            let mut seen = false;
+            let mut i = 0;
+            while i < rx.len() {
+                if rx[i] == t || rx[i] == u {
+                    if seen {
+                        rx.swap_remove(i);
+                        continue;
+                    }
+                    rx[i] = s;
+                    seen = true;
+                }
+                i += 1;
+            }
+        }
         self.ring_of.push(ring);
         self.border.push(border);
-        for i in 0..self.ring_of[s as usize].len() {
-            let x = self.ring_of[s as usize][i];
-            self.refresh(x);
+        #[cfg(debug_assertions)]
+        {
+            let mut found = Vec::new();
+            for x in std::iter::once(s).chain(self.ring_of[s as usize].clone()) {
+                let b = self.find_ring(x, &mut found);
+                let mut kept = self.ring_of[x as usize].clone();
+                kept.sort_unstable();
+                found.sort_unstable();
+                debug_assert_eq!(kept, found, "ring of {x}");
+                debug_assert_eq!(self.border[x as usize], b, "border of {x}");
+            }
         }
         self.h.collapses.push(c);
         s
@@ -686,6 +736,9 @@ fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f
 pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> Hierarchy {
     let np = w.positions.len();
     let nt = w.triangles.len();
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(MAX_THREADS);
     // Work relative to the bounding box's centre, in f64.
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in &w.positions {
@@ -720,41 +773,77 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         (wedge_start[x as usize] as usize..wedge_start[x as usize + 1] as usize)
             .find(|&i| wedges[i].group == group)
     };
-    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); np];
-    for (f, t) in w.triangles.iter().enumerate() {
-        let s = t.a.map(|a| scaled_attributes(w, a, weights, diagonal));
-        let q = Quadric::triangle(t.p.map(|x| p[x as usize]), s);
-        for &x in &t.p {
-            faces_of[x as usize].push(f as u32);
-            if let Some(i) = wedge_of(&mut wedges, x, t.group) {
-                wedges[i].q.add(&q);
+    let mut faces_of: Vec<Vec<u32>> = w.vertices.iter().map(|_| Vec::with_capacity(8)).collect();
+    // Triangle quadrics, computed in blocks on all threads and added in triangle order.
+    let mut block = vec![Quadric::default(); nt.min(QUADRIC_BLOCK)];
+    for first in (0..nt).step_by(QUADRIC_BLOCK) {
+        let n = (nt - first).min(QUADRIC_BLOCK);
+        let fill = |from: usize, out: &mut [Quadric]| {
+            for (i, q) in out.iter_mut().enumerate() {
+                let t = &w.triangles[from + i];
+                let s = t.a.map(|a| scaled_attributes(w, a, weights, diagonal));
+                *q = Quadric::triangle(t.p.map(|x| p[x as usize]), s);
+            }
+        };
+        if threads <= 1 || n < PARALLEL_MIN {
+            fill(first, &mut block[..n]);
+        } else {
+            let per = n.div_ceil(threads);
+            std::thread::scope(|scope| {
+                for (i, part) in block[..n].chunks_mut(per).enumerate() {
+                    let fill = &fill;
+                    scope.spawn(move || fill(first + i * per, part));
+                }
+            });
+        }
+        for (i, q) in block[..n].iter().enumerate() {
+            let f = first + i;
+            let t = &w.triangles[f];
+            for &x in &t.p {
+                faces_of[x as usize].push(f as u32);
+                if let Some(i) = wedge_of(&mut wedges, x, t.group) {
+                    wedges[i].q.add(q);
+                }
             }
         }
     }
+    drop(block);
     // The triangle across each edge: the one with the reverse edge.
-    let corners: Vec<[u32; 3]> = w.triangles.iter().map(|t| t.p).collect();
-    let opp: Vec<[u32; 3]> = corners
+    let mut tris: Vec<Tri> = w
+        .triangles
         .iter()
-        .map(|c| {
-            [0, 1, 2].map(|k| {
-                let (a, b) = (c[k], c[next(k)]);
-                faces_of[b as usize]
-                    .iter()
-                    .copied()
-                    .find(|&g| {
-                        let d = corners[g as usize];
-                        d[next(corner_of(d, b))] == a
-                    })
-                    .unwrap_or(NONE)
-            })
+        .map(|t| {
+            let [a, b, d] = t.p.map(|x| p[x as usize]);
+            let n = cross(sub(b, a), sub(d, a));
+            Tri {
+                c: t.p,
+                o: [NONE; 3],
+                group: t.group,
+                n,
+                len: len(n),
+            }
         })
         .collect();
+    for f in 0..nt {
+        let c = tris[f].c;
+        tris[f].o = [0, 1, 2].map(|k| {
+            let (a, b) = (c[k], c[next(k)]);
+            faces_of[b as usize]
+                .iter()
+                .copied()
+                .find(|&g| {
+                    let d = tris[g as usize].c;
+                    d[next(corner_of(d, b))] == a
+                })
+                .unwrap_or(NONE)
+        });
+    }
     // Boundary planes: through each border or group-boundary edge, perpendicular to its
     // triangle, weighted by the edge's squared length.
     for (f, t) in w.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (t.p[k], t.p[next(k)]);
-            let twin = opp[f][k];
+            let twin = tris[f].o[k];
             if twin != NONE && w.triangles[twin as usize].group == t.group {
                 continue;
             }
@@ -769,26 +858,29 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             }
         }
     }
-    let pos = p.clone();
-    let normal = corners
+    let info = w
+        .classes
         .iter()
-        .map(|c| {
-            let (a, b, d) = (pos[c[0] as usize], pos[c[1] as usize], pos[c[2] as usize]);
-            let n = cross(sub(b, a), sub(d, a));
-            (n, len(n))
+        .zip(&w.vertices)
+        .map(|(&class, vs)| PosInfo {
+            class,
+            group: match vs.as_slice() {
+                [(g, _)] => *g,
+                _ => NONE,
+            },
         })
         .collect();
+    let pos = p.clone();
     let mut work = Work {
         w,
         p,
-        pos,
-        corners,
-        opp,
-        normal,
+        info,
+        tris,
         alive: vec![true; nt],
+        pos,
         faces_of,
-        ring_of: vec![Vec::new(); np],
-        border: vec![false; np],
+        ring_of: Vec::with_capacity(2 * np),
+        border: Vec::with_capacity(2 * np),
         node_pos: (0..np as u32).collect(),
         wedges,
         wedge_start,
@@ -804,10 +896,13 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         shrunk: vec![0; np],
     };
     for v in 0..np as u32 {
-        work.refresh(v);
+        let mut ring = Vec::with_capacity(8);
+        let border = work.find_ring(v, &mut ring);
+        work.ring_of.push(ring);
+        work.border.push(border);
         let normals = work.faces_of[v as usize]
             .iter()
-            .map(|&f| norm(work.normal[f as usize].0));
+            .map(|&f| norm(work.tris[f as usize].n));
         let axis = norm(
             normals
                 .clone()
@@ -829,30 +924,35 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             .fold(0.0, f64::max) as f32;
     }
 
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(MAX_THREADS);
-    // Per edge slot (3 per triangle): the last evaluation, valid until its stars change.
-    let mut slots = vec![Slot::default(); 3 * nt];
+    // The live triangles and, for each, the last evaluation of its three edge slots.
+    let mut live: Vec<u32> = (0..nt as u32).collect();
+    let mut slots = vec![[Slot::default(); 3]; nt];
     let (mut cands, mut tmp): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
     let mut touched = Vec::new();
     let most = np.saturating_sub(1) as u64;
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        evaluate_stale(&work, pass, &mut slots, threads);
-        cands.clear();
-        for f in 0..nt {
-            if !work.alive[f] {
-                continue;
+        // Drop the triangles the last pass removed (keeping the order).
+        let mut kept = 0;
+        for i in 0..live.len() {
+            if work.alive[live[i] as usize] {
+                live[kept] = live[i];
+                slots[kept] = slots[i];
+                kept += 1;
             }
-            let c = work.corners[f];
+        }
+        live.truncate(kept);
+        slots.truncate(kept);
+        evaluate_stale(&work, pass, &live, &mut slots, threads);
+        cands.clear();
+        for (&f, slot) in live.iter().zip(&slots) {
+            let c = work.tris[f as usize].c;
             for k in 0..3 {
-                let slot = &slots[3 * f + k];
                 let (a, b) = (c[k], c[next(k)]);
-                match slot.dir {
-                    1 => cands.push((slot.cost, b, a)),
-                    2 => cands.push((slot.cost, a, b)),
+                match slot[k].dir {
+                    1 => cands.push((slot[k].cost, b, a)),
+                    2 => cands.push((slot[k].cost, a, b)),
                     _ => {}
                 }
             }
@@ -870,7 +970,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             let Some((col, _, dev)) = work.check(t, u) else {
                 continue;
             };
-            let l = work.corners[col.fl as usize][prev(col.rot_l as usize)];
+            let l = work.tris[col.fl as usize].c[prev(col.rot_l as usize)];
             let r = work.third(col.fr, t);
             touched.clear();
             touched.extend_from_slice(&work.ring_of[t as usize]);
@@ -893,7 +993,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         }
     }
     work.h.node_position = work.node_pos;
-    work.h.corners = work.corners;
+    work.h.corners = work.tris.iter().map(|t| t.c).collect();
     work.h.alive = work.alive;
     work.h
 }
@@ -901,31 +1001,40 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
 /// Threads evaluating edges.
 const MAX_THREADS: usize = 8;
 
-/// Triangles below which a pass evaluates on one thread.
+/// Triangles below which work stays on one thread.
 const PARALLEL_MIN: usize = 4096;
 
-/// Evaluates every slot of a live triangle whose stars changed since its last evaluation,
-/// split over the threads by triangle ranges (each slot's result depends on the mesh alone,
-/// so the split does not change it).
-fn evaluate_stale(work: &Work<'_>, pass: u32, slots: &mut [Slot], threads: usize) {
-    let nt = work.corners.len();
-    let run = |first: usize, slots: &mut [Slot]| {
-        for (i, slot) in slots.iter_mut().enumerate() {
-            let (f, k) = (first + i / 3, i % 3);
-            if work.alive[f] && work.stale(f, k, pass) {
-                work.evaluate(f, k, slot);
+/// Triangle quadrics computed at a time.
+const QUADRIC_BLOCK: usize = 16384;
+
+/// Evaluates every slot of the live triangles whose stars changed since its last
+/// evaluation, split over the threads by ranges of triangles (each slot's result depends
+/// on the mesh alone, so the split does not change it).
+fn evaluate_stale(
+    work: &Work<'_>,
+    pass: u32,
+    live: &[u32],
+    slots: &mut [[Slot; 3]],
+    threads: usize,
+) {
+    let run = |live: &[u32], slots: &mut [[Slot; 3]]| {
+        for (&f, slot) in live.iter().zip(slots) {
+            for (k, slot) in slot.iter_mut().enumerate() {
+                if work.stale(f, k, pass) {
+                    work.evaluate(f, k, slot);
+                }
             }
         }
     };
-    if threads <= 1 || nt < PARALLEL_MIN {
-        run(0, slots);
+    if threads <= 1 || live.len() < PARALLEL_MIN {
+        run(live, slots);
         return;
     }
-    let per = nt.div_ceil(threads);
+    let per = live.len().div_ceil(threads);
     std::thread::scope(|scope| {
-        for (i, part) in slots.chunks_mut(3 * per).enumerate() {
+        for (live, slots) in live.chunks(per).zip(slots.chunks_mut(per)) {
             let run = &run;
-            scope.spawn(move || run(i * per, part));
+            scope.spawn(move || run(live, slots));
         }
     });
 }
