@@ -443,30 +443,37 @@ impl Work<'_> {
         if !(x_ok || y_ok) || !self.edge_ok(a, b, tri.c[prev(k)], self.third(g, a)) {
             return;
         }
+        // The two [`Work::check`]s would keep the cheaper legal direction (the first on a
+        // tie), so the cheaper one is checked first and, when legal, decides.
         let mut cost = |i: usize, t: u32, u: u32| {
             if slot.costs[i].is_nan() {
                 slot.costs[i] = self.cost(t, u);
             }
-            Some(slot.costs[i]).filter(|c| c.is_finite())
+            slot.costs[i]
         };
-        let x = if x_ok {
-            let jb = corner_of(self.tris[g as usize].c, b);
-            self.moves::<false>(b, a, g, jb, f)
-                .and_then(|_| cost(0, b, a))
+        let cx = if x_ok { cost(0, b, a) } else { f64::INFINITY };
+        let cy = if y_ok { cost(1, a, b) } else { f64::INFINITY };
+        let x_legal = || {
+            cx.is_finite() && {
+                let jb = corner_of(self.tris[g as usize].c, b);
+                self.moves::<false>(b, a, g, jb, f).is_some()
+            }
+        };
+        let y_legal = || cy.is_finite() && self.moves::<false>(a, b, f, k, g).is_some();
+        (slot.cost, slot.dir) = if cy < cx {
+            if y_legal() {
+                (cy, 2)
+            } else if x_legal() {
+                (cx, 1)
+            } else {
+                (0.0, 0)
+            }
+        } else if x_legal() {
+            (cx, 1)
+        } else if y_legal() {
+            (cy, 2)
         } else {
-            None
-        };
-        let y = if y_ok {
-            self.moves::<false>(a, b, f, k, g)
-                .and_then(|_| cost(1, a, b))
-        } else {
-            None
-        };
-        (slot.cost, slot.dir) = match (x, y) {
-            (Some(x), Some(y)) if y < x => (y, 2),
-            (Some(x), _) => (x, 1),
-            (None, Some(y)) => (y, 2),
-            (None, None) => (0.0, 0),
+            (0.0, 0)
         };
     }
 
