@@ -23,6 +23,9 @@ use caveclod_core::PositionClass;
 use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 
+/// No triangle.
+const NONE: u32 = u32::MAX;
+
 /// Directed edge `a → b` as a map key.
 #[inline]
 fn ek(a: u32, b: u32) -> u64 {
@@ -251,11 +254,33 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         }
     }
 
-    // 4. Split non-manifold vertices: one position per fan.
+    // Now every directed edge has one triangle and every edge at most two: the triangle
+    // across each edge, `NONE` on a border. Splitting vertices below keeps these pairs (the
+    // two triangles on an edge through a vertex are always in the same fan).
+    drop(directed);
     let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
+    let opp: Vec<[u32; 3]> = kept
+        .iter()
+        .map(|&(p, _)| {
+            [0, 1, 2].map(|k| {
+                let (a, b) = (p[k], p[(k + 1) % 3]);
+                faces_of
+                    .get(b)
+                    .iter()
+                    .copied()
+                    .find(|&g| {
+                        let q = kept[g as usize].0;
+                        (0..3).any(|j| q[j] == b && q[(j + 1) % 3] == a)
+                    })
+                    .unwrap_or(NONE)
+            })
+        })
+        .collect();
+
+    // 4. Split non-manifold vertices: one position per fan.
     let mut fans = Fans::default();
     for v in 0..faces_of.len() as u32 {
-        fans.find(v, faces_of.get(v), &kept, &directed);
+        fans.find(v, faces_of.get(v), &kept, &opp);
         for fan in 1..fans.count() {
             repairs.non_manifold_vertices += 1;
             let copy = positions.len() as u32;
@@ -264,12 +289,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             for &f in fans.fan(fan) {
                 let p = &mut kept[f as usize].0;
                 let k = p.iter().position(|&x| x == v).unwrap_or(0);
-                let (prev, next) = (p[(k + 2) % 3], p[(k + 1) % 3]);
-                directed.remove(&ek(v, next));
-                directed.remove(&ek(prev, v));
                 p[k] = copy;
-                directed.insert(ek(copy, next), f);
-                directed.insert(ek(prev, copy), f);
             }
         }
     }
@@ -369,7 +389,8 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             }
             for k in 0..3 {
                 let (a, b) = (p[k], p[(k + 1) % 3]);
-                if let Some(&o) = directed.get(&ek(b, a)) {
+                let o = opp[f][k];
+                if o != NONE {
                     let o = o as usize;
                     if group[o] == u32::MAX
                         && surface(o) == surface(f)
@@ -385,15 +406,16 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 
     // 7. Classes from boundary edges.
     let mut boundary = vec![0u32; positions.len()];
-    for (&e, &f) in &directed {
-        let (a, b) = ((e >> 32) as u32, e as u32);
-        let counts = match directed.get(&ek(b, a)) {
-            None => true,
-            Some(&o) => f < o && group[f as usize] != group[o as usize],
-        };
-        if counts {
-            boundary[a as usize] += 1;
-            boundary[b as usize] += 1;
+    for (f, (&(p, _), o)) in kept.iter().zip(&opp).enumerate() {
+        for k in 0..3 {
+            let counts = match o[k] {
+                NONE => true,
+                o => (f as u32) < o && group[f] != group[o as usize],
+            };
+            if counts {
+                boundary[p[k] as usize] += 1;
+                boundary[p[(k + 1) % 3] as usize] += 1;
+            }
         }
     }
     let classes = boundary
@@ -523,13 +545,7 @@ struct Fans {
 impl Fans {
     /// Finds the fans around `v`, each grown breadth-first from the first triangle (in
     /// `faces` order) that no earlier fan took.
-    fn find(
-        &mut self,
-        v: u32,
-        faces: &[u32],
-        kept: &[([u32; 3], usize)],
-        directed: &FxHashMap<u64, u32>,
-    ) {
+    fn find(&mut self, v: u32, faces: &[u32], kept: &[([u32; 3], usize)], opp: &[[u32; 3]]) {
         self.order.clear();
         self.bounds.clear();
         self.done.clear();
@@ -545,8 +561,9 @@ impl Fans {
             while i < self.order.len() {
                 let p = kept[self.order[i] as usize].0;
                 let k = p.iter().position(|&x| x == v).unwrap_or(0);
-                for (a, b) in [(v, p[(k + 1) % 3]), (p[(k + 2) % 3], v)] {
-                    if let Some(&o) = directed.get(&ek(b, a)) {
+                let f = self.order[i] as usize;
+                for o in [opp[f][k], opp[f][(k + 2) % 3]] {
+                    if o != NONE {
                         if let Some(j) = faces.iter().position(|&g| g == o) {
                             if !self.done[j] {
                                 self.done[j] = true;
