@@ -411,6 +411,28 @@ impl Work<'_> {
         cost.is_finite().then_some((c, cost, dev))
     }
 
+    /// The collapse of `u` into `t`, ranked legal at the start of pass `pass`, if it still
+    /// is after the collapses applied since; with its error increment. Neither end was
+    /// touched by those (callers skip stamped ends), so their stars are as evaluated; only
+    /// a third corner of the edge may have lost a neighbour, and then all is checked again.
+    fn recheck(&self, t: u32, u: u32, pass: u32) -> Option<(Collapse, f64)> {
+        let (fl, jl) = self.dir_face(t, u)?;
+        let fr = self.tris[fl as usize].o[jl];
+        let l = self.tris[fl as usize].c[prev(jl)];
+        let r = self.third(fr, t);
+        let fresh = |x: u32| x == NONE || self.shrunk[x as usize] != pass;
+        if fresh(l) && fresh(r) {
+            let got = self.moves::<true>(t, u, fl, jl, fr);
+            debug_assert_eq!(
+                got.map(|(c, dev)| (c.fl, c.fr, c.neighbours, dev.to_bits())),
+                self.check(t, u)
+                    .map(|(c, _, dev)| (c.fl, c.fr, c.neighbours, dev.to_bits()))
+            );
+            return got;
+        }
+        self.check(t, u).map(|(c, _, dev)| (c, dev))
+    }
+
     /// The corner of triangle `f` after `v` (for a triangle on the edge `u → v`, its third
     /// corner), or `NONE` for no triangle.
     #[inline]
@@ -971,10 +993,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             if work.stamp[t as usize] == pass || work.stamp[u as usize] == pass {
                 continue;
             }
-            // Neighbourhoods of earlier collapses in this pass are stamped, so this one's
-            // check at the start of the pass still holds; check again all the same, since a
-            // shared neighbour's degree may have changed.
-            let Some((col, _, dev)) = work.check(t, u) else {
+            let Some((col, dev)) = work.recheck(t, u, pass) else {
                 continue;
             };
             let l = work.tris[col.fl as usize].c[prev(col.rot_l as usize)];
