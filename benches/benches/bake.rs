@@ -20,10 +20,11 @@
 //!   validation; the import is not timed) against `meshopt::simplify` of the welded mesh to
 //!   1%, medians of a few runs, and the bake's stages from one extra run.
 //!
-//! Prints two tables with ratios (ours / meshopt) and writes them to `bake-quality.csv` in
-//! the target directory. `cargo bench -p caveclod-benches --bench bake` (a few minutes);
-//! without `--bench` (as `cargo test --benches` runs it) it runs once on spot with fewer
-//! samples. Inputs that are absent are skipped with a note.
+//! Prints the figures with ratios (ours / meshopt) and writes them to `bake-quality.csv` in
+//! the target directory. `cargo bench -p caveclod-benches --bench bake` (about a minute; a
+//! filter argument such as `-- bake/lucy` picks inputs); without `--bench` (as
+//! `cargo test --benches` runs it) it runs once on spot with fewer samples. Inputs that are
+//! absent are skipped with a note.
 
 use std::collections::BinaryHeap;
 use std::path::{Path, PathBuf};
@@ -624,6 +625,16 @@ fn target_dir() -> Option<PathBuf> {
 
 fn main() {
     let benchmarking = std::env::args().any(|a| a == "--bench");
+    // Like criterion, a filter among the arguments picks benchmarks by substring of their
+    // names, `bake/lucy` and `bake/st_helens` (`bake/spot` without `--bench`).
+    let filters: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let wanted = |name: &str| {
+        let id = format!("bake/{name}");
+        filters.is_empty() || filters.iter().any(|f| id.contains(f.as_str()))
+    };
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
     let (inputs, settings): (&[(&str, &str)], _) = if benchmarking {
         (
@@ -657,16 +668,21 @@ fn main() {
         load()
     );
     let mut csv = Csv("input,metric,target_triangles,ours,meshopt,ratio\n".into());
+    let mut ran = 0;
     for &(name, relative) in inputs {
+        if !wanted(name) {
+            continue;
+        }
         let path = data.join(relative);
         if !path.exists() {
             println!("note: {relative} not found under ../shared/data; skipping {name}");
             continue;
         }
         run(name, &path, &settings, &mut csv);
+        ran += 1;
     }
     println!("\nload average at the end: {}", load());
-    if benchmarking {
+    if benchmarking && ran > 0 {
         if let Some(dir) = target_dir() {
             let file = dir.join("bake-quality.csv");
             match std::fs::write(&file, &csv.0) {
