@@ -126,19 +126,23 @@ struct Wedge {
     q: Quadric,
 }
 
-/// A legal collapse as a pass ranks it: `(cost, t, u)`.
+/// A collapse as a pass ranks it: `(cost, slot, 0)`, the slot numbered by the live
+/// triangles (three per triangle, in order).
 type Candidate = (f64, u32, u32);
 
-/// The last evaluation of one edge slot (3 per triangle).
+/// The ranking of one edge slot (3 per triangle) in the current pass.
 #[derive(Clone, Copy)]
 struct Slot {
-    /// The better collapse's cost.
+    /// The cheaper direction's cost.
     cost: f64,
-    /// 0: none; 1: the slot's first corner moves onto its second; 2: the reverse.
+    /// The other direction's cost (infinite when not allowed).
+    other: f64,
+    /// The cheaper direction: 0: none; 1: the slot's first corner moves onto its second;
+    /// 2: the reverse.
     dir: u8,
-    /// The edge's ends when `costs` were computed.
+    /// The edge's ends, first and second corner of the slot, at the start of the pass.
     ends: [u32; 2],
-    /// Quadric costs of the two directions, NaN where not computed.
+    /// Quadric costs of the two directions for these ends, NaN where not computed.
     costs: [f64; 2],
 }
 
@@ -146,11 +150,22 @@ impl Default for Slot {
     fn default() -> Self {
         Self {
             cost: 0.0,
+            other: 0.0,
             dir: 0,
             ends: [NONE; 2],
             costs: [f64::NAN; 2],
         }
     }
+}
+
+/// What [`Work::verdict`] found.
+enum Verdict {
+    /// Not legal at the start of the pass.
+    Illegal,
+    /// Legal at the start of the pass but no longer.
+    Lapsed,
+    /// Legal: the collapse and its error increment.
+    Legal(Collapse, f64),
 }
 
 /// A triangle of the mesh being simplified, in one cache line.
@@ -201,10 +216,10 @@ struct Work<'w> {
     h: Hierarchy,
     /// Pass in which a node's neighbourhood was last taken by a collapse.
     stamp: Vec<u32>,
-    /// Pass in which a node's star (triangles, their corners and neighbours) last changed.
-    changed: Vec<u32>,
     /// Pass in which a node last lost a neighbour (or was created).
     shrunk: Vec<u32>,
+    /// A node's number of neighbours at the start of the pass it last lost one in.
+    start_valence: Vec<u32>,
 }
 
 impl Work<'_> {
@@ -272,18 +287,11 @@ impl Work<'_> {
             .sum()
     }
 
-    /// The conditions on the edge `a`–`b` that hold for both directions: the link
-    /// condition (the ends share exactly the neighbours `l` and `r`, the third corners of
-    /// the triangles on the edge, `r` being `NONE` on a border), no interior edge between
-    /// two border nodes, and `l` and `r` keep at least three neighbours.
-    fn edge_ok(&self, a: u32, b: u32, l: u32, r: u32) -> bool {
+    /// The link condition on the edge `a`–`b` (the ends share exactly the neighbours that
+    /// are the third corners of the triangles on the edge, `r` being the second's or
+    /// `NONE` on a border), and no interior edge between two border nodes.
+    fn link_ok(&self, a: u32, b: u32, r: u32) -> bool {
         if r != NONE && self.border[a as usize] && self.border[b as usize] {
-            return false;
-        }
-        if [l, r]
-            .iter()
-            .any(|&x| x != NONE && self.ring_of[x as usize].len() <= 3)
-        {
             return false;
         }
         let (ra, rb) = (&self.ring_of[a as usize], &self.ring_of[b as usize]);
@@ -298,6 +306,16 @@ impl Work<'_> {
             ra.iter().filter(|x| rb.contains(x)).count()
         };
         shared == 1 + usize::from(r != NONE)
+    }
+
+    /// Number of neighbours of `x` at the start of pass `pass`.
+    #[inline]
+    fn valence_at_start(&self, x: u32, pass: u32) -> usize {
+        if self.shrunk[x as usize] == pass {
+            self.start_valence[x as usize] as usize
+        } else {
+            self.ring_of[x as usize].len()
+        }
     }
 
     /// The surface-group rules for moving `u` onto `t` across an edge with the triangles
@@ -329,19 +347,12 @@ impl Work<'_> {
         vu.iter().all(|(g, _)| vt.iter().any(|(h, _)| h == g))
     }
 
-    /// The rest of the checks of the collapse of `u` into `t`, `fl` being the triangle
-    /// with the edge `t → u` (`t` at its corner `jl`) and `fr` the one across or `NONE`:
-    /// Hoppe's neighbours exist, no triangle flips or collapses. Returns the collapse and,
-    /// with `DEV`, its error increment (the largest distance of `u` from the planes of
-    /// the moved triangles), else 0.
-    fn moves<const DEV: bool>(
-        &self,
-        t: u32,
-        u: u32,
-        fl: u32,
-        jl: usize,
-        fr: u32,
-    ) -> Option<(Collapse, f64)> {
+    /// The checks of the collapse of `u` into `t` that look at `u`'s triangles, `fl` being
+    /// the triangle with the edge `t → u` (`t` at its corner `jl`) and `fr` the one across
+    /// or `NONE`: Hoppe's neighbours exist, no triangle flips or collapses. Returns the
+    /// collapse and its error increment (the largest distance of `u` from the planes of
+    /// the moved triangles).
+    fn moves(&self, t: u32, u: u32, fl: u32, jl: usize, fr: u32) -> Option<(Collapse, f64)> {
         let ol = self.tris[fl as usize].o;
         let fn0 = ol[prev(jl)];
         let fn1 = ol[next(jl)];
@@ -379,11 +390,9 @@ impl Work<'_> {
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;
             }
-            if DEV {
-                // `norm(after)`, with its length known to be positive.
-                let n = [after[0] / la, after[1] / la, after[2] / la];
-                dev = dev.max(dot(n, d).abs());
-            }
+            // `norm(after)`, with its length known to be positive.
+            let n = [after[0] / la, after[1] / la, after[2] / la];
+            dev = dev.max(dot(n, d).abs());
         }
         let c = Collapse {
             t,
@@ -397,42 +406,6 @@ impl Work<'_> {
         Some((c, dev))
     }
 
-    /// Checks the collapse of `u` into `t`; returns it with its cost and error increment.
-    fn check(&self, t: u32, u: u32) -> Option<(Collapse, f64, f64)> {
-        let (fl, jl) = self.dir_face(t, u)?;
-        let fr = self.tris[fl as usize].o[jl];
-        let l = self.tris[fl as usize].c[prev(jl)];
-        let r = self.third(fr, t);
-        if !self.groups_ok(t, u, fl, fr) || !self.edge_ok(t, u, l, r) {
-            return None;
-        }
-        let (c, dev) = self.moves::<true>(t, u, fl, jl, fr)?;
-        let cost = self.cost(t, u);
-        cost.is_finite().then_some((c, cost, dev))
-    }
-
-    /// The collapse of `u` into `t`, ranked legal at the start of pass `pass`, if it still
-    /// is after the collapses applied since; with its error increment. Neither end was
-    /// touched by those (callers skip stamped ends), so their stars are as evaluated; only
-    /// a third corner of the edge may have lost a neighbour, and then all is checked again.
-    fn recheck(&self, t: u32, u: u32, pass: u32) -> Option<(Collapse, f64)> {
-        let (fl, jl) = self.dir_face(t, u)?;
-        let fr = self.tris[fl as usize].o[jl];
-        let l = self.tris[fl as usize].c[prev(jl)];
-        let r = self.third(fr, t);
-        let fresh = |x: u32| x == NONE || self.shrunk[x as usize] != pass;
-        if fresh(l) && fresh(r) {
-            let got = self.moves::<true>(t, u, fl, jl, fr);
-            debug_assert_eq!(
-                got.map(|(c, dev)| (c.fl, c.fr, c.neighbours, dev.to_bits())),
-                self.check(t, u)
-                    .map(|(c, _, dev)| (c.fl, c.fr, c.neighbours, dev.to_bits()))
-            );
-            return got;
-        }
-        self.check(t, u).map(|(c, _, dev)| (c, dev))
-    }
-
     /// The corner of triangle `f` after `v` (for a triangle on the edge `u → v`, its third
     /// corner), or `NONE` for no triangle.
     #[inline]
@@ -444,11 +417,11 @@ impl Work<'_> {
         c[next(corner_of(c, v))]
     }
 
-    /// Evaluates the edge in slot `k` of triangle `f` if the slot stands for its edge (the
-    /// lower-numbered end first, or a border edge): stores in `slot` the better collapse
-    /// of the two [`Work::check`]s would find, keeping the costs of the last evaluation
-    /// when the edge's ends are the same nodes (a node's quadric never changes).
-    fn evaluate(&self, f: u32, k: usize, slot: &mut Slot) {
+    /// Ranks the edge in slot `k` of triangle `f` if the slot stands for its edge (the
+    /// lower-numbered end first, or a border edge): the quadric costs of the directions
+    /// the surface-group rules allow, the cheaper first (the first on a tie). Costs are
+    /// kept while the edge's ends are the same nodes (a node's quadric never changes).
+    fn rank(&self, f: u32, k: usize, slot: &mut Slot) {
         let tri = &self.tris[f as usize];
         let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
         slot.dir = 0;
@@ -460,63 +433,59 @@ impl Work<'_> {
             slot.costs = [f64::NAN; 2];
         }
         // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
-        let x_ok = g != NONE && self.groups_ok(b, a, g, f);
-        let y_ok = self.groups_ok(a, b, f, g);
-        if !(x_ok || y_ok) || !self.edge_ok(a, b, tri.c[prev(k)], self.third(g, a)) {
-            return;
-        }
-        // The two [`Work::check`]s would keep the cheaper legal direction (the first on a
-        // tie), so the cheaper one is checked first and, when legal, decides.
         let mut cost = |i: usize, t: u32, u: u32| {
             if slot.costs[i].is_nan() {
                 slot.costs[i] = self.cost(t, u);
             }
             slot.costs[i]
         };
-        let cx = if x_ok { cost(0, b, a) } else { f64::INFINITY };
-        let cy = if y_ok { cost(1, a, b) } else { f64::INFINITY };
-        let x_legal = || {
-            cx.is_finite() && {
-                let jb = corner_of(self.tris[g as usize].c, b);
-                self.moves::<false>(b, a, g, jb, f).is_some()
-            }
-        };
-        let y_legal = || cy.is_finite() && self.moves::<false>(a, b, f, k, g).is_some();
-        (slot.cost, slot.dir) = if cy < cx {
-            if y_legal() {
-                (cy, 2)
-            } else if x_legal() {
-                (cx, 1)
-            } else {
-                (0.0, 0)
-            }
-        } else if x_legal() {
-            (cx, 1)
-        } else if y_legal() {
-            (cy, 2)
+        let cx = if g != NONE && self.groups_ok(b, a, g, f) {
+            cost(0, b, a)
         } else {
-            (0.0, 0)
+            f64::INFINITY
         };
+        let cy = if self.groups_ok(a, b, f, g) {
+            cost(1, a, b)
+        } else {
+            f64::INFINITY
+        };
+        (slot.cost, slot.other, slot.dir) = if cy < cx { (cy, cx, 2) } else { (cx, cy, 1) };
+        if !slot.cost.is_finite() {
+            slot.dir = 0;
+        }
     }
 
-    /// Whether slot `k` of triangle `f` must be evaluated again in pass `pass`: its edge's
-    /// checks read the stars of its ends (their triangles, those triangles' corners,
-    /// neighbours and points), the wedges of its ends, and the number of neighbours of the
-    /// third corners of the triangles on the edge; so it must when an end's star changed
-    /// or a third corner lost a neighbour in the previous pass.
-    #[inline]
-    fn stale(&self, f: u32, k: usize, pass: u32) -> bool {
-        let recent = |x: u32, v: &[u32]| v[x as usize] + 1 >= pass;
-        let tri = &self.tris[f as usize];
-        let c = tri.c;
-        if recent(c[k], &self.changed)
-            || recent(c[next(k)], &self.changed)
-            || recent(c[prev(k)], &self.shrunk)
+    /// The checks of the collapse of `u` into `t` (which the surface-group rules allow, at
+    /// a finite cost) as they stood at the start of pass `pass`, and as they stand now.
+    /// Neither end was touched since (callers skip stamped ends), so their stars, rings
+    /// and borders are as they were; only a third corner of the edge may have lost a
+    /// neighbour since.
+    fn verdict(&self, t: u32, u: u32, pass: u32) -> Verdict {
+        let Some((fl, jl)) = self.dir_face(t, u) else {
+            return Verdict::Illegal;
+        };
+        let fr = self.tris[fl as usize].o[jl];
+        let l = self.tris[fl as usize].c[prev(jl)];
+        let r = self.third(fr, t);
+        let opposite = [l, r];
+        if !opposite
+            .iter()
+            .all(|&x| x == NONE || self.valence_at_start(x, pass) > 3)
+            || !self.link_ok(t, u, r)
         {
-            return true;
+            return Verdict::Illegal;
         }
-        let g = tri.o[k];
-        g != NONE && recent(self.third(g, c[k]), &self.shrunk)
+        let Some((c, dev)) = self.moves(t, u, fl, jl, fr) else {
+            return Verdict::Illegal;
+        };
+        if opposite
+            .iter()
+            .all(|&x| x == NONE || self.ring_of[x as usize].len() > 3)
+        {
+            Verdict::Legal(c, dev)
+        } else {
+            Verdict::Lapsed
+        }
     }
 
     /// Applies a checked collapse; returns the new node.
@@ -593,8 +562,8 @@ impl Work<'_> {
         }
         self.faces_of.push(star);
         self.stamp.push(0);
-        self.changed.push(0);
         self.shrunk.push(0);
+        self.start_valence.push(0);
         // Rings: the new node's is the union of its children's; its neighbours see it
         // instead of t or u (l and r, which saw both, once). No neighbour's border changes.
         let ring_u = std::mem::take(&mut self.ring_of[u as usize]);
@@ -672,6 +641,14 @@ fn corner_of(c: [u32; 3], v: u32) -> usize {
     }
 }
 
+/// The bits of `x` as an unsigned number ordered as [`f64::total_cmp`] orders floats.
+#[inline]
+fn order_key(x: f64) -> u64 {
+    let bits = x.to_bits();
+    // Negative numbers: all bits flipped; others: the sign bit set.
+    bits ^ (((bits as i64 >> 63) as u64) | (1 << 63))
+}
+
 /// Sorts candidates by cost, stably (equal costs keep their order): a least-significant-
 /// digit radix sort on the costs' bits, ordered as [`f64::total_cmp`] orders them.
 fn sort_candidates(cands: &mut Vec<Candidate>, tmp: &mut Vec<Candidate>) {
@@ -679,11 +656,7 @@ fn sort_candidates(cands: &mut Vec<Candidate>, tmp: &mut Vec<Candidate>) {
         cands.sort_by(|a, b| a.0.total_cmp(&b.0));
         return;
     }
-    let key = |c: &Candidate| {
-        let bits = c.0.to_bits();
-        // Negative numbers: all bits flipped; others: the sign bit set.
-        bits ^ (((bits as i64 >> 63) as u64) | (1 << 63))
-    };
+    let key = |c: &Candidate| order_key(c.0);
     const BITS: u32 = 11;
     const BUCKETS: usize = 1 << BITS;
     let mut counts = vec![[0u32; BUCKETS]; 64usize.div_ceil(BITS as usize)];
@@ -921,8 +894,8 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             ..Hierarchy::default()
         },
         stamp: vec![0; np],
-        changed: vec![0; np],
         shrunk: vec![0; np],
+        start_valence: vec![0; np],
     };
     for v in 0..np as u32 {
         let mut ring = Vec::with_capacity(8);
@@ -953,10 +926,11 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             .fold(0.0, f64::max) as f32;
     }
 
-    // The live triangles and, for each, the last evaluation of its three edge slots.
+    // The live triangles and, for each, the ranking of its three edge slots.
     let mut live: Vec<u32> = (0..nt as u32).collect();
     let mut slots = vec![[Slot::default(); 3]; nt];
     let (mut cands, mut tmp): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
+    let mut later = std::collections::BinaryHeap::new();
     let mut touched = Vec::new();
     let most = np.saturating_sub(1) as u64;
     loop {
@@ -973,43 +947,78 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         }
         live.truncate(kept);
         slots.truncate(kept);
-        evaluate_stale(&work, pass, &live, &mut slots, threads);
+        rank_all(&work, &live, &mut slots, threads);
+        // Each edge's cheaper allowed direction, by cost; equal costs in slot order.
         cands.clear();
-        for (&f, slot) in live.iter().zip(&slots) {
-            let c = work.tris[f as usize].c;
-            for k in 0..3 {
-                let (a, b) = (c[k], c[next(k)]);
-                match slot[k].dir {
-                    1 => cands.push((slot[k].cost, b, a)),
-                    2 => cands.push((slot[k].cost, a, b)),
-                    _ => {}
+        for (i, slot) in slots.iter().enumerate() {
+            for (k, slot) in slot.iter().enumerate() {
+                if slot.dir != 0 {
+                    cands.push((slot.cost, (3 * i + k) as u32, 0));
                 }
             }
         }
-        // Stable, so that equal costs keep the order of the triangles.
         sort_candidates(&mut cands, &mut tmp);
+        // The pass applies, in that order, each edge's cheapest legal direction unless an
+        // earlier collapse of the pass took a neighbourhood its ends are in (stamped), or
+        // it lapsed since the start of the pass. A direction is checked only when reached
+        // with both ends free; when it was illegal at the start of the pass, the edge's
+        // other direction queues at its own cost (in the same order as if it had been
+        // ranked with the others).
         let mut applied = 0u64;
-        for &(_, t, u) in &cands {
+        let mut next_cand = 0;
+        later.clear();
+        loop {
+            let from_list = cands.get(next_cand).map(|&(c, i, _)| (order_key(c), i));
+            let from_later = later.peek().map(|&std::cmp::Reverse(e)| e);
+            let ((_, i), other) = match (from_list, from_later) {
+                (Some(a), Some(b)) if b < a => {
+                    later.pop();
+                    (b, true)
+                }
+                (Some(a), _) => {
+                    next_cand += 1;
+                    (a, false)
+                }
+                (None, Some(b)) => {
+                    later.pop();
+                    (b, true)
+                }
+                (None, None) => break,
+            };
+            let slot = &slots[i as usize / 3][i as usize % 3];
+            let [a, b] = slot.ends;
+            let (t, u) = if (slot.dir == 1) != other {
+                (b, a)
+            } else {
+                (a, b)
+            };
             if work.stamp[t as usize] == pass || work.stamp[u as usize] == pass {
                 continue;
             }
-            let Some((col, dev)) = work.recheck(t, u, pass) else {
-                continue;
+            let (col, dev) = match work.verdict(t, u, pass) {
+                Verdict::Legal(col, dev) => (col, dev),
+                Verdict::Lapsed => continue,
+                Verdict::Illegal => {
+                    if !other && slot.other.is_finite() {
+                        later.push(std::cmp::Reverse((order_key(slot.other), i)));
+                    }
+                    continue;
+                }
             };
             let l = work.tris[col.fl as usize].c[prev(col.rot_l as usize)];
             let r = work.third(col.fr, t);
+            for x in [l, r] {
+                if x != NONE && work.shrunk[x as usize] != pass {
+                    work.shrunk[x as usize] = pass;
+                    work.start_valence[x as usize] = work.ring_of[x as usize].len() as u32;
+                }
+            }
             touched.clear();
             touched.extend_from_slice(&work.ring_of[t as usize]);
             touched.extend_from_slice(&work.ring_of[u as usize]);
             let s = work.apply(col, dev);
             for &v in touched.iter().chain(&[t, u, s]) {
                 work.stamp[v as usize] = pass;
-                work.changed[v as usize] = pass;
-            }
-            for v in [l, r, s] {
-                if v != NONE {
-                    work.shrunk[v as usize] = pass;
-                }
             }
             applied += 1;
         }
@@ -1033,22 +1042,13 @@ const PARALLEL_MIN: usize = 4096;
 /// Triangle quadrics computed at a time.
 const QUADRIC_BLOCK: usize = 16384;
 
-/// Evaluates every slot of the live triangles whose stars changed since its last
-/// evaluation, split over the threads by ranges of triangles (each slot's result depends
-/// on the mesh alone, so the split does not change it).
-fn evaluate_stale(
-    work: &Work<'_>,
-    pass: u32,
-    live: &[u32],
-    slots: &mut [[Slot; 3]],
-    threads: usize,
-) {
+/// Ranks every slot of the live triangles, split over the threads by ranges of triangles
+/// (each slot's ranking depends on the mesh alone, so the split does not change it).
+fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut [[Slot; 3]], threads: usize) {
     let run = |live: &[u32], slots: &mut [[Slot; 3]]| {
         for (&f, slot) in live.iter().zip(slots) {
             for (k, slot) in slot.iter_mut().enumerate() {
-                if work.stale(f, k, pass) {
-                    work.evaluate(f, k, slot);
-                }
+                work.rank(f, k, slot);
             }
         }
     };
