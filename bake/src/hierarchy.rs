@@ -126,8 +126,7 @@ struct Wedge {
     q: Quadric,
 }
 
-/// A collapse as a pass ranks it: `(cost, slot, 0)`, the slot numbered by the live
-/// triangles (three per triangle, in order).
+/// A collapse as a pass ranks it: `(cost, t, u)`.
 type Candidate = (f64, u32, u32);
 
 /// The ranking of one edge slot (3 per triangle) in the current pass.
@@ -928,9 +927,11 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
 
     // The live triangles and, for each, the ranking of its three edge slots.
     let mut live: Vec<u32> = (0..nt as u32).collect();
+    let mut live_pos: Vec<u32> = (0..nt as u32).collect();
     let mut slots = vec![[Slot::default(); 3]; nt];
     let (mut cands, mut tmp): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
-    let mut later = std::collections::BinaryHeap::new();
+    let mut later: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize)>> =
+        std::collections::BinaryHeap::new();
     let mut touched = Vec::new();
     let most = np.saturating_sub(1) as u64;
     loop {
@@ -941,6 +942,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         for i in 0..live.len() {
             if work.alive[live[i] as usize] {
                 live[kept] = live[i];
+                live_pos[live[i] as usize] = kept as u32;
                 slots[kept] = slots[i];
                 kept += 1;
             }
@@ -948,13 +950,15 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         live.truncate(kept);
         slots.truncate(kept);
         rank_all(&work, &live, &mut slots, threads);
-        // Each edge's cheaper allowed direction, by cost; equal costs in slot order.
+        // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
+        // slots per live triangle, in order).
         cands.clear();
-        for (i, slot) in slots.iter().enumerate() {
-            for (k, slot) in slot.iter().enumerate() {
-                if slot.dir != 0 {
-                    cands.push((slot.cost, (3 * i + k) as u32, 0));
-                }
+        for slot in slots.iter().flatten() {
+            let [a, b] = slot.ends;
+            match slot.dir {
+                1 => cands.push((slot.cost, b, a)),
+                2 => cands.push((slot.cost, a, b)),
+                _ => {}
             }
         }
         sort_candidates(&mut cands, &mut tmp);
@@ -964,43 +968,62 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         // with both ends free; when it was illegal at the start of the pass, the edge's
         // other direction queues at its own cost (in the same order as if it had been
         // ranked with the others).
+        let stamped = |work: &Work<'_>, t: u32, u: u32| {
+            work.stamp[t as usize] == pass || work.stamp[u as usize] == pass
+        };
+        // The number of the slot standing for the edge of free ends t, u.
+        let slot_of = |work: &Work<'_>, t: u32, u: u32| -> usize {
+            let (fl, jl) = work.dir_face(t, u).unwrap_or((0, 0));
+            let fr = work.tris[fl as usize].o[jl];
+            let (f, k) = if fr == NONE || t < u {
+                (fl, jl)
+            } else {
+                (fr, corner_of(work.tris[fr as usize].c, u))
+            };
+            3 * live_pos[f as usize] as usize + k
+        };
         let mut applied = 0u64;
         let mut next_cand = 0;
         later.clear();
         loop {
-            let from_list = cands.get(next_cand).map(|&(c, i, _)| (order_key(c), i));
-            let from_later = later.peek().map(|&std::cmp::Reverse(e)| e);
-            let ((_, i), other) = match (from_list, from_later) {
-                (Some(a), Some(b)) if b < a => {
-                    later.pop();
-                    (b, true)
-                }
-                (Some(a), _) => {
-                    next_cand += 1;
-                    (a, false)
-                }
-                (None, Some(b)) => {
-                    later.pop();
-                    (b, true)
-                }
+            let later_first = match (cands.get(next_cand), later.peek()) {
                 (None, None) => break,
+                (None, Some(_)) => true,
+                (Some(_), None) => false,
+                (Some(&(c, t, u)), Some(&std::cmp::Reverse((key, i)))) => {
+                    let own = order_key(c);
+                    key < own || (key == own && !stamped(&work, t, u) && i < slot_of(&work, t, u))
+                }
             };
-            let slot = &slots[i as usize / 3][i as usize % 3];
-            let [a, b] = slot.ends;
-            let (t, u) = if (slot.dir == 1) != other {
-                (b, a)
+            let (t, u, from_later) = if later_first {
+                let Some(std::cmp::Reverse((_, i))) = later.pop() else {
+                    break;
+                };
+                let slot = &slots[i / 3][i % 3];
+                let [a, b] = slot.ends;
+                if slot.dir == 1 {
+                    (a, b, true)
+                } else {
+                    (b, a, true)
+                }
             } else {
-                (a, b)
+                let (_, t, u) = cands[next_cand];
+                next_cand += 1;
+                (t, u, false)
             };
-            if work.stamp[t as usize] == pass || work.stamp[u as usize] == pass {
+            if stamped(&work, t, u) {
                 continue;
             }
             let (col, dev) = match work.verdict(t, u, pass) {
                 Verdict::Legal(col, dev) => (col, dev),
                 Verdict::Lapsed => continue,
                 Verdict::Illegal => {
-                    if !other && slot.other.is_finite() {
-                        later.push(std::cmp::Reverse((order_key(slot.other), i)));
+                    if !from_later {
+                        let i = slot_of(&work, t, u);
+                        let other = slots[i / 3][i % 3].other;
+                        if other.is_finite() {
+                            later.push(std::cmp::Reverse((order_key(other), i)));
+                        }
                     }
                     continue;
                 }
