@@ -648,39 +648,88 @@ fn order_key(x: f64) -> u64 {
     bits ^ (((bits as i64 >> 63) as u64) | (1 << 63))
 }
 
-/// Sorts candidates by cost, stably (equal costs keep their order): a least-significant-
-/// digit radix sort on the costs' bits, ordered as [`f64::total_cmp`] orders them.
-fn sort_candidates(cands: &mut Vec<Candidate>, tmp: &mut Vec<Candidate>) {
-    if cands.len() < 256 {
-        cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-        return;
+/// The ranked collapses of a pass, handed out by cost, equal costs in the order they were
+/// ranked. They are bucketed by the top bits of their cost first, and a bucket is sorted
+/// only when reached, after dropping those whose ends are taken by then (which the pass
+/// would skip wherever they stood).
+#[derive(Default)]
+struct Ranked {
+    /// The candidates, bucket after bucket, each in ranking order.
+    by_bucket: Vec<Candidate>,
+    /// Where each bucket starts in `by_bucket`, and the end.
+    bounds: Vec<u32>,
+    /// The next bucket.
+    bucket: usize,
+    /// The current bucket's remaining candidates, sorted.
+    chunk: Vec<Candidate>,
+    /// The next one in `chunk`.
+    pos: usize,
+}
+
+/// Bits of [`order_key`] that pick a bucket: sign, exponent and 4 bits of mantissa.
+const BUCKET_BITS: u32 = 16;
+
+/// Candidates below which a pass sorts them all at once.
+const BUCKET_MIN: usize = 4096;
+
+impl Ranked {
+    fn start(&mut self, cands: &[Candidate]) {
+        self.chunk.clear();
+        self.pos = 0;
+        if cands.len() < BUCKET_MIN {
+            self.chunk.extend_from_slice(cands);
+            self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
+            self.bucket = self.bounds.len().saturating_sub(1);
+            return;
+        }
+        let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
+        self.bounds.clear();
+        self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
+        for c in cands {
+            self.bounds[bucket(c) + 1] += 1;
+        }
+        for i in 0..1 << BUCKET_BITS {
+            self.bounds[i + 1] += self.bounds[i];
+        }
+        self.by_bucket.clear();
+        self.by_bucket.resize(cands.len(), (0.0, 0, 0));
+        let mut fill = self.bounds.clone();
+        for c in cands {
+            let b = bucket(c);
+            self.by_bucket[fill[b] as usize] = *c;
+            fill[b] += 1;
+        }
+        self.bucket = 0;
     }
-    let key = |c: &Candidate| order_key(c.0);
-    const BITS: u32 = 11;
-    const BUCKETS: usize = 1 << BITS;
-    let mut counts = vec![[0u32; BUCKETS]; 64usize.div_ceil(BITS as usize)];
-    for c in cands.iter() {
-        let k = key(c);
-        for (d, count) in counts.iter_mut().enumerate() {
-            count[((k >> (BITS * d as u32)) as usize) & (BUCKETS - 1)] += 1;
+
+    /// The next candidate whose ends were free when its bucket was reached.
+    fn peek(&mut self, stamp: &[u32], pass: u32) -> Option<Candidate> {
+        while self.pos == self.chunk.len() {
+            if self.bucket + 1 >= self.bounds.len() {
+                return None;
+            }
+            let (a, b) = (
+                self.bounds[self.bucket] as usize,
+                self.bounds[self.bucket + 1] as usize,
+            );
+            self.bucket += 1;
+            if a == b {
+                continue;
+            }
+            self.chunk.clear();
+            self.pos = 0;
+            self.chunk.extend(
+                self.by_bucket[a..b]
+                    .iter()
+                    .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
+            );
+            self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
+        Some(self.chunk[self.pos])
     }
-    tmp.clear();
-    tmp.resize(cands.len(), (0.0, 0, 0));
-    for (d, count) in counts.iter_mut().enumerate() {
-        if count.iter().any(|&n| n as usize == cands.len()) {
-            continue;
-        }
-        let mut sum = 0u32;
-        for n in count.iter_mut() {
-            (*n, sum) = (sum, sum + *n);
-        }
-        for c in cands.iter() {
-            let b = ((key(c) >> (BITS * d as u32)) as usize) & (BUCKETS - 1);
-            tmp[count[b] as usize] = *c;
-            count[b] += 1;
-        }
-        std::mem::swap(cands, tmp);
+
+    fn advance(&mut self) {
+        self.pos += 1;
     }
 }
 
@@ -929,7 +978,8 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
     let mut live: Vec<u32> = (0..nt as u32).collect();
     let mut live_pos: Vec<u32> = (0..nt as u32).collect();
     let mut slots = vec![[Slot::default(); 3]; nt];
-    let (mut cands, mut tmp): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
+    let mut cands: Vec<Candidate> = Vec::new();
+    let mut ranked = Ranked::default();
     let mut later: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize)>> =
         std::collections::BinaryHeap::new();
     let mut touched = Vec::new();
@@ -961,7 +1011,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
                 _ => {}
             }
         }
-        sort_candidates(&mut cands, &mut tmp);
+        ranked.start(&cands);
         // The pass applies, in that order, each edge's cheapest legal direction unless an
         // earlier collapse of the pass took a neighbourhood its ends are in (stamped), or
         // it lapsed since the start of the pass. A direction is checked only when reached
@@ -983,14 +1033,14 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             3 * live_pos[f as usize] as usize + k
         };
         let mut applied = 0u64;
-        let mut next_cand = 0;
         later.clear();
         loop {
-            let later_first = match (cands.get(next_cand), later.peek()) {
+            let next_cand = ranked.peek(&work.stamp, pass);
+            let later_first = match (next_cand, later.peek()) {
                 (None, None) => break,
                 (None, Some(_)) => true,
                 (Some(_), None) => false,
-                (Some(&(c, t, u)), Some(&std::cmp::Reverse((key, i)))) => {
+                (Some((c, t, u)), Some(&std::cmp::Reverse((key, i)))) => {
                     let own = order_key(c);
                     key < own || (key == own && !stamped(&work, t, u) && i < slot_of(&work, t, u))
                 }
@@ -1007,8 +1057,10 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
                     (b, a, true)
                 }
             } else {
-                let (_, t, u) = cands[next_cand];
-                next_cand += 1;
+                let Some((_, t, u)) = next_cand else {
+                    break;
+                };
+                ranked.advance();
                 (t, u, false)
             };
             if stamped(&work, t, u) {
