@@ -261,20 +261,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
     let opp: Vec<[u32; 3]> = kept
         .iter()
-        .map(|&(p, _)| {
-            [0, 1, 2].map(|k| {
-                let (a, b) = (p[k], p[(k + 1) % 3]);
-                faces_of
-                    .get(b)
-                    .iter()
-                    .copied()
-                    .find(|&g| {
-                        let q = kept[g as usize].0;
-                        (0..3).any(|j| q[j] == b && q[(j + 1) % 3] == a)
-                    })
-                    .unwrap_or(NONE)
-            })
-        })
+        .map(|&(p, _)| [0, 1, 2].map(|k| faces_of.with_edge(p[(k + 1) % 3], p[k])))
         .collect();
 
     // 4. Split non-manifold vertices: one position per fan.
@@ -314,33 +301,41 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         }
     }
     let mut attr_ids: FxHashMap<[u32; 9], u32> = map_with_capacity(0);
+    // Corners with the same sources (normal or, for a computed one, position; UV; colour)
+    // have the same attributes: look those up once.
+    let mut by_source: FxHashMap<[u64; 2], u32> = map_with_capacity(positions.len());
     let mut attributes: Vec<Attributes> = Vec::new();
     let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
     for &(p, i) in &kept {
         let t = &mesh.triangles[i];
         let mut a = [0u32; 3];
         for k in 0..3 {
-            let normal = match mesh
+            let normal = mesh
                 .normals
                 .get(t.normal[k] as usize)
-                .filter(|_| t.normal[k] != NO_ATTRIBUTE)
-            {
-                Some(n) => *n,
-                None => {
-                    repairs.computed_normals += 1;
-                    normalize(computed[p[k] as usize])
-                }
-            };
-            let uv = mesh.uvs.get(t.uv[k] as usize).copied().unwrap_or([0.0; 2]);
-            let color = mesh
-                .colors
-                .get(t.color[k] as usize)
-                .copied()
-                .unwrap_or([1.0; 4]);
-            let attrs = Attributes { normal, uv, color };
-            a[k] = *attr_ids.entry(attrs.key()).or_insert_with(|| {
-                attributes.push(attrs);
-                attributes.len() as u32 - 1
+                .filter(|_| t.normal[k] != NO_ATTRIBUTE);
+            let uv = mesh.uvs.get(t.uv[k] as usize);
+            let color = mesh.colors.get(t.color[k] as usize);
+            if normal.is_none() {
+                repairs.computed_normals += 1;
+            }
+            let source = [
+                normal.map_or(1 << 32 | p[k] as u64, |_| t.normal[k] as u64),
+                (uv.map_or(NONE, |_| t.uv[k]) as u64) << 32
+                    | color.map_or(NONE, |_| t.color[k]) as u64,
+            ];
+            a[k] = *by_source.entry(source).or_insert_with(|| {
+                let attrs = Attributes {
+                    normal: normal
+                        .copied()
+                        .unwrap_or_else(|| normalize(computed[p[k] as usize])),
+                    uv: uv.copied().unwrap_or([0.0; 2]),
+                    color: color.copied().unwrap_or([1.0; 4]),
+                };
+                *attr_ids.entry(attrs.key()).or_insert_with(|| {
+                    attributes.push(attrs);
+                    attributes.len() as u32 - 1
+                })
             });
         }
         tri_attrs.push(a);
@@ -354,8 +349,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         tri_attrs[f][k]
     };
     let mut group = vec![u32::MAX; nt];
-    // (group, position) -> attribute id.
-    let mut vertex_of: FxHashMap<u64, u32> = map_with_capacity(nt);
+    let mut vertex_of = VertexOf::new(positions.len());
     let mut group_count = 0u32;
     let mut group_size: Vec<u32> = Vec::new();
     let mut queue = Vec::new();
@@ -374,18 +368,14 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
                 continue;
             }
             let p = kept[f].0;
-            let fits = (0..3).all(|k| {
-                vertex_of
-                    .get(&ek(g, p[k]))
-                    .is_none_or(|&a| a == tri_attrs[f][k])
-            });
+            let fits = (0..3).all(|k| vertex_of.get(g, p[k]).is_none_or(|a| a == tri_attrs[f][k]));
             if !fits {
                 continue;
             }
             group[f] = g;
             group_size[g as usize] += 1;
             for k in 0..3 {
-                vertex_of.insert(ek(g, p[k]), tri_attrs[f][k]);
+                vertex_of.insert(g, p[k], tri_attrs[f][k]);
             }
             for k in 0..3 {
                 let (a, b) = (p[k], p[(k + 1) % 3]);
@@ -429,8 +419,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
 
     // 8. Vertices per position and the colouring of groups.
     let mut vertices: Vec<Vec<(u32, u32)>> = vec![Vec::new(); positions.len()];
-    for (&e, &a) in &vertex_of {
-        let (g, p) = ((e >> 32) as u32, e as u32);
+    for (g, p, a) in vertex_of.entries() {
         vertices[p as usize].push((g, a));
     }
     for v in &mut vertices {
@@ -494,10 +483,60 @@ fn edge_faces(directed: &FxHashMap<u64, u32>, a: u32, b: u32) -> usize {
     usize::from(directed.contains_key(&ek(a, b))) + usize::from(directed.contains_key(&ek(b, a)))
 }
 
+/// The attribute id of each surface group's vertex at each position: the first group at a
+/// position in an array, others in a map.
+struct VertexOf {
+    first: Vec<(u32, u32)>,
+    more: FxHashMap<u64, u32>,
+}
+
+impl VertexOf {
+    fn new(positions: usize) -> Self {
+        Self {
+            first: vec![(NONE, NONE); positions],
+            more: map_with_capacity(0),
+        }
+    }
+
+    fn get(&self, group: u32, p: u32) -> Option<u32> {
+        match self.first[p as usize] {
+            (g, a) if g == group => Some(a),
+            (NONE, _) => None,
+            _ => self.more.get(&ek(group, p)).copied(),
+        }
+    }
+
+    fn insert(&mut self, group: u32, p: u32, attr: u32) {
+        let first = &mut self.first[p as usize];
+        if first.0 == NONE || first.0 == group {
+            *first = (group, attr);
+        } else {
+            self.more.insert(ek(group, p), attr);
+        }
+    }
+
+    /// `(group, position, attribute id)` of every vertex.
+    fn entries(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+        let first = self
+            .first
+            .iter()
+            .enumerate()
+            .filter(|(_, &(g, _))| g != NONE)
+            .map(|(p, &(g, a))| (g, p as u32, a));
+        let more = self
+            .more
+            .iter()
+            .map(|(&e, &a)| ((e >> 32) as u32, e as u32, a));
+        first.chain(more)
+    }
+}
+
 /// The triangles around every position, in triangle order, in one array.
 struct FacesOf {
     start: Vec<u32>,
     faces: Vec<u32>,
+    /// For each entry of `faces`, the corner after the position in that triangle.
+    next: Vec<u32>,
 }
 
 impl FacesOf {
@@ -513,13 +552,25 @@ impl FacesOf {
         }
         let mut fill = start.clone();
         let mut faces = vec![0u32; 3 * n];
+        let mut next = vec![0u32; 3 * n];
         for (f, p) in tris.enumerate() {
-            for v in p {
-                faces[fill[v as usize] as usize] = f as u32;
-                fill[v as usize] += 1;
+            for k in 0..3 {
+                let i = &mut fill[p[k] as usize];
+                faces[*i as usize] = f as u32;
+                next[*i as usize] = p[(k + 1) % 3];
+                *i += 1;
             }
         }
-        Self { start, faces }
+        Self { start, faces, next }
+    }
+
+    /// The triangle with the directed edge `a → b`, or `NONE`.
+    fn with_edge(&self, a: u32, b: u32) -> u32 {
+        let range = self.start[a as usize] as usize..self.start[a as usize + 1] as usize;
+        self.next[range.clone()]
+            .iter()
+            .position(|&x| x == b)
+            .map_or(NONE, |i| self.faces[range.start + i])
     }
 
     fn len(&self) -> usize {
