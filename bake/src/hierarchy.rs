@@ -132,27 +132,40 @@ type Candidate = (f64, u32, u32);
 /// The ranking of one edge slot (3 per triangle) in the current pass.
 #[derive(Clone, Copy)]
 struct Slot {
-    /// The cheaper direction's cost.
-    cost: f64,
-    /// The other direction's cost (infinite when not allowed).
-    other: f64,
-    /// The cheaper direction: 0: none; 1: the slot's first corner moves onto its second;
-    /// 2: the reverse.
-    dir: u8,
     /// The edge's ends, first and second corner of the slot, at the start of the pass.
     ends: [u32; 2],
-    /// Quadric costs of the two directions for these ends, NaN where not computed.
+    /// Quadric costs of the two directions for these ends (direction 1 moves the first end
+    /// onto the second, direction 2 the reverse), NaN where not computed.
     costs: [f64; 2],
+    /// The cheaper allowed direction, 0 for none.
+    dir: u8,
+    /// Whether the other direction is allowed too.
+    both: bool,
+}
+
+impl Slot {
+    /// The cheaper allowed direction's cost.
+    fn cost(&self) -> f64 {
+        self.costs[self.dir as usize - 1]
+    }
+
+    /// The other direction's cost, infinite where not allowed.
+    fn other(&self) -> f64 {
+        if self.both {
+            self.costs[2 - self.dir as usize]
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 impl Default for Slot {
     fn default() -> Self {
         Self {
-            cost: 0.0,
-            other: 0.0,
-            dir: 0,
             ends: [NONE; 2],
             costs: [f64::NAN; 2],
+            dir: 0,
+            both: false,
         }
     }
 }
@@ -424,6 +437,7 @@ impl Work<'_> {
         let tri = &self.tris[f as usize];
         let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
         slot.dir = 0;
+        slot.both = false;
         if !(a < b || g == NONE) {
             return;
         }
@@ -448,9 +462,10 @@ impl Work<'_> {
         } else {
             f64::INFINITY
         };
-        (slot.cost, slot.other, slot.dir) = if cy < cx { (cy, cx, 2) } else { (cx, cy, 1) };
-        if !slot.cost.is_finite() {
-            slot.dir = 0;
+        let (cost, other, dir) = if cy < cx { (cy, cx, 2) } else { (cx, cy, 1) };
+        if cost.is_finite() {
+            slot.dir = dir;
+            slot.both = other.is_finite();
         }
     }
 
@@ -976,7 +991,6 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
 
     // The live triangles and, for each, the ranking of its three edge slots.
     let mut live: Vec<u32> = (0..nt as u32).collect();
-    let mut live_pos: Vec<u32> = (0..nt as u32).collect();
     let mut slots = vec![[Slot::default(); 3]; nt];
     let mut cands: Vec<Candidate> = Vec::new();
     let mut ranked = Ranked::default();
@@ -988,27 +1002,19 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         work.h.passes += 1;
         let pass = work.h.passes;
         // Drop the triangles the last pass removed (keeping the order).
-        let mut kept = 0;
-        for i in 0..live.len() {
-            if work.alive[live[i] as usize] {
-                live[kept] = live[i];
-                live_pos[live[i] as usize] = kept as u32;
-                slots[kept] = slots[i];
-                kept += 1;
-            }
-        }
-        live.truncate(kept);
-        slots.truncate(kept);
+        live.retain(|&f| work.alive[f as usize]);
         rank_all(&work, &live, &mut slots, threads);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
-        // slots per live triangle, in order).
+        // slots per triangle, in order).
         cands.clear();
-        for slot in slots.iter().flatten() {
-            let [a, b] = slot.ends;
-            match slot.dir {
-                1 => cands.push((slot.cost, b, a)),
-                2 => cands.push((slot.cost, a, b)),
-                _ => {}
+        for &f in &live {
+            for slot in &slots[f as usize] {
+                let [a, b] = slot.ends;
+                match slot.dir {
+                    1 => cands.push((slot.cost(), b, a)),
+                    2 => cands.push((slot.cost(), a, b)),
+                    _ => {}
+                }
             }
         }
         ranked.start(&cands);
@@ -1030,7 +1036,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             } else {
                 (fr, corner_of(work.tris[fr as usize].c, u))
             };
-            3 * live_pos[f as usize] as usize + k
+            3 * f as usize + k
         };
         let mut applied = 0u64;
         later.clear();
@@ -1072,7 +1078,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
                 Verdict::Illegal => {
                     if !from_later {
                         let i = slot_of(&work, t, u);
-                        let other = slots[i / 3][i % 3].other;
+                        let other = slots[i / 3][i % 3].other();
                         if other.is_finite() {
                             later.push(std::cmp::Reverse((order_key(other), i)));
                         }
@@ -1120,22 +1126,33 @@ const QUADRIC_BLOCK: usize = 16384;
 /// Ranks every slot of the live triangles, split over the threads by ranges of triangles
 /// (each slot's ranking depends on the mesh alone, so the split does not change it).
 fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut [[Slot; 3]], threads: usize) {
-    let run = |live: &[u32], slots: &mut [[Slot; 3]]| {
-        for (&f, slot) in live.iter().zip(slots) {
-            for (k, slot) in slot.iter_mut().enumerate() {
+    // `slots` from triangle `first` on.
+    let run = |live: &[u32], first: usize, slots: &mut [[Slot; 3]]| {
+        for &f in live {
+            for (k, slot) in slots[f as usize - first].iter_mut().enumerate() {
                 work.rank(f, k, slot);
             }
         }
     };
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        run(live, slots);
+        run(live, 0, slots);
         return;
     }
     let per = live.len().div_ceil(threads);
     std::thread::scope(|scope| {
-        for (live, slots) in live.chunks(per).zip(slots.chunks_mut(per)) {
+        let mut rest = slots;
+        let mut first = 0;
+        for (i, part) in live.chunks(per).enumerate() {
+            // This thread's triangles run up to the next part's first.
+            let end = live
+                .get((i + 1) * per)
+                .map_or(first + rest.len(), |&f| f as usize);
+            let (mine, others) = rest.split_at_mut(end - first);
+            rest = others;
             let run = &run;
-            scope.spawn(move || run(live, slots));
+            let start = first;
+            scope.spawn(move || run(part, start, mine));
+            first = end;
         }
     });
 }
