@@ -135,12 +135,10 @@ struct Slot {
     /// The edge's ends, first and second corner of the slot, at the start of the pass.
     ends: [u32; 2],
     /// Quadric costs of the two directions for these ends (direction 1 moves the first end
-    /// onto the second, direction 2 the reverse), NaN where not computed.
+    /// onto the second, direction 2 the reverse), infinite where not allowed.
     costs: [f64; 2],
-    /// The cheaper allowed direction, 0 for none.
+    /// The cheaper allowed direction (the first on a tie), 0 for none.
     dir: u8,
-    /// Whether the other direction is allowed too.
-    both: bool,
 }
 
 impl Slot {
@@ -151,11 +149,7 @@ impl Slot {
 
     /// The other direction's cost, infinite where not allowed.
     fn other(&self) -> f64 {
-        if self.both {
-            self.costs[2 - self.dir as usize]
-        } else {
-            f64::INFINITY
-        }
+        self.costs[2 - self.dir as usize]
     }
 }
 
@@ -165,7 +159,6 @@ impl Default for Slot {
             ends: [NONE; 2],
             costs: [f64::NAN; 2],
             dir: 0,
-            both: false,
         }
     }
 }
@@ -431,41 +424,39 @@ impl Work<'_> {
 
     /// Ranks the edge in slot `k` of triangle `f` if the slot stands for its edge (the
     /// lower-numbered end first, or a border edge): the quadric costs of the directions
-    /// the surface-group rules allow, the cheaper first (the first on a tie). Costs are
-    /// kept while the edge's ends are the same nodes (a node's quadric never changes).
+    /// the surface-group rules allow, the cheaper first (the first on a tie).
+    ///
+    /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
+    /// and positions (a node's never change), the groups of the triangles on the edge, and
+    /// which those are (they change only by a collapse that also changes an end).
     fn rank(&self, f: u32, k: usize, slot: &mut Slot) {
         let tri = &self.tris[f as usize];
         let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
-        slot.dir = 0;
-        slot.both = false;
+        if slot.ends == [a, b] {
+            return;
+        }
+        *slot = Slot {
+            ends: [a, b],
+            ..Slot::default()
+        };
         if !(a < b || g == NONE) {
             return;
         }
-        if slot.ends != [a, b] {
-            slot.ends = [a, b];
-            slot.costs = [f64::NAN; 2];
-        }
         // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
-        let mut cost = |i: usize, t: u32, u: u32| {
-            if slot.costs[i].is_nan() {
-                slot.costs[i] = self.cost(t, u);
-            }
-            slot.costs[i]
-        };
         let cx = if g != NONE && self.groups_ok(b, a, g, f) {
-            cost(0, b, a)
+            self.cost(b, a)
         } else {
             f64::INFINITY
         };
         let cy = if self.groups_ok(a, b, f, g) {
-            cost(1, a, b)
+            self.cost(a, b)
         } else {
             f64::INFINITY
         };
-        let (cost, other, dir) = if cy < cx { (cy, cx, 2) } else { (cx, cy, 1) };
+        slot.costs = [cx, cy];
+        let (cost, dir) = if cy < cx { (cy, 2) } else { (cx, 1) };
         if cost.is_finite() {
             slot.dir = dir;
-            slot.both = other.is_finite();
         }
     }
 
