@@ -198,7 +198,7 @@ struct PosInfo {
     group: u32,
 }
 
-/// The mesh being simplified, with per node its star and ring.
+/// The mesh being simplified, with per node its triangles.
 struct Work<'w> {
     w: &'w Welded,
     /// Point of every position.
@@ -210,10 +210,8 @@ struct Work<'w> {
     pos: Vec<V3>,
     /// Triangles around every node.
     faces_of: Vec<Vec<u32>>,
-    /// Distinct neighbours of every live node.
-    ring_of: Vec<Vec<u32>>,
-    /// Whether a live node is on a border.
-    border: Vec<bool>,
+    /// Number of distinct neighbours of every live node.
+    valence: Vec<u32>,
     node_pos: Vec<u32>,
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
     wedges: Vec<Wedge>,
@@ -295,11 +293,10 @@ impl Work<'_> {
     /// The link condition on the edge `a`–`b` (the ends share exactly the neighbours that
     /// are the third corners of the triangles on the edge, `r` being the second's or
     /// `NONE` on a border), and no interior edge between two border nodes.
-    fn link_ok(&self, a: u32, b: u32, r: u32) -> bool {
-        if r != NONE && self.border[a as usize] && self.border[b as usize] {
+    fn link_ok(ra: &[u32], border_a: bool, rb: &[u32], border_b: bool, r: u32) -> bool {
+        if r != NONE && border_a && border_b {
             return false;
         }
-        let (ra, rb) = (&self.ring_of[a as usize], &self.ring_of[b as usize]);
         let shared = if rb.len() <= 8 {
             // No node is NONE, so the padding matches nothing.
             let mut pad = [NONE; 8];
@@ -319,7 +316,7 @@ impl Work<'_> {
         if self.shrunk[x as usize] == pass {
             self.start_valence[x as usize] as usize
         } else {
-            self.ring_of[x as usize].len()
+            self.valence[x as usize] as usize
         }
     }
 
@@ -461,11 +458,11 @@ impl Work<'_> {
     }
 
     /// The checks of the collapse of `u` into `t` (which the surface-group rules allow, at
-    /// a finite cost) as they stood at the start of pass `pass`, and as they stand now.
-    /// Neither end was touched since (callers skip stamped ends), so their stars, rings
-    /// and borders are as they were; only a third corner of the edge may have lost a
-    /// neighbour since.
-    fn verdict(&self, t: u32, u: u32, pass: u32) -> Verdict {
+    /// a finite cost) as they stood at the start of pass `pass`, and as they stand now;
+    /// the rings of `t` and `u` go to `rings`. Neither end was touched since (callers skip
+    /// stamped ends), so their stars, rings and borders are as they were; only a third
+    /// corner of the edge may have lost a neighbour since.
+    fn verdict(&self, t: u32, u: u32, pass: u32, rings: &mut [Vec<u32>; 2]) -> Verdict {
         let Some((fl, jl)) = self.dir_face(t, u) else {
             return Verdict::Illegal;
         };
@@ -476,8 +473,13 @@ impl Work<'_> {
         if !opposite
             .iter()
             .all(|&x| x == NONE || self.valence_at_start(x, pass) > 3)
-            || !self.link_ok(t, u, r)
         {
+            return Verdict::Illegal;
+        }
+        let [ring_t, ring_u] = rings;
+        let border_t = self.find_ring(t, ring_t);
+        let border_u = self.find_ring(u, ring_u);
+        if !Self::link_ok(ring_t, border_t, ring_u, border_u, r) {
             return Verdict::Illegal;
         }
         let Some((c, dev)) = self.moves(t, u, fl, jl, fr) else {
@@ -485,7 +487,7 @@ impl Work<'_> {
         };
         if opposite
             .iter()
-            .all(|&x| x == NONE || self.ring_of[x as usize].len() > 3)
+            .all(|&x| x == NONE || self.valence[x as usize] > 3)
         {
             Verdict::Legal(c, dev)
         } else {
@@ -551,7 +553,6 @@ impl Work<'_> {
         }
         let mut star = std::mem::take(&mut self.faces_of[t as usize]);
         star.append(&mut std::mem::take(&mut self.faces_of[u as usize]));
-        let mut border = false;
         for &f in &star {
             let mut tri = self.tris[f as usize];
             for x in tri.c.iter_mut() {
@@ -561,53 +562,34 @@ impl Work<'_> {
             }
             tri.n = self.triangle_normal(tri.c);
             tri.len = len(tri.n);
-            let j = corner_of(tri.c, s);
-            border |= tri.o[j] == NONE || tri.o[prev(j)] == NONE;
             self.tris[f as usize] = tri;
         }
         self.faces_of.push(star);
         self.stamp.push(0);
         self.shrunk.push(0);
         self.start_valence.push(0);
-        // Rings: the new node's is the union of its children's; its neighbours see it
-        // instead of t or u (l and r, which saw both, once). No neighbour's border changes.
-        let ring_u = std::mem::take(&mut self.ring_of[u as usize]);
-        let mut ring = std::mem::take(&mut self.ring_of[t as usize]);
-        ring.retain(|&x| x != u);
-        let shared = ring.len();
-        for &x in &ring_u {
-            if x != t && !ring[..shared].contains(&x) {
-                ring.push(x);
+        // The ends' rings share just l and r (the link condition): the new node has the
+        // other neighbours of both, and l and r lose one.
+        let (l, r) = (
+            self.tris[c.fl as usize].c[prev(c.rot_l as usize)],
+            self.third(c.fr, t),
+        );
+        let shared = 1 + u32::from(r != NONE);
+        self.valence
+            .push(self.valence[t as usize] + self.valence[u as usize] - 2 - shared);
+        for x in [l, r] {
+            if x != NONE {
+                self.valence[x as usize] -= 1;
             }
         }
-        for &x in &ring {
-            let rx = &mut self.ring_of[x as usize];
-            let mut seen = false;
-            let mut i = 0;
-            while i < rx.len() {
-                if rx[i] == t || rx[i] == u {
-                    if seen {
-                        rx.swap_remove(i);
-                        continue;
-                    }
-                    rx[i] = s;
-                    seen = true;
-                }
-                i += 1;
-            }
-        }
-        self.ring_of.push(ring);
-        self.border.push(border);
         #[cfg(debug_assertions)]
         {
-            let mut found = Vec::new();
-            for x in std::iter::once(s).chain(self.ring_of[s as usize].clone()) {
-                let b = self.find_ring(x, &mut found);
-                let mut kept = self.ring_of[x as usize].clone();
-                kept.sort_unstable();
-                found.sort_unstable();
-                debug_assert_eq!(kept, found, "ring of {x}");
-                debug_assert_eq!(self.border[x as usize], b, "border of {x}");
+            let mut ring = Vec::new();
+            self.find_ring(s, &mut ring);
+            let mut around = Vec::new();
+            for x in std::iter::once(s).chain(ring.iter().copied()) {
+                self.find_ring(x, &mut around);
+                debug_assert_eq!(self.valence[x as usize] as usize, around.len(), "{x}");
             }
         }
         self.h.collapses.push(c);
@@ -825,77 +807,79 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         }));
         wedge_start.push(wedges.len() as u32);
     }
-    let wedge_of = |wedges: &mut [Wedge], x: u32, group: u32| -> Option<usize> {
-        (wedge_start[x as usize] as usize..wedge_start[x as usize + 1] as usize)
-            .find(|&i| wedges[i].group == group)
+    // Positions split into ranges, one per thread, for adding to their wedges in order.
+    let per = if threads <= 1 || np < PARALLEL_MIN {
+        np.max(1)
+    } else {
+        np.div_ceil(threads)
     };
-    let mut faces_of: Vec<Vec<u32>> = w.vertices.iter().map(|_| Vec::with_capacity(8)).collect();
+    let ranges: Vec<(usize, usize)> = (0..np)
+        .step_by(per)
+        .map(|lo| (lo, (lo + per).min(np)))
+        .collect();
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); np];
     // Triangle quadrics, computed in blocks on all threads and added in triangle order.
-    let mut block = vec![Quadric::default(); nt.min(QUADRIC_BLOCK)];
     for first in (0..nt).step_by(QUADRIC_BLOCK) {
         let n = (nt - first).min(QUADRIC_BLOCK);
-        let fill = |from: usize, out: &mut [Quadric]| {
-            for (i, q) in out.iter_mut().enumerate() {
-                let t = &w.triangles[from + i];
-                let s = t.a.map(|a| scaled_attributes(w, a, weights, diagonal));
-                *q = Quadric::triangle(t.p.map(|x| p[x as usize]), s);
-            }
-        };
-        if threads <= 1 || n < PARALLEL_MIN {
-            fill(first, &mut block[..n]);
-        } else {
-            let per = n.div_ceil(threads);
-            std::thread::scope(|scope| {
-                for (i, part) in block[..n].chunks_mut(per).enumerate() {
-                    let fill = &fill;
-                    scope.spawn(move || fill(first + i * per, part));
+        let block = par_map(n, threads, |i| {
+            let t = &w.triangles[first + i];
+            let s = t.a.map(|a| scaled_attributes(w, a, weights, diagonal));
+            Quadric::triangle(t.p.map(|x| p[x as usize]), s)
+        });
+        by_positions(
+            &ranges,
+            &mut faces_of,
+            &mut wedges,
+            &wedge_start,
+            |lo, hi, faces_of, wedges| {
+                for (i, q) in block.iter().enumerate() {
+                    let t = &w.triangles[first + i];
+                    for &x in &t.p {
+                        let x = x as usize;
+                        if (lo..hi).contains(&x) {
+                            faces_of[x - lo].push((first + i) as u32);
+                            add_to_wedge(wedges, &wedge_start, lo, x, t.group, q);
+                        }
+                    }
                 }
-            });
-        }
-        for (i, q) in block[..n].iter().enumerate() {
-            let f = first + i;
-            let t = &w.triangles[f];
-            for &x in &t.p {
-                faces_of[x as usize].push(f as u32);
-                if let Some(i) = wedge_of(&mut wedges, x, t.group) {
-                    wedges[i].q.add(q);
-                }
-            }
-        }
+            },
+        );
     }
-    drop(block);
     // The triangle across each edge: the one with the reverse edge.
-    let mut tris: Vec<Tri> = w
+    let opp = par_map(nt, threads, |f| {
+        let c = w.triangles[f].p;
+        [0, 1, 2].map(|k| {
+            let (a, b) = (c[k], c[next(k)]);
+            faces_of[b as usize]
+                .iter()
+                .copied()
+                .find(|&g| {
+                    let d = w.triangles[g as usize].p;
+                    d[next(corner_of(d, b))] == a
+                })
+                .unwrap_or(NONE)
+        })
+    });
+    let tris: Vec<Tri> = w
         .triangles
         .iter()
-        .map(|t| {
+        .zip(&opp)
+        .map(|(t, &o)| {
             let [a, b, d] = t.p.map(|x| p[x as usize]);
             let n = cross(sub(b, a), sub(d, a));
             Tri {
                 c: t.p,
-                o: [NONE; 3],
+                o,
                 group: t.group,
                 n,
                 len: len(n),
             }
         })
         .collect();
-    for f in 0..nt {
-        let c = tris[f].c;
-        tris[f].o = [0, 1, 2].map(|k| {
-            let (a, b) = (c[k], c[next(k)]);
-            faces_of[b as usize]
-                .iter()
-                .copied()
-                .find(|&g| {
-                    let d = tris[g as usize].c;
-                    d[next(corner_of(d, b))] == a
-                })
-                .unwrap_or(NONE)
-        });
-    }
+    drop(opp);
     // Boundary planes: through each border or group-boundary edge, perpendicular to its
     // triangle, weighted by the edge's squared length.
+    let mut planes = Vec::new();
     for (f, t) in w.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (t.p[k], t.p[next(k)]);
@@ -906,14 +890,26 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             let (pa, pb, pc) = (p[a as usize], p[b as usize], p[t.p[prev(k)] as usize]);
             let e = sub(pb, pa);
             let n = norm(cross(e, cross(sub(pc, pa), e)));
-            let q = Quadric::plane(n, -dot(n, pa), dot(e, e));
-            for x in [a, b] {
-                if let Some(i) = wedge_of(&mut wedges, x, t.group) {
-                    wedges[i].q.add(&q);
-                }
-            }
+            planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), dot(e, e))));
         }
     }
+    by_positions(
+        &ranges,
+        &mut faces_of,
+        &mut wedges,
+        &wedge_start,
+        |lo, hi, _, wedges| {
+            for (ends, group, q) in &planes {
+                for &x in ends {
+                    let x = x as usize;
+                    if (lo..hi).contains(&x) {
+                        add_to_wedge(wedges, &wedge_start, lo, x, *group, q);
+                    }
+                }
+            }
+        },
+    );
+    drop(planes);
     let info = w
         .classes
         .iter()
@@ -935,15 +931,12 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         alive: vec![true; nt],
         pos,
         faces_of,
-        ring_of: Vec::with_capacity(2 * np),
-        border: Vec::with_capacity(2 * np),
+        valence: Vec::new(),
         node_pos: (0..np as u32).collect(),
         wedges,
         wedge_start,
         h: Hierarchy {
             parent: vec![NONE; np],
-            radius: vec![0.0; np],
-            cone: Vec::with_capacity(2 * np),
             error: vec![0.0; np],
             ..Hierarchy::default()
         },
@@ -951,11 +944,11 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         shrunk: vec![0; np],
         start_valence: vec![0; np],
     };
-    for v in 0..np as u32 {
-        let mut ring = Vec::with_capacity(8);
-        let border = work.find_ring(v, &mut ring);
-        work.ring_of.push(ring);
-        work.border.push(border);
+    // Rings, borders, normal cones and bounding radii of the leaves.
+    let leaves = par_map(np, threads, |v| {
+        let v = v as u32;
+        let mut ring = Vec::new();
+        work.find_ring(v, &mut ring);
         let normals = work.faces_of[v as usize]
             .iter()
             .map(|&f| norm(work.tris[f as usize].n));
@@ -972,12 +965,20 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         } else {
             (axis.map(|x| x as f32), angle as f32)
         };
-        work.h.cone.push(cone);
         let pv = work.pos[v as usize];
-        work.h.radius[v as usize] = work.ring_of[v as usize]
+        let radius = ring
             .iter()
             .map(|&o| len(sub(work.pos[o as usize], pv)))
             .fold(0.0, f64::max) as f32;
+        (ring.len() as u32, cone, radius)
+    });
+    work.valence.reserve(2 * np);
+    work.h.cone.reserve(2 * np);
+    work.h.radius.reserve(2 * np);
+    for (valence, cone, radius) in leaves {
+        work.valence.push(valence);
+        work.h.cone.push(cone);
+        work.h.radius.push(radius);
     }
 
     // The live triangles and, for each, the ranking of its three edge slots.
@@ -987,7 +988,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
     let mut ranked = Ranked::default();
     let mut later: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize)>> =
         std::collections::BinaryHeap::new();
-    let mut touched = Vec::new();
+    let mut rings = [Vec::new(), Vec::new()];
     let most = np.saturating_sub(1) as u64;
     loop {
         work.h.passes += 1;
@@ -1063,7 +1064,7 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             if stamped(&work, t, u) {
                 continue;
             }
-            let (col, dev) = match work.verdict(t, u, pass) {
+            let (col, dev) = match work.verdict(t, u, pass, &mut rings) {
                 Verdict::Legal(col, dev) => (col, dev),
                 Verdict::Lapsed => continue,
                 Verdict::Illegal => {
@@ -1082,14 +1083,11 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             for x in [l, r] {
                 if x != NONE && work.shrunk[x as usize] != pass {
                     work.shrunk[x as usize] = pass;
-                    work.start_valence[x as usize] = work.ring_of[x as usize].len() as u32;
+                    work.start_valence[x as usize] = work.valence[x as usize];
                 }
             }
-            touched.clear();
-            touched.extend_from_slice(&work.ring_of[t as usize]);
-            touched.extend_from_slice(&work.ring_of[u as usize]);
             let s = work.apply(col, dev);
-            for &v in touched.iter().chain(&[t, u, s]) {
+            for &v in rings.iter().flatten().chain(&[t, u, s]) {
                 work.stamp[v as usize] = pass;
             }
             applied += 1;
@@ -1105,13 +1103,77 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
     work.h
 }
 
+/// `f(i)` for `i` in `0..n`, in order, computed on up to `threads` threads.
+fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    if threads <= 1 || n < PARALLEL_MIN {
+        return (0..n).map(f).collect();
+    }
+    let per = n.div_ceil(threads);
+    std::thread::scope(|scope| {
+        let parts: Vec<_> = (0..n)
+            .step_by(per)
+            .map(|lo| {
+                let f = &f;
+                scope.spawn(move || (lo..(lo + per).min(n)).map(f).collect::<Vec<T>>())
+            })
+            .collect();
+        parts
+            .into_iter()
+            .flat_map(|part| part.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, on a thread
+/// each, with the triangle lists and the wedges of those positions.
+fn by_positions(
+    ranges: &[(usize, usize)],
+    faces_of: &mut [Vec<u32>],
+    wedges: &mut [Wedge],
+    wedge_start: &[u32],
+    f: impl Fn(usize, usize, &mut [Vec<u32>], &mut [Wedge]) + Sync,
+) {
+    if ranges.len() <= 1 {
+        f(0, faces_of.len(), faces_of, wedges);
+        return;
+    }
+    std::thread::scope(|scope| {
+        let (mut faces_of, mut wedges) = (faces_of, wedges);
+        for &(lo, hi) in ranges {
+            let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
+            let count = (wedge_start[hi] - wedge_start[lo]) as usize;
+            let (these_wedges, other_wedges) = wedges.split_at_mut(count);
+            (faces_of, wedges) = (other_faces, other_wedges);
+            let f = &f;
+            scope.spawn(move || f(lo, hi, these_faces, these_wedges));
+        }
+    });
+}
+
+/// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from
+/// `lo` on.
+fn add_to_wedge(
+    wedges: &mut [Wedge],
+    wedge_start: &[u32],
+    lo: usize,
+    x: usize,
+    group: u32,
+    q: &Quadric,
+) {
+    let base = wedge_start[lo] as usize;
+    let range = wedge_start[x] as usize - base..wedge_start[x + 1] as usize - base;
+    if let Some(wd) = wedges[range].iter_mut().find(|wd| wd.group == group) {
+        wd.q.add(q);
+    }
+}
+
 /// Threads evaluating edges.
 const MAX_THREADS: usize = 8;
 
 /// Triangles below which work stays on one thread.
 const PARALLEL_MIN: usize = 4096;
 
-/// Triangle quadrics computed at a time.
+/// Triangle quadrics computed at a time (a block's take about 5 MB).
 const QUADRIC_BLOCK: usize = 16384;
 
 /// Ranks every slot of the live triangles, split over the threads by ranges of triangles
