@@ -190,6 +190,15 @@ struct Tri {
     len: f64,
 }
 
+/// What the hierarchy records of a node.
+#[derive(Clone, Copy)]
+struct NodeOut {
+    parent: u32,
+    error: f32,
+    radius: f32,
+    cone: ([f32; 3], f32),
+}
+
 /// What the surface-group rules read of a position.
 #[derive(Clone, Copy)]
 struct PosInfo {
@@ -217,6 +226,8 @@ struct Work<'w> {
     wedges: Vec<Wedge>,
     wedge_start: Vec<u32>,
     h: Hierarchy,
+    /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
+    nodes: Vec<NodeOut>,
     /// Pass in which a node's neighbourhood was last taken by a collapse.
     stamp: Vec<u32>,
     /// Pass in which a node last lost a neighbour (or was created).
@@ -501,20 +512,17 @@ impl Work<'_> {
         let (t, u) = (c.t, c.u);
         let (pt, pu) = (self.node_pos[t as usize], self.node_pos[u as usize]);
         self.node_pos.push(pt);
-        self.h.parent.push(NONE);
-        self.h.parent[t as usize] = s;
-        self.h.parent[u as usize] = s;
+        self.nodes[t as usize].parent = s;
+        self.nodes[u as usize].parent = s;
+        let (nt, nu) = (self.nodes[t as usize], self.nodes[u as usize]);
         let (p_t, p_u) = (self.pos[t as usize], self.pos[u as usize]);
         self.pos.push(p_t);
-        let e = (self.h.error[t as usize] as f64).max(self.h.error[u as usize] as f64 + dev);
-        self.h.error.push(e as f32);
-        let r = (self.h.radius[t as usize] as f64)
-            .max(len(sub(p_u, p_t)) + self.h.radius[u as usize] as f64);
-        self.h.radius.push(r as f32);
-        self.h.cone.push(merge_cones(
-            self.h.cone[t as usize],
-            self.h.cone[u as usize],
-        ));
+        self.nodes.push(NodeOut {
+            parent: NONE,
+            error: (nt.error as f64).max(nu.error as f64 + dev) as f32,
+            radius: (nt.radius as f64).max(len(sub(p_u, p_t)) + nu.radius as f64) as f32,
+            cone: merge_cones(nt.cone, nu.cone),
+        });
         // The removed position's wedges merge into the kept position's.
         let (st, et) = (
             self.wedge_start[pt as usize] as usize,
@@ -935,11 +943,8 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         node_pos: (0..np as u32).collect(),
         wedges,
         wedge_start,
-        h: Hierarchy {
-            parent: vec![NONE; np],
-            error: vec![0.0; np],
-            ..Hierarchy::default()
-        },
+        h: Hierarchy::default(),
+        nodes: Vec::new(),
         stamp: vec![0; np],
         shrunk: vec![0; np],
         start_valence: vec![0; np],
@@ -973,12 +978,15 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         (ring.len() as u32, cone, radius)
     });
     work.valence.reserve(2 * np);
-    work.h.cone.reserve(2 * np);
-    work.h.radius.reserve(2 * np);
+    work.nodes.reserve(2 * np);
     for (valence, cone, radius) in leaves {
         work.valence.push(valence);
-        work.h.cone.push(cone);
-        work.h.radius.push(radius);
+        work.nodes.push(NodeOut {
+            parent: NONE,
+            error: 0.0,
+            radius,
+            cone,
+        });
     }
 
     // The live triangles and, for each, the ranking of its three edge slots.
@@ -1097,6 +1105,10 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             break;
         }
     }
+    work.h.parent = work.nodes.iter().map(|n| n.parent).collect();
+    work.h.error = work.nodes.iter().map(|n| n.error).collect();
+    work.h.radius = work.nodes.iter().map(|n| n.radius).collect();
+    work.h.cone = work.nodes.iter().map(|n| n.cone).collect();
     work.h.node_position = work.node_pos;
     work.h.corners = work.tris.iter().map(|t| t.c).collect();
     work.h.alive = work.alive;
