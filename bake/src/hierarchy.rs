@@ -17,6 +17,13 @@
 //! - **Bounds for refinement**: the bounding-sphere radius and normal cone of everything
 //!   below a node, and an error bound that grows with the removed positions' distances from
 //!   the surface that replaces them.
+//!
+//! A pass is built for speed without changing its outcome: every edge is ranked by the cost
+//! of its cheaper allowed direction (a ranking stands while the edge's ends are the same
+//! nodes, and ranking runs on all threads), and the legality checks run only for the
+//! collapses the pass reaches with both ends free, as they stood at the start of the pass.
+//! The result is the same as checking every edge first and sorting the legal collapses
+//! stably by cost.
 
 use caveclod_core::PositionClass;
 
@@ -157,7 +164,7 @@ impl Default for Slot {
     fn default() -> Self {
         Self {
             ends: [NONE; 2],
-            costs: [f64::NAN; 2],
+            costs: [f64::INFINITY; 2],
             dir: 0,
         }
     }
@@ -230,7 +237,7 @@ struct Work<'w> {
     nodes: Vec<NodeOut>,
     /// Pass in which a node's neighbourhood was last taken by a collapse.
     stamp: Vec<u32>,
-    /// Pass in which a node last lost a neighbour (or was created).
+    /// Pass in which a node last lost a neighbour.
     shrunk: Vec<u32>,
     /// A node's number of neighbours at the start of the pass it last lost one in.
     start_valence: Vec<u32>,
@@ -1003,20 +1010,9 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         let pass = work.h.passes;
         // Drop the triangles the last pass removed (keeping the order).
         live.retain(|&f| work.alive[f as usize]);
-        rank_all(&work, &live, &mut slots, threads);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
         // slots per triangle, in order).
-        cands.clear();
-        for &f in &live {
-            for slot in &slots[f as usize] {
-                let [a, b] = slot.ends;
-                match slot.dir {
-                    1 => cands.push((slot.cost(), b, a)),
-                    2 => cands.push((slot.cost(), a, b)),
-                    _ => {}
-                }
-            }
-        }
+        rank_all(&work, &live, &mut slots, &mut cands, threads);
         ranked.start(&cands);
         // The pass applies, in that order, each edge's cheapest legal direction unless an
         // earlier collapse of the pass took a neighbourhood its ends are in (stamped), or
@@ -1189,24 +1185,39 @@ const PARALLEL_MIN: usize = 4096;
 const QUADRIC_BLOCK: usize = 16384;
 
 /// Ranks every slot of the live triangles, split over the threads by ranges of triangles
-/// (each slot's ranking depends on the mesh alone, so the split does not change it).
-fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut [[Slot; 3]], threads: usize) {
+/// (each slot's ranking depends on the mesh alone, so the split does not change it), and
+/// lists each edge's cheaper allowed direction in `cands`, in slot order.
+fn rank_all(
+    work: &Work<'_>,
+    live: &[u32],
+    slots: &mut [[Slot; 3]],
+    cands: &mut Vec<Candidate>,
+    threads: usize,
+) {
     // `slots` from triangle `first` on.
-    let run = |live: &[u32], first: usize, slots: &mut [[Slot; 3]]| {
+    let run = |live: &[u32], first: usize, slots: &mut [[Slot; 3]], cands: &mut Vec<Candidate>| {
         for &f in live {
             for (k, slot) in slots[f as usize - first].iter_mut().enumerate() {
                 work.rank(f, k, slot);
+                let [a, b] = slot.ends;
+                match slot.dir {
+                    1 => cands.push((slot.cost(), b, a)),
+                    2 => cands.push((slot.cost(), a, b)),
+                    _ => {}
+                }
             }
         }
     };
+    cands.clear();
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        run(live, 0, slots);
+        run(live, 0, slots, cands);
         return;
     }
     let per = live.len().div_ceil(threads);
-    std::thread::scope(|scope| {
+    let parts: Vec<Vec<Candidate>> = std::thread::scope(|scope| {
         let mut rest = slots;
         let mut first = 0;
+        let mut handles = Vec::new();
         for (i, part) in live.chunks(per).enumerate() {
             // This thread's triangles run up to the next part's first.
             let end = live
@@ -1216,8 +1227,19 @@ fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut [[Slot; 3]], threads: usi
             rest = others;
             let run = &run;
             let start = first;
-            scope.spawn(move || run(part, start, mine));
+            handles.push(scope.spawn(move || {
+                let mut found = Vec::with_capacity(part.len() * 3 / 2);
+                run(part, start, mine, &mut found);
+                found
+            }));
             first = end;
         }
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
     });
+    for part in parts {
+        cands.extend_from_slice(&part);
+    }
 }
