@@ -1,5 +1,5 @@
 //! Criterion benchmarks of the runtime on a terrain of about a million polygons
-//! (`terrain(708, 708)`: 1,002,528 triangles), built once per run outside the timed code.
+//! (`terrain(708, 708)`: 1,002,528 triangles), baked once per run outside the timed code.
 //!
 //! - `ops/split_collapse`: a precomputed legal sequence of every split of the hierarchy,
 //!   then the collapses in reverse order (throughput: operations).
@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, Hierarchy, NodeId, RefineParams, RefineStats, View};
-use caveclod_tests::{build, meshes};
+use caveclod_tests::{bake, meshes};
 use criterion::{Criterion, Throughput};
 
 const SEED: u64 = 7;
@@ -324,12 +324,12 @@ fn main() {
         n: size,
         heights: mesh.positions.iter().map(|p| p[1]).collect(),
     };
-    let built = build(&mesh);
+    let baked = bake(&mesh);
     let polygons = mesh.triangles.len();
     drop(mesh);
-    let h = built.hierarchy();
+    let h = baked.hierarchy();
     eprintln!(
-        "terrain {size} x {size}: {polygons} polygons, {} nodes, {} splits; built in {:.2} s",
+        "terrain {size} x {size}: {polygons} polygons, {} nodes, {} splits; baked in {:.2} s",
         h.node_count(),
         h.splits().len(),
         t.elapsed().as_secs_f64()

@@ -31,7 +31,7 @@ use caveclod_core::glam::Vec3;
 use caveclod_core::{
     CameraConfig, CameraState, Hierarchy, MemoryReport, RefineParams, RefineStats, View,
 };
-use caveclod_tests::{build, meshes};
+use caveclod_tests::{bake, meshes};
 
 const WIDTH: f32 = 1280.0;
 const HEIGHT: f32 = 720.0;
@@ -645,16 +645,16 @@ fn run() -> Result<(), String> {
     let mesh_time = t.elapsed();
     let ground = Ground::new(&mesh, args.size);
     let t = Instant::now();
-    let built = build(&mesh);
+    let baked = bake(&mesh);
     let build_time = t.elapsed();
     let polygons = mesh.triangles.len();
     drop(mesh);
     let t = Instant::now();
-    let h = built.hierarchy();
+    let h = baked.hierarchy();
     let validate_time = t.elapsed();
     let m = *h.meta();
     say(format!(
-        "terrain {0} x {0} (seed {1}): {2} polygons, generated in {3:.2} s, hierarchy built in \
+        "terrain {0} x {0} (seed {1}): {2} polygons, generated in {3:.2} s, hierarchy baked in \
          {4:.2} s, validated in {5:.3} s",
         args.size,
         args.seed,

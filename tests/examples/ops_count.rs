@@ -24,8 +24,8 @@ fn run(h: &caveclod_core::Hierarchy<'_>, cam: &mut CameraState<'_>, order: &[Nod
 }
 
 fn main() {
-    let built = caveclod_tests::build(&caveclod_tests::meshes::terrain(128, 128, 1));
-    let h = built.hierarchy();
+    let baked = caveclod_tests::bake(&caveclod_tests::meshes::terrain(128, 128, 1));
+    let h = baked.hierarchy();
     let mut mem = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut mem).expect("sized");
     // A legal order: the order a full forced split applies them in.

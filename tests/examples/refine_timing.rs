@@ -10,8 +10,8 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(1.0);
-    let built = caveclod_tests::build(&caveclod_tests::meshes::terrain(n, n, 1));
-    let h = built.hierarchy();
+    let baked = caveclod_tests::bake(&caveclod_tests::meshes::terrain(n, n, 1));
+    let h = baked.hierarchy();
     let mut mem = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut mem).unwrap();
     let s = n as f32;

@@ -1,13 +1,9 @@
-//! Test support for caveclod: generated meshes and a small, test-only hierarchy builder.
-//!
-//! The builder here exists so that the core runtime can be tested, benchmarked and
-//! demonstrated before (and independently of) `caveclod-bake`. It is deliberately simple:
-//! shortest-edge half-edge collapses in passes of independent sets, a crude error bound, no
-//! attribute-aware quadrics. It is not the product's builder and is not published.
+//! Test support for caveclod: generated meshes, baked in memory by `caveclod-bake`, and
+//! checks of a camera's front against a from-scratch derivation.
 
-pub mod builder;
+pub mod bake;
 pub mod check;
 pub mod meshes;
 
-pub use builder::{build, AlignedBytes, Built};
+pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};
 pub use meshes::{TestMesh, Tri};

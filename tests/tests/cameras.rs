@@ -6,7 +6,7 @@ use caveclod_core::{
     CameraConfig, CameraError, CameraState, Hierarchy, OpError, RefineParams, View,
 };
 use caveclod_tests::check::check_front;
-use caveclod_tests::{build, meshes};
+use caveclod_tests::{bake, meshes};
 
 fn view(t: f32, k: usize) -> View {
     let a = t + k as f32 * 1.7;
@@ -42,8 +42,8 @@ fn run_alone(
 
 #[test]
 fn cameras_on_threads_match_cameras_alone() {
-    let built = build(&meshes::terrain(40, 40, 11));
-    let h = built.hierarchy();
+    let baked = bake(&meshes::terrain(40, 40, 11));
+    let h = baked.hierarchy();
     let alone: Vec<_> = (0..4).map(|k| run_alone(&h, k, 30)).collect();
     let threaded: Vec<_> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..4)
@@ -64,8 +64,8 @@ fn cameras_on_threads_match_cameras_alone() {
 
 #[test]
 fn camera_states_move_between_threads() {
-    let built = build(&meshes::terrain(24, 24, 4));
-    let h = built.hierarchy();
+    let baked = bake(&meshes::terrain(24, 24, 4));
+    let h = baked.hierarchy();
     let mut mem = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut mem).expect("sized");
     std::thread::scope(|s| {
@@ -82,8 +82,8 @@ fn camera_states_move_between_threads() {
 
 #[test]
 fn a_budgeted_camera_refuses_splits_instead_of_failing() {
-    let built = build(&meshes::terrain(40, 40, 2));
-    let h = built.hierarchy();
+    let baked = bake(&meshes::terrain(40, 40, 2));
+    let h = baked.hierarchy();
     let budget = h.base_polygon_count() as u32 + 200;
     let config = CameraConfig::with_polygon_budget(&h, budget);
     let mut mem = vec![0u32; CameraState::words_needed_for(&h, &config)];
@@ -117,8 +117,8 @@ fn a_budgeted_camera_refuses_splits_instead_of_failing() {
 
 #[test]
 fn capacity_and_hierarchy_errors_are_typed() {
-    let built = build(&meshes::terrain(10, 10, 2));
-    let h = built.hierarchy();
+    let baked = bake(&meshes::terrain(10, 10, 2));
+    let h = baked.hierarchy();
     let needed = CameraState::words_needed(&h);
     let mut small = vec![0u32; needed - 1];
     assert_eq!(
@@ -128,7 +128,7 @@ fn capacity_and_hierarchy_errors_are_typed() {
             given: needed - 1
         })
     );
-    let bytes = built.to_bytes();
+    let bytes = baked.to_bytes();
     let h_file = Hierarchy::from_bytes(&bytes).expect("valid");
     let mut mem = vec![0u32; needed];
     let mut cam = CameraState::new(&h_file, &mut mem).expect("sized");

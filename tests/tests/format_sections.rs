@@ -3,12 +3,12 @@
 
 use caveclod_core::format::{serialized_len, tags, write_into, ExtraSection, Tag, WriteError};
 use caveclod_core::{FormatError, Hierarchy, NodeId};
-use caveclod_tests::{build, meshes, AlignedBytes};
+use caveclod_tests::{bake, meshes, AlignedBytes};
 
 #[test]
 fn unknown_sections_are_skipped_and_found_by_tag() {
-    let built = build(&meshes::terrain(6, 5, 1));
-    let parts = built.parts();
+    let baked = bake(&meshes::terrain(6, 5, 1));
+    let parts = baked.parts();
     let payload: Vec<u8> = (0u8..=250).collect();
     let extra = [ExtraSection {
         tag: Tag(*b"GMSH"),
@@ -21,13 +21,13 @@ fn unknown_sections_are_skipped_and_found_by_tag() {
     let h = Hierarchy::from_bytes(&bytes).expect("an unknown section does not stop the reader");
     assert_eq!(h.section(Tag(*b"GMSH")), Some(&payload[..]));
     assert_eq!(h.section(Tag(*b"NOPE")), None);
-    assert_eq!(h.meta(), built.hierarchy().meta());
+    assert_eq!(h.meta(), baked.hierarchy().meta());
 }
 
 #[test]
 fn reserved_tags_and_ragged_extras_are_refused() {
-    let built = build(&meshes::terrain(4, 4, 1));
-    let parts = built.parts();
+    let baked = bake(&meshes::terrain(4, 4, 1));
+    let parts = baked.parts();
     for extra in [
         ExtraSection {
             tag: tags::NODES,
@@ -50,11 +50,11 @@ fn reserved_tags_and_ragged_extras_are_refused() {
 
 #[test]
 fn the_writer_refuses_invalid_parts_and_short_buffers() {
-    let built = build(&meshes::terrain(4, 4, 1));
-    let mut nodes = built.nodes.clone();
+    let baked = bake(&meshes::terrain(4, 4, 1));
+    let mut nodes = baked.nodes.clone();
     let last = nodes.len() - 1;
     nodes[last].parent = NodeId(last as u32 + 5);
-    let mut parts = built.parts();
+    let mut parts = baked.parts();
     parts.nodes = &nodes;
     let mut out = AlignedBytes::zeroed(serialized_len(&parts, &[]));
     match write_into(&parts, &[], &mut out) {
@@ -65,7 +65,7 @@ fn the_writer_refuses_invalid_parts_and_short_buffers() {
         }
         other => panic!("expected a NODE parent error, got {other:?}"),
     }
-    let parts = built.parts();
+    let parts = baked.parts();
     let needed = serialized_len(&parts, &[]);
     let mut short = AlignedBytes::zeroed(needed - 1);
     assert_eq!(
@@ -79,10 +79,10 @@ fn the_writer_refuses_invalid_parts_and_short_buffers() {
 
 #[test]
 fn errors_name_section_record_and_field() {
-    let built = build(&meshes::terrain(4, 4, 1));
-    let mut bounds = built.bounds.clone();
+    let baked = bake(&meshes::terrain(4, 4, 1));
+    let mut bounds = baked.bounds.clone();
     bounds[0].uni_error = f32::NAN;
-    let mut parts = built.parts();
+    let mut parts = baked.parts();
     parts.bounds = &bounds;
     let e = Hierarchy::from_parts(parts).expect_err("NaN error bound");
     assert_eq!(

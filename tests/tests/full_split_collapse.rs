@@ -3,11 +3,11 @@
 
 use caveclod_core::{CameraState, NodeId, PolyId};
 use caveclod_tests::check::{check_front, collapse_all, split_all};
-use caveclod_tests::{build, meshes, TestMesh};
+use caveclod_tests::{bake, meshes, TestMesh};
 
 fn round_trip(mesh: &TestMesh) {
-    let built = build(mesh);
-    let h = built.hierarchy();
+    let baked = bake(mesh);
+    let h = baked.hierarchy();
     let mut mem = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut mem).expect("memory sized by words_needed");
     check_front(&h, &cam).expect("base front");

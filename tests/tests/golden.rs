@@ -1,14 +1,14 @@
 //! The golden file `core/tests/data/terrain6.clod`, which the core crate's integration tests
 //! use, and its copy `fuzz/seeds/from_bytes/terrain6.clod`, the fuzzer's seed, are exactly
-//! what the test builder makes of `terrain(6, 6, 1)`.
+//! what `caveclod-bake` makes of `terrain(6, 6, 1)`.
 //!
-//! After an intended change to the builder or the format, regenerate both with
+//! After an intended change to the baker or the format, regenerate both with
 //! `CAVECLOD_UPDATE_GOLDEN=1 cargo test -p caveclod-tests --test golden` and commit them.
 
 use std::path::PathBuf;
 
 use caveclod_core::Hierarchy;
-use caveclod_tests::{build, meshes};
+use caveclod_tests::{bake, meshes};
 
 /// The golden file and its copies, relative to the workspace root.
 const GOLDEN_FILES: [&str; 2] = [
@@ -28,10 +28,10 @@ fn updating() -> bool {
 
 #[test]
 fn terrain6_matches_the_golden_file() {
-    let built = build(&meshes::terrain(6, 6, 1));
-    let bytes = built.to_bytes();
+    let baked = bake(&meshes::terrain(6, 6, 1));
+    let bytes = baked.to_bytes();
     // Whatever is committed must load.
-    Hierarchy::from_bytes(&bytes).expect("the builder's bytes are a valid hierarchy");
+    Hierarchy::from_bytes(&bytes).expect("the baked bytes are a valid hierarchy");
 
     for relative in GOLDEN_FILES {
         let path = workspace_path(relative);
@@ -53,8 +53,8 @@ fn terrain6_matches_the_golden_file() {
                 .position(|(a, b)| a != b)
                 .unwrap_or(golden.len().min(bytes.len()));
             panic!(
-                "the builder's output for terrain(6, 6, 1) differs from {relative}: {} bytes \
-                 built, {} golden, first difference at byte {first}. If the change is \
+                "the baked output of terrain(6, 6, 1) differs from {relative}: {} bytes \
+                 baked, {} golden, first difference at byte {first}. If the change is \
                  intended, rerun with CAVECLOD_UPDATE_GOLDEN=1 and commit the files.",
                 bytes.len(),
                 golden.len()
@@ -64,8 +64,8 @@ fn terrain6_matches_the_golden_file() {
 }
 
 #[test]
-fn the_builder_is_deterministic() {
-    let a = build(&meshes::terrain(6, 6, 1)).to_bytes();
-    let b = build(&meshes::terrain(6, 6, 1)).to_bytes();
-    assert!(a[..] == b[..], "two builds of the same mesh differ");
+fn the_bake_is_deterministic() {
+    let a = bake(&meshes::terrain(6, 6, 1)).to_bytes();
+    let b = bake(&meshes::terrain(6, 6, 1)).to_bytes();
+    assert!(a[..] == b[..], "two bakes of the same mesh differ");
 }

@@ -9,16 +9,16 @@ use std::sync::OnceLock;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, NodeId, RefineParams, View};
 use caveclod_tests::check::check_front;
-use caveclod_tests::{build, meshes, Built};
+use caveclod_tests::{bake, meshes, BakedMesh};
 use proptest::prelude::*;
 
-fn meshes_built() -> &'static [Built; 3] {
-    static B: OnceLock<[Built; 3]> = OnceLock::new();
+fn meshes_baked() -> &'static [BakedMesh; 3] {
+    static B: OnceLock<[BakedMesh; 3]> = OnceLock::new();
     B.get_or_init(|| {
         [
-            build(&meshes::terrain(10, 8, 5)),
-            build(&meshes::sphere(2)),
-            build(&meshes::holed_terrain(12, 12, 9)),
+            bake(&meshes::terrain(10, 8, 5)),
+            bake(&meshes::sphere(2)),
+            bake(&meshes::holed_terrain(12, 12, 9)),
         ]
     })
 }
@@ -89,8 +89,8 @@ proptest! {
 
     #[test]
     fn random_steps_keep_every_invariant(which in 0usize..3, steps in prop::collection::vec(step(), 1..120)) {
-        let built = &meshes_built()[which];
-        let h = built.hierarchy();
+        let baked = &meshes_baked()[which];
+        let h = baked.hierarchy();
         let mut mem = vec![0u32; CameraState::words_needed(&h)];
         let mut other_mem = vec![0u32; CameraState::words_needed(&h)];
         let mut cam = CameraState::new(&h, &mut mem).expect("sized");

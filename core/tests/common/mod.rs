@@ -1,7 +1,7 @@
 //! Shared by the integration tests of caveclod-core: the golden file in aligned memory,
 //! views around a hierarchy, and a short exercise of every runtime entry point.
 //!
-//! The golden file `data/terrain6.clod` is the test builder's output for
+//! The golden file `data/terrain6.clod` is what `caveclod-bake` makes of
 //! `meshes::terrain(6, 6, 1)`; the `caveclod-tests` package's `golden` test checks that it
 //! is current (and rewrites it with `CAVECLOD_UPDATE_GOLDEN=1`).
 

@@ -1,0 +1,127 @@
+//! Generated test meshes baked by `caveclod-bake`, the product's builder, in memory.
+//!
+//! The tests, examples and benchmarks of the runtime use exactly the hierarchies users get
+//! from `caveclod bake`: no second, test-only builder whose behaviour could drift from it.
+
+use caveclod_bake::baked::Baked;
+use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use caveclod_bake::pipeline::bake_mesh;
+use caveclod_core::Hierarchy;
+
+use crate::meshes::TestMesh;
+
+/// Owned bytes in 8-byte aligned storage, so `Hierarchy::from_bytes` can cast in place.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct AlignedBytes {
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl AlignedBytes {
+    /// `len` zero bytes.
+    pub fn zeroed(len: usize) -> Self {
+        Self {
+            words: vec![0; len.div_ceil(8)],
+            len,
+        }
+    }
+
+    /// A copy of `bytes`.
+    pub fn from_slice(bytes: &[u8]) -> Self {
+        let mut out = Self::zeroed(bytes.len());
+        out.copy_from_slice(bytes);
+        out
+    }
+}
+
+impl std::ops::Deref for AlignedBytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        &bytemuck::cast_slice(&self.words)[..self.len]
+    }
+}
+
+impl std::ops::DerefMut for AlignedBytes {
+    fn deref_mut(&mut self) -> &mut [u8] {
+        &mut bytemuck::cast_slice_mut(&mut self.words)[..self.len]
+    }
+}
+
+/// A test mesh as an imported mesh: per-corner normal and UV streams (so seams stay seams),
+/// no colours, one surface per distinct surface id.
+pub fn to_mesh(t: &TestMesh) -> Mesh {
+    let mut m = Mesh {
+        positions: t.positions.clone(),
+        ..Mesh::default()
+    };
+    for tri in &t.triangles {
+        let mut out = Triangle {
+            position: tri.p,
+            normal: [0; 3],
+            uv: [0; 3],
+            color: [NO_ATTRIBUTE; 3],
+            surface: tri.surface,
+        };
+        for k in 0..3 {
+            out.normal[k] = m.normals.len() as u32;
+            m.normals.push(tri.normal[k]);
+            out.uv[k] = m.uvs.len() as u32;
+            m.uvs.push(tri.uv[k]);
+        }
+        m.triangles.push(out);
+    }
+    m.surfaces = (0..t.surface_count())
+        .map(|s| Surface {
+            name: format!("s{s}"),
+            base_color: [1.0; 4],
+            texture: None,
+        })
+        .collect();
+    m
+}
+
+/// A baked test mesh; dereferences to the baker's arrays.
+#[derive(Clone, Debug)]
+pub struct BakedMesh(pub Baked);
+
+impl std::ops::Deref for BakedMesh {
+    type Target = Baked;
+    fn deref(&self) -> &Baked {
+        &self.0
+    }
+}
+
+impl BakedMesh {
+    /// The validated hierarchy.
+    ///
+    /// # Panics
+    /// If the baker produced an invalid hierarchy (a baker bug, which the test reports).
+    pub fn hierarchy(&self) -> Hierarchy<'_> {
+        match self.0.hierarchy() {
+            Ok(h) => h,
+            Err(e) => panic!("the baker produced an invalid hierarchy: {e}"),
+        }
+    }
+
+    /// The `.clod` file in aligned storage.
+    ///
+    /// # Panics
+    /// If the baker produced an invalid hierarchy.
+    pub fn to_bytes(&self) -> AlignedBytes {
+        match self.0.to_bytes(&[]) {
+            Ok(bytes) => AlignedBytes::from_slice(&bytes),
+            Err(e) => panic!("the baker produced an invalid hierarchy: {e}"),
+        }
+    }
+}
+
+/// Bakes a test mesh with the default options, as `caveclod bake` would.
+///
+/// # Panics
+/// If the bake fails (generated meshes are valid input, so that is a baker bug).
+pub fn bake(t: &TestMesh) -> BakedMesh {
+    match bake_mesh(&to_mesh(t), "test mesh", &mut |_| {}) {
+        Ok((baked, _)) => BakedMesh(baked),
+        Err(e) => panic!("baking a generated mesh failed: {e}"),
+    }
+}
