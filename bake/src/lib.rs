@@ -7,6 +7,7 @@
 
 pub mod baked;
 pub mod export;
+pub mod generate;
 mod fxhash;
 pub mod hierarchy;
 pub mod import;

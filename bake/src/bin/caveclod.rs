@@ -47,6 +47,15 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Generate a procedural terrain (normals, colours, UVs) as binary PLY, streamed to disk.
+    Generate {
+        /// At least this many triangles.
+        #[arg(long)]
+        triangles: u64,
+        /// The .ply file to write (replaced only once complete).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Write one level of a .clod file as Wavefront OBJ.
     Export {
         /// The file.
@@ -159,6 +168,29 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }),
+        Command::Generate { triangles, output } => {
+            let bar = ProgressBar::new(0);
+            bar.set_style(
+                ProgressStyle::with_template("{spinner} writing [{bar:30}] {percent}% ({elapsed})")
+                    .map_err(|e| e.to_string())?
+                    .progress_chars("=> "),
+            );
+            let grid = caveclod_bake::generate::terrain(&output, triangles, &mut |done, total| {
+                bar.set_length(total);
+                bar.set_position(done);
+            });
+            bar.finish_and_clear();
+            let grid = grid.map_err(|e| e.to_string())?;
+            println!(
+                "generated {}: terrain {}x{} quads, {} vertices, {} triangles",
+                output.display(),
+                grid.columns,
+                grid.rows,
+                grid.vertices(),
+                grid.triangles()
+            );
+            Ok(())
+        }
         Command::Export {
             file,
             level,
