@@ -11,6 +11,8 @@
 //! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
 //!   operations that meet contradictions return errors.
 //! - The `.clod` format ([`format`]) is defined here, reader and writer.
+//! - The shaders' math ([`gpu`]: geomorphing and shading) is defined here too, so the rust-gpu
+//!   shaders and the CPU run the same functions.
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
@@ -36,6 +38,8 @@
 pub mod camera;
 mod checksum;
 pub mod format;
+pub mod gmesh;
+pub mod gpu;
 mod hierarchy;
 mod ids;
 mod memory;
