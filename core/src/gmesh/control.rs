@@ -28,8 +28,8 @@ use super::partition::{GmeshError, LevelMorph, Partitions};
 /// One g-mesh as the controller sees it: its partitions and the polygons of each level.
 #[derive(Clone, Copy, Debug)]
 pub struct LodModel<'a> {
-    partitions: Partitions<'a>,
-    level_polygons: &'a [u32],
+    pub(super) partitions: Partitions<'a>,
+    pub(super) level_polygons: &'a [u32],
 }
 
 impl<'a> LodModel<'a> {

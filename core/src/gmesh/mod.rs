@@ -10,11 +10,13 @@
 //! geomorph shader stages on the GPU.
 
 mod control;
+mod model;
 mod partition;
 
 pub use control::{
     control, scene_polygons, ControlEntry, ControlOutcome, ControlParams, LodInstance, LodModel,
 };
+pub use model::{gmesh_tags, GMesh, GMeshFormatError, GMeshLevel, GMeshParts};
 pub use partition::{
     even_boundaries, t_from_distance, volume_boundaries, GmeshError, LevelMorph, Partitions,
 };

@@ -133,13 +133,15 @@ pub fn even_boundaries(out: &mut [f32]) -> Result<(), GmeshError> {
     Ok(())
 }
 
-/// Writes volume-based boundaries: `r_i ∝ V_i - V_{i+1}` for normalised volumes
+/// Writes volume-based boundaries: `r_i ∝ |V_i - V_{i+1}|` for normalised volumes
 /// `volumes[i] = V_i` (`V_0 = 1` for the input, one value per level), `out.len() ==
 /// volumes.len()`.
 ///
-/// Volumes need not decrease: a batch that grows the volume (or leaves it) still gets a
-/// range, at least `min_share` of the whole (e.g. 0.01) so every level stays reachable, and
-/// the ranges are normalised to sum to 1. With no decrease at all the partitions are even.
+/// The paper takes `r_i = V_i - V_{i+1}`, for shapes that shrink as they are simplified. A
+/// batch can also grow the volume (concave regions, terrains): the change counts either way,
+/// as a measure of how much the shape changes. Every range gets at least `min_share` of the
+/// whole (e.g. 0.01) so every level stays reachable, and the ranges are normalised to sum to
+/// 1. With no change at all the partitions are even.
 pub fn volume_boundaries(
     volumes: &[f32],
     min_share: f32,
@@ -168,15 +170,15 @@ pub fn volume_boundaries(
     } else {
         0.0
     };
-    // Raw decreases, each at least the floor share of the total decrease.
-    let total: f32 = volumes.windows(2).map(|w| (w[0] - w[1]).max(0.0)).sum();
+    // Raw changes, each at least the floor share of the total change.
+    let total: f32 = volumes.windows(2).map(|w| (w[0] - w[1]).abs()).sum();
     if total <= 0.0 {
         return even_boundaries(out);
     }
     let mut acc = 0.0f32;
     out[0] = 0.0;
     for i in 0..ranges {
-        let r = ((volumes[i] - volumes[i + 1]).max(0.0) / total).max(floor);
+        let r = ((volumes[i] - volumes[i + 1]).abs() / total).max(floor);
         acc += r;
         out[i + 1] = acc;
     }
@@ -352,7 +354,7 @@ mod tests {
         let r: [f32; 4] = core::array::from_fn(|i| out[i + 1] - out[i]);
         assert!(r.windows(2).all(|w| w[0] <= w[1]), "{r:?}");
         assert_eq!(p.boundaries()[4], 1.0);
-        // Growth and flat steps still get a range.
+        // Growth counts as change; a flat step still gets a range.
         let v = [1.0, 1.01, 1.01, 0.5];
         let mut out = [0.0; 4];
         volume_boundaries(&v, 0.02, &mut out).unwrap();
