@@ -8,6 +8,7 @@
 pub mod baked;
 pub mod export;
 pub mod generate;
+pub mod gmesh;
 mod fxhash;
 pub mod hierarchy;
 pub mod import;
