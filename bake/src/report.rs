@@ -5,6 +5,7 @@
 //! readers that do not know it skip.
 
 use caveclod_core::format::{ExtraSection, Tag};
+use caveclod_core::gmesh::GMesh;
 use caveclod_core::{CameraState, Hierarchy, MemoryReport};
 use serde_json::{json, Map, Value};
 
@@ -132,6 +133,21 @@ pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> 
         "vertex_table_fill".into(),
         json!(filled as f64 / cells.max(1) as f64),
     );
+    // g-mesh levels, when the file has them (their sections were validated here).
+    match GMesh::from_hierarchy(h) {
+        Ok(Some(g)) => {
+            o.insert("gmesh_levels".into(), json!(g.levels()));
+            o.insert("gmesh_level_polygons".into(), json!(g.level_polygons()));
+            o.insert(
+                "gmesh_boundaries".into(),
+                json!(g.partitions().boundaries()),
+            );
+        }
+        Ok(None) => {}
+        Err(e) => {
+            o.insert("gmesh_error".into(), json!(e.to_string()));
+        }
+    }
     o
 }
 
