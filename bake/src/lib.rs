@@ -13,6 +13,7 @@ mod fxhash;
 pub mod hierarchy;
 pub mod import;
 pub mod mesh;
+pub mod ooc;
 pub mod pipeline;
 pub mod quadric;
 pub mod report;

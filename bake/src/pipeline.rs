@@ -24,6 +24,9 @@ pub enum BakeError {
         /// Why.
         source: WeldError,
     },
+    /// The out-of-core simplification failed.
+    #[error(transparent)]
+    OutOfCore(#[from] crate::ooc::OocError),
     /// The baked arrays did not validate (a baker bug).
     #[error("internal error: the baked hierarchy does not validate: {0}")]
     Invalid(caveclod_core::FormatError),
@@ -82,4 +85,22 @@ pub fn bake_file(
     let (baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
     info.bake_seconds = start.elapsed().as_secs_f64();
     Ok((baked, info))
+}
+
+/// Simplifies a file of any size out of core ([`crate::ooc::simplify_file`]) to a mesh that
+/// fits the memory budget, then bakes that mesh in core; `bake_seconds` covers both and
+/// `input_triangles` counts the file's triangles.
+pub fn bake_out_of_core(
+    path: &Path,
+    options: &crate::ooc::OocOptions,
+    ooc_progress: &mut dyn FnMut(crate::ooc::OocStage),
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo, crate::ooc::OocStats), BakeError> {
+    let start = Instant::now();
+    let (mesh, stats) = crate::ooc::simplify_file(path, options, ooc_progress)?;
+    let (baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
+    drop(mesh);
+    info.input_triangles = stats.input_triangles;
+    info.bake_seconds = start.elapsed().as_secs_f64();
+    Ok((baked, info, stats))
 }

@@ -6,7 +6,8 @@ use std::process::ExitCode;
 use caveclod_bake::baked::write_atomically;
 use caveclod_bake::export::{self, Level};
 use caveclod_bake::import::ImportOptions;
-use caveclod_bake::pipeline::{bake_file, Stage};
+use caveclod_bake::ooc::{OocOptions, OocStage};
+use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
 use caveclod_bake::report::{self, BakeInfo};
 use caveclod_core::Hierarchy;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -38,6 +39,19 @@ enum Command {
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
+        /// Simplify the input (.ply, .obj) out of core first, streaming it from disk, down to a
+        /// size whose hierarchy fits the memory budget.
+        #[arg(long)]
+        out_of_core: bool,
+        /// Memory budget for --out-of-core (256M, 1G, ...).
+        #[arg(long, default_value = "256M", value_parser = caveclod_bake::ooc::parse_size)]
+        memory_budget: u64,
+        /// Directory for --out-of-core's temporary files (the system's by default).
+        #[arg(long)]
+        temp_dir: Option<PathBuf>,
+        /// Output triangles for --out-of-core to aim for (from the budget by default).
+        #[arg(long)]
+        target_triangles: Option<u64>,
     },
     /// Counts, sizes and validation status of a .clod file.
     Info {
@@ -112,6 +126,10 @@ fn run(cli: Cli) -> Result<(), String> {
             output,
             spacing,
             json,
+            out_of_core,
+            memory_budget,
+            temp_dir,
+            target_triangles,
         } => {
             let bar = ProgressBar::new(0);
             bar.set_style(
@@ -131,7 +149,45 @@ fn run(cli: Cli) -> Result<(), String> {
                 }
                 Stage::Assemble => bar.set_message("assembling"),
             };
-            let result = bake_file(&input, &ImportOptions { spacing }, &mut on_stage);
+            let mut ooc_stats = None;
+            let result = if out_of_core {
+                let options = OocOptions {
+                    temp_dir,
+                    target_triangles,
+                    ..OocOptions::with_budget(memory_budget)
+                };
+                let ooc_bar = ProgressBar::new(0);
+                ooc_bar.set_style(
+                    ProgressStyle::with_template(
+                        "{spinner} {msg} [{bar:30}] {pos}/{len} triangles ({elapsed})",
+                    )
+                    .map_err(|e| e.to_string())?
+                    .progress_chars("=> "),
+                );
+                let mut on_ooc = |s: OocStage| {
+                    let (msg, done, total) = match s {
+                        OocStage::Read(d, t) => ("reading and sorting".to_string(), d, t),
+                        OocStage::Merge(d, t) => ("merging sorted runs".to_string(), d, t),
+                        OocStage::Cluster(level, d, t) => {
+                            (format!("clustering at level {level}"), d, t)
+                        }
+                    };
+                    ooc_bar.set_message(msg);
+                    ooc_bar.set_length(total);
+                    ooc_bar.set_position(done);
+                };
+                let r = bake_out_of_core(&input, &options, &mut on_ooc, &mut |s| {
+                    ooc_bar.finish_and_clear();
+                    on_stage(s)
+                });
+                ooc_bar.finish_and_clear();
+                r.map(|(b, i, st)| {
+                    ooc_stats = Some(st);
+                    (b, i)
+                })
+            } else {
+                bake_file(&input, &ImportOptions { spacing }, &mut on_stage)
+            };
             bar.finish_and_clear();
             let (baked, info) = result.map_err(|e| e.to_string())?;
             let json_info = info.to_json();
@@ -141,6 +197,36 @@ fn run(cli: Cli) -> Result<(), String> {
             with_hierarchy(&output, |h| {
                 let mut r = report::report(h, Some(&info));
                 r.insert("bake_seconds".into(), serde_json::json!(info.bake_seconds));
+                if let Some(st) = &ooc_stats {
+                    r.insert(
+                        "input_triangles_per_second".into(),
+                        serde_json::json!(st.input_triangles as f64 / info.bake_seconds),
+                    );
+                    r.insert(
+                        "out_of_core".into(),
+                        serde_json::json!({
+                            "memory_budget": memory_budget,
+                            "input_vertices": st.input_vertices,
+                            "clustered_triangles": st.output_triangles,
+                            "clusters": st.clusters,
+                            "level": st.level,
+                            "target_triangles": st.target_triangles,
+                            "octree_nodes": st.octree_nodes,
+                            "octree_leaves": st.octree_leaves,
+                            "sorted_runs": st.runs,
+                            "temp_bytes": st.temp_bytes,
+                            "read_seconds": st.seconds[0],
+                            "merge_seconds": st.seconds[1],
+                            "cluster_seconds": st.seconds[2],
+                            "triangles_per_second": st.input_triangles as f64
+                                / (st.seconds[0] + st.seconds[1] + st.seconds[2]),
+                        }),
+                    );
+                }
+                r.insert(
+                    "peak_rss_bytes".into(),
+                    serde_json::json!(caveclod_bake::ooc::peak_rss_bytes()),
+                );
                 if json {
                     println!("{}", serde_json::Value::Object(r));
                 } else {

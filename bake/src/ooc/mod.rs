@@ -1,0 +1,408 @@
+//! Out-of-core simplification: inputs of any size down to a mesh that fits a memory budget.
+//!
+//! The method is Lindstrom's out-of-core vertex clustering (OoCS) organised around an octree,
+//! with Garland & Heckbert's 1998 generalized quadrics so that normals, colours and texture
+//! coordinates are preserved along with the shape:
+//!
+//! 1. [`stream`]: the input (PLY, OBJ) is read once, vertex data going to a temporary file
+//!    looked up through a bounded cache, and turned into a triangle soup ([`soup`]) whose
+//!    records carry everything later stages need and a spatial key (the Morton code of the
+//!    centroid);
+//! 2. [`sort`]: the soup is sorted by key with an external merge sort whose chunks and merge
+//!    buffers are shares of the memory budget; merging counts the occupied octree cells at
+//!    every depth;
+//! 3. [`octree`]: the sorted file is the octree's storage: each node is a range of it; nodes
+//!    split until a leaf holds at most a set number of triangles or the maximum depth;
+//! 4. [`cluster`]: leaf by leaf, corners are clustered on the grid of the octree level whose
+//!    occupied-cell count says the output will fit the target, with one quadric per cluster
+//!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
+//!    optima.
+//!
+//! The result is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands to
+//! the in-core pipeline for the view-dependent hierarchy. The target size comes from the
+//! budget ([`target_triangles_for_budget`]): the in-core hierarchy build needs about a
+//! kilobyte per triangle. Memory: the sort chunk (half the budget), the vertex cache (an
+//! eighth), the merge buffers (a quarter, after the chunk is freed), then one leaf and the
+//! clusters (proportional to the output). Every temporary file lives in one [`TempSpace`]
+//! directory, removed when the simplification returns, with an error or without.
+//!
+//! In-memory meshes (glTF, which is not streamed) take the same clustering through
+//! [`cluster_mesh`].
+
+pub mod cluster;
+pub mod octree;
+pub mod quadric;
+pub mod sort;
+pub mod soup;
+pub mod stream;
+pub mod temp;
+
+use std::io;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+pub use cluster::{ClusterOptions, Clusterer, Weights};
+pub use temp::{parse_size, TempSpace};
+
+use crate::mesh::{Mesh, NO_ATTRIBUTE};
+use soup::{encode_normal, linear_to_srgb8, Corner, Cube, SoupTriangle, KEY_LEVELS};
+
+/// Why an out-of-core simplification failed.
+#[derive(Debug, thiserror::Error)]
+pub enum OocError {
+    /// The input could not be read.
+    #[error("{file}: {what}: {source}")]
+    Io {
+        /// The input.
+        file: String,
+        /// What was being done.
+        what: String,
+        /// The operating-system error.
+        #[source]
+        source: io::Error,
+    },
+    /// The input is malformed or ends early, at a named element.
+    #[error("{file}: {at}: {message}")]
+    Input {
+        /// The input.
+        file: String,
+        /// The element at fault (`face 12`, `line 7`, `header`).
+        at: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The input is valid but not something the streaming readers take.
+    #[error("{file}: {message}")]
+    Unsupported {
+        /// The input.
+        file: String,
+        /// Why.
+        message: String,
+    },
+    /// The input has no triangles.
+    #[error("{file}: no triangles")]
+    Empty {
+        /// The input.
+        file: String,
+    },
+    /// A temporary file could not be written or read (a full disk, a quota).
+    #[error("temporary files: {what}: {source}")]
+    Temp {
+        /// What was being done.
+        what: String,
+        /// The operating-system error.
+        #[source]
+        source: io::Error,
+    },
+    /// The memory budget cannot hold what one step needs.
+    #[error("memory budget of {budget} bytes is too small: {what} needs {needed} bytes (raise --memory-budget{hint})")]
+    Budget {
+        /// The budget.
+        budget: u64,
+        /// What does not fit.
+        what: String,
+        /// Bytes it needs.
+        needed: u64,
+        /// A further way out, if any.
+        hint: &'static str,
+    },
+}
+
+impl OocError {
+    pub(crate) fn io(file: &str, what: &str, source: io::Error) -> Self {
+        Self::Io {
+            file: file.to_string(),
+            what: what.to_string(),
+            source,
+        }
+    }
+    pub(crate) fn temp(what: &str, source: io::Error) -> Self {
+        Self::Temp {
+            what: what.to_string(),
+            source,
+        }
+    }
+}
+
+/// Settings of an out-of-core run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OocOptions {
+    /// Bytes the whole bake may use (approximately: the chunks, caches and output are sized
+    /// from it).
+    pub memory_budget: u64,
+    /// Where to make the temporary directory (the system's temporary directory if `None`).
+    pub temp_dir: Option<PathBuf>,
+    /// Most bytes of temporary files (unlimited if `None`): a full disk on demand.
+    pub temp_quota: Option<u64>,
+    /// Most triangles in an octree leaf (below the maximum depth).
+    pub leaf_triangles: u64,
+    /// Maximum octree depth (at most 21).
+    pub max_depth: u32,
+    /// Output triangles to aim for (from the budget if `None`).
+    pub target_triangles: Option<u64>,
+    /// Attribute weights of the quadrics.
+    pub weights: Weights,
+}
+
+impl OocOptions {
+    /// Defaults for a budget.
+    pub fn with_budget(memory_budget: u64) -> Self {
+        Self {
+            memory_budget,
+            temp_dir: None,
+            temp_quota: None,
+            leaf_triangles: 1 << 16,
+            max_depth: 12,
+            target_triangles: None,
+            weights: Weights::default(),
+        }
+    }
+}
+
+/// Output triangles whose in-core hierarchy build fits `budget` (about 1.6 KB each, with room
+/// for the clustering).
+pub fn target_triangles_for_budget(budget: u64) -> u64 {
+    (budget / 1600).max(16)
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OocStats {
+    /// Triangles read.
+    pub input_triangles: u64,
+    /// Vertices read.
+    pub input_vertices: u64,
+    /// Triangles of the clustered mesh.
+    pub output_triangles: u64,
+    /// Clusters (output vertices).
+    pub clusters: u64,
+    /// Grid level clustered at.
+    pub level: u32,
+    /// Target the level was chosen for.
+    pub target_triangles: u64,
+    /// Octree nodes and leaves.
+    pub octree_nodes: u64,
+    /// Leaves.
+    pub octree_leaves: u64,
+    /// Sorted runs.
+    pub runs: u64,
+    /// Bytes written to temporary files.
+    pub temp_bytes: u64,
+    /// Seconds reading (and making runs), merging, clustering.
+    pub seconds: [f64; 3],
+}
+
+/// Progress of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OocStage {
+    /// Reading the input: triangles `(done, expected)`.
+    Read(u64, u64),
+    /// Merging sorted runs: `(done, total)`.
+    Merge(u64, u64),
+    /// Clustering at a level: triangles `(done, total)`.
+    Cluster(u32, u64, u64),
+}
+
+/// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core.
+pub fn simplify_file(
+    path: &Path,
+    options: &OocOptions,
+    progress: &mut dyn FnMut(OocStage),
+) -> Result<(Mesh, OocStats), OocError> {
+    let budget = options.memory_budget;
+    let leaf_bytes = options.leaf_triangles * soup::RECORD_BYTES as u64;
+    if leaf_bytes * 8 > budget {
+        return Err(OocError::Budget {
+            budget,
+            what: format!(
+                "an octree leaf of {} triangles (with the sort chunk and caches around it)",
+                options.leaf_triangles
+            ),
+            needed: leaf_bytes * 8,
+            hint: " or lower the leaf size",
+        });
+    }
+    let temp = TempSpace::new(options.temp_dir.as_deref(), options.temp_quota)
+        .map_err(|e| OocError::temp("creating the temporary directory", e))?;
+    let mut stats = OocStats::default();
+    let t0 = Instant::now();
+    let (report, sorted) = {
+        let mut sort_progress = |merging, d, n| {
+            progress(if merging {
+                OocStage::Merge(d, n)
+            } else {
+                OocStage::Read(d, n)
+            })
+        };
+        let mut runs = sort::RunBuilder::new(&temp, (budget / 2) as usize, &mut sort_progress);
+        let report = stream::stream_file(path, &temp, (budget / 8) as usize, &mut runs)?;
+        stats.seconds[0] = t0.elapsed().as_secs_f64();
+        let sorted = runs.finish((budget / 4) as usize)?;
+        (report, sorted)
+    };
+    stats.seconds[1] = t0.elapsed().as_secs_f64() - stats.seconds[0];
+    if sorted.triangles == 0 {
+        return Err(OocError::Empty {
+            file: path.display().to_string(),
+        });
+    }
+    stats.input_triangles = sorted.triangles;
+    stats.input_vertices = report.vertices;
+    stats.runs = sorted.runs as u64;
+    let file = std::fs::File::open(&sorted.path)
+        .map_err(|e| OocError::temp("reading the sorted soup", e))?;
+    let tree = octree::Octree::build(
+        &file,
+        sorted.triangles,
+        options.leaf_triangles,
+        options.max_depth,
+    )?;
+    if tree.largest_leaf * soup::RECORD_BYTES as u64 > budget / 2 {
+        return Err(OocError::Budget {
+            budget,
+            what: format!(
+                "an octree leaf at the maximum depth {} holding {} triangles",
+                options.max_depth, tree.largest_leaf
+            ),
+            needed: tree.largest_leaf * soup::RECORD_BYTES as u64 * 2,
+            hint: " or the maximum depth",
+        });
+    }
+    let leaves = tree.leaves();
+    stats.octree_nodes = tree.nodes.len() as u64;
+    stats.octree_leaves = leaves.len() as u64;
+    let target = options
+        .target_triangles
+        .unwrap_or_else(|| target_triangles_for_budget(budget));
+    stats.target_triangles = target;
+    let mut level = if sorted.triangles <= target {
+        KEY_LEVELS
+    } else {
+        (1..=KEY_LEVELS)
+            .rev()
+            .find(|&l| 2 * sorted.occupied[l as usize] <= target)
+            .unwrap_or(1)
+    };
+    let t1 = Instant::now();
+    let mut buf = Vec::new();
+    let mesh = loop {
+        let mut c = Clusterer::new(
+            sorted.cube,
+            ClusterOptions {
+                weights: options.weights,
+                ..ClusterOptions::at_level(level)
+            },
+        );
+        let mut done = 0;
+        for leaf in &leaves {
+            octree::read_leaf(&file, leaf, &mut buf)?;
+            for t in &buf {
+                c.add(t);
+            }
+            done += leaf.count;
+            progress(OocStage::Cluster(level, done, sorted.triangles));
+        }
+        // The occupancy of centroids only estimates the output: go one level coarser when
+        // it came out far above the target.
+        if c.triangle_count() as u64 > 2 * target && level > 1 {
+            level -= 1;
+            continue;
+        }
+        stats.clusters = c.cluster_count() as u64;
+        break c.finish(&report.surfaces);
+    };
+    drop(buf);
+    stats.level = level;
+    stats.output_triangles = mesh.triangles.len() as u64;
+    stats.seconds[2] = t1.elapsed().as_secs_f64();
+    stats.temp_bytes = temp.used();
+    drop(file);
+    drop(temp);
+    Ok((mesh, stats))
+}
+
+/// The soup of an in-memory mesh, keyed on its bounding cube (the adapter for formats that
+/// are not streamed).
+pub fn mesh_soup(mesh: &Mesh) -> (Cube, Vec<SoupTriangle>) {
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for p in &mesh.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let cube = Cube::around(lo, hi);
+    let soup = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let has = |i: [u32; 3]| !i.contains(&NO_ATTRIBUTE);
+            let mut flags = 0;
+            if has(t.normal) {
+                flags |= soup::HAS_NORMAL;
+            }
+            if has(t.uv) {
+                flags |= soup::HAS_UV;
+            }
+            if has(t.color) {
+                flags |= soup::HAS_COLOR;
+            }
+            let corners: [Corner; 3] = std::array::from_fn(|k| {
+                let mut c = Corner {
+                    position: mesh.positions[t.position[k] as usize],
+                    color: [255; 4],
+                    ..Default::default()
+                };
+                if flags & soup::HAS_NORMAL != 0 {
+                    c.normal = encode_normal(mesh.normals[t.normal[k] as usize]);
+                }
+                if flags & soup::HAS_UV != 0 {
+                    c.uv = mesh.uvs[t.uv[k] as usize];
+                }
+                if flags & soup::HAS_COLOR != 0 {
+                    let col = mesh.colors[t.color[k] as usize];
+                    c.color = [
+                        linear_to_srgb8(col[0]),
+                        linear_to_srgb8(col[1]),
+                        linear_to_srgb8(col[2]),
+                        (col[3].clamp(0.0, 1.0) * 255.0).round() as u8,
+                    ];
+                }
+                c
+            });
+            SoupTriangle {
+                key: cube.key(&corners.map(|c| c.position)),
+                surface: t.surface,
+                flags,
+                corners,
+            }
+        })
+        .collect();
+    (cube, soup)
+}
+
+/// Clusters an in-memory mesh (glTF and other formats that are not streamed) with the same
+/// clustering as [`simplify_file`], triangles in their order; returns the clustered mesh
+/// and the clusterer (for [`Clusterer::corner_clusters`]).
+pub fn cluster_mesh(mesh: &Mesh, options: ClusterOptions) -> (Mesh, Clusterer) {
+    let (cube, soup) = mesh_soup(mesh);
+    let mut c = Clusterer::new(cube, options);
+    for t in &soup {
+        c.add(t);
+    }
+    (c.finish(&mesh.surfaces), c)
+}
+
+/// Peak resident set size of this process (`VmHWM` of `/proc/self/status`), if known.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line
+        .trim_start_matches("VmHWM:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
+}

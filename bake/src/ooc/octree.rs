@@ -1,0 +1,185 @@
+//! The on-disk octree over the sorted soup.
+//!
+//! Sorting by Morton key made every octree cell a contiguous range of the sorted file, so
+//! the octree is a small table of nodes (depth, key prefix, range, children) over that file;
+//! the triangles stay on disk. A node with more than `leaf_triangles` triangles is split into
+//! its non-empty children (found by binary searches on the keys in the file, a few reads
+//! each) until the maximum depth; a leaf at the maximum depth may hold more, which the memory
+//! check in [`Octree::build`] reports.
+
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+
+use super::soup::{key_prefix, SoupTriangle, KEY_LEVELS, RECORD_BYTES};
+use super::OocError;
+
+/// "No child".
+pub const NO_NODE: u32 = u32::MAX;
+
+/// One octree node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Node {
+    /// Depth (the root is 0).
+    pub depth: u32,
+    /// The cell: the key's top `3 * depth` bits.
+    pub prefix: u64,
+    /// First triangle in the sorted file.
+    pub first: u64,
+    /// Triangles in the cell.
+    pub count: u64,
+    /// Children by octant, [`NO_NODE`] where empty; all [`NO_NODE`] for a leaf.
+    pub children: [u32; 8],
+}
+
+impl Node {
+    /// Whether the node is a leaf.
+    pub fn is_leaf(&self) -> bool {
+        self.children.iter().all(|&c| c == NO_NODE)
+    }
+}
+
+/// The octree: nodes in depth-first order (a leaf's triangles follow the previous leaf's).
+#[derive(Clone, Debug, Default)]
+pub struct Octree {
+    /// Nodes; the root is node 0.
+    pub nodes: Vec<Node>,
+    /// Most triangles in one leaf.
+    pub largest_leaf: u64,
+}
+
+impl Octree {
+    /// Builds the octree over a sorted file of `triangles` records.
+    pub fn build(
+        file: &File,
+        triangles: u64,
+        leaf_triangles: u64,
+        max_depth: u32,
+    ) -> Result<Self, OocError> {
+        let max_depth = max_depth.min(KEY_LEVELS);
+        let key_at = |i: u64| -> Result<u64, OocError> {
+            let mut b = [0u8; 8];
+            file.read_exact_at(&mut b, i * RECORD_BYTES as u64)
+                .map_err(|e| OocError::temp("reading the sorted soup", e))?;
+            Ok(u64::from_le_bytes(b))
+        };
+        let mut tree = Octree::default();
+        tree.nodes.push(Node {
+            depth: 0,
+            prefix: 0,
+            first: 0,
+            count: triangles,
+            children: [NO_NODE; 8],
+        });
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = tree.nodes[n as usize];
+            if node.count <= leaf_triangles || node.depth >= max_depth {
+                tree.largest_leaf = tree.largest_leaf.max(node.count);
+                continue;
+            }
+            let d = node.depth + 1;
+            let end = node.first + node.count;
+            let mut lo = node.first;
+            let mut kids = Vec::new();
+            for octant in 0..8u64 {
+                let prefix = node.prefix << 3 | octant;
+                // First index in [lo, end) whose prefix exceeds `prefix`.
+                let (mut a, mut b) = (lo, end);
+                while a < b {
+                    let mid = a + (b - a) / 2;
+                    if key_prefix(key_at(mid)?, d) <= prefix {
+                        a = mid + 1;
+                    } else {
+                        b = mid;
+                    }
+                }
+                if a > lo {
+                    let id = tree.nodes.len() as u32;
+                    tree.nodes.push(Node {
+                        depth: d,
+                        prefix,
+                        first: lo,
+                        count: a - lo,
+                        children: [NO_NODE; 8],
+                    });
+                    tree.nodes[n as usize].children[octant as usize] = id;
+                    kids.push(id);
+                }
+                lo = a;
+            }
+            // Depth-first, octants in order.
+            stack.extend(kids.into_iter().rev());
+        }
+        Ok(tree)
+    }
+
+    /// Leaves in file order.
+    pub fn leaves(&self) -> Vec<Node> {
+        let mut out = Vec::new();
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = self.nodes[n as usize];
+            if node.is_leaf() {
+                out.push(node);
+            } else {
+                stack.extend(node.children.iter().rev().filter(|&&c| c != NO_NODE));
+            }
+        }
+        out
+    }
+}
+
+/// Reads a leaf's triangles into `out`.
+pub fn read_leaf(file: &File, leaf: &Node, out: &mut Vec<SoupTriangle>) -> Result<(), OocError> {
+    out.clear();
+    out.resize(leaf.count as usize, SoupTriangle::default());
+    file.read_exact_at(
+        bytemuck::cast_slice_mut(out.as_mut_slice()),
+        leaf.first * RECORD_BYTES as u64,
+    )
+    .map_err(|e| OocError::temp("reading an octree leaf", e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    #[test]
+    fn leaves_partition_the_file_and_respect_the_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s");
+        let mut keys: Vec<u64> = (0..1000u64)
+            .map(|i| (i * 2_654_435_761) % (1 << 63))
+            .collect();
+        keys.sort_unstable();
+        let recs: Vec<SoupTriangle> = keys
+            .iter()
+            .map(|&key| SoupTriangle {
+                key,
+                ..Default::default()
+            })
+            .collect();
+        std::fs::File::create(&path)
+            .unwrap()
+            .write_all(bytemuck::cast_slice(&recs))
+            .unwrap();
+        let f = File::open(&path).unwrap();
+        let t = Octree::build(&f, 1000, 50, 21).unwrap();
+        let leaves = t.leaves();
+        let mut next = 0;
+        for l in &leaves {
+            assert_eq!(l.first, next);
+            assert!(l.count <= 50);
+            for i in l.first..l.first + l.count {
+                assert_eq!(key_prefix(keys[i as usize], l.depth), l.prefix);
+            }
+            next += l.count;
+        }
+        assert_eq!(next, 1000);
+        // Capped depth: leaves may exceed the limit.
+        let t = Octree::build(&f, 1000, 50, 1).unwrap();
+        assert_eq!(t.leaves().len(), t.nodes.len() - 1);
+        assert!(t.largest_leaf > 50);
+    }
+}
