@@ -7,6 +7,7 @@
 
 pub mod baked;
 pub mod export;
+pub mod flyover;
 pub mod generate;
 pub mod gmesh;
 mod fxhash;

@@ -1,0 +1,335 @@
+//! Flights of several cameras over one hierarchy, measured per frame: a state per camera
+//! (one thread, or one thread per camera) or the paper's baseline of one shared state
+//! re-refined to each camera's view in turn.
+
+use std::sync::Barrier;
+use std::time::{Duration, Instant};
+
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, RefineStats, View};
+
+/// Per-frame figures of one camera.
+#[derive(Clone, Debug, Default)]
+pub struct Record {
+    pub ops: Vec<u32>,
+    pub splits: u64,
+    pub forced: u64,
+    pub collapses: u64,
+    pub refine_ns: Vec<u64>,
+    pub emit_ns: Vec<u64>,
+    pub active_polygons: Vec<u32>,
+    pub max_active_nodes: u32,
+    pub indices: Vec<u32>,
+    pub refusals: u64,
+    pub overflows: u64,
+}
+
+impl Record {
+    pub fn with_capacity(frames: usize) -> Self {
+        Self {
+            ops: Vec::with_capacity(frames),
+            refine_ns: Vec::with_capacity(frames),
+            emit_ns: Vec::with_capacity(frames),
+            active_polygons: Vec::with_capacity(frames),
+            indices: Vec::with_capacity(frames),
+            ..Self::default()
+        }
+    }
+
+    pub fn push(&mut self, st: &RefineStats, refine: Duration, emit: Duration, indices: usize) {
+        self.ops.push(st.operations());
+        self.splits += u64::from(st.splits);
+        self.forced += u64::from(st.forced_splits);
+        self.collapses += u64::from(st.collapses);
+        self.refine_ns.push(refine.as_nanos() as u64);
+        self.emit_ns.push(emit.as_nanos() as u64);
+        self.active_polygons.push(st.active_polygons);
+        self.max_active_nodes = self.max_active_nodes.max(st.active_nodes);
+        self.indices.push(indices as u32);
+        self.refusals += u64::from(st.capacity_refusals);
+        self.overflows += u64::from(st.stack_overflows);
+    }
+
+    /// Frames after the first: the first frame refines from the base mesh.
+    pub fn steady<T: Copy>(v: &[T]) -> &[T] {
+        v.get(1..).unwrap_or(&[])
+    }
+
+    pub fn ops_mean(&self) -> f64 {
+        mean(Self::steady(&self.ops).iter().map(|&x| f64::from(x)))
+    }
+
+    pub fn ops_max(&self) -> u32 {
+        Self::steady(&self.ops).iter().copied().max().unwrap_or(0)
+    }
+
+    pub fn refine_ms_mean(&self) -> f64 {
+        mean(Self::steady(&self.refine_ns).iter().map(|&x| x as f64)) * 1e-6
+    }
+
+    pub fn refine_ms_p99(&self) -> f64 {
+        percentile(Self::steady(&self.refine_ns), 0.99) as f64 * 1e-6
+    }
+
+    pub fn emit_ms_mean(&self) -> f64 {
+        mean(Self::steady(&self.emit_ns).iter().map(|&x| x as f64)) * 1e-6
+    }
+
+    pub fn active_mean(&self) -> f64 {
+        mean(
+            Self::steady(&self.active_polygons)
+                .iter()
+                .map(|&x| f64::from(x)),
+        )
+    }
+
+    pub fn active_max(&self) -> u32 {
+        self.active_polygons.iter().copied().max().unwrap_or(0)
+    }
+
+    pub fn indices_mean(&self) -> f64 {
+        mean(Self::steady(&self.indices).iter().map(|&x| f64::from(x)))
+    }
+
+    pub fn indices_total(&self) -> u64 {
+        self.indices.iter().map(|&x| u64::from(x)).sum()
+    }
+}
+
+/// The mean (0 for none).
+pub fn mean(it: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in it {
+        s += x;
+        n += 1;
+    }
+    if n == 0 {
+        0.0
+    } else {
+        s / n as f64
+    }
+}
+
+/// The `q`-quantile (nearest rank; 0 for none).
+pub fn percentile(v: &[u64], q: f64) -> u64 {
+    if v.is_empty() {
+        return 0;
+    }
+    let mut s = v.to_vec();
+    s.sort_unstable();
+    let i = ((s.len() as f64 * q).ceil() as usize).clamp(1, s.len()) - 1;
+    s[i]
+}
+
+/// Index output of one camera, allocated once and reused every frame.
+pub struct IndexBuffers {
+    /// Indices of all surfaces, packed.
+    pub indices: Vec<u32>,
+    /// Where each surface starts in `indices`.
+    pub offsets: Vec<u32>,
+}
+
+impl IndexBuffers {
+    /// Room for the largest front a camera with `max_pairs` splits can hold.
+    pub fn new(h: &Hierarchy<'_>, max_pairs: u32) -> Self {
+        let polys = h.base_polygon_count() + 2 * max_pairs as usize;
+        Self {
+            indices: vec![0; 3 * polys],
+            offsets: vec![0; h.surface_count() + 1],
+        }
+    }
+}
+
+/// Refines `cam` to `view`, emits its indices, and records the frame.
+pub fn frame(
+    h: &Hierarchy<'_>,
+    cam: &mut CameraState<'_>,
+    view: &View,
+    params: &RefineParams,
+    out: Option<&mut IndexBuffers>,
+    rec: &mut Record,
+) -> Result<(), String> {
+    let t0 = Instant::now();
+    let st = cam
+        .refine(h, view, params)
+        .map_err(|e| format!("refine: {e}"))?;
+    let t1 = Instant::now();
+    let n = match out {
+        Some(out) => {
+            let n = cam
+                .emit_indices_packed(h, &mut out.indices, &mut out.offsets)
+                .map_err(|e| format!("emit: {e}"))?;
+            std::hint::black_box(&out.indices);
+            n
+        }
+        None => 0,
+    };
+    let t2 = Instant::now();
+    rec.push(&st, t1 - t0, t2 - t1, n);
+    Ok(())
+}
+
+/// What one flight of several cameras measured.
+pub struct Flight {
+    /// Per camera.
+    pub records: Vec<Record>,
+    /// Bytes of one camera state.
+    pub camera_bytes: usize,
+    /// Wall time of the whole flight.
+    pub wall: Duration,
+}
+
+/// One flight of every camera, each with its own state of capacity `config`, over every
+/// `stride`-th frame; `emit` also writes the index lists each frame.
+pub fn fly_per_camera(
+    h: &Hierarchy<'_>,
+    views: &[Vec<View>],
+    params: &RefineParams,
+    config: &CameraConfig,
+    stride: usize,
+    emit: bool,
+    threads: bool,
+) -> Result<Flight, String> {
+    let start = Instant::now();
+    let words = CameraState::words_needed_for(h, config);
+    let mut memories: Vec<Vec<u32>> = views.iter().map(|_| vec![0u32; words]).collect();
+    let mut cams = Vec::with_capacity(views.len());
+    for m in memories.iter_mut() {
+        cams.push(CameraState::with_config(h, m, config).map_err(|e| e.to_string())?);
+    }
+    let camera_bytes = cams.first().map_or(0, CameraState::bytes);
+    let mut outs: Vec<Option<IndexBuffers>> = views
+        .iter()
+        .map(|_| emit.then(|| IndexBuffers::new(h, config.max_pairs)))
+        .collect();
+    let frames = views.first().map_or(0, Vec::len).div_ceil(stride);
+    let records = if threads {
+        let barrier = Barrier::new(views.len());
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = cams
+                .into_iter()
+                .zip(outs.iter_mut())
+                .zip(views)
+                .map(|((mut cam, out), cam_views)| {
+                    let barrier = &barrier;
+                    // The camera state moves to its thread (`Send`); every thread reads the
+                    // one hierarchy (`Sync`). Frames stay in step, as a renderer's would.
+                    scope.spawn(move || -> Result<Record, String> {
+                        let mut rec = Record::with_capacity(frames);
+                        let mut failed = Ok(());
+                        for view in cam_views.iter().step_by(stride) {
+                            if failed.is_ok() {
+                                failed = frame(h, &mut cam, view, params, out.as_mut(), &mut rec);
+                            }
+                            barrier.wait();
+                        }
+                        failed.map(|()| rec)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|t| t.join().map_err(|_| "camera thread panicked".to_string())?)
+                .collect::<Result<Vec<_>, _>>()
+        })?
+    } else {
+        let mut records: Vec<Record> = views
+            .iter()
+            .map(|_| Record::with_capacity(frames))
+            .collect();
+        for f in (0..views.first().map_or(0, Vec::len)).step_by(stride) {
+            for (c, cam) in cams.iter_mut().enumerate() {
+                frame(
+                    h,
+                    cam,
+                    &views[c][f],
+                    params,
+                    outs[c].as_mut(),
+                    &mut records[c],
+                )?;
+            }
+        }
+        records
+    };
+    Ok(Flight {
+        records,
+        camera_bytes,
+        wall: start.elapsed(),
+    })
+}
+
+/// The paper's baseline: one state, re-refined to each camera's view in turn every frame.
+pub fn fly_shared(
+    h: &Hierarchy<'_>,
+    views: &[Vec<View>],
+    params: &RefineParams,
+) -> Result<Flight, String> {
+    let start = Instant::now();
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = CameraState::new(h, &mut memory).map_err(|e| e.to_string())?;
+    let mut out = IndexBuffers::new(h, cam.max_pairs());
+    let frames = views.first().map_or(0, Vec::len);
+    let mut records: Vec<Record> = views
+        .iter()
+        .map(|_| Record::with_capacity(frames))
+        .collect();
+    for f in 0..frames {
+        for c in 0..views.len() {
+            frame(
+                h,
+                &mut cam,
+                &views[c][f],
+                params,
+                Some(&mut out),
+                &mut records[c],
+            )?;
+        }
+    }
+    Ok(Flight {
+        records,
+        camera_bytes: cam.bytes(),
+        wall: start.elapsed(),
+    })
+}
+
+/// Summary over all cameras of one flight.
+pub struct Summary {
+    pub ops_mean: f64,
+    pub ops_max: u32,
+    pub first_frame_ops: f64,
+    pub refine_ms_mean: f64,
+    pub refine_ms_p99: f64,
+    pub emit_ms_mean: f64,
+    pub active_mean: f64,
+    pub active_max: u32,
+    pub max_active_nodes: u32,
+    pub refusals: u64,
+}
+
+/// Summary over the cameras of one flight.
+pub fn summarise(records: &[Record]) -> Summary {
+    let all_refine: Vec<u64> = records
+        .iter()
+        .flat_map(|r| Record::steady(&r.refine_ns).iter().copied())
+        .collect();
+    let n = records.len().max(1) as f64;
+    Summary {
+        ops_mean: records.iter().map(Record::ops_mean).sum::<f64>() / n,
+        ops_max: records.iter().map(Record::ops_max).max().unwrap_or(0),
+        first_frame_ops: records
+            .iter()
+            .map(|r| f64::from(r.ops.first().copied().unwrap_or(0)))
+            .sum::<f64>()
+            / n,
+        refine_ms_mean: records.iter().map(Record::refine_ms_mean).sum::<f64>() / n,
+        refine_ms_p99: percentile(&all_refine, 0.99) as f64 * 1e-6,
+        emit_ms_mean: records.iter().map(Record::emit_ms_mean).sum::<f64>() / n,
+        active_mean: records.iter().map(Record::active_mean).sum::<f64>() / n,
+        active_max: records.iter().map(Record::active_max).max().unwrap_or(0),
+        max_active_nodes: records
+            .iter()
+            .map(|r| r.max_active_nodes)
+            .max()
+            .unwrap_or(0),
+        refusals: records.iter().map(|r| r.refusals).sum(),
+    }
+}

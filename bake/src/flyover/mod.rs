@@ -1,0 +1,387 @@
+//! The CAVECLOD paper's experiment: several cameras fly scripted routes over one hierarchy,
+//! each refining its own [`CameraState`] (the default), or one shared state re-refined to each
+//! camera's view in turn every frame (`Mode::Shared`, the paper's baseline), or a state per
+//! camera on a thread per camera (`Mode::Threads`, the paper's future work).
+//!
+//! Per-camera modes first size their cameras: a refine-only flight of full-capacity cameras
+//! ([`CameraConfig::full`]) over every third frame finds the largest front each camera needs;
+//! the measured flight then uses cameras sized by [`CameraConfig::with_polygon_budget`] to that
+//! front plus 10%, which is what a runtime with fixed memory would allocate. Capacity refusals
+//! are counted. Memory is reported for both capacities against the paper's equation 1.
+//! Views are computed before the flight, so it times only the runtime (refine and emit).
+
+pub mod fly;
+pub mod routes;
+
+use std::fmt::Write as _;
+use std::time::Duration;
+
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, MemoryReport, RefineParams, View};
+use serde_json::{json, Value};
+
+pub use fly::{fly_per_camera, fly_shared, summarise, Flight, Record, Summary};
+pub use routes::{routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
+
+/// Headroom over the sizing flight's largest front when budgeting cameras.
+const BUDGET_HEADROOM: f64 = 1.10;
+/// The sizing flight refines every this many frames.
+const SIZING_STRIDE: usize = 3;
+
+/// How the cameras share state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// A state per camera, one thread.
+    PerCamera,
+    /// A state per camera, one thread per camera.
+    Threads,
+    /// One shared state re-refined for each camera in turn (the paper's baseline).
+    Shared,
+}
+
+impl Mode {
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::PerCamera => "per-camera",
+            Self::Threads => "per-camera-threads",
+            Self::Shared => "shared-state",
+        }
+    }
+}
+
+/// What to fly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlyoverOptions {
+    /// 1 to 4 cameras.
+    pub cameras: usize,
+    /// Frames per camera.
+    pub frames: usize,
+    /// Screen-space tolerance in pixels (1280 x 720, 60° field of view).
+    pub tolerance: f32,
+    /// State sharing.
+    pub mode: Mode,
+    /// Fly full-capacity cameras instead of sizing them first.
+    pub full_capacity: bool,
+}
+
+impl Default for FlyoverOptions {
+    fn default() -> Self {
+        Self {
+            cameras: 4,
+            frames: 300,
+            tolerance: 1.0,
+            mode: Mode::PerCamera,
+            full_capacity: false,
+        }
+    }
+}
+
+/// The result of a fly-over.
+pub struct Flyover {
+    /// What was flown.
+    pub options: FlyoverOptions,
+    /// The route names, per camera.
+    pub names: Vec<&'static str>,
+    /// The measured flight.
+    pub flight: Flight,
+    /// Its summary.
+    pub summary: Summary,
+    /// The sizing flight, if one was flown.
+    pub sizing: Option<Flight>,
+    /// Polygon budget the measured cameras were sized to, if sized.
+    pub budget: Option<u32>,
+    /// Memory of a full-capacity camera against the paper.
+    pub memory_full: MemoryReport,
+    /// Memory of a budgeted camera against the paper.
+    pub memory_budgeted: MemoryReport,
+    /// Polygons the budgeted figure is for.
+    pub budget_polygons: u32,
+    /// Vertex-table cells and filled cells.
+    pub vertex_table_fill: (u64, u64),
+}
+
+/// Every camera's views for `options`, computed up front.
+pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>, Vec<Vec<View>>) {
+    let ground = Ground::new(h);
+    let speed = ground.size / 600.0;
+    let all = routes();
+    let chosen = &all[..options.cameras.clamp(1, 4)];
+    let names = chosen.iter().map(|r| r.name).collect();
+    let views = chosen
+        .iter()
+        .map(|r| {
+            (0..options.frames)
+                .map(|f| view_at(r, f, speed, &ground))
+                .collect()
+        })
+        .collect();
+    (names, views)
+}
+
+/// Flies `options` over `h`.
+pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
+    if !(1..=4).contains(&options.cameras) {
+        return Err(format!("cameras must be 1 to 4, not {}", options.cameras));
+    }
+    if options.frames < 2 || !options.tolerance.is_finite() || options.tolerance <= 0.0 {
+        return Err("need at least 2 frames and a positive tolerance".into());
+    }
+    let (names, views) = views(h, options);
+    let params = RefineParams {
+        tolerance_px: options.tolerance,
+        ..RefineParams::default()
+    };
+    let threads = options.mode == Mode::Threads;
+    let full_config = CameraConfig::full(h);
+    let mut sizing = None;
+    let (flight, budget) = if options.mode == Mode::Shared {
+        (fly_shared(h, &views, &params)?, None)
+    } else if options.full_capacity {
+        let f = fly_per_camera(h, &views, &params, &full_config, 1, true, threads)?;
+        (f, None)
+    } else {
+        let s = fly_per_camera(
+            h,
+            &views,
+            &params,
+            &full_config,
+            SIZING_STRIDE,
+            false,
+            threads,
+        )?;
+        let largest = summarise(&s.records).active_max;
+        let budget = ((f64::from(largest) * BUDGET_HEADROOM).ceil() as u32)
+            .max(h.base_polygon_count() as u32);
+        let config = CameraConfig::with_polygon_budget(h, budget);
+        let f = fly_per_camera(h, &views, &params, &config, 1, true, threads)?;
+        sizing = Some(s);
+        (f, Some(budget))
+    };
+    let summary = summarise(&flight.records);
+    let full_bytes = match &sizing {
+        Some(sz) => sz.camera_bytes,
+        None if options.mode == Mode::Shared || options.full_capacity => flight.camera_bytes,
+        None => 0,
+    };
+    let budget_polygons = budget.unwrap_or_else(|| {
+        ((f64::from(summary.active_max) * BUDGET_HEADROOM).ceil() as u32)
+            .max(h.base_polygon_count() as u32)
+    });
+    let budget_bytes = if budget.is_some() {
+        flight.camera_bytes
+    } else {
+        let config = CameraConfig::with_polygon_budget(h, budget_polygons);
+        4 * CameraState::words_needed_for(h, &config) + std::mem::size_of::<CameraState<'_>>()
+    };
+    let (na, pa) = (
+        u64::from(summary.max_active_nodes),
+        u64::from(summary.active_max),
+    );
+    Ok(Flyover {
+        options: *options,
+        names,
+        flight,
+        summary,
+        sizing,
+        budget,
+        memory_full: MemoryReport::new(h, full_bytes, na, pa),
+        memory_budgeted: MemoryReport::new(h, budget_bytes, na, pa),
+        budget_polygons,
+        vertex_table_fill: h.vertex_table_fill(),
+    })
+}
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1024.0 * 1024.0)
+}
+
+fn secs(d: Duration) -> f64 {
+    d.as_secs_f64()
+}
+
+impl Flyover {
+    /// The report as JSON, with the stable keys `cameras`, `frames`, `ops_per_camera_per_frame`
+    /// (mean, max, first frame), `refine_ms_per_frame` (mean, p99), `active_polygons` (mean and
+    /// max per camera), `static_bytes`, `camera_bytes`, `paper_camera_bytes` (for the camera
+    /// actually flown: budgeted when sized, full otherwise), and more.
+    pub fn json(&self) -> Value {
+        let s = &self.summary;
+        let flown = if self.budget.is_some() {
+            &self.memory_budgeted
+        } else {
+            &self.memory_full
+        };
+        let per_camera: Vec<Value> = self
+            .names
+            .iter()
+            .zip(&self.flight.records)
+            .map(|(name, r)| {
+                json!({
+                    "name": name,
+                    "ops_mean": r.ops_mean(),
+                    "ops_max": r.ops_max(),
+                    "first_frame_ops": r.ops.first().copied().unwrap_or(0),
+                    "refine_ms_mean": r.refine_ms_mean(),
+                    "refine_ms_p99": r.refine_ms_p99(),
+                    "emit_ms_mean": r.emit_ms_mean(),
+                    "active_polygons_mean": r.active_mean(),
+                    "active_polygons_max": r.active_max(),
+                    "indices_total": r.indices_total(),
+                })
+            })
+            .collect();
+        json!({
+            "mode": self.options.mode.name(),
+            "cameras": self.options.cameras,
+            "frames": self.options.frames,
+            "tolerance_px": self.options.tolerance,
+            "ops_per_camera_per_frame": {
+                "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
+            },
+            "refine_ms_per_frame": { "mean": s.refine_ms_mean, "p99": s.refine_ms_p99 },
+            "emit_ms_per_frame": s.emit_ms_mean,
+            "active_polygons": { "mean": s.active_mean, "max": s.active_max },
+            "capacity_refusals": s.refusals,
+            "static_bytes": flown.static_bytes,
+            "paper_static_bytes": flown.paper_static_bytes,
+            "camera_bytes": flown.camera_bytes,
+            "paper_camera_bytes": flown.paper_camera_bytes,
+            "camera_ratio": flown.camera_ratio(),
+            "camera_bytes_full": self.memory_full.camera_bytes,
+            "camera_ratio_full": self.memory_full.camera_ratio(),
+            "budget_polygons": self.budget_polygons,
+            "budgeted_flown": self.budget.is_some(),
+            "flight_s": secs(self.flight.wall),
+            "sizing_s": self.sizing.as_ref().map(|f| secs(f.wall)),
+            "per_camera": per_camera,
+        })
+    }
+
+    /// The report for people.
+    pub fn human(&self) -> String {
+        let mut o = String::new();
+        let s = &self.summary;
+        let _ = writeln!(
+            o,
+            "{} camera(s), {} frames, tolerance {} px at {WIDTH}x{HEIGHT}, fov {FOV_Y_DEG} deg; \
+             mode: {}",
+            self.options.cameras,
+            self.options.frames,
+            self.options.tolerance,
+            match self.options.mode {
+                Mode::Shared => "one shared state re-refined for each camera in turn (baseline)",
+                Mode::Threads => "a state per camera, one thread per camera",
+                Mode::PerCamera => "a state per camera, one thread",
+            }
+        );
+        if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
+            let _ = writeln!(
+                o,
+                "sizing flight (full-capacity cameras, refine only, every {SIZING_STRIDE}rd \
+                 frame): {:.2} s -> budget {b} polygons (+{:.0}%)",
+                secs(sz.wall),
+                (BUDGET_HEADROOM - 1.0) * 100.0
+            );
+        }
+        let _ = writeln!(
+            o,
+            "flight: {:.2} s for {} camera-frames (ops = splits + collapses; per-frame figures \
+             leave out frame 0, which refines from the base mesh)",
+            secs(self.flight.wall),
+            self.options.cameras * self.options.frames
+        );
+        let _ = writeln!(
+            o,
+            "  {:<14} {:>9} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8}",
+            "camera",
+            "first-op",
+            "ops/f",
+            "max-ops/f",
+            "refine",
+            "p99",
+            "emit",
+            "active",
+            "max-act",
+            "refused"
+        );
+        for (name, r) in self.names.iter().zip(&self.flight.records) {
+            let _ = writeln!(
+                o,
+                "  {:<14} {:>9} {:>7.1} {:>9} {:>6.3} ms {:>6.3} ms {:>6.3} ms {:>9.0} {:>9} {:>8}",
+                name,
+                r.ops.first().copied().unwrap_or(0),
+                r.ops_mean(),
+                r.ops_max(),
+                r.refine_ms_mean(),
+                r.refine_ms_p99(),
+                r.emit_ms_mean(),
+                r.active_mean(),
+                r.active_max(),
+                r.refusals,
+            );
+        }
+        let _ = writeln!(
+            o,
+            "  all cameras: {:.1} ops/frame/camera (max {}), refine {:.3} ms mean, {:.3} ms p99, \
+             emit {:.3} ms mean, {:.0} active polygons mean, {} capacity refusals",
+            s.ops_mean,
+            s.ops_max,
+            s.refine_ms_mean,
+            s.refine_ms_p99,
+            s.emit_ms_mean,
+            s.active_mean,
+            s.refusals
+        );
+        let (f, b) = (&self.memory_full, &self.memory_budgeted);
+        let _ = writeln!(
+            o,
+            "memory (paper: b = 44n + 12p + 32d + 2se + 12n_a + 36p_a + c(4n + 4p + 16), with \
+             n_a, p_a the largest front of one camera: {} nodes, {} polygons)",
+            s.max_active_nodes, s.active_max
+        );
+        let _ = writeln!(
+            o,
+            "  static:               ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}  (vertex table {:.1}% filled)",
+            f.static_bytes,
+            mib(f.static_bytes),
+            f.paper_static_bytes,
+            mib(f.paper_static_bytes),
+            f.static_bytes as f64 / f.paper_static_bytes.max(1) as f64,
+            100.0 * self.vertex_table_fill.1 as f64 / self.vertex_table_fill.0.max(1) as f64
+        );
+        let _ = writeln!(
+            o,
+            "  per camera, full:     ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}",
+            f.camera_bytes,
+            mib(f.camera_bytes),
+            f.paper_camera_bytes,
+            mib(f.paper_camera_bytes),
+            f.camera_ratio()
+        );
+        let _ = writeln!(
+            o,
+            "  per camera, budgeted: ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}  ({} polygons{})",
+            b.camera_bytes,
+            mib(b.camera_bytes),
+            b.paper_camera_bytes,
+            mib(b.paper_camera_bytes),
+            b.camera_ratio(),
+            self.budget_polygons,
+            if self.budget.is_some() {
+                ", flown"
+            } else {
+                ", computed, not flown"
+            }
+        );
+        o
+    }
+}
+
+// The shared hierarchy may be read from any thread; a camera state may move to its thread.
+const fn is_sync<T: Sync>() {}
+const fn is_send<T: Send>() {}
+const _: () = is_sync::<Hierarchy<'static>>();
+const _: () = is_send::<CameraState<'static>>();
