@@ -168,9 +168,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     let (msg, done, total) = match s {
                         OocStage::Read(d, t) => ("reading and sorting".to_string(), d, t),
                         OocStage::Merge(d, t) => ("merging sorted runs".to_string(), d, t),
-                        OocStage::Cluster(level, d, t) => {
-                            (format!("clustering at level {level}"), d, t)
-                        }
+                        OocStage::Cluster(r, d, t) => (format!("clustering on a {r}^3 grid"), d, t),
                     };
                     ooc_bar.set_message(msg);
                     ooc_bar.set_length(total);
@@ -209,7 +207,7 @@ fn run(cli: Cli) -> Result<(), String> {
                             "input_vertices": st.input_vertices,
                             "clustered_triangles": st.output_triangles,
                             "clusters": st.clusters,
-                            "level": st.level,
+                            "resolution": st.resolution,
                             "target_triangles": st.target_triangles,
                             "octree_nodes": st.octree_nodes,
                             "octree_leaves": st.octree_leaves,

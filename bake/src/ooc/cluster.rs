@@ -1,7 +1,8 @@
 //! Vertex clustering with generalized quadrics over position, normal, UV and colour.
 //!
-//! Every corner falls in a cell of a `2^level` grid over the input's bounding cube (the
-//! octree's cells at depth `level`). Inside a cell, corners are grouped into *clusters* that
+//! Every corner falls in a cell of a grid of `resolution` cells per axis over the input's
+//! bounding cube (at a power of two, the octree's cells at that depth; in between, so that
+//! the output size can be aimed closer than a factor of four). Inside a cell, corners are grouped into *clusters* that
 //! never mix surfaces and never join the two sides of a UV seam: a corner joins the cell's
 //! cluster of its surface whose UV, predicted at the cell centre, is close to its own
 //! prediction (the prediction extends the corner's triangle's affine UV map to the cell
@@ -49,23 +50,29 @@ impl Default for Weights {
 /// How to cluster.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClusterOptions {
-    /// Grid level: `2^level` cells per axis of the bounding cube.
-    pub level: u32,
+    /// Cells per axis of the bounding cube (1 to 2^21).
+    pub resolution: u32,
     /// Attribute weights.
     pub weights: Weights,
-    /// UV distance beyond which two corners' predictions are two sides of a seam (the
-    /// tolerance grows with the UV change across half a cell, which predictions at coarse
-    /// levels cannot resolve).
+    /// UV distance (in either coordinate) beyond which two corners' predictions are two sides
+    /// of a seam. Predictions are exact for UV maps affine across the cell; a curved map
+    /// splits a chart's corners into more clusters than needed at coarse resolutions (a few
+    /// percent more vertices, no cracks: the clusters of a cell share its position).
     pub seam_tolerance: f32,
     /// Record each input corner's cluster ([`Clusterer::corner_clusters`]), for tests.
     pub record_corners: bool,
 }
 
 impl ClusterOptions {
-    /// Defaults at `level`.
+    /// Defaults at `2^level` cells per axis.
     pub fn at_level(level: u32) -> Self {
+        Self::at_resolution(1 << level.min(21))
+    }
+
+    /// Defaults at `resolution` cells per axis.
+    pub fn at_resolution(resolution: u32) -> Self {
         Self {
-            level,
+            resolution,
             weights: Weights::default(),
             seam_tolerance: 0.05,
             record_corners: false,
@@ -110,11 +117,14 @@ fn cell_id(c: [u32; 3]) -> u64 {
 impl Clusterer {
     /// A clusterer on `cube`.
     pub fn new(cube: Cube, options: ClusterOptions) -> Self {
-        let level = options.level.min(21);
+        let resolution = options.resolution.clamp(1, 1 << 21);
         Self {
             cube,
-            options: ClusterOptions { level, ..options },
-            scale: (1u64 << level) as f64 / cube.size,
+            options: ClusterOptions {
+                resolution,
+                ..options
+            },
+            scale: f64::from(resolution) / cube.size,
             cells: FxHashMap::default(),
             cell_first: Vec::new(),
             cell_coords: Vec::new(),
@@ -178,7 +188,7 @@ impl Clusterer {
 
     /// The cell of a point in cell units, and its id.
     fn cell_of(&self, p: &[f64; DIM]) -> [u32; 3] {
-        let top = ((1u64 << self.options.level) - 1) as f64;
+        let top = f64::from(self.options.resolution - 1);
         [0, 1, 2].map(|a| p[a].floor().clamp(0.0, top) as u32)
     }
 
@@ -191,8 +201,7 @@ impl Clusterer {
             self.cell_of(&p[1]),
             self.cell_of(&p[2]),
         ];
-        // UV prediction: the triangle's affine UV map at each corner's cell centre, and how
-        // much UV half a cell spans.
+        // UV prediction: the triangle's affine UV map at each corner's cell centre.
         let (d1, d2) = (sub3(&p[1], &p[0]), sub3(&p[2], &p[0]));
         let (g11, g12, g22) = (dot3(d1, d1), dot3(d1, d2), dot3(d2, d2));
         let det = g11 * g22 - g12 * g12;
@@ -202,18 +211,6 @@ impl Clusterer {
         let du2 = [u2[0] - u0[0], u2[1] - u0[1]];
         let has_uv = t.flags & HAS_UV != 0;
         let affine = has_uv && det > 1e-12 * (g11 * g22).max(f64::MIN_POSITIVE);
-        let slack = if affine {
-            // Frobenius norm of the UV gradient (per cell unit), times half a cell diagonal.
-            let (i11, i12, i22) = (g22 / det, -g12 / det, g11 / det);
-            let mut g = 0.0;
-            for c in 0..2 {
-                let (a, b) = (du1[c], du2[c]);
-                g += a * a * i11 + 2.0 * a * b * i12 + b * b * i22;
-            }
-            0.87 * g.sqrt()
-        } else {
-            0.0
-        };
         let mut ids = [0u32; 3];
         for k in 0..3 {
             let pred = if affine {
@@ -229,7 +226,7 @@ impl Clusterer {
             } else {
                 t.corners[k].uv
             };
-            ids[k] = self.cluster_for(cells[k], t.surface, t.flags, has_uv, pred, slack as f32);
+            ids[k] = self.cluster_for(cells[k], t.surface, t.flags, has_uv, pred);
         }
         if self.options.record_corners {
             self.corner_clusters.extend_from_slice(&ids);
@@ -270,7 +267,6 @@ impl Clusterer {
         flags: u16,
         has_uv: bool,
         uv: [f32; 2],
-        slack: f32,
     ) -> u32 {
         let id = cell_id(cell);
         let next_cell = self.cell_first.len() as u32;
@@ -279,7 +275,7 @@ impl Clusterer {
             self.cell_first.push(u32::MAX);
             self.cell_coords.push(cell);
         }
-        let tol = self.options.seam_tolerance + slack;
+        let tol = self.options.seam_tolerance;
         let mut k = self.cell_first[ci as usize];
         while k != u32::MAX {
             let c = &mut self.clusters[k as usize];

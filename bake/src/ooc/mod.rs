@@ -13,8 +13,8 @@
 //!    every depth;
 //! 3. [`octree`]: the sorted file is the octree's storage: each node is a range of it; nodes
 //!    split until a leaf holds at most a set number of triangles or the maximum depth;
-//! 4. [`cluster`]: leaf by leaf, corners are clustered on the grid of the octree level whose
-//!    occupied-cell count says the output will fit the target, with one quadric per cluster
+//! 4. [`cluster`]: leaf by leaf, corners are clustered on a grid whose resolution the
+//!    occupied-cell counts say will make the output fit the target, with one quadric per cluster
 //!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
 //!    optima.
 //!
@@ -45,7 +45,8 @@ pub use cluster::{ClusterOptions, Clusterer, Weights};
 pub use temp::{parse_size, TempSpace};
 
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
-use soup::{encode_normal, linear_to_srgb8, Corner, Cube, SoupTriangle, KEY_LEVELS};
+pub use soup::Cube;
+use soup::{encode_normal, linear_to_srgb8, Corner, SoupTriangle, KEY_LEVELS};
 
 /// Why an out-of-core simplification failed.
 #[derive(Debug, thiserror::Error)]
@@ -176,8 +177,8 @@ pub struct OocStats {
     pub output_triangles: u64,
     /// Clusters (output vertices).
     pub clusters: u64,
-    /// Grid level clustered at.
-    pub level: u32,
+    /// Grid cells per axis clustered at.
+    pub resolution: u32,
     /// Target the level was chosen for.
     pub target_triangles: u64,
     /// Octree nodes and leaves.
@@ -199,7 +200,7 @@ pub enum OocStage {
     Read(u64, u64),
     /// Merging sorted runs: `(done, total)`.
     Merge(u64, u64),
-    /// Clustering at a level: triangles `(done, total)`.
+    /// Clustering at a grid resolution: triangles `(resolution, done, total)`.
     Cluster(u32, u64, u64),
 }
 
@@ -275,13 +276,17 @@ pub fn simplify_file(
         .target_triangles
         .unwrap_or_else(|| target_triangles_for_budget(budget));
     stats.target_triangles = target;
-    let mut level = if sorted.triangles <= target {
-        KEY_LEVELS
+    let mut resolution = if sorted.triangles <= target {
+        1 << KEY_LEVELS
     } else {
-        (1..=KEY_LEVELS)
+        // The finest octree depth whose occupied cells (about half the output triangles)
+        // fit, then a resolution between it and the next depth by the surface's square law.
+        let l = (1..=KEY_LEVELS)
             .rev()
             .find(|&l| 2 * sorted.occupied[l as usize] <= target)
-            .unwrap_or(1)
+            .unwrap_or(1);
+        let f = (target as f64 / (2 * sorted.occupied[l as usize]).max(1) as f64).sqrt();
+        ((f64::from(1u32 << l) * f.min(2.0)) as u32).max(2)
     };
     let t1 = Instant::now();
     let mut buf = Vec::new();
@@ -290,7 +295,7 @@ pub fn simplify_file(
             sorted.cube,
             ClusterOptions {
                 weights: options.weights,
-                ..ClusterOptions::at_level(level)
+                ..ClusterOptions::at_resolution(resolution)
             },
         );
         let mut done = 0;
@@ -300,19 +305,19 @@ pub fn simplify_file(
                 c.add(t);
             }
             done += leaf.count;
-            progress(OocStage::Cluster(level, done, sorted.triangles));
+            progress(OocStage::Cluster(resolution, done, sorted.triangles));
         }
-        // The occupancy of centroids only estimates the output: go one level coarser when
-        // it came out far above the target.
-        if c.triangle_count() as u64 > 2 * target && level > 1 {
-            level -= 1;
+        // The occupancy of centroids only estimates the output: go coarser when it came out
+        // far above the target.
+        if c.triangle_count() as u64 > 2 * target && resolution > 2 {
+            resolution = resolution * 7 / 10;
             continue;
         }
         stats.clusters = c.cluster_count() as u64;
         break c.finish(&report.surfaces);
     };
     drop(buf);
-    stats.level = level;
+    stats.resolution = resolution;
     stats.output_triangles = mesh.triangles.len() as u64;
     stats.seconds[2] = t1.elapsed().as_secs_f64();
     stats.temp_bytes = temp.used();
@@ -321,9 +326,8 @@ pub fn simplify_file(
     Ok((mesh, stats))
 }
 
-/// The soup of an in-memory mesh, keyed on its bounding cube (the adapter for formats that
-/// are not streamed).
-pub fn mesh_soup(mesh: &Mesh) -> (Cube, Vec<SoupTriangle>) {
+/// The bounding cube of a mesh's positions.
+pub fn mesh_cube(mesh: &Mesh) -> Cube {
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     for p in &mesh.positions {
         for k in 0..3 {
@@ -331,9 +335,13 @@ pub fn mesh_soup(mesh: &Mesh) -> (Cube, Vec<SoupTriangle>) {
             hi[k] = hi[k].max(p[k]);
         }
     }
-    let cube = Cube::around(lo, hi);
-    let soup = mesh
-        .triangles
+    Cube::around(lo, hi)
+}
+
+/// The soup of an in-memory mesh, keyed on `cube` (the adapter for formats that are not
+/// streamed).
+pub fn mesh_soup(mesh: &Mesh, cube: &Cube) -> Vec<SoupTriangle> {
+    mesh.triangles
         .iter()
         .map(|t| {
             let has = |i: [u32; 3]| !i.contains(&NO_ATTRIBUTE);
@@ -377,15 +385,19 @@ pub fn mesh_soup(mesh: &Mesh) -> (Cube, Vec<SoupTriangle>) {
                 corners,
             }
         })
-        .collect();
-    (cube, soup)
+        .collect()
 }
 
 /// Clusters an in-memory mesh (glTF and other formats that are not streamed) with the same
 /// clustering as [`simplify_file`], triangles in their order; returns the clustered mesh
 /// and the clusterer (for [`Clusterer::corner_clusters`]).
 pub fn cluster_mesh(mesh: &Mesh, options: ClusterOptions) -> (Mesh, Clusterer) {
-    let (cube, soup) = mesh_soup(mesh);
+    cluster_mesh_in(mesh, mesh_cube(mesh), options)
+}
+
+/// [`cluster_mesh`] on a given cube (which should contain the mesh).
+pub fn cluster_mesh_in(mesh: &Mesh, cube: Cube, options: ClusterOptions) -> (Mesh, Clusterer) {
+    let soup = mesh_soup(mesh, &cube);
     let mut c = Clusterer::new(cube, options);
     for t in &soup {
         c.add(t);
