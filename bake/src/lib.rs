@@ -6,6 +6,7 @@
 //! ([`baked`]), and the reports and exports of the `caveclod` command-line tool.
 
 pub mod baked;
+pub mod demo;
 pub mod export;
 pub mod flyover;
 pub mod generate;

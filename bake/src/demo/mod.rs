@@ -1,0 +1,520 @@
+//! `caveclod demo`: the whole library in one run. Bakes the St. Helens terrain and Spot from
+//! the repository's `data/` (cached in `out/cache/`), flies four cameras over the terrain with
+//! a state per camera, with one shared state (the CAVECLOD paper's baseline) and with a thread
+//! per camera, and with one to three cameras for scaling, then writes the figures, a CSV of
+//! every frame and `report.md` with the measured ratios against the acceptance targets.
+//!
+//! Everything the demo measures comes from [`crate::flyover`]; this module only chooses the
+//! runs, writes the files and words the report.
+
+mod plots;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use caveclod_core::{checksum64, Hierarchy};
+
+use crate::baked::{write_atomically, Baked};
+use crate::flyover::{fly, Flyover, FlyoverOptions, Mode};
+use crate::import::ImportOptions;
+use crate::pipeline::bake_file;
+use plots::Series;
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct DemoOptions {
+    /// Where the inputs are (`data/` of the repository).
+    pub data: PathBuf,
+    /// Where everything is written.
+    pub out: PathBuf,
+    /// Frames per flight.
+    pub frames: usize,
+    /// Bake again even if the cache has the file.
+    pub rebake: bool,
+}
+
+impl Default for DemoOptions {
+    fn default() -> Self {
+        Self {
+            data: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../data")),
+            out: PathBuf::from("out"),
+            frames: 300,
+            rebake: false,
+        }
+    }
+}
+
+/// A baked input, loaded.
+pub struct Loaded {
+    /// The input file.
+    pub input: PathBuf,
+    /// The cached `.clod`.
+    pub clod: PathBuf,
+    /// Whether it was baked now (false: read from the cache).
+    pub baked_now: bool,
+    /// Bake time if baked now.
+    pub bake_seconds: f64,
+    /// The file's bytes in 8-byte aligned words.
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl Loaded {
+    /// The hierarchy (validated again on each call; cheap next to a flight).
+    pub fn hierarchy(&self) -> Result<Hierarchy<'_>, String> {
+        let bytes = &bytemuck::cast_slice::<u64, u8>(&self.words)[..self.len];
+        Hierarchy::from_bytes(bytes).map_err(|e| format!("{}: {e}", self.clod.display()))
+    }
+}
+
+/// Bakes `input` into `cache` once: the cached file's name carries a checksum of the input and
+/// the crate version, so a changed input or baker bakes again.
+pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, String> {
+    let bytes = std::fs::read(input).map_err(|e| format!("{}: {e}", input.display()))?;
+    let key = checksum64(&bytes) ^ checksum64(env!("CARGO_PKG_VERSION").as_bytes());
+    let stem = input
+        .file_stem()
+        .map_or("input".into(), |s| s.to_string_lossy().into_owned());
+    std::fs::create_dir_all(cache).map_err(|e| format!("{}: {e}", cache.display()))?;
+    let clod = cache.join(format!("{stem}-{key:016x}.clod"));
+    let start = Instant::now();
+    let mut baked_now = false;
+    let file = match std::fs::read(&clod) {
+        Ok(b) if !rebake => b,
+        _ => {
+            let (baked, _info): (Baked, _) =
+                bake_file(input, &ImportOptions::default(), &mut |_| {})
+                    .map_err(|e| e.to_string())?;
+            let out = baked.to_bytes(&[]).map_err(|e| e.to_string())?;
+            write_atomically(&clod, &out).map_err(|e| e.to_string())?;
+            baked_now = true;
+            out
+        }
+    };
+    let mut words = vec![0u64; file.len().div_ceil(8)];
+    bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..file.len()].copy_from_slice(&file);
+    let loaded = Loaded {
+        input: input.to_path_buf(),
+        clod,
+        baked_now,
+        bake_seconds: start.elapsed().as_secs_f64(),
+        words,
+        len: file.len(),
+    };
+    loaded.hierarchy()?;
+    Ok(loaded)
+}
+
+/// The measured flights.
+pub struct Flights {
+    /// Four cameras, a state each.
+    pub per_camera: Flyover,
+    /// Four cameras, one shared state.
+    pub shared: Flyover,
+    /// Four cameras, a state and a thread each.
+    pub threads: Flyover,
+    /// One to three cameras, a state each (for scaling).
+    pub fewer: Vec<Flyover>,
+}
+
+/// Flies every run of the demo.
+pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
+    let base = FlyoverOptions {
+        cameras: 4,
+        frames,
+        ..FlyoverOptions::default()
+    };
+    let per_camera = fly(h, &base)?;
+    let shared = fly(
+        h,
+        &FlyoverOptions {
+            mode: Mode::Shared,
+            ..base
+        },
+    )?;
+    let threads = fly(
+        h,
+        &FlyoverOptions {
+            mode: Mode::Threads,
+            ..base
+        },
+    )?;
+    let fewer = (1..4)
+        .map(|c| fly(h, &FlyoverOptions { cameras: c, ..base }))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Flights {
+        per_camera,
+        shared,
+        threads,
+        fewer,
+    })
+}
+
+/// Total refinement time per frame over all cameras, in ms (frame 0 left out).
+fn refine_ms_all_cameras(f: &Flyover) -> f64 {
+    f.flight.records.iter().map(|r| r.refine_ms_mean()).sum()
+}
+
+/// The ratios the report and the acceptance checks use.
+#[derive(Clone, Copy, Debug)]
+pub struct Ratios {
+    /// Shared-state operations per camera per frame over per-camera's (goal ≥ 7).
+    pub ops: f64,
+    /// Shared-state refinement time over per-camera's (goal ≥ 3).
+    pub refine_time: f64,
+    /// Four cameras' refinement time over one camera's (goal ≤ 4.4).
+    pub four_over_one: f64,
+    /// One thread's flight time over a thread per camera's (goal ≥ 1.6 on 2 cores).
+    pub threads_speedup: f64,
+    /// Per-camera memory over the paper's (goal ≤ 0.5, 0.25 the stretch).
+    pub memory: f64,
+}
+
+/// Computes the ratios of a demo's flights.
+pub fn ratios(f: &Flights) -> Ratios {
+    let one = f.fewer.first().map_or(0.0, refine_ms_all_cameras);
+    Ratios {
+        ops: f.shared.summary.ops_mean / f.per_camera.summary.ops_mean.max(1e-9),
+        refine_time: f.shared.summary.refine_ms_mean
+            / f.per_camera.summary.refine_ms_mean.max(1e-9),
+        four_over_one: refine_ms_all_cameras(&f.per_camera) / one.max(1e-9),
+        threads_speedup: f.per_camera.flight.wall.as_secs_f64()
+            / f.threads.flight.wall.as_secs_f64().max(1e-9),
+        memory: f.per_camera.memory_budgeted.camera_ratio(),
+    }
+}
+
+/// Writes the per-frame CSV.
+fn write_csv(path: &Path, f: &Flights) -> Result<(), String> {
+    let mut s = String::from(
+        "mode,cameras,camera,route,frame,operations,refine_us,emit_us,active_polygons\n",
+    );
+    let all = [&f.per_camera, &f.shared, &f.threads]
+        .into_iter()
+        .chain(f.fewer.iter());
+    for fl in all {
+        for (c, (name, r)) in fl.names.iter().zip(&fl.flight.records).enumerate() {
+            for i in 0..r.ops.len() {
+                let _ = writeln!(
+                    s,
+                    "{},{},{c},{name},{i},{},{:.1},{:.1},{}",
+                    fl.options.mode.name(),
+                    fl.options.cameras,
+                    r.ops[i],
+                    r.refine_ns[i] as f64 / 1e3,
+                    r.emit_ns[i] as f64 / 1e3,
+                    r.active_polygons[i]
+                );
+            }
+        }
+    }
+    write_atomically(path, s.as_bytes()).map_err(|e| e.to_string())
+}
+
+/// Mean over cameras, per frame, of `pick(record)[frame]`.
+fn per_frame_mean(
+    fl: &Flyover,
+    pick: impl Fn(&crate::flyover::Record) -> Vec<f64>,
+) -> Vec<(f64, f64)> {
+    let columns: Vec<Vec<f64>> = fl.flight.records.iter().map(&pick).collect();
+    let frames = columns.iter().map(Vec::len).min().unwrap_or(0);
+    (1..frames)
+        .map(|i| {
+            let m = columns.iter().map(|c| c[i]).sum::<f64>() / columns.len().max(1) as f64;
+            (i as f64, m)
+        })
+        .collect()
+}
+
+/// Writes the figures; returns their paths.
+fn write_plots(out: &Path, f: &Flights) -> Result<Vec<PathBuf>, String> {
+    let err = |p: &Path, e: Box<dyn std::error::Error>| format!("{}: {e}", p.display());
+    let mut written = Vec::new();
+
+    let ops = |r: &crate::flyover::Record| r.ops.iter().map(|&x| f64::from(x)).collect();
+    let per = per_frame_mean(&f.per_camera, ops);
+    let shared = per_frame_mean(&f.shared, ops);
+    let p = out.join("fig-operations.svg");
+    plots::lines(
+        &p,
+        "Refinement operations per camera per frame (4 cameras, St. Helens)",
+        "frame",
+        "splits + collapses per camera (log scale)",
+        &[
+            Series {
+                label: "a state per camera (mean of 4)".into(),
+                points: &per,
+                baseline: false,
+            },
+            Series {
+                label: "one shared state re-refined per camera (mean of 4)".into(),
+                points: &shared,
+                baseline: true,
+            },
+        ],
+        true,
+    )
+    .map_err(|e| err(&p, e))?;
+    written.push(p);
+
+    let active: Vec<Vec<(f64, f64)>> = f
+        .per_camera
+        .flight
+        .records
+        .iter()
+        .map(|r| {
+            r.active_polygons
+                .iter()
+                .enumerate()
+                .map(|(i, &a)| (i as f64, f64::from(a)))
+                .collect()
+        })
+        .collect();
+    let series: Vec<Series<'_>> = f
+        .per_camera
+        .names
+        .iter()
+        .zip(&active)
+        .map(|(n, pts)| Series {
+            label: format!("camera: {n}"),
+            points: pts,
+            baseline: false,
+        })
+        .collect();
+    let p = out.join("fig-active-polygons.svg");
+    plots::lines(
+        &p,
+        "Active polygons per camera (a state per camera)",
+        "frame",
+        "active polygons",
+        &series,
+        false,
+    )
+    .map_err(|e| err(&p, e))?;
+    written.push(p);
+
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    let m = &f.per_camera.memory_budgeted;
+    let ours: Vec<(f64, f64)> = (1..=8u64)
+        .map(|c| (c as f64, mib(m.static_bytes + c * m.camera_bytes)))
+        .collect();
+    let paper: Vec<(f64, f64)> = (1..=8u64)
+        .map(|c| {
+            (
+                c as f64,
+                mib(m.paper_static_bytes + c * m.paper_camera_bytes),
+            )
+        })
+        .collect();
+    let p = out.join("fig-memory.svg");
+    plots::lines(
+        &p,
+        "Memory against the number of cameras (static + per-camera state)",
+        "cameras",
+        "MiB",
+        &[
+            Series {
+                label: "caveclod (cameras sized to their flight + 10%)".into(),
+                points: &ours,
+                baseline: false,
+            },
+            Series {
+                label: "CAVECLOD paper, equation 1, same mesh and fronts".into(),
+                points: &paper,
+                baseline: true,
+            },
+        ],
+        false,
+    )
+    .map_err(|e| err(&p, e))?;
+    written.push(p);
+
+    let mut measured: Vec<(f64, f64)> = f
+        .fewer
+        .iter()
+        .map(|fl| (fl.options.cameras as f64, refine_ms_all_cameras(fl)))
+        .collect();
+    measured.push((4.0, refine_ms_all_cameras(&f.per_camera)));
+    let one = measured.first().map_or(0.0, |p| p.1);
+    let linear: Vec<(f64, f64)> = (1..=4).map(|c| (c as f64, c as f64 * one)).collect();
+    let p = out.join("fig-scaling.svg");
+    plots::lines(
+        &p,
+        "Refinement time per frame, all cameras together (a state per camera)",
+        "cameras",
+        "ms per frame",
+        &[
+            Series {
+                label: "measured".into(),
+                points: &measured,
+                baseline: false,
+            },
+            Series {
+                label: "linear: cameras x one camera's time".into(),
+                points: &linear,
+                baseline: true,
+            },
+        ],
+        false,
+    )
+    .map_err(|e| err(&p, e))?;
+    written.push(p);
+    Ok(written)
+}
+
+fn verdict(ok: bool) -> &'static str {
+    if ok {
+        "met"
+    } else {
+        "not met"
+    }
+}
+
+/// The markdown report.
+fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f64) -> String {
+    let mut s = String::new();
+    let pc = &f.per_camera;
+    let _ = writeln!(s, "# caveclod demo report\n");
+    let _ = writeln!(
+        s,
+        "Terrain: `{}` ({}); model: `{}` ({}). {} frames per flight, 4 cameras, {} px \
+         tolerance at 1280x720. Whole demo: {seconds:.1} s.\n",
+        terrain.input.display(),
+        if terrain.baked_now {
+            format!("baked in {:.2} s", terrain.bake_seconds)
+        } else {
+            "from the bake cache".into()
+        },
+        model.input.display(),
+        if model.baked_now {
+            format!("baked in {:.2} s", model.bake_seconds)
+        } else {
+            "from the bake cache".into()
+        },
+        pc.options.frames,
+        pc.options.tolerance
+    );
+    let _ = writeln!(s, "| measure | value | target | |\n|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| refinement operations per camera per frame, shared state / per-camera state | {:.1}x ({:.1} vs {:.1}) | >= 7x | {} |",
+        r.ops,
+        f.shared.summary.ops_mean,
+        pc.summary.ops_mean,
+        verdict(r.ops >= 7.0)
+    );
+    let _ = writeln!(
+        s,
+        "| refinement time per camera per frame, shared / per-camera | {:.1}x ({:.3} ms vs {:.3} ms) | >= 3x | {} |",
+        r.refine_time,
+        f.shared.summary.refine_ms_mean,
+        pc.summary.refine_ms_mean,
+        verdict(r.refine_time >= 3.0)
+    );
+    let _ = writeln!(
+        s,
+        "| refinement time, 4 cameras / 1 camera | {:.2}x | <= 4.4x | {} |",
+        r.four_over_one,
+        verdict(r.four_over_one <= 4.4)
+    );
+    let _ = writeln!(
+        s,
+        "| flight time, one thread / a thread per camera | {:.2}x | >= 1.6x on 2 cores | {} |",
+        r.threads_speedup,
+        verdict(r.threads_speedup >= 1.6)
+    );
+    let _ = writeln!(
+        s,
+        "| per-camera memory / the paper's c(4n + 4p + 16) + 12n_a + 36p_a | {:.2} ({} B vs {} B) | <= 0.5 (goal 0.25) | {} |",
+        r.memory,
+        pc.memory_budgeted.camera_bytes,
+        pc.memory_budgeted.paper_camera_bytes,
+        verdict(r.memory <= 0.5)
+    );
+    let _ = writeln!(
+        s,
+        "\nTimes are wall-clock on this machine, shared with whatever else runs; ratios come \
+         from flights in the same run.\n"
+    );
+    let _ = writeln!(
+        s,
+        "## Per-camera state, 4 cameras\n\n```text\n{}```\n",
+        pc.human()
+    );
+    let _ = writeln!(
+        s,
+        "## One shared state, 4 cameras (the paper's baseline)\n\n```text\n{}```\n",
+        f.shared.human()
+    );
+    let _ = writeln!(
+        s,
+        "## A thread per camera, 4 cameras\n\n```text\n{}```\n",
+        f.threads.human()
+    );
+    let _ = writeln!(
+        s,
+        "## Figures\n\n- `fig-operations.svg`: refinement operations per camera per frame\n\
+         - `fig-active-polygons.svg`: active polygons per camera\n\
+         - `fig-memory.svg`: memory against the number of cameras\n\
+         - `fig-scaling.svg`: refinement time against the number of cameras\n\
+         - `flyover.csv`: every camera's every frame in every run"
+    );
+    s
+}
+
+/// What the demo wrote and measured.
+pub struct DemoOutcome {
+    /// The report's path.
+    pub report: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// The ratios.
+    pub ratios: Ratios,
+}
+
+/// Runs the demo; `say` receives progress lines.
+pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutcome, String> {
+    let start = Instant::now();
+    std::fs::create_dir_all(&options.out).map_err(|e| format!("{}: {e}", options.out.display()))?;
+    let cache = options.out.join("cache");
+    let terrain_path = options.data.join("terrain/SainteHelens.dem");
+    let model_path = options.data.join("spot/spot_triangulated.obj");
+    say(&format!(
+        "baking {} (cached in {})",
+        terrain_path.display(),
+        cache.display()
+    ));
+    let terrain = bake_cached(&terrain_path, &cache, options.rebake)?;
+    say(&format!("baking {}", model_path.display()));
+    let model = bake_cached(&model_path, &cache, options.rebake)?;
+    let h = terrain.hierarchy()?;
+    say(&format!(
+        "flying 4 cameras over {} polygons: a state per camera, one shared state, a thread per \
+         camera, and 1-3 cameras ({} frames each)",
+        h.polygon_count(),
+        options.frames
+    ));
+    let flights = fly_all(&h, options.frames)?;
+    let r = ratios(&flights);
+    let mut files = Vec::new();
+    let csv = options.out.join("flyover.csv");
+    write_csv(&csv, &flights)?;
+    files.push(csv);
+    files.extend(write_plots(&options.out, &flights)?);
+    let text = report(
+        &terrain,
+        &model,
+        &flights,
+        &r,
+        start.elapsed().as_secs_f64(),
+    );
+    let report_path = options.out.join("report.md");
+    write_atomically(&report_path, text.as_bytes()).map_err(|e| e.to_string())?;
+    files.push(report_path.clone());
+    Ok(DemoOutcome {
+        report: report_path,
+        files,
+        ratios: r,
+    })
+}

@@ -1,0 +1,119 @@
+//! The demo's figures (SVG through plotters, so they need no font files): refinement
+//! operations per camera, active polygons per camera, memory against the number of cameras,
+//! and refinement time against the number of cameras — the CAVECLOD paper's Figures 10–14.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+/// Colours of up to four series.
+const COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
+
+/// One line of a chart.
+pub struct Series<'a> {
+    /// Legend label.
+    pub label: String,
+    /// Points.
+    pub points: &'a [(f64, f64)],
+    /// Dashed (drawn thinner and lighter) for a baseline.
+    pub baseline: bool,
+}
+
+type PlotResult = Result<(), Box<dyn std::error::Error>>;
+
+/// A line chart with axis labels and a legend; `log_y` for quantities over decades.
+pub fn lines(
+    file: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[Series<'_>],
+    log_y: bool,
+) -> PlotResult {
+    let root = SVGBackend::new(file, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let pts = || series.iter().flat_map(|s| s.points.iter());
+    let x_max = pts().map(|p| p.0).fold(1.0f64, f64::max);
+    let y_max = pts().map(|p| p.1).fold(1.0f64, f64::max) * 1.15;
+    let mut builder = ChartBuilder::on(&root);
+    builder
+        .caption(title, ("sans-serif", 22))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(84);
+    if log_y {
+        let y_min = pts()
+            .map(|p| p.1)
+            .filter(|&y| y > 0.0)
+            .fold(f64::INFINITY, f64::min)
+            .min(1.0)
+            .max(0.1);
+        let mut chart = builder.build_cartesian_2d(0f64..x_max, (y_min..y_max).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .draw()?;
+        draw_series(&mut chart, series)?;
+    } else {
+        let mut chart = builder.build_cartesian_2d(0f64..x_max, 0f64..y_max)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .y_label_formatter(&|v| short(*v))
+            .draw()?;
+        draw_series(&mut chart, series)?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    series: &[Series<'_>],
+) -> PlotResult
+where
+    DB::ErrorType: 'static,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for (i, s) in series.iter().enumerate() {
+        let colour = COLOURS[i % COLOURS.len()];
+        let style = if s.baseline {
+            colour.mix(0.55).stroke_width(1)
+        } else {
+            colour.stroke_width(2)
+        };
+        chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), style))?
+            .label(s.label.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], style));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
+}
+
+/// 12k, 3.4M: short tick labels.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a >= 1e6 {
+        format!("{:.1}M", v / 1e6)
+    } else if a >= 1e4 {
+        format!("{:.0}k", v / 1e3)
+    } else if a >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
+    }
+}
