@@ -14,6 +14,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         tolerance: 2.0,
         mode: Mode::PerCamera,
         full_capacity: false,
+        first_route: 0,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(

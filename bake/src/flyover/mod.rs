@@ -62,6 +62,8 @@ pub struct FlyoverOptions {
     pub mode: Mode,
     /// Fly full-capacity cameras instead of sizing them first.
     pub full_capacity: bool,
+    /// The first camera flies this route (0 to 3); the others follow in order.
+    pub first_route: usize,
 }
 
 impl Default for FlyoverOptions {
@@ -72,6 +74,7 @@ impl Default for FlyoverOptions {
             tolerance: 1.0,
             mode: Mode::PerCamera,
             full_capacity: false,
+            first_route: 0,
         }
     }
 }
@@ -105,7 +108,9 @@ pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>,
     let ground = Ground::new(h);
     let speed = ground.size / 600.0;
     let all = routes();
-    let chosen = &all[..options.cameras.clamp(1, 4)];
+    let chosen: Vec<_> = (0..options.cameras.clamp(1, 4))
+        .map(|i| &all[(options.first_route + i) % all.len()])
+        .collect();
     let names = chosen.iter().map(|r| r.name).collect();
     let views = chosen
         .iter()
