@@ -4,12 +4,19 @@
 //!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
 //!   `spirv-val`), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
-//! - `test`: setup, then formatting, clippy, the workspace tests, the no_std build for a
-//!   microcontroller target, and the core crate's tests under miri. Every step prints a
+//! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
+//!   no_std build for a microcontroller target, and the core crate's tests under miri. Every step prints a
 //!   header and its wall time; the run ends with `N passed, M failed`.
+//! - `check-shaders`: the committed SPIR-V (`vulkan/spirv`) is up to date and valid: the
+//!   manifest's source hash equals the hash of the current shader sources (computed by
+//!   [`shader_manifest`], the same file the shader builder includes), its entry points are
+//!   those of the module, and `spirv-val --target-env vulkan1.2` accepts every `.spv` there.
+//!   It never builds shaders (that needs the rust-gpu toolchain); it says how to.
 //! - `demo [ARGS..]`: the fly-over example in release mode, with `ARGS` forwarded.
 //!
 //! Only std: the tool must build before anything else is installed.
+
+mod shader_manifest;
 
 use std::env;
 use std::ffi::OsStr;
@@ -37,7 +44,8 @@ commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
                         spirv-val and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
-  test                  setup, then fmt, clippy, tests, no_std build, miri
+  test                  setup, then shader check, fmt, clippy, tests, no_std build, miri
+  check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   demo [ARGS..]         cargo run --release -p caveclod-examples --example flyover -- ARGS
 ";
 
@@ -52,6 +60,7 @@ fn main() -> ExitCode {
             parse_flags(rest, &["--with-miri"]).and_then(|f| setup(f.contains(&"--with-miri")))
         }
         "test" => parse_flags(rest, &[]).and_then(|_| test()),
+        "check-shaders" => parse_flags(rest, &[]).and_then(|_| check_shaders()),
         "demo" => demo(rest),
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
@@ -329,6 +338,10 @@ fn test_steps() -> Vec<(String, Step)> {
     };
     vec![
         ("setup".to_string(), Box::new(|| setup(false))),
+        (
+            "check-shaders (manifest hash, spirv-val)".to_string(),
+            Box::new(check_shaders),
+        ),
         step(
             "cargo fmt --all -- --check",
             &["fmt", "--all", "--", "--check"],
@@ -413,6 +426,86 @@ fn test() -> Result<(), String> {
 
 fn secs(d: Duration) -> String {
     format!("{:.1}s", d.as_secs_f64())
+}
+
+// ---------------------------------------------------------------------------------------
+// check-shaders
+
+/// Checks the committed shader module against the sources and `spirv-val` (see the module
+/// docs); every problem found is reported, not just the first.
+fn check_shaders() -> Result<(), String> {
+    use shader_manifest::{
+        entry_points, manifest_field, manifest_json, source_hash, MANIFEST_FILE, MODULE_FILE,
+        REBUILD_COMMAND, SPIRV_DIR,
+    };
+    let root = workspace_root();
+    let dir = root.join(SPIRV_DIR);
+    let manifest_path = format!("{SPIRV_DIR}/{MANIFEST_FILE}");
+    let module_path = format!("{SPIRV_DIR}/{MODULE_FILE}");
+    let rebuild = format!("run `{REBUILD_COMMAND}` and commit {SPIRV_DIR}");
+    let manifest = fs::read_to_string(dir.join(MANIFEST_FILE))
+        .map_err(|e| format!("reading {manifest_path}: {e}; {rebuild}"))?;
+    let mut problems = Vec::new();
+
+    let current = source_hash(&root).map_err(|e| format!("hashing the shader sources: {e}"))?;
+    let recorded = manifest_field(&manifest, "source_hash").unwrap_or_default();
+    if recorded == current {
+        println!("shader source hash {current} matches {manifest_path}");
+    } else {
+        problems.push(format!(
+            "the shader sources changed since {SPIRV_DIR} was built (manifest hash \
+             {recorded:?}, sources {current}): {rebuild}"
+        ));
+    }
+
+    // The manifest must be exactly what the builder writes for this module.
+    match fs::read(dir.join(MODULE_FILE))
+        .map_err(|e| e.to_string())
+        .and_then(|bytes| entry_points(&bytes))
+    {
+        Err(e) => problems.push(format!("{module_path}: {e}; {rebuild}")),
+        Ok(entries) => {
+            let expected = manifest_json(
+                MODULE_FILE,
+                &entries,
+                &recorded,
+                &manifest_field(&manifest, "toolchain").unwrap_or_default(),
+                &manifest_field(&manifest, "spirv_builder").unwrap_or_default(),
+            );
+            if manifest != expected {
+                problems.push(format!(
+                    "{manifest_path} does not describe {module_path} (entry points {entries:?}): \
+                     {rebuild}"
+                ));
+            }
+        }
+    }
+
+    let Some(spirv_val) = find_in_path("spirv-val") else {
+        problems.push(
+            "spirv-val not found: run `cargo xtask setup` (Debian package spirv-tools)".to_string(),
+        );
+        return Err(problems.join("\n"));
+    };
+    let mut modules: Vec<PathBuf> = fs::read_dir(&dir)
+        .map_err(|e| format!("reading {SPIRV_DIR}: {e}"))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension() == Some(OsStr::new("spv")))
+        .collect();
+    modules.sort();
+    for module in &modules {
+        let mut c = cmd(&spirv_val.to_string_lossy(), &["--target-env", "vulkan1.2"]);
+        c.arg(module);
+        if let Err(e) = run(c) {
+            problems.push(e);
+        }
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(problems.join("\n"))
+    }
 }
 
 // ---------------------------------------------------------------------------------------
