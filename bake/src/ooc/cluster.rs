@@ -188,8 +188,9 @@ impl Clusterer {
 
     /// The cell of a point in cell units, and its id.
     fn cell_of(&self, p: &[f64; DIM]) -> [u32; 3] {
-        let top = f64::from(self.options.resolution - 1);
-        [0, 1, 2].map(|a| p[a].floor().clamp(0.0, top) as u32)
+        // Truncation is the floor for the non-negative coordinates inside the cube.
+        let top = self.options.resolution - 1;
+        [0, 1, 2].map(|a| (p[a].max(0.0) as u32).min(top))
     }
 
     /// Adds one triangle.
@@ -305,6 +306,37 @@ impl Clusterer {
         });
         self.cell_first[ci as usize] = k;
         k
+    }
+
+    /// Adds the clusters and triangles of `other` (same cube and options), which clustered
+    /// other triangles: clusters of a cell and surface whose UV references agree are summed.
+    pub fn merge(&mut self, other: &Clusterer) {
+        let mut map = Vec::with_capacity(other.clusters.len());
+        for c in &other.clusters {
+            let cell = other.cell_coords[c.cell as usize];
+            let has_uv = c.flags & HAS_UV != 0;
+            let k = self.cluster_for(cell, c.surface, c.flags, has_uv, c.uv_ref);
+            let d = &mut self.clusters[k as usize];
+            d.quadric.add_scaled(&c.quadric, 1.0);
+            for a in 0..DIM {
+                d.sum[a] += c.sum[a];
+            }
+            d.corners += c.corners;
+            map.push(k);
+        }
+        for &(_, ids, surface) in &other.triangles {
+            let ids = ids.map(|i| map[i as usize]);
+            let cs = ids.map(|i| self.clusters[i as usize].cell);
+            let mut key = cs;
+            key.sort_unstable();
+            if self.seen.insert(key) {
+                self.triangles.push((cs, ids, surface));
+            }
+        }
+        self.corner_clusters
+            .extend(other.corner_clusters.iter().map(|&i| map[i as usize]));
+        self.input += other.input;
+        self.degenerate += other.degenerate;
     }
 
     /// The clustered mesh: one position per cell, one normal / UV / colour per cluster.

@@ -143,6 +143,8 @@ pub struct OocOptions {
     pub target_triangles: Option<u64>,
     /// Attribute weights of the quadrics.
     pub weights: Weights,
+    /// Clustering threads.
+    pub threads: usize,
 }
 
 impl OocOptions {
@@ -156,6 +158,7 @@ impl OocOptions {
             max_depth: 12,
             target_triangles: None,
             weights: Weights::default(),
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(8)),
         }
     }
 }
@@ -289,23 +292,78 @@ pub fn simplify_file(
         ((f64::from(1u32 << l) * f.min(2.0)) as u32).max(2)
     };
     let t1 = Instant::now();
-    let mut buf = Vec::new();
-    let mesh = loop {
-        let mut c = Clusterer::new(
-            sorted.cube,
-            ClusterOptions {
-                weights: options.weights,
-                ..ClusterOptions::at_resolution(resolution)
-            },
-        );
-        let mut done = 0;
-        for leaf in &leaves {
+    // Threads take contiguous runs of leaves (spatially coherent: few clusters on the
+    // borders between them), each with its own clusters, merged at the end.
+    let threads = options.threads.max(1).min(leaves.len().max(1));
+    let mut parts: Vec<&[octree::Node]> = Vec::new();
+    let mut rest = &leaves[..];
+    for t in 0..threads {
+        let want = (sorted.triangles - rest.first().map_or(sorted.triangles, |l| l.first))
+            / (threads - t) as u64;
+        let mut n = 0;
+        let mut sum = 0;
+        while n < rest.len() && (sum < want || n == 0) {
+            sum += rest[n].count;
+            n += 1;
+        }
+        let (a, b) = rest.split_at(n);
+        parts.push(a);
+        rest = b;
+    }
+    let cluster_options = |resolution| ClusterOptions {
+        weights: options.weights,
+        ..ClusterOptions::at_resolution(resolution)
+    };
+    let run = |part: &[octree::Node],
+               c: &mut Clusterer,
+               report: &mut dyn FnMut(u64)|
+     -> Result<(), OocError> {
+        let mut buf = Vec::new();
+        for leaf in part {
             octree::read_leaf(&file, leaf, &mut buf)?;
             for t in &buf {
                 c.add(t);
             }
-            done += leaf.count;
-            progress(OocStage::Cluster(resolution, done, sorted.triangles));
+            report(leaf.count);
+        }
+        Ok(())
+    };
+    let mesh = loop {
+        let mut c = Clusterer::new(sorted.cube, cluster_options(resolution));
+        let others = std::thread::scope(|scope| {
+            let handles: Vec<_> = parts[1..]
+                .iter()
+                .map(|part| {
+                    scope.spawn(move || {
+                        let mut c = Clusterer::new(sorted.cube, cluster_options(resolution));
+                        run(part, &mut c, &mut |_| {}).map(|()| c)
+                    })
+                })
+                .collect();
+            let mut done = 0;
+            let first = run(parts[0], &mut c, &mut |n| {
+                done += n * threads as u64;
+                progress(OocStage::Cluster(
+                    resolution,
+                    done.min(sorted.triangles),
+                    sorted.triangles,
+                ));
+            });
+            let others: Vec<Result<Clusterer, OocError>> = handles
+                .into_iter()
+                .map(|h| {
+                    h.join().unwrap_or_else(|_| {
+                        Err(OocError::temp(
+                            "clustering",
+                            io::Error::other("a clustering thread panicked"),
+                        ))
+                    })
+                })
+                .collect();
+            first.map(|()| others)
+        })?;
+        for o in others {
+            c.merge(&o?);
         }
         // The occupancy of centroids only estimates the output: go coarser when it came out
         // far above the target.
@@ -316,7 +374,6 @@ pub fn simplify_file(
         stats.clusters = c.cluster_count() as u64;
         break c.finish(&report.surfaces);
     };
-    drop(buf);
     stats.resolution = resolution;
     stats.output_triangles = mesh.triangles.len() as u64;
     stats.seconds[2] = t1.elapsed().as_secs_f64();

@@ -76,10 +76,11 @@ impl Cube {
 
     /// Integer cell of `p` at `level` (`2^level` cells per axis), clamped into the cube.
     pub fn cell(&self, p: [f32; 3], level: u32) -> [u32; 3] {
-        let n = (1u64 << level) as f64;
+        let scale = (1u64 << level) as f64 / self.size;
         let top = (1u64 << level) - 1;
+        // Truncation is the floor for the non-negative values that matter.
         [0, 1, 2].map(|k| {
-            let t = ((f64::from(p[k]) - self.origin[k]) / self.size * n).floor();
+            let t = (f64::from(p[k]) - self.origin[k]) * scale;
             (t.max(0.0) as u64).min(top) as u32
         })
     }

@@ -499,15 +499,42 @@ fn ply(
         .map_err(|e| OocError::temp("creating the vertex file", e))?;
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     let mut v = [0f64; 12];
+    // Binary vertices without lists have a fixed stride: one read, decodes at offsets.
+    let fixed: Option<(usize, Vec<(usize, Scalar, usize, f64)>)> = match format {
+        Format::Binary { .. } if elements[vi].properties.iter().all(|p| p.list.is_none()) => {
+            let mut offset = 0;
+            let mut fields = Vec::new();
+            for (k, p) in elements[vi].properties.iter().enumerate() {
+                if let Some(s) = vslots[k] {
+                    fields.push((offset, p.ty, s, color_scale[k]));
+                }
+                offset += p.ty.size();
+            }
+            Some((offset, fields))
+        }
+        _ => None,
+    };
+    let big = format == Format::Binary { big: true };
+    let mut record = Vec::new();
     for i in 0..vcount {
         v = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
-        items
-            .read(&mut r, &elements[vi], &mut |p, x, _| {
-                if let Some(s) = vslots[p] {
-                    v[s] = if s >= 8 { x / color_scale[p] } else { x };
+        match &fixed {
+            Some((stride, fields)) => {
+                read_exact(&mut r, &mut record, *stride)
+                    .map_err(|m| bad(&format!("vertex {i}"), m))?;
+                for &(offset, ty, s, scale) in fields {
+                    let x = ty.decode(&record[offset..], big);
+                    v[s] = if s >= 8 { x / scale } else { x };
                 }
-            })
-            .map_err(|m| bad(&format!("vertex {i}"), m))?;
+            }
+            None => items
+                .read(&mut r, &elements[vi], &mut |p, x, _| {
+                    if let Some(s) = vslots[p] {
+                        v[s] = if s >= 8 { x / color_scale[p] } else { x };
+                    }
+                })
+                .map_err(|m| bad(&format!("vertex {i}"), m))?,
+        }
         if v.iter().any(|x| !x.is_finite()) {
             return Err(bad(&format!("vertex {i}"), "a number is not finite".into()));
         }
