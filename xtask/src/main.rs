@@ -12,7 +12,7 @@
 //!   [`shader_manifest`], the same file the shader builder includes), its entry points are
 //!   those of the module, and `spirv-val --target-env vulkan1.2` accepts every `.spv` there.
 //!   It never builds shaders (that needs the rust-gpu toolchain); it says how to.
-//! - `demo [ARGS..]`: the fly-over example in release mode, with `ARGS` forwarded.
+//! - `demo [ARGS..]`: `caveclod demo` in release mode, with `ARGS` forwarded.
 //!
 //! Only std: the tool must build before anything else is installed.
 
@@ -46,7 +46,7 @@ commands:
                         installs the pinned nightly with miri
   test                  setup, then shader check, fmt, clippy, tests, no_std build, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
-  demo [ARGS..]         cargo run --release -p caveclod-examples --example flyover -- ARGS
+  demo [ARGS..]         cargo run --release -p caveclod-bake --bin caveclod -- demo ARGS
 ";
 
 fn main() -> ExitCode {
@@ -518,10 +518,11 @@ fn demo(args: &[String]) -> Result<(), String> {
             "run",
             "--release",
             "-p",
-            "caveclod-examples",
-            "--example",
-            "flyover",
+            "caveclod-bake",
+            "--bin",
+            "caveclod",
             "--",
+            "demo",
         ],
     );
     c.args(args);
