@@ -4,7 +4,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use caveclod_bake::baked::write_atomically;
+use caveclod_bake::demo::{self, DemoOptions};
 use caveclod_bake::export::{self, Level};
+use caveclod_bake::flyover::{fly, Flyover, FlyoverOptions, Mode};
+use caveclod_bake::gmesh::GMeshOptions;
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{OocOptions, OocStage};
 use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
@@ -52,6 +55,59 @@ enum Command {
         /// Output triangles for --out-of-core to aim for (from the budget by default).
         #[arg(long)]
         target_triangles: Option<u64>,
+        /// Also store g-mesh levels (batched collapses, geomorph pairs, volume partitions).
+        #[arg(long)]
+        gmesh: bool,
+        /// With --gmesh: stop adding levels below this many polygons (default |c0| / 64).
+        #[arg(long)]
+        gmesh_min_polygons: Option<u32>,
+    },
+    /// The demo: bake St. Helens and Spot, fly 4 cameras, write figures, CSV and out/report.md.
+    Demo {
+        /// Where to write (created if missing).
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Frames per flight.
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+        /// The repository's data directory (St. Helens and Spot).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Bake again even if out/cache has the files.
+        #[arg(long)]
+        rebake: bool,
+    },
+    /// The CAVECLOD paper's experiment: cameras fly scripted routes over a hierarchy.
+    Flyover {
+        /// A .clod file (or use --dem).
+        file: Option<PathBuf>,
+        /// Bake this heightfield (.dem, .npy) in memory and fly over it.
+        #[arg(long, conflicts_with = "file")]
+        dem: Option<PathBuf>,
+        /// Grid spacing in metres for --dem.
+        #[arg(long)]
+        spacing: Option<f32>,
+        /// Cameras, 1 to 4.
+        #[arg(long, default_value_t = 4)]
+        cameras: usize,
+        /// Frames per camera.
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+        /// Screen-space tolerance in pixels (1280 x 720, 60 degree field of view).
+        #[arg(long, default_value_t = 1.0)]
+        tolerance: f32,
+        /// One shared state re-refined for each camera in turn (the paper's baseline).
+        #[arg(long, conflicts_with = "threads")]
+        shared_state: bool,
+        /// One thread per camera.
+        #[arg(long)]
+        threads: bool,
+        /// Fly full-capacity cameras instead of sizing them to a first flight.
+        #[arg(long)]
+        full_capacity: bool,
+        /// Print the report as one JSON object.
+        #[arg(long)]
+        json: bool,
     },
     /// Counts, sizes and validation status of a .clod file.
     Info {
@@ -130,6 +186,8 @@ fn run(cli: Cli) -> Result<(), String> {
             memory_budget,
             temp_dir,
             target_triangles,
+            gmesh,
+            gmesh_min_polygons,
         } => {
             let bar = ProgressBar::new(0);
             bar.set_style(
@@ -189,9 +247,22 @@ fn run(cli: Cli) -> Result<(), String> {
             bar.finish_and_clear();
             let (baked, info) = result.map_err(|e| e.to_string())?;
             let json_info = info.to_json();
-            baked
-                .write(&output, &[BakeInfo::section(&json_info)])
-                .map_err(|e| e.to_string())?;
+            let levels = if gmesh {
+                bar.set_message("building g-mesh levels");
+                let h = baked.hierarchy().map_err(|e| e.to_string())?;
+                let options = GMeshOptions {
+                    min_polygons: gmesh_min_polygons.unwrap_or(0),
+                    ..GMeshOptions::default()
+                };
+                Some(caveclod_bake::gmesh::build(&h, &options).map_err(|e| e.to_string())?)
+            } else {
+                None
+            };
+            let mut sections = vec![BakeInfo::section(&json_info)];
+            if let Some(g) = &levels {
+                sections.extend(g.sections());
+            }
+            baked.write(&output, &sections).map_err(|e| e.to_string())?;
             with_hierarchy(&output, |h| {
                 let mut r = report::report(h, Some(&info));
                 r.insert("bake_seconds".into(), serde_json::json!(info.bake_seconds));
@@ -237,6 +308,85 @@ fn run(cli: Cli) -> Result<(), String> {
                 }
                 Ok(())
             })
+        }
+        Command::Demo {
+            out,
+            frames,
+            data,
+            rebake,
+        } => {
+            let mut options = DemoOptions {
+                out,
+                frames,
+                rebake,
+                ..DemoOptions::default()
+            };
+            if let Some(d) = data {
+                options.data = d;
+            }
+            let outcome = demo::run(&options, &mut |line| eprintln!("{line}"))?;
+            let r = outcome.ratios;
+            println!(
+                "operations per camera, shared / per-camera state: {:.1}x (target >= 7)\n\
+                 refinement time, shared / per-camera: {:.1}x (target >= 3)\n\
+                 refinement time, 4 cameras together / one alone (mean): {:.2}x (target <= 4.4)\n\
+                 a thread per camera, speed-up: {:.2}x (target >= 1.6 on 2 cores)\n\
+                 per-camera memory / the paper's: {:.2} (target <= 0.5)",
+                r.ops, r.refine_time, r.four_over_one, r.threads_speedup, r.memory
+            );
+            for f in &outcome.files {
+                println!("wrote {}", f.display());
+            }
+            println!("report: {}", outcome.report.display());
+            Ok(())
+        }
+        Command::Flyover {
+            file,
+            dem,
+            spacing,
+            cameras,
+            frames,
+            tolerance,
+            shared_state,
+            threads,
+            full_capacity,
+            json,
+        } => {
+            let options = FlyoverOptions {
+                cameras,
+                frames,
+                tolerance,
+                mode: if shared_state {
+                    Mode::Shared
+                } else if threads {
+                    Mode::Threads
+                } else {
+                    Mode::PerCamera
+                },
+                full_capacity,
+                first_route: 0,
+            };
+            let print = |f: &Flyover| {
+                if json {
+                    println!("{}", f.json());
+                } else {
+                    print!("{}", f.human());
+                }
+            };
+            match (file, dem) {
+                (Some(file), None) => with_hierarchy(&file, |h| {
+                    print(&fly(h, &options)?);
+                    Ok(())
+                }),
+                (None, Some(dem)) => {
+                    let (baked, _) = bake_file(&dem, &ImportOptions { spacing }, &mut |_| {})
+                        .map_err(|e| e.to_string())?;
+                    let h = baked.hierarchy().map_err(|e| e.to_string())?;
+                    print(&fly(&h, &options)?);
+                    Ok(())
+                }
+                _ => Err("give a .clod file or --dem FILE".into()),
+            }
         }
         Command::Info { file, json } => with_hierarchy(&file, |h| {
             let info = BakeInfo::read(h);
