@@ -133,6 +133,9 @@ impl<T: Pod> BlockCache<T> {
 
 // ---------------------------------------------------------------- PLY
 
+/// A vertex property read at a fixed offset: (offset, type, slot, colour scale).
+type Field = (usize, Scalar, usize, f64);
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Scalar {
     I8,
@@ -500,7 +503,7 @@ fn ply(
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     let mut v = [0f64; 12];
     // Binary vertices without lists have a fixed stride: one read, decodes at offsets.
-    let fixed: Option<(usize, Vec<(usize, Scalar, usize, f64)>)> = match format {
+    let fixed: Option<(usize, Vec<Field>)> = match format {
         Format::Binary { .. } if elements[vi].properties.iter().all(|p| p.list.is_none()) => {
             let mut offset = 0;
             let mut fields = Vec::new();
