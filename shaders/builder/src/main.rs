@@ -1,5 +1,7 @@
 //! Builds the caveclod shaders and commits-ready output:
 //!
+//! 0. runs the shader crate's tests on the CPU (its entry points called as plain functions;
+//!    target dir `shaders/target/host`), and stops if one fails;
 //! 1. compiles `shaders/caveclod-shaders` with rust-gpu (spirv-builder) for
 //!    `spirv-unknown-vulkan1.2` into `shaders/target/spirv-builder`;
 //! 2. copies the module to `vulkan/spirv/caveclod_shaders.spv` and writes
@@ -53,6 +55,7 @@ fn build() -> Result<(), String> {
     // A crash of the rust-gpu backend would otherwise leave a `rustc-ice-*.txt` report in
     // the folder of the crate being compiled; the message on stderr is enough.
     std::env::set_var("RUSTC_ICE", "0");
+    test_on_cpu(&root)?;
     let started = Instant::now();
     let result = SpirvBuilder::new(root.join(SHADER_CRATE_DIR), TARGET)
         .target_dir_path(root.join("shaders/target/spirv-builder"))
@@ -100,6 +103,30 @@ fn build() -> Result<(), String> {
     );
 
     validate(&module_out)
+}
+
+/// `cargo test` of the shader crate on the host.
+fn test_on_cpu(root: &Path) -> Result<(), String> {
+    let started = Instant::now();
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let mut c = Command::new(cargo);
+    c.args(["test", "--quiet", "--lib", "--manifest-path"])
+        .arg(root.join(SHADER_CRATE_DIR).join("Cargo.toml"))
+        .arg("--target-dir")
+        .arg(root.join("shaders/target/host"));
+    let status = c
+        .status()
+        .map_err(|e| format!("could not start cargo test: {e}"))?;
+    if !status.success() {
+        return Err(format!(
+            "the tests of {SHADER_CRATE_DIR} failed ({status}); nothing was written"
+        ));
+    }
+    println!(
+        "tested {SHADER_CRATE_DIR} on the CPU in {:.1}s",
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 /// Writes `path` through a temporary file in the same folder and a rename.

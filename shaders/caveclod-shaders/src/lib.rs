@@ -154,3 +154,159 @@ pub fn geomorph_cs(
     let v = morph_vertex(read_vertex(a, sa), read_vertex(b, sb), push.t);
     write_vertex(out, so, v);
 }
+
+/// The entry points run on the CPU as plain functions (the builder runs these tests before
+/// compiling to SPIR-V).
+#[cfg(all(test, not(target_arch = "spirv")))]
+mod tests {
+    use super::*;
+    use caveclod_core::gpu::MorphInstance;
+
+    fn floats(vertices: &[Vertex]) -> Vec<f32> {
+        vertices
+            .iter()
+            .flat_map(|v| {
+                v.position
+                    .iter()
+                    .chain(v.normal.iter())
+                    .chain(v.uv.iter())
+                    .copied()
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    fn vertices(seed: f32, count: usize) -> Vec<Vertex> {
+        (0..count)
+            .map(|i| {
+                let x = seed + i as f32;
+                Vertex {
+                    position: [x, -x * 0.5, 2.0 * x],
+                    normal: [1.0, x, 0.25],
+                    uv: [x * 0.125, 1.0 - x * 0.25],
+                }
+            })
+            .collect()
+    }
+
+    fn run_cs(a: &[f32], b: &[f32], out: &mut [f32], push: MorphPush, invocations: u32) {
+        for x in 0..invocations {
+            geomorph_cs(UVec3::new(x, 0, 0), a, b, out, &push);
+        }
+    }
+
+    #[test]
+    fn geomorph_cs_writes_the_cpu_morph_at_the_offsets() {
+        let (va, vb) = (vertices(1.0, 6), vertices(-3.0, 6));
+        let (a, b) = (floats(&va), floats(&vb));
+        let mut out = vec![-7.0f32; 8 * 5];
+        let push = MorphPush {
+            t: 0.25,
+            count: 3,
+            src_offset: 2,
+            dst_offset: 1,
+        };
+        run_cs(&a, &b, &mut out, push, 64);
+        let untouched = [-7.0f32; 8];
+        assert_eq!(out[0..8], untouched);
+        for i in 0..3 {
+            let want = floats(&[morph_vertex(va[2 + i], vb[2 + i], 0.25)]);
+            assert_eq!(out[8 * (1 + i)..8 * (2 + i)], want[..], "vertex {i}");
+        }
+        assert_eq!(out[32..40], untouched);
+    }
+
+    #[test]
+    fn geomorph_cs_skips_vertices_past_a_buffer_end() {
+        let (va, vb) = (vertices(1.0, 4), vertices(2.0, 3));
+        let (a, b) = (floats(&va), floats(&vb));
+        let mut out = vec![-7.0f32; 8 * 4 + 5];
+        let push = MorphPush {
+            t: 0.5,
+            count: 4,
+            src_offset: 0,
+            dst_offset: 1,
+        };
+        run_cs(&a, &b, &mut out, push, 64);
+        // b has 3 vertices: the fourth is skipped; the output holds vertices 1..=3 whole,
+        // its last 5 floats are not a whole vertex.
+        for i in 0..3 {
+            let want = floats(&[morph_vertex(va[i], vb[i], 0.5)]);
+            assert_eq!(out[8 * (1 + i)..8 * (2 + i)], want[..], "vertex {i}");
+        }
+        assert!(out[..8].iter().chain(&out[32..]).all(|&f| f == -7.0));
+        // Offsets that overflow u32 are skipped, not wrapped around.
+        let mut out = vec![-7.0f32; 8];
+        let push = MorphPush {
+            t: 0.5,
+            count: 2,
+            src_offset: 0,
+            dst_offset: u32::MAX,
+        };
+        run_cs(&a, &b, &mut out, push, 2);
+        assert!(out.iter().all(|&f| f == -7.0));
+    }
+
+    #[test]
+    fn vertex_start_needs_the_whole_vertex() {
+        assert_eq!(vertex_start(16, 0), Some(0));
+        assert_eq!(vertex_start(16, 1), Some(8));
+        assert_eq!(vertex_start(15, 1), None);
+        assert_eq!(vertex_start(16, 2), None);
+        assert_eq!(vertex_start(0, 0), None);
+        assert_eq!(
+            vertex_start(usize::MAX, u32::MAX),
+            Some(u32::MAX as usize * 8)
+        );
+    }
+
+    #[test]
+    fn vertex_stages_place_and_morph() {
+        let push = DrawPush::new(
+            Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)),
+            Vec4::new(0.5, 0.5, 0.5, 1.0),
+        );
+        let (mut pos, mut n, mut uv) = (Vec4::ZERO, Vec3::ZERO, Vec2::ZERO);
+        let normal = Vec3::new(0.0, 2.0, 0.0);
+        draw_vs(
+            Vec3::new(1.0, 1.0, 1.0),
+            normal,
+            Vec2::new(0.5, 0.25),
+            &push,
+            &mut pos,
+            &mut n,
+            &mut uv,
+        );
+        assert_eq!(pos, Vec4::new(2.0, 3.0, 4.0, 1.0));
+        assert_eq!((n, uv), (normal, Vec2::new(0.5, 0.25)));
+
+        let inst = MorphInstance {
+            offset_scale: [10.0, 0.0, 0.0, 2.0],
+            t: 0.5,
+            _pad: [0.0; 3],
+        };
+        geomorph_vs(
+            Vec3::ZERO,
+            Vec3::X,
+            Vec2::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::Y,
+            Vec2::ONE,
+            Vec4::from_array(inst.offset_scale),
+            inst.t,
+            &push,
+            &mut pos,
+            &mut n,
+            &mut uv,
+        );
+        // morphed position (1, 0, 0) * 2 + (10, 0, 0), then translated by (1, 2, 3).
+        assert_eq!(pos, Vec4::new(13.0, 2.0, 3.0, 1.0));
+        let h = core::f32::consts::FRAC_1_SQRT_2;
+        assert!((n - Vec3::new(h, h, 0.0)).length() < 1e-6);
+        assert_eq!(uv, Vec2::splat(0.5));
+
+        let mut colour = Vec4::ZERO;
+        draw_fs(n, uv, &push, &mut colour);
+        assert_eq!(colour, shade(n, uv, Vec4::new(0.5, 0.5, 0.5, 1.0)));
+    }
+}
