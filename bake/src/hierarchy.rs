@@ -4,19 +4,33 @@
 //!   vertex is ever created and the vertex buffer is the full-resolution one.
 //! - **Batches of independent collapses** (as g-mesh builds its levels): each pass sorts the
 //!   legal collapses by cost and applies those whose neighbourhoods do not overlap, so the
-//!   hierarchy is balanced and shallow (depth grows with the logarithm of the size).
+//!   hierarchy is balanced and shallow (depth grows with the logarithm of the size). A pass
+//!   goes only through the cheapest half of its ranked collapses ([`PASS_SHARE`]): applying
+//!   every independent one lets dear collapses take neighbourhoods that cheaper ones of the
+//!   next pass would have used (measured on lucy and St. Helens against meshoptimizer, this
+//!   ordering is a large part of the difference; it costs passes, not depth).
 //! - **Cost**: the attribute-aware quadric of the removed position's wedges (one per surface
 //!   group there) evaluated at the kept position with that group's attributes there
 //!   ([`crate::quadric`]), plus boundary planes that hold mesh borders and surface-group
-//!   boundaries in place.
+//!   boundaries in place, weighted [`BOUNDARY_WEIGHT`] times a triangle's (sliding borders
+//!   were the largest errors on terrain). A normal that follows from the geometry
+//!   ([`crate::weld::Attributes::normal_from_geometry`]: computed, or an importer's smooth
+//!   one) gets no weight: it would only make curved regions dearer, which the distance
+//!   term already does, at the expense of geometric accuracy.
 //! - **Legality**: the surface-group rules (a RIGID position never floats; a SHARP one floats
 //!   only along a boundary edge onto a non-FREE position; every group at the removed position
 //!   must have a vertex at the kept one), the link condition, no doubled faces, no face
 //!   flipped or collapsed, and Hoppe's requirement that `fl_clw` (and `fr_ccw` when `f_r`
 //!   exists) are present.
 //! - **Bounds for refinement**: the bounding-sphere radius and normal cone of everything
-//!   below a node, and an error bound that grows with the removed positions' distances from
-//!   the surface that replaces them.
+//!   below a node, and its error (`uni_error`) from the residuals of the input, as Hoppe's
+//!   view-dependent progressive meshes (1997) measure it: every input position belongs to
+//!   the current triangle nearest to it; a collapse hands the positions of the removed
+//!   node's triangles to the nearest triangles around the new node, and the node's error is
+//!   the largest of those distances and its children's errors. It measures what a cut
+//!   through the node loses, including borders that slide, where the planes' distances
+//!   alone miss it. The hand-over runs after each pass on all threads (the collapses of a
+//!   pass have disjoint stars); it takes about a quarter of a lucy bake's instructions.
 //!
 //! A pass is built for speed without changing its outcome: every edge is ranked by the cost
 //! of its cheaper allowed direction (a ranking stands while the edge's ends are the same
@@ -176,8 +190,8 @@ enum Verdict {
     Illegal,
     /// Legal at the start of the pass but no longer.
     Lapsed,
-    /// Legal: the collapse and its error increment.
-    Legal(Collapse, f64),
+    /// Legal: the collapse.
+    Legal(Collapse),
 }
 
 /// A triangle of the mesh being simplified, in one cache line.
@@ -241,7 +255,16 @@ struct Work<'w> {
     shrunk: Vec<u32>,
     /// A node's number of neighbours at the start of the pass it last lost one in.
     start_valence: Vec<u32>,
+    /// The input's positions each triangle stands for (nearest to it when it last
+    /// changed), which the error bounds measure; relative to the centre.
+    pts_of: Vec<Vec<P3>>,
+    /// Points the pass's collapses moved, waiting for [`Work::settle`], each with the new
+    /// node whose triangles it goes to (those of one node in a row).
+    moved: Vec<(P3, u32)>,
 }
+
+/// A point the error bounds measure (single precision is ample for an error bound).
+type P3 = [f32; 3];
 
 impl Work<'_> {
     #[inline]
@@ -369,10 +392,8 @@ impl Work<'_> {
 
     /// The checks of the collapse of `u` into `t` that look at `u`'s triangles, `fl` being
     /// the triangle with the edge `t → u` (`t` at its corner `jl`) and `fr` the one across
-    /// or `NONE`: Hoppe's neighbours exist, no triangle flips or collapses. Returns the
-    /// collapse and its error increment (the largest distance of `u` from the planes of
-    /// the moved triangles).
-    fn moves(&self, t: u32, u: u32, fl: u32, jl: usize, fr: u32) -> Option<(Collapse, f64)> {
+    /// or `NONE`: Hoppe's neighbours exist, no triangle flips or collapses.
+    fn moves(&self, t: u32, u: u32, fl: u32, jl: usize, fr: u32) -> Option<Collapse> {
         let ol = self.tris[fl as usize].o;
         let fn0 = ol[prev(jl)];
         let fn1 = ol[next(jl)];
@@ -389,9 +410,7 @@ impl Work<'_> {
                 return None;
             }
         }
-        let (p_t, p_u) = (self.pos[t as usize], self.pos[u as usize]);
-        let d = sub(p_u, p_t);
-        let mut dev = 0.0f64;
+        let p_t = self.pos[t as usize];
         for &f in &self.faces_of[u as usize] {
             if f == fl || f == fr {
                 continue;
@@ -410,9 +429,6 @@ impl Work<'_> {
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;
             }
-            // `norm(after)`, with its length known to be positive.
-            let n = [after[0] / la, after[1] / la, after[2] / la];
-            dev = dev.max(dot(n, d).abs());
         }
         let c = Collapse {
             t,
@@ -423,7 +439,7 @@ impl Work<'_> {
             rot_l: jl as u8,
             rot_r: jr as u8,
         };
-        Some((c, dev))
+        Some(c)
     }
 
     /// The corner of triangle `f` after `v` (for a triangle on the edge `u → v`, its third
@@ -500,23 +516,29 @@ impl Work<'_> {
         if !Self::link_ok(ring_t, border_t, ring_u, border_u, r) {
             return Verdict::Illegal;
         }
-        let Some((c, dev)) = self.moves(t, u, fl, jl, fr) else {
+        let Some(c) = self.moves(t, u, fl, jl, fr) else {
             return Verdict::Illegal;
         };
         if opposite
             .iter()
             .all(|&x| x == NONE || self.valence[x as usize] > 3)
         {
-            Verdict::Legal(c, dev)
+            Verdict::Legal(c)
         } else {
             Verdict::Lapsed
         }
     }
 
-    /// Applies a checked collapse; returns the new node.
-    fn apply(&mut self, c: Collapse, dev: f64) -> u32 {
+    /// Applies a checked collapse; returns the new node. The points of `u`'s triangles
+    /// (those dying included) wait for [`Work::settle`] to find their nearest triangle
+    /// around the new node.
+    fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
         let (t, u) = (c.t, c.u);
+        for &f in &self.faces_of[u as usize] {
+            self.moved
+                .extend(self.pts_of[f as usize].drain(..).map(|x| (x, s)));
+        }
         let (pt, pu) = (self.node_pos[t as usize], self.node_pos[u as usize]);
         self.node_pos.push(pt);
         self.nodes[t as usize].parent = s;
@@ -526,7 +548,7 @@ impl Work<'_> {
         self.pos.push(p_t);
         self.nodes.push(NodeOut {
             parent: NONE,
-            error: (nt.error as f64).max(nu.error as f64 + dev) as f32,
+            error: nt.error.max(nu.error),
             radius: (nt.radius as f64).max(len(sub(p_u, p_t)) + nu.radius as f64) as f32,
             cone: merge_cones(nt.cone, nu.cone),
         });
@@ -610,6 +632,152 @@ impl Work<'_> {
         self.h.collapses.push(c);
         s
     }
+
+    /// The points of the error bounds, the input's positions, each given to a triangle it
+    /// is a corner of (its first).
+    fn place_points(&mut self) {
+        self.pts_of = vec![Vec::new(); self.tris.len()];
+        for (x, faces) in self.faces_of[..self.p.len()].iter().enumerate() {
+            if let Some(&f) = faces.first() {
+                self.pts_of[f as usize].push(self.p[x].map(|c| c as f32));
+            }
+        }
+    }
+
+    /// The nearest triangle of `star` to each of `points` and the squared distance, into
+    /// `out`; `tris` is scratch space.
+    fn nearest(
+        &self,
+        star: &[u32],
+        points: &[(P3, u32)],
+        tris: &mut Vec<([V3; 3], V3, f64)>,
+        out: &mut Vec<(f64, u32)>,
+    ) {
+        // The star's corners and plane normals, gathered once for all the points; the
+        // removed node's triangles (listed last) first, as the points come from there.
+        tris.clear();
+        tris.extend(star.iter().rev().map(|&f| {
+            let tri = &self.tris[f as usize];
+            (
+                tri.c.map(|v| self.pos[v as usize]),
+                tri.n,
+                tri.len * tri.len,
+            )
+        }));
+        for &(x, _) in points {
+            let x = x.map(f64::from);
+            let mut best = (f64::INFINITY, NONE);
+            for (&f, &([a, b, c], n, len2)) in star.iter().rev().zip(tris.iter()) {
+                // The distance to the plane is a lower bound.
+                let h = dot(sub(x, a), n);
+                if len2 > 0.0 && h * h >= best.0 * len2 {
+                    continue;
+                }
+                let d = point_triangle_d2(x, a, b, c);
+                if d < best.0 {
+                    best = (d, f);
+                }
+            }
+            out.push(best);
+        }
+    }
+
+    /// Gives each point a collapse of the pass moved to the nearest triangle around the
+    /// collapse's new node, and raises the node's error to the largest such distance. The
+    /// collapses of a pass have disjoint stars, which no later collapse of the pass
+    /// changes, so this runs after the pass, on all threads.
+    fn settle(&mut self, threads: usize) {
+        let moved = std::mem::take(&mut self.moved);
+        // Runs of points going to one node, split over the threads at run boundaries.
+        let per = moved.len().div_ceil(threads.max(1)).max(PARALLEL_MIN);
+        let mut parts = Vec::new();
+        let mut lo = 0;
+        while lo < moved.len() {
+            let mut hi = (lo + per).min(moved.len());
+            while hi < moved.len() && moved[hi].1 == moved[hi - 1].1 {
+                hi += 1;
+            }
+            parts.push(&moved[lo..hi]);
+            lo = hi;
+        }
+        let this = &*self;
+        let run = |part: &[(P3, u32)]| {
+            let (mut out, mut tris) = (Vec::with_capacity(part.len()), Vec::new());
+            for points in part.chunk_by(|a, b| a.1 == b.1) {
+                let star = &this.faces_of[points[0].1 as usize];
+                this.nearest(star, points, &mut tris, &mut out);
+            }
+            out
+        };
+        let found: Vec<Vec<(f64, u32)>> = if parts.len() <= 1 {
+            parts.iter().map(|part| run(part)).collect()
+        } else {
+            std::thread::scope(|scope| {
+                let handles: Vec<_> = parts
+                    .iter()
+                    .map(|part| {
+                        let run = &run;
+                        scope.spawn(move || run(part))
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        for (&(x, s), &(d, f)) in moved.iter().zip(found.iter().flatten()) {
+            if f != NONE {
+                self.pts_of[f as usize].push(x);
+                let error = &mut self.nodes[s as usize].error;
+                *error = error.max(d.sqrt() as f32);
+            }
+        }
+        self.moved = moved;
+        self.moved.clear();
+    }
+}
+
+/// Squared distance from `x` to the triangle `a b c` (Ericson, "Real-Time Collision
+/// Detection", 5.1.5: the closest point by the Voronoi region of `x`).
+fn point_triangle_d2(x: V3, a: V3, b: V3, c: V3) -> f64 {
+    let d2 = |y: V3| dot(sub(x, y), sub(x, y));
+    let along = |p: V3, s: f64, d: V3| [p[0] + s * d[0], p[1] + s * d[1], p[2] + s * d[2]];
+    let (ab, ac, ax) = (sub(b, a), sub(c, a), sub(x, a));
+    let (d1, d2_) = (dot(ab, ax), dot(ac, ax));
+    if d1 <= 0.0 && d2_ <= 0.0 {
+        return d2(a);
+    }
+    let bx = sub(x, b);
+    let (d3, d4) = (dot(ab, bx), dot(ac, bx));
+    if d3 >= 0.0 && d4 <= d3 {
+        return d2(b);
+    }
+    let vc = d1 * d4 - d3 * d2_;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return d2(along(a, d1 / (d1 - d3), ab));
+    }
+    let cx = sub(x, c);
+    let (d5, d6) = (dot(ab, cx), dot(ac, cx));
+    if d6 >= 0.0 && d5 <= d6 {
+        return d2(c);
+    }
+    let vb = d5 * d2_ - d1 * d6;
+    if vb <= 0.0 && d2_ >= 0.0 && d6 <= 0.0 {
+        return d2(along(a, d2_ / (d2_ - d6), ac));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return d2(along(b, w, sub(c, b)));
+    }
+    let denom = va + vb + vc;
+    if denom <= 0.0 {
+        // Degenerate: the nearest corner.
+        return d2(a).min(d2(b)).min(d2(c));
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    d2(along(along(a, v, ab), w, ac))
 }
 
 #[inline]
@@ -676,14 +844,21 @@ const BUCKET_BITS: u32 = 16;
 const BUCKET_MIN: usize = 4096;
 
 impl Ranked {
-    fn start(&mut self, cands: &[Candidate]) {
+    /// Takes a pass's candidates, of which the pass means to apply the cheapest `share`;
+    /// returns the [`order_key`] of the dearest cost in that share (for many candidates,
+    /// rounded up to the end of its bucket). Only candidates up to it are handed out.
+    fn start(&mut self, cands: &[Candidate], share: f64) -> u64 {
         self.chunk.clear();
         self.pos = 0;
+        let want = ((cands.len() as f64 * share).ceil() as usize).clamp(1, cands.len().max(1));
         if cands.len() < BUCKET_MIN {
             self.chunk.extend_from_slice(cands);
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
-            return;
+            return match self.chunk.get(want - 1) {
+                Some(c) if want < cands.len() => order_key(c.0),
+                _ => u64::MAX,
+            };
         }
         let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
         self.bounds.clear();
@@ -694,15 +869,27 @@ impl Ranked {
         for i in 0..1 << BUCKET_BITS {
             self.bounds[i + 1] += self.bounds[i];
         }
+        // The bucket holding the `want`-th cheapest; those after it are left out.
+        let last = self.bounds[1..].partition_point(|&n| (n as usize) < want);
+        let limit = if last + 1 >= 1 << BUCKET_BITS {
+            u64::MAX
+        } else {
+            (((last + 1) as u64) << (64 - BUCKET_BITS)) - 1
+        };
+        let kept = self.bounds[last + 1] as usize;
+        self.bounds.truncate(last + 2);
         self.by_bucket.clear();
-        self.by_bucket.resize(cands.len(), (0.0, 0, 0));
+        self.by_bucket.resize(kept, (0.0, 0, 0));
         let mut fill = self.bounds.clone();
         for c in cands {
             let b = bucket(c);
-            self.by_bucket[fill[b] as usize] = *c;
-            fill[b] += 1;
+            if b <= last {
+                self.by_bucket[fill[b] as usize] = *c;
+                fill[b] += 1;
+            }
         }
         self.bucket = 0;
+        limit
     }
 
     /// The next candidate whose ends were free when its bucket was reached.
@@ -768,11 +955,12 @@ fn merge_cones(a: ([f32; 3], f32), b: ([f32; 3], f32)) -> ([f32; 3], f32) {
 
 fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f64) -> [f64; M] {
     let a = &w.attributes[attr as usize];
-    let (wn, wu, wc) = (
-        weights.normal * scale,
-        weights.uv * scale,
-        weights.color * scale,
-    );
+    let normal = if a.normal_from_geometry {
+        0.0
+    } else {
+        weights.normal
+    };
+    let (wn, wu, wc) = (normal * scale, weights.uv * scale, weights.color * scale);
     [
         a.normal[0] as f64 * wn,
         a.normal[1] as f64 * wn,
@@ -905,7 +1093,8 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             let (pa, pb, pc) = (p[a as usize], p[b as usize], p[t.p[prev(k)] as usize]);
             let e = sub(pb, pa);
             let n = norm(cross(e, cross(sub(pc, pa), e)));
-            planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), dot(e, e))));
+            let weight = BOUNDARY_WEIGHT * dot(e, e);
+            planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), weight)));
         }
     }
     by_positions(
@@ -955,7 +1144,10 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         stamp: vec![0; np],
         shrunk: vec![0; np],
         start_valence: vec![0; np],
+        pts_of: Vec::new(),
+        moved: Vec::new(),
     };
+    work.place_points();
     // Rings, borders, normal cones and bounding radii of the leaves.
     let leaves = par_map(np, threads, |v| {
         let v = v as u32;
@@ -1005,6 +1197,9 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         std::collections::BinaryHeap::new();
     let mut rings = [Vec::new(), Vec::new()];
     let most = np.saturating_sub(1) as u64;
+    // Whether this pass may apply every ranked collapse (after one that applied none of
+    // its cheapest share).
+    let mut full = false;
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
@@ -1013,7 +1208,9 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
         // slots per triangle, in order).
         rank_all(&work, &live, &mut slots, &mut cands, threads);
-        ranked.start(&cands);
+        // The pass stops at the first collapse dearer than its cheapest share.
+        let limit = ranked.start(&cands, if full { 1.0 } else { PASS_SHARE });
+        let mut cut = false;
         // The pass applies, in that order, each edge's cheapest legal direction unless an
         // earlier collapse of the pass took a neighbourhood its ends are in (stamped), or
         // it lapsed since the start of the pass. A direction is checked only when reached
@@ -1047,6 +1244,15 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
                     key < own || (key == own && !stamped(&work, t, u) && i < slot_of(&work, t, u))
                 }
             };
+            let key = if later_first {
+                later.peek().map(|r| r.0 .0)
+            } else {
+                next_cand.map(|c| order_key(c.0))
+            };
+            if key.is_some_and(|k| k > limit) {
+                cut = true;
+                break;
+            }
             let (t, u, from_later) = if later_first {
                 let Some(std::cmp::Reverse((_, i))) = later.pop() else {
                     break;
@@ -1068,8 +1274,8 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
             if stamped(&work, t, u) {
                 continue;
             }
-            let (col, dev) = match work.verdict(t, u, pass, &mut rings) {
-                Verdict::Legal(col, dev) => (col, dev),
+            let col = match work.verdict(t, u, pass, &mut rings) {
+                Verdict::Legal(col) => col,
                 Verdict::Lapsed => continue,
                 Verdict::Illegal => {
                     if !from_later {
@@ -1090,16 +1296,18 @@ pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> 
                     work.start_valence[x as usize] = work.valence[x as usize];
                 }
             }
-            let s = work.apply(col, dev);
+            let s = work.apply(col);
             for &v in rings.iter().flatten().chain(&[t, u, s]) {
                 work.stamp[v as usize] = pass;
             }
             applied += 1;
         }
+        work.settle(threads);
         progress(work.h.collapses.len() as u64, most);
-        if applied == 0 {
+        if applied == 0 && !cut {
             break;
         }
+        full = applied == 0;
     }
     work.h.parent = work.nodes.iter().map(|n| n.parent).collect();
     work.h.error = work.nodes.iter().map(|n| n.error).collect();
@@ -1175,6 +1383,16 @@ fn add_to_wedge(
     }
 }
 
+/// Weight of a boundary plane per squared length of its edge. Heavier than a triangle's
+/// plane (weighted by its area) so that borders slide little: on a terrain tile the border
+/// is where the error would otherwise be largest.
+const BOUNDARY_WEIGHT: f64 = 10.0;
+
+/// Share of a pass's ranked collapses it may apply: the cheapest half. Applying every
+/// independent collapse lets an expensive one take a neighbourhood that a cheaper one of
+/// the next pass would have used; the cut costs passes, not depth to speak of.
+const PASS_SHARE: f64 = 0.5;
+
 /// Threads evaluating edges.
 const MAX_THREADS: usize = 8;
 
@@ -1241,5 +1459,102 @@ fn rank_all(
     });
     for part in parts {
         cands.extend_from_slice(&part);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+
+    #[test]
+    fn point_triangle_distance_in_every_region() {
+        let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]);
+        let d = |x: V3| point_triangle_d2(x, a, b, c).sqrt();
+        let close = |x: f64, y: f64| (x - y).abs() < 1e-12;
+        assert!(close(d([0.5, 0.5, 3.0]), 3.0)); // inside, above
+        assert!(close(d([-1.0, -1.0, 0.0]), 2f64.sqrt())); // corner a
+        assert!(close(d([3.0, 0.0, 0.0]), 1.0)); // corner b
+        assert!(close(d([0.0, 3.0, 4.0]), 17f64.sqrt())); // corner c
+        assert!(close(d([1.0, -2.0, 0.0]), 2.0)); // edge ab
+        assert!(close(d([-2.0, 1.0, 0.0]), 2.0)); // edge ac
+        assert!(close(d([2.0, 2.0, 0.0]), 2f64.sqrt())); // edge bc
+                                                         // Degenerate (a segment): the nearest corner at worst.
+        assert!(point_triangle_d2([1.0, 1.0, 0.0], a, b, b) <= 2.0 + 1e-12);
+    }
+
+    /// A bumpy height field of `n × n` posts with a border.
+    fn terrain(n: u32) -> Mesh {
+        let mut m = Mesh {
+            surfaces: vec![Surface::default()],
+            ..Mesh::default()
+        };
+        for row in 0..n {
+            for col in 0..n {
+                let (x, z) = (col as f32, row as f32);
+                let h = (x * 0.7).sin() * (z * 0.4).cos() * 2.0 + ((x * z) * 0.37).sin() * 0.3;
+                m.positions.push([x, h, z]);
+            }
+        }
+        for row in 0..n - 1 {
+            for col in 0..n - 1 {
+                let i = row * n + col;
+                for position in [[i, i + n, i + n + 1], [i, i + n + 1, i + 1]] {
+                    m.triangles.push(Triangle {
+                        position,
+                        normal: [NO_ATTRIBUTE; 3],
+                        uv: [NO_ATTRIBUTE; 3],
+                        color: [NO_ATTRIBUTE; 3],
+                        surface: 0,
+                    });
+                }
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
+        let w = crate::weld::weld(&terrain(24)).expect("weld");
+        let h = build(&w, &AttributeWeights::default(), &mut |_, _| {});
+        let point = |node: u32| w.positions[h.node_position[node as usize] as usize].map(f64::from);
+        let base: Vec<[V3; 3]> = h
+            .corners
+            .iter()
+            .zip(&h.alive)
+            .filter(|(_, &alive)| alive)
+            .map(|(c, _)| c.map(point))
+            .collect();
+        assert!(
+            base.len() < w.triangles.len() / 10,
+            "{} base triangles",
+            base.len()
+        );
+        let root_error = h
+            .parent
+            .iter()
+            .zip(&h.error)
+            .filter(|(&p, _)| p == NONE)
+            .map(|(_, &e)| e as f64)
+            .fold(0.0, f64::max);
+        let worst = w
+            .positions
+            .iter()
+            .map(|p| {
+                let x = p.map(f64::from);
+                base.iter()
+                    .map(|&[a, b, c]| point_triangle_d2(x, a, b, c))
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            })
+            .fold(0.0, f64::max);
+        assert!(worst > 0.1, "the base mesh should not be exact: {worst}");
+        assert!(worst <= root_error * (1.0 + 1e-5), "{worst} > {root_error}");
+        // A parent's error is at least its children's.
+        for (v, &p) in h.parent.iter().enumerate() {
+            if p != NONE {
+                assert!(h.error[p as usize] >= h.error[v]);
+            }
+        }
     }
 }
