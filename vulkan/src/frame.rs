@@ -1,0 +1,713 @@
+//! The renderer: targets, frames in flight, and the per-frame recording of every camera.
+//!
+//! One [`Renderer::render`] call is one frame and one queue submission:
+//! 1. wait for the frame slot's fence (its command buffer and index buffers are free);
+//! 2. fill each camera's index buffers for that slot (index emission into mapped memory);
+//! 3. per target: transition colour + depth, begin dynamic rendering (clear), then per
+//!    camera set its viewport and scissor, bind the mesh's persistent vertex buffer, and
+//!    issue one indexed draw per non-empty surface with the surface colour pushed (a
+//!    geomorphing camera binds the `geomorph_vs` pipeline, its two vertex streams and its
+//!    instances instead, and draws every instance);
+//! 4. optionally copy each colour target into the slot's read-back buffer;
+//! 5. submit with synchronization2 and the slot's fence.
+//!
+//! Several cameras share a target through viewports (the paper's split screen) or use
+//! separate targets; either way all of them go into the one submission.
+//!
+//! View-projection matrices are in Vulkan's clip space (y down, depth 0..1; glam's
+//! `camera::rh::proj::vulkan::perspective`, see [`LookAt`](crate::LookAt)), so viewports
+//! are plain rectangles.
+
+use ash::vk;
+use caveclod_core::gpu::DrawPush;
+use glam::{Mat4, Vec4};
+
+use crate::buffer::{Buffer, BufferDesc};
+use crate::device::Context;
+use crate::error::{Error, Result, VkResultExt};
+use crate::image::{Image, ImageDesc};
+use crate::indices::{CameraIndices, IndexSource};
+use crate::mesh::{MorphInstances, VertexBuffer};
+use crate::pipeline::{DrawPipeline, VertexStage};
+use crate::readback::RgbaImage;
+
+/// A rectangle of a target, in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Viewport {
+    /// Left edge.
+    pub x: u32,
+    /// Top edge.
+    pub y: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+impl Viewport {
+    /// The whole of a `width` × `height` target.
+    pub fn full(width: u32, height: u32) -> Self {
+        Self {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        }
+    }
+
+    /// Split screen for `cameras` (1 to 4): one full view, two side by side, or quadrants
+    /// (top left, top right, bottom left, bottom right) for three and four.
+    pub fn split_screen(width: u32, height: u32, cameras: usize) -> Result<Vec<Self>> {
+        let (hw, hh) = (width / 2, height / 2);
+        let quad = |i: u32| Self {
+            x: (i % 2) * hw,
+            y: (i / 2) * hh,
+            width: hw,
+            height: hh,
+        };
+        match cameras {
+            1 => Ok(vec![Self::full(width, height)]),
+            2 => Ok(vec![
+                Self {
+                    x: 0,
+                    y: 0,
+                    width: hw,
+                    height,
+                },
+                Self {
+                    x: hw,
+                    y: 0,
+                    width: hw,
+                    height,
+                },
+            ]),
+            3 | 4 => Ok((0..cameras as u32).map(quad).collect()),
+            n => Err(Error::InvalidArgument(format!(
+                "split screen for {n} cameras: 1 to 4 supported"
+            ))),
+        }
+    }
+
+    /// Width over height.
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height.max(1) as f32
+    }
+}
+
+/// How to make a [`Renderer`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RendererDesc {
+    /// Size (width, height) of each colour + depth target.
+    pub targets: Vec<(u32, u32)>,
+    /// Frames in flight (index buffers per camera must have as many slots).
+    pub frames_in_flight: usize,
+    /// Copy every target into a host-visible buffer each frame (for [`Renderer::read_target`]).
+    pub readback: bool,
+    /// Clear colour (linear RGBA).
+    pub clear_colour: [f32; 4],
+    /// Also create the geomorphing pipeline (`geomorph_vs`), for [`CameraDraw::morph`].
+    pub geomorph: bool,
+}
+
+impl RendererDesc {
+    /// One target of `width` × `height`, two frames in flight, read-back enabled.
+    pub fn single(width: u32, height: u32) -> Self {
+        Self {
+            targets: vec![(width, height)],
+            frames_in_flight: 2,
+            readback: true,
+            clear_colour: [0.0, 0.0, 0.0, 1.0],
+            geomorph: false,
+        }
+    }
+}
+
+/// One camera's part of a frame.
+pub struct CameraDraw<'a, 'c> {
+    /// Which target (index into [`RendererDesc::targets`]).
+    pub target: usize,
+    /// Where in the target.
+    pub viewport: Viewport,
+    /// View-projection matrix into Vulkan clip space (y down, depth 0..1).
+    pub view_proj: Mat4,
+    /// The mesh's persistent vertex buffer.
+    pub vertices: &'a VertexBuffer,
+    /// This camera's index buffers.
+    pub indices: &'a mut CameraIndices,
+    /// Where this frame's indices come from.
+    pub source: IndexSource<'a, 'c>,
+    /// Colour per surface (linear RGBA); at least one per surface.
+    pub colours: &'a [[f32; 4]],
+    /// Geomorph instead of drawing `vertices` as they are (needs [`RendererDesc::geomorph`]).
+    pub morph: Option<Morph<'a>>,
+}
+
+/// A geomorphing draw: the camera's indices index both vertex streams alike; `vertices`
+/// (of [`CameraDraw`]) are the coarse ends, `fine` the fine ends, and each instance morphs
+/// and places them by its [`MorphInstance`](caveclod_core::gpu::MorphInstance).
+#[derive(Clone, Copy, Debug)]
+pub struct Morph<'a> {
+    /// Fine ends, as many as the coarse ones.
+    pub fine: &'a VertexBuffer,
+    /// Instances.
+    pub instances: &'a MorphInstances,
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameStats {
+    /// Frame number (0 for the first).
+    pub frame: u64,
+    /// Frame slot used.
+    pub slot: usize,
+    /// Index bytes written for the GPU this frame, all cameras.
+    pub index_bytes: u64,
+    /// Index bytes per camera.
+    pub camera_index_bytes: Vec<u64>,
+    /// Indexed draws recorded (one per camera and non-empty surface).
+    pub draws: u32,
+}
+
+struct Target {
+    colour: Image,
+    depth: Image,
+}
+
+struct FrameSlot {
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    readback: Vec<Buffer>,
+}
+
+/// Targets, pipeline and frames in flight. See the [module docs](self).
+pub struct Renderer {
+    desc: RendererDesc,
+    pipeline: DrawPipeline,
+    morph_pipeline: Option<DrawPipeline>,
+    targets: Vec<Target>,
+    pool: vk::CommandPool,
+    slots: Vec<FrameSlot>,
+    frame: u64,
+    last_slot: Option<usize>,
+}
+
+impl Renderer {
+    /// Creates targets, pipeline, command buffers and fences.
+    pub fn new(ctx: &Context, desc: RendererDesc) -> Result<Self> {
+        if desc.targets.is_empty() || desc.frames_in_flight == 0 {
+            return Err(Error::InvalidArgument(
+                "a renderer needs at least one target and one frame in flight".into(),
+            ));
+        }
+        let d = &ctx.device;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create info.
+        let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let pipeline = match DrawPipeline::new(ctx, VertexStage::Draw) {
+            Ok(p) => p,
+            Err(e) => {
+                // SAFETY: unused pool.
+                unsafe { d.destroy_command_pool(pool, None) };
+                return Err(e);
+            }
+        };
+        let morph_pipeline = if desc.geomorph {
+            match DrawPipeline::new(ctx, VertexStage::Geomorph) {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    pipeline.destroy(ctx);
+                    // SAFETY: unused pool.
+                    unsafe { d.destroy_command_pool(pool, None) };
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        let mut r = Self {
+            desc,
+            pipeline,
+            morph_pipeline,
+            targets: Vec::new(),
+            pool,
+            slots: Vec::new(),
+            frame: 0,
+            last_slot: None,
+        };
+        match r.create_resources(ctx) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                let _ = r.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn create_resources(&mut self, ctx: &Context) -> Result<()> {
+        let d = &ctx.device;
+        for (i, &(w, h)) in self.desc.targets.iter().enumerate() {
+            let colour = Image::new(
+                ctx,
+                &format!("target {i} colour"),
+                ImageDesc::colour_target(w, h),
+            )?;
+            let depth = match Image::new(
+                ctx,
+                &format!("target {i} depth"),
+                ImageDesc::depth_target(w, h),
+            ) {
+                Ok(x) => x,
+                Err(e) => {
+                    colour.destroy(ctx)?;
+                    return Err(e);
+                }
+            };
+            self.targets.push(Target { colour, depth });
+        }
+        for s in 0..self.desc.frames_in_flight {
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(self.pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            // SAFETY: the pool is alive.
+            let cmd = unsafe { d.allocate_command_buffers(&alloc) }
+                .vk("vkAllocateCommandBuffers")?
+                .first()
+                .copied()
+                .ok_or_else(|| Error::InvalidArgument("no command buffer allocated".into()))?;
+            let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+            // SAFETY: valid create info.
+            let fence = unsafe { d.create_fence(&fence_info, None) }.vk("vkCreateFence")?;
+            self.slots.push(FrameSlot {
+                cmd,
+                fence,
+                readback: Vec::new(),
+            });
+            if self.desc.readback {
+                for (t, &(w, h)) in self.desc.targets.iter().enumerate() {
+                    let b = Buffer::new(
+                        ctx,
+                        &format!("read-back f{s} t{t}"),
+                        BufferDesc::gpu_to_cpu(
+                            u64::from(w) * u64::from(h) * 4,
+                            vk::BufferUsageFlags::TRANSFER_DST,
+                        ),
+                    )?;
+                    if let Some(slot) = self.slots.last_mut() {
+                        slot.readback.push(b);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The description.
+    pub fn desc(&self) -> &RendererDesc {
+        &self.desc
+    }
+
+    /// Frames rendered so far.
+    pub fn frames_rendered(&self) -> u64 {
+        self.frame
+    }
+
+    /// Records and submits one frame of every camera in `cameras` (see the module docs).
+    pub fn render(
+        &mut self,
+        ctx: &Context,
+        cameras: &mut [CameraDraw<'_, '_>],
+    ) -> Result<FrameStats> {
+        let slot_index = (self.frame % self.slots.len() as u64) as usize;
+        self.check(cameras)?;
+        let d = &ctx.device;
+        let (cmd, fence) = {
+            let s = &self.slots[slot_index];
+            (s.cmd, s.fence)
+        };
+        // SAFETY: the fence is alive; waiting makes the slot's buffers free to write.
+        unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+
+        let mut stats = FrameStats {
+            frame: self.frame,
+            slot: slot_index,
+            ..FrameStats::default()
+        };
+        for (i, cam) in cameras.iter_mut().enumerate() {
+            let bytes = cam.indices.fill(ctx, slot_index, i, cam.source)?;
+            stats.index_bytes += bytes;
+            stats.camera_index_bytes.push(bytes);
+        }
+
+        // SAFETY: the slot's previous submission completed (fence waited).
+        unsafe { d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()) }
+            .vk("vkResetCommandBuffer")?;
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: `cmd` is reset.
+        unsafe { d.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        for t in 0..self.targets.len() {
+            stats.draws += self.record_target(ctx, cmd, t, slot_index, cameras);
+        }
+        // SAFETY: `cmd` is recording.
+        unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+
+        // SAFETY: the fence is signalled and unused by pending work.
+        unsafe { d.reset_fences(&[fence]) }.vk("vkResetFences")?;
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        {
+            let q = ctx.queue();
+            // SAFETY: `cmd` is executable and references live objects; the queue is locked.
+            unsafe { d.queue_submit2(*q, &submit, fence) }.vk("vkQueueSubmit2")?;
+        }
+        self.last_slot = Some(slot_index);
+        self.frame += 1;
+        Ok(stats)
+    }
+
+    fn check(&self, cameras: &[CameraDraw<'_, '_>]) -> Result<()> {
+        for (i, c) in cameras.iter().enumerate() {
+            let Some(&(w, h)) = self.desc.targets.get(c.target) else {
+                return Err(Error::InvalidArgument(format!(
+                    "camera {i}: target {} of {}",
+                    c.target,
+                    self.targets.len()
+                )));
+            };
+            let v = c.viewport;
+            if v.width == 0
+                || v.height == 0
+                || u64::from(v.x) + u64::from(v.width) > u64::from(w)
+                || u64::from(v.y) + u64::from(v.height) > u64::from(h)
+            {
+                return Err(Error::InvalidArgument(format!(
+                    "camera {i}: viewport {v:?} outside its {w}x{h} target"
+                )));
+            }
+            if c.indices.frames_in_flight() != self.slots.len() {
+                return Err(Error::InvalidArgument(format!(
+                    "camera {i}: index buffers for {} frames in flight, renderer has {}",
+                    c.indices.frames_in_flight(),
+                    self.slots.len()
+                )));
+            }
+            if c.colours.len() < c.indices.surface_count() {
+                return Err(Error::InvalidArgument(format!(
+                    "camera {i}: {} colours for {} surfaces",
+                    c.colours.len(),
+                    c.indices.surface_count()
+                )));
+            }
+            if let Some(m) = &c.morph {
+                if self.morph_pipeline.is_none() {
+                    return Err(Error::InvalidArgument(format!(
+                        "camera {i}: geomorph draw, but the renderer was made without geomorph"
+                    )));
+                }
+                if m.fine.count != c.vertices.count {
+                    return Err(Error::InvalidArgument(format!(
+                        "camera {i}: {} fine and {} coarse vertices",
+                        m.fine.count, c.vertices.count
+                    )));
+                }
+            }
+            match c.source {
+                IndexSource::Camera { hierarchy, .. } => {
+                    if hierarchy.vertices().len() != c.vertices.count as usize {
+                        return Err(Error::InvalidArgument(format!(
+                            "camera {i}: vertex buffer has {} vertices, its hierarchy {}",
+                            c.vertices.count,
+                            hierarchy.vertices().len()
+                        )));
+                    }
+                }
+                IndexSource::Lists(lists) => {
+                    let count = c.vertices.count;
+                    if let Some(bad) = lists.iter().flat_map(|l| l.iter()).find(|&&x| x >= count) {
+                        return Err(Error::InvalidArgument(format!(
+                            "camera {i}: index {bad} beyond the {count} vertices"
+                        )));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Records target `t`: transitions, rendering of its cameras, optional copy-out.
+    /// Returns the draws recorded.
+    fn record_target(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        t: usize,
+        slot: usize,
+        cameras: &[CameraDraw<'_, '_>],
+    ) -> u32 {
+        let d = &ctx.device;
+        let target = &self.targets[t];
+        let extent = target.colour.desc.extent;
+        let image_barriers = [
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(
+                    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags2::COPY,
+                )
+                .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+                .dst_access_mask(
+                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+                )
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(target.colour.raw)
+                .subresource_range(Image::range(vk::ImageAspectFlags::COLOR)),
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(
+                    vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                )
+                .src_access_mask(vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE)
+                .dst_stage_mask(
+                    vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                )
+                .dst_access_mask(
+                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+                        | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                )
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(target.depth.raw)
+                .subresource_range(Image::range(vk::ImageAspectFlags::DEPTH)),
+        ];
+        let dep = vk::DependencyInfo::default().image_memory_barriers(&image_barriers);
+        // SAFETY: `cmd` is recording; the images are alive.
+        unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
+
+        let colour_attachment = [vk::RenderingAttachmentInfo::default()
+            .image_view(target.colour.view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: self.desc.clear_colour,
+                },
+            })];
+        let depth_attachment = vk::RenderingAttachmentInfo::default()
+            .image_view(target.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            });
+        let rendering = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D { x: 0, y: 0 },
+                extent,
+            })
+            .layer_count(1)
+            .color_attachments(&colour_attachment)
+            .depth_attachment(&depth_attachment);
+        let mut draws = 0;
+        // SAFETY: `cmd` is recording; attachments are in the layouts named.
+        unsafe { d.cmd_begin_rendering(cmd, &rendering) };
+        for cam in cameras.iter().filter(|c| c.target == t) {
+            let (pipeline, instances) = match (&cam.morph, &self.morph_pipeline) {
+                (Some(m), Some(p)) => (p, m.instances.count),
+                _ => (&self.pipeline, 1),
+            };
+            let v = cam.viewport;
+            let viewport = [vk::Viewport {
+                x: v.x as f32,
+                y: v.y as f32,
+                width: v.width as f32,
+                height: v.height as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            }];
+            let scissor = [vk::Rect2D {
+                offset: vk::Offset2D {
+                    x: v.x as i32,
+                    y: v.y as i32,
+                },
+                extent: vk::Extent2D {
+                    width: v.width,
+                    height: v.height,
+                },
+            }];
+            // SAFETY: `cmd` is recording inside rendering; the vertex buffers are alive.
+            unsafe {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+                d.cmd_set_viewport(cmd, 0, &viewport);
+                d.cmd_set_scissor(cmd, 0, &scissor);
+                match &cam.morph {
+                    Some(m) => d.cmd_bind_vertex_buffers(
+                        cmd,
+                        0,
+                        &[
+                            cam.vertices.buffer.raw,
+                            m.fine.buffer.raw,
+                            m.instances.buffer.raw,
+                        ],
+                        &[0, 0, 0],
+                    ),
+                    None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
+                }
+            }
+            for s in 0..cam.indices.surface_count() {
+                let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
+                    continue;
+                };
+                let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
+                let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
+                // SAFETY: `cmd` is recording; `buffer` holds `count` valid indices.
+                unsafe {
+                    d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
+                    d.cmd_push_constants(
+                        cmd,
+                        pipeline.layout,
+                        vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                        0,
+                        bytemuck::bytes_of(&push),
+                    );
+                    d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
+                }
+                draws += 1;
+            }
+        }
+        // SAFETY: rendering was begun above.
+        unsafe { d.cmd_end_rendering(cmd) };
+
+        if let Some(buffer) = self.slots[slot].readback.get(t) {
+            let to_src = [vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+                .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+                .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+                .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(target.colour.raw)
+                .subresource_range(Image::range(vk::ImageAspectFlags::COLOR))];
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&to_src);
+            let region = [vk::BufferImageCopy {
+                buffer_offset: 0,
+                buffer_row_length: 0,
+                buffer_image_height: 0,
+                image_subresource: vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                },
+                image_offset: vk::Offset3D::default(),
+                image_extent: extent.into(),
+            }];
+            let to_host = [vk::BufferMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .buffer(buffer.raw)
+                .offset(0)
+                .size(vk::WHOLE_SIZE)];
+            let host_dep = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
+            // SAFETY: `cmd` is recording; image and buffer are alive and large enough.
+            unsafe {
+                d.cmd_pipeline_barrier2(cmd, &dep);
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    target.colour.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer.raw,
+                    &region,
+                );
+                d.cmd_pipeline_barrier2(cmd, &host_dep);
+            }
+        }
+        draws
+    }
+
+    /// Waits for every submitted frame.
+    pub fn wait(&self, ctx: &Context) -> Result<()> {
+        let fences: Vec<vk::Fence> = self.slots.iter().map(|s| s.fence).collect();
+        if fences.is_empty() {
+            return Ok(());
+        }
+        // SAFETY: the fences are alive.
+        unsafe { ctx.device.wait_for_fences(&fences, true, u64::MAX) }.vk("vkWaitForFences")
+    }
+
+    /// Waits for the last frame and returns target `t`'s pixels (needs
+    /// [`RendererDesc::readback`]).
+    pub fn read_target(&self, ctx: &Context, t: usize) -> Result<RgbaImage> {
+        let slot = self
+            .last_slot
+            .ok_or_else(|| Error::InvalidArgument("no frame rendered yet".into()))?;
+        let s = &self.slots[slot];
+        let buffer = s.readback.get(t).ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "target {t}: no read-back buffer (read-back disabled or no such target)"
+            ))
+        })?;
+        // SAFETY: the fence is alive.
+        unsafe { ctx.device.wait_for_fences(&[s.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        let (w, h) = self.desc.targets[t];
+        let bytes = buffer
+            .mapped()
+            .ok_or_else(|| Error::InvalidArgument("read-back memory is not host-visible".into()))?;
+        let len = (w as usize) * (h as usize) * 4;
+        Ok(RgbaImage {
+            width: w,
+            height: h,
+            pixels: bytes[..len].to_vec(),
+        })
+    }
+
+    /// Waits for pending frames and destroys everything the renderer made.
+    pub fn destroy(self, ctx: &Context) -> Result<()> {
+        let waited = self.wait(ctx);
+        let d = &ctx.device;
+        let mut first_err = waited.err();
+        for s in self.slots {
+            // SAFETY: the fence's work completed.
+            unsafe { d.destroy_fence(s.fence, None) };
+            for b in s.readback {
+                if let Err(e) = b.destroy(ctx) {
+                    first_err.get_or_insert(e);
+                }
+            }
+        }
+        for t in self.targets {
+            for img in [t.colour, t.depth] {
+                if let Err(e) = img.destroy(ctx) {
+                    first_err.get_or_insert(e);
+                }
+            }
+        }
+        // SAFETY: no command buffer of the pool is pending.
+        unsafe { d.destroy_command_pool(self.pool, None) };
+        self.pipeline.destroy(ctx);
+        if let Some(p) = self.morph_pipeline {
+            p.destroy(ctx);
+        }
+        first_err.map_or(Ok(()), Err)
+    }
+}

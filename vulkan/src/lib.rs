@@ -1,0 +1,100 @@
+//! # caveclod-vulkan
+//!
+//! Renders caveclod hierarchies with Vulkan (ash 0.38 + gpu-allocator 0.28, both
+//! re-exported so users never mix versions) and the rust-gpu shaders committed as SPIR-V in
+//! `vulkan/spirv/`.
+//!
+//! - [`Context`]: *embedded* in a host engine ([`Context::from_raw`]: the host's instance,
+//!   device, queue and optionally allocator; no instance is created) or *headless*
+//!   ([`Context::headless`]: own instance and device, lavapipe preferred, validation layer
+//!   enabled when installed and its messages recorded in a [`ValidationLog`]).
+//! - Per baked mesh one device-local [`VertexBuffer`], uploaded once through a staging
+//!   buffer and never rewritten ([`Context::vertex_uploads`] counts uploads).
+//! - Per camera [`CameraIndices`]: per surface and frame in flight a host-visible index
+//!   buffer, grown by doubling, filled by caveclod-core's index emission.
+//! - [`Renderer`]: 1-4 cameras into viewports of one colour + depth target (split screen)
+//!   or separate targets, one indexed draw per (camera, surface), dynamic rendering and
+//!   synchronization2, one submission per frame; [`RgbaImage`] read-back and PNG.
+//! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
+//!   CPU); a [`CameraDraw`] with a [`Morph`] draws through the geomorphing vertex stage.
+//! - [`render_snapshot`]: one frame of 1-4 orbiting cameras, read back (the
+//!   `caveclod render` command).
+//!
+//! Everything is destroyed explicitly (`destroy(self, &Context)`); [`Context::destroy`]
+//! reports resources still alive as [`Error::Leaked`].
+//!
+//! ```no_run
+//! # fn demo(bytes: &[u8]) -> caveclod_vulkan::Result<()> {
+//! use caveclod_core::{CameraState, Hierarchy, RefineParams};
+//! use caveclod_vulkan::*;
+//! let h = Hierarchy::from_bytes(bytes).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! let ctx = Context::headless(&HeadlessDesc::default())?;
+//! let vertices = VertexBuffer::from_hierarchy(&ctx, "mesh", &h)?;
+//! let mut renderer = Renderer::new(&ctx, RendererDesc::single(256, 256))?;
+//! let mut indices = CameraIndices::new("camera 0", h.surface_count(), 2);
+//! let mut memory = vec![0u32; CameraState::words_needed(&h)];
+//! let mut cam = CameraState::new(&h, &mut memory).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! let look = LookAt {
+//!     eye: glam::Vec3::new(0.0, 5.0, 10.0),
+//!     target: glam::Vec3::ZERO,
+//!     up: glam::Vec3::Y,
+//!     fov_y: 1.0,
+//!     near: 0.1,
+//!     far: 100.0,
+//! };
+//! let viewport = Viewport::full(256, 256);
+//! cam.refine(&h, &look.view(viewport), &RefineParams::default())
+//!     .map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! let colours = vec![[0.8, 0.7, 0.6, 1.0]; h.surface_count()];
+//! renderer.render(&ctx, &mut [CameraDraw {
+//!     target: 0,
+//!     viewport,
+//!     view_proj: look.view_proj(viewport),
+//!     vertices: &vertices,
+//!     indices: &mut indices,
+//!     source: IndexSource::Camera { hierarchy: &h, camera: &cam },
+//!     colours: &colours,
+//!     morph: None,
+//! }])?;
+//! renderer.read_target(&ctx, 0)?.write_png("out.png".as_ref())?;
+//! renderer.destroy(&ctx)?;
+//! indices.destroy(&ctx)?;
+//! vertices.destroy(&ctx)?;
+//! ctx.destroy()
+//! # }
+//! ```
+#![deny(missing_docs)]
+#![deny(clippy::unwrap_used, clippy::expect_used)]
+
+pub use ash;
+pub use gpu_allocator;
+
+pub mod buffer;
+pub mod device;
+pub mod error;
+pub mod frame;
+pub mod geomorph;
+pub mod image;
+pub mod indices;
+mod instance;
+pub mod mesh;
+pub mod pipeline;
+pub mod readback;
+pub mod snapshot;
+pub mod validation;
+pub mod view;
+
+pub use buffer::{Buffer, BufferDesc};
+pub use device::{Context, HeadlessDesc, SharedAllocator};
+pub use error::{from_vk, Error, Result, VkResultExt};
+pub use frame::{CameraDraw, FrameStats, Morph, Renderer, RendererDesc, Viewport};
+pub use geomorph::Geomorph;
+pub use image::{Image, ImageDesc, COLOUR_FORMAT, DEPTH_FORMAT};
+pub use indices::{CameraIndices, IndexSource};
+pub use mesh::{MorphInstances, VertexBuffer, VERTEX_STRIDE};
+pub use readback::{ImageDiff, RgbaImage};
+pub use snapshot::{orbit, palette, render_snapshot, Layout, Snapshot, SnapshotDesc};
+pub use validation::{
+    messenger_info, validation_layer_present, DebugMessenger, ValidationLog, VALIDATION_LAYER,
+};
+pub use view::LookAt;

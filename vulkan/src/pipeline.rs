@@ -1,0 +1,336 @@
+//! Pipelines over the committed SPIR-V module (`vulkan/spirv/caveclod_shaders.spv`, built by
+//! `shaders/builder` with rust-gpu; see `vulkan/spirv/INTERFACE.md`).
+//!
+//! The module is embedded with `include_bytes!` and read with `ash::util::read_spv`, which
+//! fixes alignment, so users of this crate never need rust-gpu. Vertex layouts, push-constant
+//! ranges and descriptor bindings here mirror the interface contract: `draw_vs`/`draw_fs`
+//! (binding 0: `caveclod_core::Vertex`, stride 32; 80-byte [`DrawPush`] for vertex and
+//! fragment), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
+//! [`MorphInstance`] per instance; same push constants) and `geomorph_cs` (three storage
+//! buffers, 16-byte [`MorphPush`]).
+//!
+//! Drawing uses dynamic rendering (no render pass objects), dynamic viewport and scissor
+//! (one pipeline serves every split-screen viewport), depth test `LESS`, no culling (the
+//! tests compare renders of the same triangles, whatever their winding).
+//!
+//! [`DrawPush`]: caveclod_core::gpu::DrawPush
+//! [`MorphPush`]: caveclod_core::gpu::MorphPush
+//! [`MorphInstance`]: caveclod_core::gpu::MorphInstance
+
+use std::ffi::CStr;
+
+use ash::vk;
+use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush};
+
+use crate::device::Context;
+use crate::error::{Error, Result, VkResultExt};
+use crate::image::{COLOUR_FORMAT, DEPTH_FORMAT};
+use crate::mesh::VERTEX_STRIDE;
+
+/// The committed SPIR-V module.
+pub const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");
+
+/// Entry point names (Rust function names of the shader crate).
+pub mod entry {
+    use std::ffi::CStr;
+    /// Vertex stage for drawing.
+    pub const DRAW_VS: &CStr = c"draw_vs";
+    /// Fragment stage for drawing.
+    pub const DRAW_FS: &CStr = c"draw_fs";
+    /// Vertex stage for geomorphing two vertex streams by a per-instance `t`.
+    pub const GEOMORPH_VS: &CStr = c"geomorph_vs";
+    /// Geomorph compute stage.
+    pub const GEOMORPH_CS: &CStr = c"geomorph_cs";
+}
+
+/// Threads per workgroup of `geomorph_cs`.
+pub const GEOMORPH_LOCAL_SIZE: u32 = 64;
+
+/// Creates a shader module from SPIR-V bytes.
+pub fn shader_module(ctx: &Context, spirv: &[u8]) -> Result<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+        .map_err(|e| Error::Shader(format!("reading SPIR-V: {e}")))?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    // SAFETY: `words` is a SPIR-V module validated by spirv-val when it was committed.
+    unsafe { ctx.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")
+}
+
+/// Which vertex stage a [`DrawPipeline`] runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexStage {
+    /// `draw_vs`: binding 0, `Vertex` per vertex.
+    Draw,
+    /// `geomorph_vs`: bindings 0 and 1, `Vertex` per vertex (coarse, fine); binding 2,
+    /// `MorphInstance` per instance.
+    Geomorph,
+}
+
+/// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout.
+#[derive(Debug)]
+pub struct DrawPipeline {
+    /// The pipeline.
+    pub raw: vk::Pipeline,
+    /// Its layout (push constants only).
+    pub layout: vk::PipelineLayout,
+}
+
+impl DrawPipeline {
+    /// Creates the pipeline for RGBA8 colour + D32 depth targets.
+    pub fn new(ctx: &Context, vertex_stage: VertexStage) -> Result<Self> {
+        let d = &ctx.device;
+        let module = shader_module(ctx, SPIRV)?;
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            offset: 0,
+            size: std::mem::size_of::<DrawPush>() as u32,
+        }];
+        let layout_info = vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges);
+        // SAFETY: valid create info.
+        let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }
+            .vk("vkCreatePipelineLayout")
+        {
+            Ok(l) => l,
+            Err(e) => {
+                // SAFETY: unused module.
+                unsafe { d.destroy_shader_module(module, None) };
+                return Err(e);
+            }
+        };
+        let raw = Self::create(ctx, module, layout, vertex_stage);
+        // SAFETY: the pipeline (if any) no longer needs the module.
+        unsafe { d.destroy_shader_module(module, None) };
+        match raw {
+            Ok(raw) => Ok(Self { raw, layout }),
+            Err(e) => {
+                // SAFETY: unused layout.
+                unsafe { d.destroy_pipeline_layout(layout, None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn create(
+        ctx: &Context,
+        module: vk::ShaderModule,
+        layout: vk::PipelineLayout,
+        vertex_stage: VertexStage,
+    ) -> Result<vk::Pipeline> {
+        let vs = match vertex_stage {
+            VertexStage::Draw => entry::DRAW_VS,
+            VertexStage::Geomorph => entry::GEOMORPH_VS,
+        };
+        let stages = [
+            stage(vk::ShaderStageFlags::VERTEX, module, vs),
+            stage(vk::ShaderStageFlags::FRAGMENT, module, entry::DRAW_FS),
+        ];
+        let per_vertex = |binding| vk::VertexInputBindingDescription {
+            binding,
+            stride: VERTEX_STRIDE,
+            input_rate: vk::VertexInputRate::VERTEX,
+        };
+        // Position, normal, uv of a `Vertex` in `binding` at locations `first..first + 3`.
+        let vertex = |binding, first| {
+            [
+                attribute(first, binding, vk::Format::R32G32B32_SFLOAT, 0),
+                attribute(first + 1, binding, vk::Format::R32G32B32_SFLOAT, 12),
+                attribute(first + 2, binding, vk::Format::R32G32_SFLOAT, 24),
+            ]
+        };
+        let (bindings, attributes) = match vertex_stage {
+            VertexStage::Draw => (vec![per_vertex(0)], vertex(0, 0).to_vec()),
+            VertexStage::Geomorph => {
+                let mut attributes = vertex(0, 0).to_vec();
+                attributes.extend(vertex(1, 3));
+                attributes.push(attribute(6, 2, vk::Format::R32G32B32A32_SFLOAT, 0));
+                attributes.push(attribute(7, 2, vk::Format::R32_SFLOAT, 16));
+                let instance = vk::VertexInputBindingDescription {
+                    binding: 2,
+                    stride: std::mem::size_of::<MorphInstance>() as u32,
+                    input_rate: vk::VertexInputRate::INSTANCE,
+                };
+                (vec![per_vertex(0), per_vertex(1), instance], attributes)
+            }
+        };
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(&attributes);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let colour_formats = [COLOUR_FORMAT];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&colour_formats)
+            .depth_attachment_format(DEPTH_FORMAT);
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering)];
+        // SAFETY: every pointer in `info` refers to locals alive for the call.
+        let pipelines = unsafe {
+            ctx.device
+                .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+        }
+        .map_err(|(_, e)| e)
+        .vk("vkCreateGraphicsPipelines")?;
+        pipelines
+            .first()
+            .copied()
+            .ok_or_else(|| Error::Shader("no graphics pipeline returned".into()))
+    }
+
+    /// Destroys pipeline and layout. The GPU must be done with them.
+    pub fn destroy(self, ctx: &Context) {
+        // SAFETY: the caller guarantees no pending work uses them.
+        unsafe {
+            ctx.device.destroy_pipeline(self.raw, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+/// The geomorph compute pipeline (`geomorph_cs`), its descriptor set layout and layout.
+#[derive(Debug)]
+pub struct GeomorphPipeline {
+    /// The pipeline.
+    pub raw: vk::Pipeline,
+    /// Its layout (one set, push constants).
+    pub layout: vk::PipelineLayout,
+    /// Set 0: bindings 0 (a), 1 (b), 2 (output), storage buffers.
+    pub set_layout: vk::DescriptorSetLayout,
+}
+
+impl GeomorphPipeline {
+    /// Creates the compute pipeline.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let d = &ctx.device;
+        let bindings: Vec<_> = (0..3)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: valid create info.
+        let set_layout = unsafe { d.create_descriptor_set_layout(&set_info, None) }
+            .vk("vkCreateDescriptorSetLayout")?;
+        let set_layouts = [set_layout];
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::COMPUTE,
+            offset: 0,
+            size: std::mem::size_of::<MorphPush>() as u32,
+        }];
+        let layout_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(&ranges);
+        // SAFETY: valid create info.
+        let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }
+            .vk("vkCreatePipelineLayout")
+        {
+            Ok(l) => l,
+            Err(e) => {
+                // SAFETY: unused.
+                unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(e);
+            }
+        };
+        let raw = shader_module(ctx, SPIRV).and_then(|module| {
+            let info = [vk::ComputePipelineCreateInfo::default()
+                .stage(stage(
+                    vk::ShaderStageFlags::COMPUTE,
+                    module,
+                    entry::GEOMORPH_CS,
+                ))
+                .layout(layout)];
+            // SAFETY: valid create info referring to live objects.
+            let r = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+                .map_err(|(_, e)| e)
+                .vk("vkCreateComputePipelines");
+            // SAFETY: the pipeline no longer needs the module.
+            unsafe { d.destroy_shader_module(module, None) };
+            r?.first()
+                .copied()
+                .ok_or_else(|| Error::Shader("no compute pipeline returned".into()))
+        });
+        match raw {
+            Ok(raw) => Ok(Self {
+                raw,
+                layout,
+                set_layout,
+            }),
+            Err(e) => {
+                // SAFETY: unused.
+                unsafe {
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Destroys pipeline and layouts. The GPU must be done with them.
+    pub fn destroy(self, ctx: &Context) {
+        // SAFETY: the caller guarantees no pending work uses them.
+        unsafe {
+            ctx.device.destroy_pipeline(self.raw, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+            ctx.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+fn stage<'a>(
+    stage: vk::ShaderStageFlags,
+    module: vk::ShaderModule,
+    name: &'a CStr,
+) -> vk::PipelineShaderStageCreateInfo<'a> {
+    vk::PipelineShaderStageCreateInfo::default()
+        .stage(stage)
+        .module(module)
+        .name(name)
+}
+
+fn attribute(
+    location: u32,
+    binding: u32,
+    format: vk::Format,
+    offset: u32,
+) -> vk::VertexInputAttributeDescription {
+    vk::VertexInputAttributeDescription {
+        location,
+        binding,
+        format,
+        offset,
+    }
+}

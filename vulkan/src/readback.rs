@@ -1,0 +1,216 @@
+//! Read-back pixels: an RGBA8 image, its PNG file, crops and comparisons.
+
+use std::io::Write as _;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::frame::Viewport;
+
+/// Pixels of a colour target, RGBA8, rows top to bottom.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RgbaImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height * 4` bytes.
+    pub pixels: Vec<u8>,
+}
+
+/// How two images differ.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImageDiff {
+    /// Pixels compared.
+    pub pixels: u64,
+    /// Pixels equal in every channel.
+    pub equal: u64,
+    /// Pixels whose channels all differ by at most 1 (of 255).
+    pub within_one: u64,
+    /// Largest channel difference.
+    pub max_channel_difference: u8,
+    /// Mean absolute channel difference.
+    pub mean_channel_difference: f64,
+}
+
+impl ImageDiff {
+    /// Fraction of pixels within 1/255 in every channel.
+    pub fn within_one_fraction(&self) -> f64 {
+        self.within_one as f64 / self.pixels.max(1) as f64
+    }
+
+    /// Fraction of identical pixels.
+    pub fn equal_fraction(&self) -> f64 {
+        self.equal as f64 / self.pixels.max(1) as f64
+    }
+}
+
+impl RgbaImage {
+    /// The RGBA of pixel (x, y), if inside.
+    pub fn pixel(&self, x: u32, y: u32) -> Option<[u8; 4]> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let i = 4 * (y as usize * self.width as usize + x as usize);
+        let p = self.pixels.get(i..i + 4)?;
+        Some([p[0], p[1], p[2], p[3]])
+    }
+
+    /// The part of the image under `v`.
+    pub fn crop(&self, v: Viewport) -> Result<Self> {
+        if v.x + v.width > self.width || v.y + v.height > self.height {
+            return Err(Error::InvalidArgument(format!(
+                "crop {v:?} outside a {}x{} image",
+                self.width, self.height
+            )));
+        }
+        let mut pixels = Vec::with_capacity(v.width as usize * v.height as usize * 4);
+        for y in v.y..v.y + v.height {
+            let start = 4 * (y as usize * self.width as usize + v.x as usize);
+            pixels.extend_from_slice(&self.pixels[start..start + 4 * v.width as usize]);
+        }
+        Ok(Self {
+            width: v.width,
+            height: v.height,
+            pixels,
+        })
+    }
+
+    /// Per-pixel comparison with an image of the same size.
+    pub fn diff(&self, other: &Self) -> Result<ImageDiff> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(Error::InvalidArgument(format!(
+                "comparing a {}x{} image with a {}x{} one",
+                self.width, self.height, other.width, other.height
+            )));
+        }
+        let mut d = ImageDiff::default();
+        let mut sum = 0u64;
+        for (a, b) in self
+            .pixels
+            .chunks_exact(4)
+            .zip(other.pixels.chunks_exact(4))
+        {
+            let m = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| x.abs_diff(*y))
+                .max()
+                .unwrap_or(0);
+            sum += a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| u64::from(x.abs_diff(*y)))
+                .sum::<u64>();
+            d.pixels += 1;
+            d.equal += u64::from(m == 0);
+            d.within_one += u64::from(m <= 1);
+            d.max_channel_difference = d.max_channel_difference.max(m);
+        }
+        d.mean_channel_difference = sum as f64 / (4 * d.pixels.max(1)) as f64;
+        Ok(d)
+    }
+
+    /// Pixels that differ from `background` in some channel.
+    pub fn covered(&self, background: [u8; 4]) -> u64 {
+        self.pixels
+            .chunks_exact(4)
+            .filter(|p| *p != background.as_slice())
+            .count() as u64
+    }
+
+    /// Writes the image as an RGBA PNG, through a temporary file renamed into place.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let shown = path.display().to_string();
+        let io = |source| Error::Io {
+            path: shown.clone(),
+            source,
+        };
+        let png_err = |source| Error::Png {
+            path: shown.clone(),
+            source,
+        };
+        let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+        tmp_name.push(".tmp");
+        let tmp = path.with_file_name(tmp_name);
+        let file = std::fs::File::create(&tmp).map_err(io)?;
+        let result = (|| {
+            let mut w = std::io::BufWriter::new(file);
+            {
+                let mut enc = png::Encoder::new(&mut w, self.width, self.height);
+                enc.set_color(png::ColorType::Rgba);
+                enc.set_depth(png::BitDepth::Eight);
+                let mut writer = enc.write_header().map_err(png_err)?;
+                writer.write_image_data(&self.pixels).map_err(png_err)?;
+                writer.finish().map_err(png_err)?;
+            }
+            w.flush().map_err(io)?;
+            let file = w.into_inner().map_err(|e| io(e.into_error()))?;
+            file.sync_all().map_err(io)?;
+            std::fs::rename(&tmp, path).map_err(io)
+        })();
+        if result.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 4]) -> RgbaImage {
+        let mut pixels = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                pixels.extend_from_slice(&f(x, y));
+            }
+        }
+        RgbaImage {
+            width: w,
+            height: h,
+            pixels,
+        }
+    }
+
+    #[test]
+    fn crop_and_diff() {
+        let a = image(4, 4, |x, y| [x as u8, y as u8, 0, 255]);
+        let c = a
+            .crop(Viewport {
+                x: 2,
+                y: 1,
+                width: 2,
+                height: 3,
+            })
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(c.pixel(0, 0), Some([2, 1, 0, 255]));
+        assert_eq!(c.pixel(1, 2), Some([3, 3, 0, 255]));
+        let b = image(4, 4, |x, y| [x as u8 + u8::from(x == 3), y as u8, 0, 255]);
+        let d = a.diff(&b).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((d.pixels, d.equal, d.within_one), (16, 12, 16));
+        assert_eq!(d.max_channel_difference, 1);
+        assert_eq!(a.covered([0, 0, 0, 255]), 15);
+    }
+
+    #[test]
+    fn png_round_trip_through_a_temp_file() {
+        let a = image(3, 2, |x, y| [x as u8 * 80, y as u8 * 100, 7, 255]);
+        let dir = std::env::temp_dir().join(format!("caveclod-vulkan-png-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.join("a.png");
+        a.write_png(&path).unwrap_or_else(|e| panic!("{e}"));
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&path).unwrap_or_else(|e| panic!("{e}")),
+        ));
+        let mut reader = decoder.read_info().unwrap_or_else(|e| panic!("{e}"));
+        let mut buf = vec![0; reader.output_buffer_size().unwrap_or(0)];
+        let info = reader
+            .next_frame(&mut buf)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((info.width, info.height), (3, 2));
+        assert_eq!(&buf[..info.buffer_size()], &a.pixels[..]);
+        assert!(!dir.join("a.png.tmp").exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
