@@ -1,0 +1,142 @@
+//! Shared set-up of the Vulkan tests: a headless lavapipe context with validation, baked
+//! generated meshes, cameras, and the "no validation messages" check.
+#![allow(dead_code)]
+
+use caveclod_core::{CameraState, Hierarchy, RefineParams, Vertex};
+use caveclod_tests::meshes::TestMesh;
+use caveclod_vulkan::{
+    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
+    RgbaImage, VertexBuffer, Viewport,
+};
+use glam::Vec3;
+
+/// Colours of surfaces 0 and 1.
+pub const COLOURS: [[f32; 4]; 2] = [[0.9, 0.6, 0.3, 1.0], [0.3, 0.7, 0.9, 1.0]];
+/// The clear colour as RGBA8.
+pub const BACKGROUND: [u8; 4] = [0, 0, 0, 255];
+
+/// A headless context on lavapipe with the validation layer, which must be installed.
+pub fn context() -> Context {
+    let ctx = match Context::headless(&HeadlessDesc {
+        validation: true,
+        prefer_lavapipe: true,
+    }) {
+        Ok(c) => c,
+        Err(e) => panic!("no Vulkan context (install lavapipe: cargo xtask setup): {e}"),
+    };
+    assert!(
+        ctx.validation_enabled(),
+        "VK_LAYER_KHRONOS_validation is not installed (cargo xtask setup)"
+    );
+    ctx
+}
+
+/// Panics with the messages if the validation layer reported anything.
+pub fn assert_clean(ctx: &Context, when: &str) {
+    let messages = ctx.take_validation_messages();
+    assert!(
+        messages.is_empty(),
+        "{} validation message(s) {when}:\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
+}
+
+/// Unwraps a result of this crate, naming the step.
+pub fn ok<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
+    match r {
+        Ok(x) => x,
+        Err(e) => panic!("{what}: {e}"),
+    }
+}
+
+/// A camera looking at the middle of a `size` × `size` terrain from `angle` (radians around
+/// the y axis) at distance `distance` (in terrain sizes) and height `height`.
+pub fn terrain_camera(size: f32, angle: f32, distance: f32, height: f32) -> LookAt {
+    let c = Vec3::new(size * 0.5, 0.0, size * 0.5);
+    LookAt {
+        eye: c + Vec3::new(
+            angle.sin() * distance * size,
+            height * size,
+            angle.cos() * distance * size,
+        ),
+        target: c,
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.05,
+        far: 10.0 * size,
+    }
+}
+
+/// The input mesh as a vertex buffer (three vertices per triangle, attributes as given)
+/// and one index list per surface: the mesh drawn directly, without the baker.
+pub fn direct_mesh(t: &TestMesh) -> (Vec<Vertex>, Vec<Vec<u32>>) {
+    let mut vertices = Vec::with_capacity(3 * t.triangles.len());
+    let mut lists = vec![Vec::new(); t.surface_count() as usize];
+    for tri in &t.triangles {
+        for k in 0..3 {
+            lists[tri.surface as usize].push(vertices.len() as u32);
+            vertices.push(Vertex {
+                position: t.positions[tri.p[k] as usize],
+                normal: tri.normal[k],
+                uv: tri.uv[k],
+            });
+        }
+    }
+    (vertices, lists)
+}
+
+/// Camera memory for full resolution.
+pub fn camera_memory(h: &Hierarchy<'_>) -> Vec<u32> {
+    vec![0u32; CameraState::words_needed(h)]
+}
+
+/// Refines `cam` for `look` in `viewport` at `tolerance_px`.
+pub fn refine(
+    h: &Hierarchy<'_>,
+    cam: &mut CameraState<'_>,
+    look: &LookAt,
+    viewport: Viewport,
+    tolerance_px: f32,
+) {
+    let params = RefineParams {
+        tolerance_px,
+        ..RefineParams::default()
+    };
+    ok(cam.refine(h, &look.view(viewport), &params), "refine");
+}
+
+/// Renders one camera's indices from `source` alone into a fresh `w` × `h` renderer and
+/// reads the image back; destroys what it made.
+pub fn render_alone(
+    ctx: &Context,
+    vertices: &VertexBuffer,
+    surfaces: usize,
+    look: &LookAt,
+    (w, h): (u32, u32),
+    source: IndexSource<'_, '_>,
+) -> RgbaImage {
+    let mut renderer = ok(Renderer::new(ctx, RendererDesc::single(w, h)), "renderer");
+    let mut indices = CameraIndices::new("alone", surfaces, renderer.desc().frames_in_flight);
+    let viewport = Viewport::full(w, h);
+    ok(
+        renderer.render(
+            ctx,
+            &mut [CameraDraw {
+                target: 0,
+                viewport,
+                view_proj: look.view_proj(viewport),
+                vertices,
+                indices: &mut indices,
+                source,
+                colours: &COLOURS,
+                morph: None,
+            }],
+        ),
+        "render",
+    );
+    let image = ok(renderer.read_target(ctx, 0), "read back");
+    ok(renderer.destroy(ctx), "destroy renderer");
+    ok(indices.destroy(ctx), "destroy indices");
+    image
+}
