@@ -1,0 +1,229 @@
+//! Criterion benchmarks of caveclod-vulkan on lavapipe (validation off): frame time of one
+//! camera against four cameras in split screen, and index bytes uploaded per frame.
+//!
+//! A generated terrain (`terrain(256, 256)`: 131,072 triangles) is baked once; its vertex
+//! buffer is uploaded once. Cameras are refined once for their viewports (1 px tolerance),
+//! so the timed frame is what a renderer does every frame for a settled front: index
+//! emission into the mapped index buffers of the frame slot, recording, submission, and
+//! the wait for the frame slot's previous use (two frames in flight, so in steady state one
+//! iteration is one frame of GPU work).
+//!
+//! - `render/frame_1_camera`: one camera, full 960 × 540 target.
+//! - `render/frame_4_cameras_split`: four cameras, one quadrant each of the same target
+//!   (the same pixel count), one submission.
+//!
+//! Index bytes per frame are printed for both (`index bytes per frame: ...`).
+//! `cargo bench -p caveclod-benches --bench render`; `CAVECLOD_BENCH_RENDER_SIZE=N` changes
+//! the terrain. Without `--bench` (as `cargo test --benches` runs it) each benchmark runs
+//! once on a small terrain.
+
+use std::time::{Duration, Instant};
+
+use caveclod_core::glam::Vec3;
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_tests::{bake, meshes};
+use caveclod_vulkan::{
+    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
+    VertexBuffer, Viewport,
+};
+use criterion::Criterion;
+
+const SEED: u64 = 7;
+const WIDTH: u32 = 960;
+const HEIGHT: u32 = 540;
+const COLOURS: [[f32; 4]; 2] = [[0.9, 0.6, 0.3, 1.0], [0.3, 0.7, 0.9, 1.0]];
+
+fn or_exit<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
+    match r {
+        Ok(x) => x,
+        Err(e) => {
+            eprintln!("render bench: {what}: {e}");
+            std::process::exit(1)
+        }
+    }
+}
+
+/// Camera `i` of four, around and above the middle of a `size` terrain.
+fn look(i: usize, size: f32) -> LookAt {
+    let c = Vec3::new(size * 0.5, 0.0, size * 0.5);
+    let angle = 0.4 + i as f32 * std::f32::consts::FRAC_PI_2;
+    let (distance, height) = [(0.45, 0.25), (0.35, 0.15), (0.6, 0.35), (0.3, 0.2)][i % 4];
+    LookAt {
+        eye: c + Vec3::new(
+            angle.sin() * distance * size,
+            height * size,
+            angle.cos() * distance * size,
+        ),
+        target: c,
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.01 * size,
+        far: 3.0 * size,
+    }
+}
+
+/// Camera states refined for `viewports` (camera `i` in `viewports[i]`).
+fn refined<'m>(
+    h: &Hierarchy<'_>,
+    memories: &'m mut [Vec<u32>],
+    viewports: &[Viewport],
+    size: f32,
+) -> Vec<CameraState<'m>> {
+    let config = CameraConfig::full(h);
+    let params = RefineParams::default();
+    memories
+        .iter_mut()
+        .enumerate()
+        .map(|(i, m)| {
+            let mut cam = or_exit(CameraState::with_config(h, m, &config), "camera");
+            or_exit(
+                cam.refine(h, &look(i, size).view(viewports[i]), &params),
+                "refine",
+            );
+            cam
+        })
+        .collect()
+}
+
+/// What every benchmark draws.
+struct Scene<'a> {
+    ctx: &'a Context,
+    h: &'a Hierarchy<'a>,
+    vertices: &'a VertexBuffer,
+    size: f32,
+}
+
+/// Benchmarks `cams` drawn into `viewports` of one target; returns index bytes per frame.
+fn bench_frames(
+    c: &mut Criterion,
+    name: &str,
+    scene: &Scene<'_>,
+    cams: &[CameraState<'_>],
+    viewports: &[Viewport],
+) -> u64 {
+    let Scene {
+        ctx,
+        h,
+        vertices,
+        size,
+    } = *scene;
+    let mut renderer = or_exit(
+        Renderer::new(
+            ctx,
+            RendererDesc {
+                readback: false,
+                ..RendererDesc::single(WIDTH, HEIGHT)
+            },
+        ),
+        "renderer",
+    );
+    let frames = renderer.desc().frames_in_flight;
+    let mut indices: Vec<CameraIndices> = (0..cams.len())
+        .map(|i| CameraIndices::new(&format!("camera {i}"), h.surface_count(), frames))
+        .collect();
+    let mut index_bytes = 0;
+    c.bench_function(name, |b| {
+        b.iter(|| {
+            let mut draws: Vec<CameraDraw<'_, '_>> = indices
+                .iter_mut()
+                .enumerate()
+                .map(|(i, ind)| CameraDraw {
+                    target: 0,
+                    viewport: viewports[i],
+                    view_proj: look(i, size).view_proj(viewports[i]),
+                    vertices,
+                    indices: ind,
+                    source: IndexSource::Camera {
+                        hierarchy: h,
+                        camera: &cams[i],
+                    },
+                    colours: &COLOURS,
+                    morph: None,
+                })
+                .collect();
+            let stats = or_exit(renderer.render(ctx, &mut draws), "render");
+            index_bytes = stats.index_bytes;
+        })
+    });
+    or_exit(renderer.wait(ctx), "wait");
+    or_exit(renderer.destroy(ctx), "destroy renderer");
+    for i in indices {
+        or_exit(i.destroy(ctx), "destroy indices");
+    }
+    index_bytes
+}
+
+fn main() {
+    let benchmarking = std::env::args().any(|a| a == "--bench");
+    let size: u32 = std::env::var("CAVECLOD_BENCH_RENDER_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(if benchmarking { 256 } else { 24 });
+    let t = Instant::now();
+    let mesh = meshes::terrain(size, size, SEED);
+    let baked = bake(&mesh);
+    let h = baked.hierarchy();
+    eprintln!(
+        "terrain {size} x {size}: {} polygons; baked in {:.2} s",
+        mesh.triangles.len(),
+        t.elapsed().as_secs_f64()
+    );
+    let ctx = or_exit(
+        Context::headless(&HeadlessDesc {
+            validation: false,
+            prefer_lavapipe: true,
+        }),
+        "no Vulkan device",
+    );
+    eprintln!("device: {}", ctx.device_name());
+    let vertices = or_exit(
+        VertexBuffer::from_hierarchy(&ctx, "terrain", &h),
+        "vertices",
+    );
+    let s = size as f32;
+    let full = [Viewport::full(WIDTH, HEIGHT)];
+    let quadrants = or_exit(Viewport::split_screen(WIDTH, HEIGHT, 4), "split screen");
+    let words = CameraState::words_needed(&h);
+    let mut memory_one = vec![vec![0u32; words]];
+    let mut memory_four = vec![vec![0u32; words]; 4];
+    let one = refined(&h, &mut memory_one, &full, s);
+    let four = refined(&h, &mut memory_four, &quadrants, s);
+
+    let mut c = Criterion::default()
+        .sample_size(20)
+        .warm_up_time(Duration::from_secs(2))
+        .measurement_time(Duration::from_secs(12))
+        .configure_from_args();
+    let scene = Scene {
+        ctx: &ctx,
+        h: &h,
+        vertices: &vertices,
+        size: s,
+    };
+    let bytes_one = bench_frames(&mut c, "render/frame_1_camera", &scene, &one, &full);
+    let bytes_four = bench_frames(
+        &mut c,
+        "render/frame_4_cameras_split",
+        &scene,
+        &four,
+        &quadrants,
+    );
+    c.final_summary();
+    let polys = |cams: &[CameraState<'_>]| {
+        cams.iter()
+            .map(|c| c.active_polygon_count().to_string())
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    println!(
+        "index bytes per frame: 1 camera {bytes_one} ({} active polygons), 4 cameras split {bytes_four} ({} active polygons); ratio {:.2}",
+        polys(&one),
+        polys(&four),
+        bytes_four as f64 / bytes_one.max(1) as f64
+    );
+    println!("vertex buffer uploads: {}", ctx.vertex_uploads());
+    drop(one);
+    drop(four);
+    or_exit(vertices.destroy(&ctx), "destroy vertices");
+    or_exit(ctx.destroy(), "destroy context");
+}
