@@ -12,7 +12,10 @@
 //! - `render/frame_4_cameras_split`: four cameras, one quadrant each of the same target
 //!   (the same pixel count), one submission.
 //!
-//! Index bytes per frame are printed for both (`index bytes per frame: ...`).
+//! Index bytes per frame are printed for both (`index bytes per frame: ...`). Because
+//! criterion runs one benchmark after the other, a change of machine load between them
+//! skews their ratio; a paired measurement after them alternates one waited-for frame of
+//! each, 100 times, and prints the medians and their ratio (`paired frame latency: ...`).
 //! `cargo bench -p caveclod-benches --bench render`; `CAVECLOD_BENCH_RENDER_SIZE=N` changes
 //! the terrain. Without `--bench` (as `cargo test --benches` runs it) each benchmark runs
 //! once on a small terrain.
@@ -91,6 +94,93 @@ struct Scene<'a> {
     h: &'a Hierarchy<'a>,
     vertices: &'a VertexBuffer,
     size: f32,
+}
+
+/// One camera set's renderer and index buffers, for the paired measurement.
+struct Setup<'s, 'c> {
+    renderer: Renderer,
+    indices: Vec<CameraIndices>,
+    cams: &'s [CameraState<'c>],
+    viewports: &'s [Viewport],
+}
+
+impl<'s, 'c> Setup<'s, 'c> {
+    fn new(ctx: &Context, cams: &'s [CameraState<'c>], viewports: &'s [Viewport]) -> Self {
+        let renderer = or_exit(
+            Renderer::new(
+                ctx,
+                RendererDesc {
+                    readback: false,
+                    ..RendererDesc::single(WIDTH, HEIGHT)
+                },
+            ),
+            "renderer",
+        );
+        let frames = renderer.desc().frames_in_flight;
+        let surfaces = cams.first().map_or(0, |c| c.surface_polygons().len());
+        let indices = (0..cams.len())
+            .map(|i| CameraIndices::new(&format!("camera {i}"), surfaces, frames))
+            .collect();
+        Self {
+            renderer,
+            indices,
+            cams,
+            viewports,
+        }
+    }
+
+    /// One frame, waited for: its latency.
+    fn frame(&mut self, scene: &Scene<'_>) -> Duration {
+        let t = Instant::now();
+        let mut draws: Vec<CameraDraw<'_, '_>> = self
+            .indices
+            .iter_mut()
+            .enumerate()
+            .map(|(i, ind)| CameraDraw {
+                target: 0,
+                viewport: self.viewports[i],
+                view_proj: look(i, scene.size).view_proj(self.viewports[i]),
+                vertices: scene.vertices,
+                indices: ind,
+                source: IndexSource::Camera {
+                    hierarchy: scene.h,
+                    camera: &self.cams[i],
+                },
+                colours: &COLOURS,
+                morph: None,
+            })
+            .collect();
+        or_exit(self.renderer.render(scene.ctx, &mut draws), "render");
+        or_exit(self.renderer.wait(scene.ctx), "wait");
+        t.elapsed()
+    }
+
+    fn destroy(self, ctx: &Context) {
+        or_exit(self.renderer.destroy(ctx), "destroy renderer");
+        for i in self.indices {
+            or_exit(i.destroy(ctx), "destroy indices");
+        }
+    }
+}
+
+/// Frame latency of `b` against `a`, alternating one frame of each for `rounds` rounds so
+/// both see the same machine load; returns the medians.
+fn paired(
+    scene: &Scene<'_>,
+    a: &mut Setup<'_, '_>,
+    b: &mut Setup<'_, '_>,
+    rounds: usize,
+) -> (f64, f64) {
+    let (mut ta, mut tb) = (Vec::new(), Vec::new());
+    for _ in 0..rounds {
+        ta.push(a.frame(scene).as_secs_f64());
+        tb.push(b.frame(scene).as_secs_f64());
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    (median(&mut ta), median(&mut tb))
 }
 
 /// Benchmarks `cams` drawn into `viewports` of one target; returns index bytes per frame.
@@ -221,6 +311,19 @@ fn main() {
         polys(&four),
         bytes_four as f64 / bytes_one.max(1) as f64
     );
+    // Paired latency: one frame of each set in turn, each waited for.
+    let mut a = Setup::new(&ctx, &one, &full);
+    let mut b = Setup::new(&ctx, &four, &quadrants);
+    let rounds = if benchmarking { 100 } else { 3 };
+    let (ta, tb) = paired(&scene, &mut a, &mut b, rounds);
+    println!(
+        "paired frame latency over {rounds} alternating rounds (median): 1 camera {:.2} ms, 4 cameras split {:.2} ms; ratio {:.2}",
+        ta * 1e3,
+        tb * 1e3,
+        tb / ta.max(1e-12)
+    );
+    a.destroy(&ctx);
+    b.destroy(&ctx);
     println!("vertex buffer uploads: {}", ctx.vertex_uploads());
     drop(one);
     drop(four);
