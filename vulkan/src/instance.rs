@@ -59,7 +59,15 @@ pub(crate) fn create(validation: bool, log: &Arc<ValidationLog>) -> Result<Owned
             .push_next(&mut messenger_info);
     }
     // SAFETY: every pointer in `info` refers to locals alive for the call.
-    let instance = unsafe { entry.create_instance(&info, None) }.vk("vkCreateInstance")?;
+    let instance =
+        match unsafe { entry.create_instance(&info, None) } {
+            Ok(i) => i,
+            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => return Err(Error::NoDevice(
+                "the Vulkan loader found no driver (install Mesa's lavapipe: mesa-vulkan-drivers)"
+                    .into(),
+            )),
+            Err(e) => return Err(crate::error::from_vk("vkCreateInstance", e)),
+        };
     let messenger = if debug {
         match DebugMessenger::new(&entry, &instance, log.clone()) {
             Ok(m) => Some(m),
