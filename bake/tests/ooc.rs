@@ -476,3 +476,34 @@ fn twenty_million_triangles_bake_within_the_memory_budget() {
     assert!(rss <= 320 << 20, "peak RSS {rss}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
+
+#[test]
+fn threads_cluster_like_one_thread() {
+    let dir = tempfile::tempdir().unwrap();
+    let temp = tempfile::tempdir().unwrap();
+    let input = terrain(dir.path(), 30_000);
+    let run = |threads| {
+        let o = OocOptions {
+            threads,
+            target_triangles: Some(3000),
+            ..options(temp.path(), 4 << 20)
+        };
+        ooc::simplify_file(&input, &o, &mut no_progress).unwrap()
+    };
+    let (one, s1) = run(1);
+    let (three, s3) = run(3);
+    assert_eq!(s1.resolution, s3.resolution);
+    assert_eq!(s1.clusters, s3.clusters);
+    assert_eq!(one.triangles.len(), three.triangles.len());
+    let sorted = |m: &Mesh| {
+        let mut p = m.positions.clone();
+        p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        p
+    };
+    for (a, b) in sorted(&one).iter().zip(&sorted(&three)) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() < 1e-3, "{a:?} {b:?}");
+        }
+    }
+    assert_empty(temp.path());
+}

@@ -9,7 +9,9 @@
 //! reported as the symmetric Hausdorff distance (the larger one-way maximum) and the RMS over
 //! both directions, both relative to the input's bounding-box diagonal, plus each method's
 //! wall time (one run each; ours includes reading and sorting the file, meshopt's input is
-//! already in memory, so the time ratio favours meshopt).
+//! already in memory, so the time ratio favours meshopt). A third column group is our
+//! clustering with the attribute weights near zero (geometry alone), to show what the
+//! attribute terms cost in distance.
 //!
 //! `cargo bench -p caveclod-benches --bench ooc`; data from `../shared/data` (skipped when
 //! absent). Output: one table on stdout.
@@ -18,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use caveclod_bake::import;
-use caveclod_bake::ooc::{self, OocOptions};
+use caveclod_bake::ooc::{self, OocOptions, Weights};
 
 type P = [f64; 3];
 type Tri = [P; 3];
@@ -247,9 +249,9 @@ fn main() {
     }
     inputs.push(("terrain 2M", terrain.clone()));
     println!(
-        "| input | triangles | target | ours: triangles | Hausdorff | RMS | seconds | sloppy: triangles | Hausdorff | RMS | seconds |"
+        "| input | triangles | target | ours: triangles | Hausdorff | RMS | seconds | sloppy: triangles | Hausdorff | RMS | seconds | ours, geometry only: triangles | Hausdorff | RMS |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, path) in &inputs {
         let mesh = import::import(path, &Default::default()).expect("import");
         let input = soup(&mesh.positions, mesh.triangles.iter().map(|t| t.position));
@@ -275,6 +277,17 @@ fn main() {
             let (ours, _) = ooc::simplify_file(path, &options, &mut |_| {}).expect("ooc");
             let ours_s = t0.elapsed().as_secs_f64();
             let ours_soup = soup(&ours.positions, ours.triangles.iter().map(|t| t.position));
+            // The same clustering with attribute weights near zero: geometry alone.
+            let geometry = OocOptions {
+                weights: Weights {
+                    normal: 0.0,
+                    uv: 0.0,
+                    color: 0.0,
+                },
+                ..options.clone()
+            };
+            let (geo, _) = ooc::simplify_file(path, &geometry, &mut |_| {}).expect("ooc");
+            let geo_soup = soup(&geo.positions, geo.triangles.iter().map(|t| t.position));
             let adapter =
                 meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&mesh.positions), 12, 0)
                     .expect("adapter");
@@ -289,11 +302,13 @@ fn main() {
             let samples = 200_000;
             let (oh, or) = distances(&input, &grid, &ours_soup, samples, diag);
             let (sh, sr) = distances(&input, &grid, &sloppy_soup, samples, diag);
+            let (gh, gr) = distances(&input, &grid, &geo_soup, samples, diag);
             println!(
-                "| {name} | {} | {percent}% | {} | {oh:.5} | {or:.6} | {ours_s:.3} | {} | {sh:.5} | {sr:.6} | {sloppy_s:.3} |",
+                "| {name} | {} | {percent}% | {} | {oh:.5} | {or:.6} | {ours_s:.3} | {} | {sh:.5} | {sr:.6} | {sloppy_s:.3} | {} | {gh:.5} | {gr:.6} |",
                 mesh.triangles.len(),
                 ours_soup.len(),
-                sloppy_soup.len()
+                sloppy_soup.len(),
+                geo_soup.len()
             );
         }
     }

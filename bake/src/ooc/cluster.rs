@@ -118,10 +118,18 @@ impl Clusterer {
     /// A clusterer on `cube`.
     pub fn new(cube: Cube, options: ClusterOptions) -> Self {
         let resolution = options.resolution.clamp(1, 1 << 21);
+        // A weight of zero would lose the attribute; a tiny one keeps it without influence.
+        let w = options.weights;
+        let weights = Weights {
+            normal: w.normal.max(1e-6),
+            uv: w.uv.max(1e-6),
+            color: w.color.max(1e-6),
+        };
         Self {
             cube,
             options: ClusterOptions {
                 resolution,
+                weights,
                 ..options
             },
             scale: f64::from(resolution) / cube.size,

@@ -9,7 +9,8 @@
 //! weighted by its area, and a cluster's quadric is the sum over the triangles touching it.
 //!
 //! The representative is the minimiser, found by a regularised solve: `(A + εI)x = -b + εm`,
-//! where `m` is the mean of the cluster's corners and `ε` a small fraction of `A`'s trace.
+//! where `m` is the mean of the cluster's corners and `ε` a thousandth of `A`'s mean diagonal
+//! entry (as Lindstrom truncates small singular values).
 //! Along directions the quadric does not constrain (a flat region's tangent plane) this gives
 //! the mean exactly; elsewhere it moves the optimum by a relative `ε / λ`. A solve that fails
 //! (not positive definite in floating point) falls back to the mean. Attributes can be
@@ -159,7 +160,7 @@ impl Quadric {
         for i in fixed..DIM {
             trace += self.at(i, i);
         }
-        let eps = 1e-6 * (trace / n as f64).max(f64::MIN_POSITIVE);
+        let eps = 1e-3 * (trace / n as f64).max(f64::MIN_POSITIVE);
         // M x = r with M = A_ff + εI, r = -(b_f + A_fx x_x) + ε m_f.
         let mut m = [[0.0; DIM]; DIM];
         let mut r = [0.0; DIM];
