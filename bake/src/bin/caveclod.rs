@@ -55,6 +55,9 @@ enum Command {
         /// Output triangles for --out-of-core to aim for (from the budget by default).
         #[arg(long)]
         target_triangles: Option<u64>,
+        /// Most triangles in an octree leaf for --out-of-core.
+        #[arg(long, default_value_t = 65536)]
+        leaf_triangles: u64,
         /// Also store g-mesh levels (batched collapses, geomorph pairs, volume partitions).
         #[arg(long)]
         gmesh: bool,
@@ -216,6 +219,7 @@ fn run(cli: Cli) -> Result<(), String> {
             memory_budget,
             temp_dir,
             target_triangles,
+            leaf_triangles,
             gmesh,
             gmesh_min_polygons,
         } => {
@@ -242,6 +246,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 let options = OocOptions {
                     temp_dir,
                     target_triangles,
+                    leaf_triangles,
                     ..OocOptions::with_budget(memory_budget)
                 };
                 let ooc_bar = ProgressBar::new(0);

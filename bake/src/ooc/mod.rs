@@ -223,7 +223,7 @@ pub fn simplify_file(
                 options.leaf_triangles
             ),
             needed: leaf_bytes * 8,
-            hint: " or lower the leaf size",
+            hint: " or lower --leaf-triangles",
         });
     }
     let temp = TempSpace::new(options.temp_dir.as_deref(), options.temp_quota)
