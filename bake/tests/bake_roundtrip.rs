@@ -3,43 +3,10 @@
 //! collapse gives back the base mesh.
 
 use caveclod_bake::hierarchy::{build, AttributeWeights};
-use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 use caveclod_bake::{baked::Baked, weld::weld};
 use caveclod_core::{CameraState, PolyId};
 use caveclod_tests::check::{check_front, collapse_all, split_all};
-use caveclod_tests::{meshes, TestMesh};
-
-/// A test mesh as an imported mesh with per-corner attribute streams.
-fn to_mesh(t: &TestMesh) -> Mesh {
-    let mut m = Mesh {
-        positions: t.positions.clone(),
-        ..Mesh::default()
-    };
-    for tri in &t.triangles {
-        let mut out = Triangle {
-            position: tri.p,
-            normal: [0; 3],
-            uv: [0; 3],
-            color: [NO_ATTRIBUTE; 3],
-            surface: tri.surface,
-        };
-        for k in 0..3 {
-            out.normal[k] = m.normals.len() as u32;
-            m.normals.push(tri.normal[k]);
-            out.uv[k] = m.uvs.len() as u32;
-            m.uvs.push(tri.uv[k]);
-        }
-        m.triangles.push(out);
-    }
-    m.surfaces = (0..t.surface_count())
-        .map(|s| Surface {
-            name: format!("s{s}"),
-            base_color: [1.0; 4],
-            texture: None,
-        })
-        .collect();
-    m
-}
+use caveclod_tests::{meshes, to_mesh, TestMesh};
 
 fn bake(t: &TestMesh) -> Baked {
     let w = weld(&to_mesh(t)).expect("weld");

@@ -51,8 +51,7 @@ pub fn lines(
             .map(|p| p.1)
             .filter(|&y| y > 0.0)
             .fold(f64::INFINITY, f64::min)
-            .min(1.0)
-            .max(0.1);
+            .clamp(0.1, 1.0);
         let mut chart = builder.build_cartesian_2d(0f64..x_max, (y_min..y_max).log_scale())?;
         chart
             .configure_mesh()

