@@ -79,6 +79,9 @@ enum Command {
         /// Bake again even if out/cache has the files.
         #[arg(long)]
         rebake: bool,
+        /// CPU figures only, no Vulkan pictures.
+        #[arg(long)]
+        no_render: bool,
     },
     /// The CAVECLOD paper's experiment: cameras fly scripted routes over a hierarchy.
     Flyover {
@@ -349,11 +352,13 @@ fn run(cli: Cli) -> Result<(), String> {
             frames,
             data,
             rebake,
+            no_render,
         } => {
             let mut options = DemoOptions {
                 out,
                 frames,
                 rebake,
+                no_render,
                 ..DemoOptions::default()
             };
             if let Some(d) = data {

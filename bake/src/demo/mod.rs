@@ -8,6 +8,7 @@
 //! runs, writes the files and words the report.
 
 mod plots;
+pub mod render;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -32,6 +33,8 @@ pub struct DemoOptions {
     pub frames: usize,
     /// Bake again even if the cache has the file.
     pub rebake: bool,
+    /// Skip the Vulkan pictures (CPU figures only).
+    pub no_render: bool,
 }
 
 impl Default for DemoOptions {
@@ -41,6 +44,7 @@ impl Default for DemoOptions {
             out: PathBuf::from("out"),
             frames: 300,
             rebake: false,
+            no_render: false,
         }
     }
 }
@@ -541,13 +545,47 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
     write_csv(&csv, &flights)?;
     files.push(csv);
     files.extend(write_plots(&options.out, &flights)?);
-    let text = report(
+    let f = options.frames;
+    let shots = [0, f / 3, 2 * f / 3, f.saturating_sub(1)];
+    let pictures = if options.no_render {
+        Err("--no-render given".to_string())
+    } else {
+        say("drawing the 4 cameras as a split screen on the Vulkan device");
+        render::render_flight(&h, f, &shots, &options.out)
+    };
+    let pictures = match pictures {
+        Ok((written, device)) => {
+            files.extend(written.iter().cloned());
+            format!(
+                "{} split-screen frames of the 4 cameras (1280x720, frames {:?}) drawn on {device}: {}.",
+                written.len(),
+                shots,
+                written
+                    .iter()
+                    .filter_map(|p| p.file_name())
+                    .map(|n| format!("`{}`", n.to_string_lossy()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        }
+        Err(e) => {
+            let msg = format!(
+                "No pictures: {e}. The figures above need no GPU; for the pictures install a \
+                 Vulkan driver (on Debian: apt-get install mesa-vulkan-drivers libvulkan1, or \
+                 cargo xtask setup)."
+            );
+            say(&msg);
+            msg
+        }
+    };
+    let mut text = report(
         &terrain,
         &model,
         &flights,
         &r,
         start.elapsed().as_secs_f64(),
     );
+    text.push_str(&format!("\n## Pictures\n\n{pictures}\n"));
     let report_path = options.out.join("report.md");
     write_atomically(&report_path, text.as_bytes()).map_err(|e| e.to_string())?;
     files.push(report_path.clone());

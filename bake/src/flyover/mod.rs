@@ -20,7 +20,7 @@ use caveclod_core::{CameraConfig, CameraState, Hierarchy, MemoryReport, RefinePa
 use serde_json::{json, Value};
 
 pub use fly::{fly_per_camera, fly_shared, summarise, Flight, Record, Summary};
-pub use routes::{routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
+pub use routes::{clip, eye_at, routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
 
 /// Headroom over the sizing flight's largest front when budgeting cameras.
 const BUDGET_HEADROOM: f64 = 1.10;

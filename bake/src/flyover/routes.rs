@@ -191,8 +191,8 @@ fn ground_point_local(path: Path, s: f32, size: f32) -> (f32, f32) {
     }
 }
 
-/// The view of `route` at frame `frame`, flying `speed` world units per frame.
-pub fn view_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> View {
+/// Eye and look direction of `route` at frame `frame`, flying `speed` world units per frame.
+pub fn eye_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> (Vec3, Vec3) {
     let size = ground.size;
     let s = frame as f32 * speed;
     let (x, z) = ground_point(route.path, s, size, ground.centre);
@@ -210,15 +210,27 @@ pub fn view_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> View
     }
     let eye = Vec3::new(x, floor + route.clearance * size, z);
     let pitch = route.pitch_deg.to_radians();
-    let dir = forward * pitch.cos() - Vec3::Y * pitch.sin();
+    (eye, forward * pitch.cos() - Vec3::Y * pitch.sin())
+}
+
+/// Near and far clip distances of the fly-over's views over `ground`.
+pub fn clip(ground: &Ground) -> (f32, f32) {
+    (0.1, 2.0 * ground.size)
+}
+
+/// The view of `route` at frame `frame` (1280 x 720, 60 degrees), flying `speed` world units
+/// per frame.
+pub fn view_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> View {
+    let (eye, dir) = eye_at(route, frame, speed, ground);
+    let (near, far) = clip(ground);
     View::perspective(
         eye,
         eye + dir,
         Vec3::Y,
         FOV_Y_DEG.to_radians(),
         WIDTH / HEIGHT,
-        0.1,
-        2.0 * size,
+        near,
+        far,
         HEIGHT,
     )
 }
