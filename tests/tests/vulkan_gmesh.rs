@@ -128,7 +128,10 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
     // Vertex stage: both streams, one instanced draw.
     let coarse = ok(VertexBuffer::from_vertices(&ctx, "a_i", &a), "a_i");
     let fine = ok(VertexBuffer::from_vertices(&ctx, "a'_i", &b), "a'_i");
-    let inst_buffer = ok(MorphInstances::new(&ctx, "instances", &instances), "instances");
+    let inst_buffer = ok(
+        MorphInstances::new(&ctx, "instances", &instances),
+        "instances",
+    );
     let mut renderer = ok(
         Renderer::new(
             &ctx,
@@ -185,9 +188,18 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
     let dv = ok(vertex_image.diff(&cpu_image), "diff");
     let df = ok(flat_image.diff(&cpu_image), "diff");
     println!("compute vs CPU: {dc:?}\nvertex stage vs CPU: {dv:?}\nunmorphed vs CPU: {df:?}");
-    assert!(dc.within_one_fraction() >= 0.999, "compute path differs: {dc:?}");
-    assert!(dv.within_one_fraction() >= 0.999, "vertex-stage path differs: {dv:?}");
-    assert!(df.within_one_fraction() < 0.999, "the morph is invisible: {df:?}");
+    assert!(
+        dc.within_one_fraction() >= 0.999,
+        "compute path differs: {dc:?}"
+    );
+    assert!(
+        dv.within_one_fraction() >= 0.999,
+        "vertex-stage path differs: {dv:?}"
+    );
+    assert!(
+        df.within_one_fraction() < 0.999,
+        "the morph is invisible: {df:?}"
+    );
 
     for buffer in [cpu_buffer, gpu_buffer, coarse, fine, flat_buffer] {
         ok(buffer.destroy(&ctx), "destroy buffer");
