@@ -5,8 +5,8 @@
 //! ```text
 //! cargo run --release -p caveclod-examples --example crowd -- [OPTIONS]
 //!
-//!   --mesh FILE       mesh to bake (default ../shared/data/spot/spot_triangulated.obj; a
-//!                     generated sphere of 20,480 triangles if that file is absent)
+//!   --mesh FILE       mesh to bake (default data/spot/spot_triangulated.obj; a generated
+//!                     sphere of 20,480 triangles if that file is absent)
 //!   --instances N     instances (default 1000)
 //!   --frames F        frames per run (default 720)
 //!   --budget P        polygon budget (default 500000)
@@ -15,7 +15,7 @@
 //!   --levels L        at most L g-mesh levels (default 10)
 //!   --out DIR         where plots and CSV go (default out/crowd)
 //!   --json            print one JSON object per path for the controlled run with cap 0.1
-//!   --no-render       CPU only (this example renders nothing yet; kept for scripts)
+//!   --no-render       CPU only: no pictures
 //! ```
 //!
 //! For each path it runs the scene three times: without control (`T` from distance only),
@@ -24,7 +24,10 @@
 //! volatile one flies low across the centre looking straight down, so instances rush in and
 //! out of the view frustum. Writes `crowd.csv` (one row per path, run and frame) and one SVG
 //! plot per path: polygons per frame for the three runs against the budget and its `±ε` band,
-//! and `T_bias` per frame.
+//! and `T_bias` per frame. Unless `--no-render`, it also draws frames 0, 1/3, 2/3 and the last
+//! of the controlled circle run (cap 0.1) to `crowd-circle-NNN.png` on the Vulkan device
+//! (lavapipe by default): each g-mesh level is one instanced draw through the geomorph vertex
+//! stage, every visible instance morphing by its own factor.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -33,13 +36,19 @@ use caveclod_bake::gmesh::{build as build_gmesh, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, bake_mesh};
 use caveclod_core::glam::Vec3;
+use caveclod_core::gmesh::GMesh;
 use caveclod_core::gmesh::{
     control, scene_polygons, t_from_distance, ControlEntry, ControlParams, LodInstance, LodModel,
     Partitions,
 };
+use caveclod_core::gpu::MorphInstance;
 use caveclod_core::View;
 use caveclod_tests::meshes::{self, Rng};
 use caveclod_tests::to_mesh;
+use caveclod_vulkan::{
+    palette, CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph,
+    MorphInstances, Renderer, RendererDesc, VertexBuffer, Viewport,
+};
 use plotters::prelude::*;
 
 const USAGE: &str = "usage: crowd [--mesh FILE] [--instances N] [--frames F] [--budget P] \
@@ -65,6 +74,7 @@ struct Args {
     levels: u32,
     out: PathBuf,
     json: bool,
+    render: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -104,7 +114,10 @@ impl CameraPath {
 
 fn parse_args() -> Result<Args, String> {
     let mut a = Args {
-        mesh: PathBuf::from("../shared/data/spot/spot_triangulated.obj"),
+        mesh: PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../data/spot/spot_triangulated.obj"
+        )),
         instances: 1000,
         frames: 720,
         budget: 500_000,
@@ -113,6 +126,7 @@ fn parse_args() -> Result<Args, String> {
         levels: 10,
         out: PathBuf::from("out/crowd"),
         json: false,
+        render: true,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -137,7 +151,7 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--json" => a.json = true,
-            "--no-render" => {}
+            "--no-render" => a.render = false,
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),
         }
@@ -361,6 +375,197 @@ fn plot(
     Ok(())
 }
 
+/// A g-mesh level on the device: both attribute streams and the per-surface lists.
+struct LevelBuffers {
+    a: VertexBuffer,
+    b: VertexBuffer,
+    lists: Vec<Vec<u32>>,
+}
+
+/// Draws `frames` of a run to PNG; returns the files written.
+#[allow(clippy::too_many_arguments)]
+fn render_run(
+    h: &caveclod_core::Hierarchy<'_>,
+    gm: &GMesh<'_>,
+    path: CameraPath,
+    places: &[Vec3],
+    run: &Run,
+    total_frames: usize,
+    frames: &[usize],
+    out: &std::path::Path,
+) -> Result<Vec<PathBuf>, String> {
+    let ctx = Context::headless(&HeadlessDesc {
+        validation: false,
+        prefer_lavapipe: true,
+    })
+    .map_err(|e| e.to_string())?;
+    let result = render_with(&ctx, h, gm, path, places, run, total_frames, frames, out);
+    let destroyed = ctx.destroy().map_err(|e| e.to_string());
+    let files = result?;
+    destroyed?;
+    Ok(files)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render_with(
+    ctx: &Context,
+    h: &caveclod_core::Hierarchy<'_>,
+    gm: &GMesh<'_>,
+    path: CameraPath,
+    places: &[Vec3],
+    run: &Run,
+    total_frames: usize,
+    frames: &[usize],
+    out: &std::path::Path,
+) -> Result<Vec<PathBuf>, String> {
+    let e = |e: caveclod_vulkan::Error| e.to_string();
+    // Instances are placed at radius 1 around their point.
+    let m = h.meta();
+    let (lo, hi) = (
+        Vec3::from_array(m.bounds_min),
+        Vec3::from_array(m.bounds_max),
+    );
+    let centre = (lo + hi) * 0.5;
+    let scale = 1.0 / ((hi - lo).length() * 0.5).max(1e-6);
+    let mut levels = Vec::new();
+    for i in 0..gm.levels() {
+        let level = gm.level(i).ok_or("missing level")?;
+        let gather = |side: usize| -> Vec<caveclod_core::Vertex> {
+            level
+                .vertices
+                .iter()
+                .map(|p| h.vertices()[p[side] as usize])
+                .collect()
+        };
+        levels.push(LevelBuffers {
+            a: VertexBuffer::from_vertices(ctx, "a_i", &gather(0)).map_err(e)?,
+            b: VertexBuffer::from_vertices(ctx, "a'_i", &gather(1)).map_err(e)?,
+            lists: (0..gm.surfaces())
+                .map(|s| level.surface_indices(s).to_vec())
+                .collect(),
+        });
+    }
+    let (w, hgt) = (1280, 720);
+    let mut renderer = Renderer::new(
+        ctx,
+        RendererDesc {
+            targets: vec![(w, hgt)],
+            frames_in_flight: 1,
+            readback: true,
+            clear_colour: [0.55, 0.7, 0.9, 1.0],
+            geomorph: true,
+        },
+    )
+    .map_err(e)?;
+    let colours: Vec<[f32; 4]> = (0..gm.surfaces()).map(palette).collect();
+    let mut written = Vec::new();
+    let mut outcome = Ok(());
+    for &f in frames {
+        let (eye, target, up) = path.at(f as f32 / total_frames as f32);
+        let look = LookAt {
+            eye,
+            target,
+            up,
+            fov_y: 1.0,
+            near: 0.5,
+            far: 1000.0,
+        };
+        let viewport = Viewport::full(w, hgt);
+        let view = look.view(viewport);
+        let bias = run.bias.get(f).copied().unwrap_or(0.0);
+        let mut per_level: Vec<Vec<MorphInstance>> = vec![Vec::new(); levels.len()];
+        for &p in places {
+            if !view.sphere_visible(p, 1.0) {
+                continue;
+            }
+            let lm = gm
+                .partitions()
+                .level_morph(t_from_distance(eye.distance(p), D_NEAR, D_FAR) + bias);
+            let o = p - centre * scale;
+            per_level[lm.level].push(MorphInstance {
+                offset_scale: [o.x, o.y, o.z, scale],
+                t: lm.t,
+                _pad: [0.0; 3],
+            });
+        }
+        let mut inst_buffers = Vec::new();
+        for (i, list) in per_level.iter().enumerate() {
+            if !list.is_empty() {
+                match MorphInstances::new(ctx, "instances", list) {
+                    Ok(b) => inst_buffers.push((i, b)),
+                    Err(err) => {
+                        outcome = Err(err.to_string());
+                        break;
+                    }
+                }
+            }
+        }
+        let mut indices: Vec<CameraIndices> = inst_buffers
+            .iter()
+            .map(|_| CameraIndices::new("level", gm.surfaces(), 1))
+            .collect();
+        if outcome.is_ok() {
+            let refs: Vec<Vec<&[u32]>> = inst_buffers
+                .iter()
+                .map(|(i, _)| levels[*i].lists.iter().map(Vec::as_slice).collect())
+                .collect();
+            let mut draws: Vec<CameraDraw<'_, '_>> = inst_buffers
+                .iter()
+                .zip(indices.iter_mut())
+                .zip(&refs)
+                .map(|(((i, inst), ind), lists)| CameraDraw {
+                    target: 0,
+                    viewport,
+                    view_proj: look.view_proj(viewport),
+                    vertices: &levels[*i].a,
+                    indices: ind,
+                    source: IndexSource::Lists(lists),
+                    colours: &colours,
+                    morph: Some(Morph {
+                        fine: &levels[*i].b,
+                        instances: inst,
+                    }),
+                })
+                .collect();
+            let image = renderer
+                .render(ctx, &mut draws)
+                .and_then(|_| renderer.read_target(ctx, 0));
+            match image {
+                Ok(img) => {
+                    let file = out.join(format!("crowd-{}-{f:03}.png", path.name()));
+                    match img.write_png(&file) {
+                        Ok(()) => written.push(file),
+                        Err(err) => outcome = Err(err.to_string()),
+                    }
+                }
+                Err(err) => outcome = Err(err.to_string()),
+            }
+        }
+        for ind in indices {
+            if let Err(err) = ind.destroy(ctx) {
+                outcome = Err(err.to_string());
+            }
+        }
+        for (_, b) in inst_buffers {
+            if let Err(err) = b.destroy(ctx) {
+                outcome = Err(err.to_string());
+            }
+        }
+        if outcome.is_err() {
+            break;
+        }
+    }
+    let mut cleanup = renderer.destroy(ctx);
+    for l in levels {
+        cleanup = cleanup
+            .and_then(|()| l.a.destroy(ctx))
+            .and_then(|()| l.b.destroy(ctx));
+    }
+    outcome?;
+    cleanup.map_err(e)?;
+    Ok(written)
+}
+
 fn main() {
     if let Err(e) = real_main() {
         eprintln!("crowd: {e}");
@@ -409,6 +614,9 @@ fn real_main() -> Result<(), String> {
             args.instances, args.budget, args.frames
         );
     }
+    let gm =
+        GMesh::new(g.parts(), h.vertices().len(), h.surface_count()).map_err(|e| e.to_string())?;
+    let mut pictures: Vec<PathBuf> = Vec::new();
     let mut csv = String::from("path,run,frame,polygons,t_bias,visible\n");
     for &path in &args.paths {
         let runs = [
@@ -443,6 +651,25 @@ fn real_main() -> Result<(), String> {
                     run.bias[f],
                     run.visible[f]
                 );
+            }
+        }
+        if args.render && path == CameraPath::Circle {
+            let shots = [0, args.frames / 3, 2 * args.frames / 3, args.frames - 1];
+            match render_run(
+                &h,
+                &gm,
+                path,
+                &places,
+                &runs[2],
+                args.frames,
+                &shots,
+                &args.out,
+            ) {
+                Ok(files) => pictures.extend(files),
+                Err(e) => eprintln!(
+                    "crowd: no pictures ({e}); install a Vulkan driver (cargo xtask setup) or \
+                     pass --no-render"
+                ),
             }
         }
         let svg = args.out.join(format!("crowd-{}.svg", path.name()));
@@ -482,6 +709,9 @@ fn real_main() -> Result<(), String> {
     std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
     if !args.json {
         println!("\nwrote {}", csv_path.display());
+        for p in &pictures {
+            println!("wrote {}", p.display());
+        }
     }
     Ok(())
 }
