@@ -42,8 +42,21 @@ fn counts(finest: u32, shrink: &[f32]) -> Vec<u32> {
     c
 }
 
+/// 256 cases; under miri 3, and no regression file (miri isolates the file system).
+fn config() -> ProptestConfig {
+    if cfg!(miri) {
+        ProptestConfig {
+            cases: 3,
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        }
+    } else {
+        ProptestConfig::with_cases(256)
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 3 } else { 256 }))]
+    #![proptest_config(config())]
 
     #[test]
     fn f_is_continuous_at_every_boundary(
