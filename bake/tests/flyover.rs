@@ -15,6 +15,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         mode: Mode::PerCamera,
         full_capacity: false,
         first_route: 0,
+        compact_every: 30,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(

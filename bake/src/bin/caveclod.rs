@@ -111,6 +111,10 @@ enum Command {
         /// Fly full-capacity cameras instead of sizing them to a first flight.
         #[arg(long)]
         full_capacity: bool,
+        /// Compact each camera state every N of its frames, inside the timed refinement
+        /// (0: never).
+        #[arg(long, default_value_t = 30)]
+        compact_every: usize,
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
@@ -390,6 +394,7 @@ fn run(cli: Cli) -> Result<(), String> {
             shared_state,
             threads,
             full_capacity,
+            compact_every,
             json,
         } => {
             let options = FlyoverOptions {
@@ -405,6 +410,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 },
                 full_capacity,
                 first_route: 0,
+                compact_every,
             };
             let print = |f: &Flyover| {
                 if json {
