@@ -301,10 +301,19 @@ impl Baked {
 /// Writes `bytes` to `path` via a temporary sibling and a rename; the temporary file is
 /// removed on failure.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeWriteError> {
-    let io = |source| BakeWriteError::Io {
+    write_atomically_with(path, |f| f.write_all(bytes)).map_err(|source| BakeWriteError::Io {
         path: path.to_path_buf(),
         source,
-    };
+    })
+}
+
+/// Creates a temporary sibling of `path`, lets `fill` write it, syncs it and renames it over
+/// `path`: a reader never sees a partial file, and the temporary file is removed on failure.
+/// For output streamed as it is made (`write_atomically` for bytes already in memory).
+pub fn write_atomically_with(
+    path: &Path,
+    fill: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -316,13 +325,12 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeWriteError>
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        fill(&mut f)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
-    if let Err(e) = result {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
     }
-    Ok(())
+    result
 }

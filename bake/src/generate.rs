@@ -8,7 +8,6 @@
 //! needs no vertex data). The file is written to a temporary sibling and renamed once
 //! complete, so an interrupted run never leaves a partial file under the requested name.
 
-use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
@@ -172,30 +171,15 @@ pub fn terrain(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<TerrainGrid, GenerateError> {
     let grid = TerrainGrid::for_triangles(triangles)?;
-    let io = |source| GenerateError::Io {
+    crate::baked::write_atomically_with(path, |f| {
+        let mut w = BufWriter::with_capacity(1 << 20, f);
+        write_terrain(&mut w, grid, progress)?;
+        w.flush()
+    })
+    .map_err(|source| GenerateError::Io {
         path: path.display().to_string(),
         source,
-    };
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
-        write_terrain(&mut w, grid, progress)?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
-    }
+    })?;
     Ok(grid)
 }
 

@@ -1,1 +1,4 @@
-//! Criterion benchmarks of caveclod live in `benches/`.
+//! Criterion benchmarks of caveclod live in `benches/`; this library holds what several of
+//! them share.
+
+pub mod distance;
