@@ -80,28 +80,111 @@ impl ClusterOptions {
     }
 }
 
+/// One cluster: the corners of one surface (and one side of any UV seam) in one cell.
 #[derive(Clone)]
-struct Cluster {
-    cell: u32,
-    surface: u16,
-    flags: u16,
-    next: u32,
-    uv_ref: [f32; 2],
-    quadric: Quadric,
-    sum: [f64; DIM],
-    corners: f64,
+pub(super) struct Cluster {
+    /// Index of its cell.
+    pub(super) cell: u32,
+    /// Its surface.
+    pub(super) surface: u16,
+    /// Which attributes its corners carry (`HAS_*`).
+    pub(super) flags: u16,
+    /// Next cluster of the same cell (`u32::MAX` ends the list).
+    pub(super) next: u32,
+    /// The UV its corners predict at the cell centre.
+    pub(super) uv_ref: [f32; 2],
+    /// Sum of the quadrics of the triangles at its corners.
+    pub(super) quadric: Quadric,
+    /// Sum of its corners as points of R^n.
+    pub(super) sum: [f64; DIM],
+    /// Number of corners.
+    pub(super) corners: f64,
+    /// Box of its corners' positions, cell units.
+    pub(super) lo: [f64; 3],
+    /// Box of its corners' positions, cell units.
+    pub(super) hi: [f64; 3],
+}
+
+impl Cluster {
+    /// The mean of its corners.
+    pub(super) fn mean(&self) -> [f64; DIM] {
+        self.sum.map(|s| s / self.corners.max(1.0))
+    }
+}
+
+/// The clusters of a cell's list starting at `first` (linked by [`Cluster::next`]).
+pub(super) fn cluster_list(clusters: &[Cluster], first: u32) -> impl Iterator<Item = &Cluster> {
+    let mut k = first;
+    std::iter::from_fn(move || {
+        let c = clusters.get(k as usize)?;
+        k = c.next;
+        Some(c)
+    })
+}
+
+/// The representative position of a cell from its clusters' quadrics: the quadric optimum,
+/// or the corners' mean where the optimum lies outside the cell by more than half a cell (a
+/// poorly conditioned solve). `lo` is the cell's low corner and `size` its edge, in the
+/// quadrics' units.
+pub(super) fn cell_position<'a>(
+    clusters: impl Iterator<Item = &'a Cluster>,
+    lo: [f64; 3],
+    size: f64,
+) -> [f64; 3] {
+    let mut q = Quadric::default();
+    let mut sum = [0.0; DIM];
+    let mut n = 0.0;
+    for c in clusters {
+        q.add_scaled(&c.quadric, 1.0);
+        for a in 0..DIM {
+            sum[a] += c.sum[a];
+        }
+        n += c.corners;
+    }
+    let mean = sum.map(|s| s / f64::max(n, 1.0));
+    let x = q.minimize(&mean);
+    let x = if (0..3).any(|a| (x[a] - (lo[a] + 0.5 * size)).abs() > size) {
+        mean
+    } else {
+        x
+    };
+    [x[0], x[1], x[2]]
+}
+
+/// A cluster's normal, UV and colour: the minimiser of its quadric with the position held at
+/// its cell's representative, unweighted (normal normalised; `+z` where it vanishes).
+pub(super) fn cluster_attributes(
+    c: &Cluster,
+    position: [f64; 3],
+    w: &Weights,
+) -> ([f32; 3], [f32; 2], [f32; 4]) {
+    let x = c.quadric.minimize_given(position, &c.mean());
+    let n = [x[3], x[4], x[5]].map(|v| v / w.normal);
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let normal = if len > 1e-12 {
+        n.map(|v| (v / len) as f32)
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    let uv = [(x[6] / w.uv) as f32, (x[7] / w.uv) as f32];
+    let color = [8, 9, 10, 11].map(|a| ((x[a] / w.color).clamp(0.0, 1.0)) as f32);
+    (normal, uv, color)
 }
 
 /// Accumulates clusters over a stream of triangles.
 pub struct Clusterer {
-    cube: Cube,
-    options: ClusterOptions,
-    scale: f64,
+    pub(super) cube: Cube,
+    pub(super) options: ClusterOptions,
+    /// Cells per unit of length.
+    pub(super) scale: f64,
     cells: FxHashMap<u64, u32>,
-    cell_first: Vec<u32>,
-    cell_coords: Vec<[u32; 3]>,
-    clusters: Vec<Cluster>,
-    triangles: Vec<([u32; 3], [u32; 3], u16)>,
+    /// Each cell's first cluster.
+    pub(super) cell_first: Vec<u32>,
+    /// Each cell's integer coordinates.
+    pub(super) cell_coords: Vec<[u32; 3]>,
+    pub(super) clusters: Vec<Cluster>,
+    /// Surviving triangles: cells, clusters, surface.
+    pub(super) triangles: Vec<([u32; 3], [u32; 3], u16)>,
     seen: FxHashSet<[u32; 3]>,
     corner_clusters: Vec<u32>,
     srgb: [f32; 256],
@@ -144,6 +227,11 @@ impl Clusterer {
             input: 0,
             degenerate: 0,
         }
+    }
+
+    /// The clusters of the cell whose first cluster is `first`.
+    pub(super) fn cell_clusters(&self, first: u32) -> impl Iterator<Item = &Cluster> {
+        cluster_list(&self.clusters, first)
     }
 
     /// Clusters so far.
@@ -257,6 +345,10 @@ impl Clusterer {
             for a in 0..DIM {
                 c.sum[a] += p[k][a];
             }
+            for a in 0..3 {
+                c.lo[a] = c.lo[a].min(p[k][a]);
+                c.hi[a] = c.hi[a].max(p[k][a]);
+            }
             c.corners += 1.0;
         }
         let cs = ids.map(|i| self.clusters[i as usize].cell);
@@ -311,6 +403,8 @@ impl Clusterer {
             quadric: Quadric::default(),
             sum: [0.0; DIM],
             corners: 0.0,
+            lo: [f64::MAX; 3],
+            hi: [f64::MIN; 3],
         });
         self.cell_first[ci as usize] = k;
         k
@@ -330,6 +424,10 @@ impl Clusterer {
                 d.sum[a] += c.sum[a];
             }
             d.corners += c.corners;
+            for a in 0..3 {
+                d.lo[a] = d.lo[a].min(c.lo[a]);
+                d.hi[a] = d.hi[a].max(c.hi[a]);
+            }
             map.push(k);
         }
         for &(_, ids, surface) in &other.triangles {
@@ -355,46 +453,19 @@ impl Clusterer {
             surfaces: surfaces.to_vec(),
             ..Default::default()
         };
-        let mut cell_pos = vec![[0.0f64; 3]; self.cell_first.len()];
+        let mut cell_pos = Vec::with_capacity(self.cell_first.len());
         for (ci, &first) in self.cell_first.iter().enumerate() {
-            let mut q = Quadric::default();
-            let mut sum = [0.0; DIM];
-            let mut n = 0.0;
-            let mut k = first;
-            while k != u32::MAX {
-                let c = &self.clusters[k as usize];
-                q.add_scaled(&c.quadric, 1.0);
-                for a in 0..DIM {
-                    sum[a] += c.sum[a];
-                }
-                n += c.corners;
-                k = c.next;
-            }
-            let mean = sum.map(|s| s / n.max(1.0));
-            let mut x = q.minimize(&mean);
-            // A representative outside its cell (by more than half a cell) is a poorly
-            // conditioned solve: take the mean.
-            let cell = self.cell_coords[ci];
-            if (0..3).any(|a| (x[a] - (f64::from(cell[a]) + 0.5)).abs() > 1.0) {
-                x = mean;
-            }
-            cell_pos[ci] = [x[0], x[1], x[2]];
+            let lo = self.cell_coords[ci].map(f64::from);
+            let x = cell_position(self.cell_clusters(first), lo, 1.0);
+            cell_pos.push(x);
             mesh.positions
                 .push([0, 1, 2].map(|a| (self.cube.origin[a] + x[a] * unit) as f32));
         }
         for c in &self.clusters {
-            let mean = c.sum.map(|s| s / c.corners.max(1.0));
-            let x = c.quadric.minimize_given(cell_pos[c.cell as usize], &mean);
-            let n = [x[3], x[4], x[5]].map(|v| v / w.normal);
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            mesh.normals.push(if len > 1e-12 {
-                n.map(|v| (v / len) as f32)
-            } else {
-                [0.0, 0.0, 1.0]
-            });
-            mesh.uvs.push([(x[6] / w.uv) as f32, (x[7] / w.uv) as f32]);
-            mesh.colors
-                .push([8, 9, 10, 11].map(|a| ((x[a] / w.color).clamp(0.0, 1.0)) as f32));
+            let (normal, uv, color) = cluster_attributes(c, cell_pos[c.cell as usize], &w);
+            mesh.normals.push(normal);
+            mesh.uvs.push(uv);
+            mesh.colors.push(color);
         }
         for &(cells, ids, surface) in &self.triangles {
             let attr = |flag: u16| {

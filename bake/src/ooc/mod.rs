@@ -30,6 +30,7 @@
 //! [`cluster_mesh`].
 
 pub mod cluster;
+pub mod multires;
 pub mod octree;
 pub mod quadric;
 pub mod sort;
@@ -42,6 +43,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub use cluster::{ClusterOptions, Clusterer, Weights};
+pub use multires::{MultiresNode, MultiresOctree, MultiresOptions};
 pub use temp::{parse_size, TempSpace};
 
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
@@ -145,6 +147,8 @@ pub struct OocOptions {
     pub weights: Weights,
     /// Clustering threads.
     pub threads: usize,
+    /// Build the multiresolution octree ([`multires`]) with these settings, or not.
+    pub octree: Option<MultiresOptions>,
 }
 
 impl OocOptions {
@@ -159,6 +163,7 @@ impl OocOptions {
             target_triangles: None,
             weights: Weights::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(8)),
+            octree: Some(MultiresOptions::default()),
         }
     }
 }
@@ -194,6 +199,23 @@ pub struct OocStats {
     pub temp_bytes: u64,
     /// Seconds reading (and making runs), merging, clustering.
     pub seconds: [f64; 3],
+    /// Levels of the multiresolution octree (0 when not built).
+    pub lod_levels: u32,
+    /// Nodes of the multiresolution octree.
+    pub lod_nodes: u64,
+    /// Seconds building it (included in the clustering seconds).
+    pub lod_seconds: f64,
+}
+
+/// What [`simplify`] makes.
+#[derive(Clone, Debug)]
+pub struct Simplified {
+    /// The clustered mesh at the target size (the finest level).
+    pub mesh: Mesh,
+    /// The multiresolution octree over every level, if asked for.
+    pub octree: Option<MultiresOctree>,
+    /// What the run did.
+    pub stats: OocStats,
 }
 
 /// Progress of a run.
@@ -213,6 +235,20 @@ pub fn simplify_file(
     options: &OocOptions,
     progress: &mut dyn FnMut(OocStage),
 ) -> Result<(Mesh, OocStats), OocError> {
+    let options = OocOptions {
+        octree: None,
+        ..options.clone()
+    };
+    simplify(path, &options, progress).map(|s| (s.mesh, s.stats))
+}
+
+/// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core, with the multiresolution
+/// octree when [`OocOptions::octree`] asks for it.
+pub fn simplify(
+    path: &Path,
+    options: &OocOptions,
+    progress: &mut dyn FnMut(OocStage),
+) -> Result<Simplified, OocError> {
     let budget = options.memory_budget;
     let leaf_bytes = options.leaf_triangles * soup::RECORD_BYTES as u64;
     if leaf_bytes * 8 > budget {
@@ -328,7 +364,7 @@ pub fn simplify_file(
         }
         Ok(())
     };
-    let mesh = loop {
+    let (mesh, octree) = loop {
         let mut c = Clusterer::new(sorted.cube, cluster_options(resolution));
         let others = std::thread::scope(|scope| {
             let handles: Vec<_> = parts[1..]
@@ -372,7 +408,17 @@ pub fn simplify_file(
             continue;
         }
         stats.clusters = c.cluster_count() as u64;
-        break c.finish(&report.surfaces);
+        let mesh = c.finish(&report.surfaces);
+        let t2 = Instant::now();
+        let octree = options
+            .octree
+            .map(|o| multires::build(c, report.surfaces.len() as u32, &o));
+        if let Some(o) = &octree {
+            stats.lod_levels = o.level_count;
+            stats.lod_nodes = o.nodes.len() as u64;
+            stats.lod_seconds = t2.elapsed().as_secs_f64();
+        }
+        break (mesh, octree);
     };
     stats.resolution = resolution;
     stats.output_triangles = mesh.triangles.len() as u64;
@@ -380,7 +426,11 @@ pub fn simplify_file(
     stats.temp_bytes = temp.used();
     drop(file);
     drop(temp);
-    Ok((mesh, stats))
+    Ok(Simplified {
+        mesh,
+        octree,
+        stats,
+    })
 }
 
 /// The bounding cube of a mesh's positions.
