@@ -11,6 +11,8 @@
 //! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
 //!   operations that meet contradictions return errors.
 //! - The `.clod` format ([`format`]) is defined here, reader and writer.
+//! - The multiresolution octree of out-of-core bakes ([`octree`]) is selected per camera and
+//!   emitted the same way, as a cut of its nodes in caller memory.
 //! - The shaders' math ([`gpu`]: geomorphing and shading) is defined here too, so the rust-gpu
 //!   shaders and the CPU run the same functions.
 //!
@@ -43,6 +45,7 @@ pub mod gpu;
 mod hierarchy;
 mod ids;
 mod memory;
+pub mod octree;
 mod records;
 mod view;
 
@@ -55,6 +58,7 @@ pub use glam;
 pub use hierarchy::Hierarchy;
 pub use ids::{NodeId, PolyId, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
+pub use octree::{CutError, Octree, OctreeCut, OctreeFormatError, SelectStats};
 pub use records::{
     octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
     PositionClass, Split, SplitBounds, Vertex, VertexKey,

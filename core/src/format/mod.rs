@@ -14,6 +14,15 @@
 //! sections (g-mesh levels, out-of-core octrees, materials) without breaking older readers.
 //! A change to a known section's record size or meaning bumps the major version.
 //!
+//! Besides the hierarchy's sections ([`tags`]), a file may carry these, defined and validated
+//! by their own modules and written as [`ExtraSection`]s:
+//!
+//! | tags   | what | defined in |
+//! |--------|------|------------|
+//! | `GMPC`, `GMBD`, `GMVL`, `GMVO`, `GMIO`, `GMVX`, `GMIX` | g-mesh levels | [`gmesh_tags`](crate::gmesh::gmesh_tags) |
+//! | `OCMT`, `OCND`, `OCRG`, `OCVX`, `OCIX` | multiresolution octree (meta, nodes, per-surface ranges, vertices, indices) | [`octree_tags`](crate::octree::octree_tags) |
+//! | `INFO` | the bake's figures, UTF-8 JSON | `caveclod-bake` (`report.rs`) |
+//!
 //! The writer side ([`serialized_len`], [`write_into`]) needs no allocation either: a std
 //! caller sizes a buffer with `serialized_len`, fills it with `write_into`, and writes it to
 //! disk through a temporary file and a rename.
