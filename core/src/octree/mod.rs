@@ -7,9 +7,9 @@
 //! level (`bake/src/ooc/multires.rs`). A node is one block of cells of one level: all the
 //! triangles that level's clustering keeps in the block, with a box and an object-space error
 //! bound of drawing them instead of the full-resolution input. A block of level `l + 1` is the
-//! parent of the level-`l` blocks inside it, so the nodes form an octree over space, and a
-//! cut — a set of nodes that meets every root-to-leaf path at most once — draws every visible
-//! region exactly once, each at one level.
+//! parent of the level-`l` blocks inside it, so the nodes form an octree over space. A cut
+//! meets every root-to-leaf path at most once, and exactly once unless the path was culled,
+//! so it draws every region it keeps once, at one level.
 //!
 //! - **Nodes are whole levels of a block.** A node's triangles are a complete clustering of
 //!   its block, independent of its neighbours: unlike the vertex hierarchy, where a split may
