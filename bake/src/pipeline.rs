@@ -87,20 +87,43 @@ pub fn bake_file(
     Ok((baked, info))
 }
 
-/// Simplifies a file of any size out of core ([`crate::ooc::simplify_file`]) to a mesh that
-/// fits the memory budget, then bakes that mesh in core; `bake_seconds` covers both and
-/// `input_triangles` counts the file's triangles.
+/// What [`bake_out_of_core`] makes.
+#[derive(Debug)]
+pub struct OutOfCoreBake {
+    /// The view-dependent hierarchy over the clustered mesh.
+    pub baked: Baked,
+    /// About the bake (`input_triangles` counts the file's triangles).
+    pub info: BakeInfo,
+    /// About the out-of-core simplification.
+    pub stats: crate::ooc::OocStats,
+    /// The multiresolution octree over every clustering level, when the options ask for it.
+    pub octree: Option<crate::ooc::MultiresOctree>,
+}
+
+/// Simplifies a file of any size out of core ([`crate::ooc::simplify`]) to a mesh that fits
+/// the memory budget, then bakes that mesh in core; `bake_seconds` covers both. The
+/// multiresolution octree (if [`crate::ooc::OocOptions::octree`]) describes the same surfaces
+/// as the hierarchy.
 pub fn bake_out_of_core(
     path: &Path,
     options: &crate::ooc::OocOptions,
     ooc_progress: &mut dyn FnMut(crate::ooc::OocStage),
     progress: &mut dyn FnMut(Stage),
-) -> Result<(Baked, BakeInfo, crate::ooc::OocStats), BakeError> {
+) -> Result<OutOfCoreBake, BakeError> {
     let start = Instant::now();
-    let (mesh, stats) = crate::ooc::simplify_file(path, options, ooc_progress)?;
-    let (baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
-    drop(mesh);
-    info.input_triangles = stats.input_triangles;
+    let s = crate::ooc::simplify(path, options, ooc_progress)?;
+    let (baked, mut info) = bake_mesh(&s.mesh, &path.display().to_string(), progress)?;
+    drop(s.mesh);
+    let mut octree = s.octree;
+    if let Some(o) = &mut octree {
+        o.surface_count = baked.surface_count;
+    }
+    info.input_triangles = s.stats.input_triangles;
     info.bake_seconds = start.elapsed().as_secs_f64();
-    Ok((baked, info, stats))
+    Ok(OutOfCoreBake {
+        baked,
+        info,
+        stats: s.stats,
+        octree,
+    })
 }

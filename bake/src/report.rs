@@ -6,7 +6,7 @@
 
 use caveclod_core::format::{ExtraSection, Tag};
 use caveclod_core::gmesh::GMesh;
-use caveclod_core::{CameraState, Hierarchy, MemoryReport};
+use caveclod_core::{CameraState, Hierarchy, MemoryReport, Octree};
 use serde_json::{json, Map, Value};
 
 use crate::weld::Repairs;
@@ -146,6 +146,44 @@ pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> 
         Ok(None) => {}
         Err(e) => {
             o.insert("gmesh_error".into(), json!(e.to_string()));
+        }
+    }
+    // The out-of-core bake's multiresolution octree, when present (validated here too).
+    match Octree::from_hierarchy(h) {
+        Ok(Some(t)) => {
+            let mut per_level = vec![0u64; t.level_count() as usize];
+            for (id, n) in t.nodes().iter().enumerate() {
+                let tris: u64 = t
+                    .node_ranges(id as u32)
+                    .iter()
+                    .map(|r| u64::from(r.index_count / 3))
+                    .sum();
+                if let Some(l) = per_level.get_mut(n.level as usize) {
+                    *l += tris;
+                }
+            }
+            o.insert("octree_levels".into(), json!(t.level_count()));
+            o.insert("octree_nodes".into(), json!(t.node_count()));
+            o.insert("octree_vertices".into(), json!(t.vertices().len()));
+            o.insert("octree_level_triangles".into(), json!(per_level));
+            let mut errors: Vec<Vec<f32>> = vec![Vec::new(); t.level_count() as usize];
+            for n in t.nodes() {
+                if let Some(e) = errors.get_mut(n.level as usize) {
+                    e.push(n.error);
+                }
+            }
+            let medians: Vec<f32> = errors
+                .iter_mut()
+                .map(|e| {
+                    e.sort_by(f32::total_cmp);
+                    e.get(e.len() / 2).copied().unwrap_or(0.0)
+                })
+                .collect();
+            o.insert("octree_level_median_error".into(), json!(medians));
+        }
+        Ok(None) => {}
+        Err(e) => {
+            o.insert("octree_error".into(), json!(e.to_string()));
         }
     }
     o

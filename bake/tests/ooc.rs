@@ -267,8 +267,9 @@ fn a_small_terrain_bakes_out_of_core_within_its_target_and_leaves_no_files() {
         target_triangles: Some(4000),
         ..options(temp.path(), 4 << 20)
     };
-    let (baked, info, stats) =
-        pipeline::bake_out_of_core(&input, &o, &mut no_progress, &mut |_| {}).unwrap();
+    let pipeline::OutOfCoreBake {
+        baked, info, stats, ..
+    } = pipeline::bake_out_of_core(&input, &o, &mut no_progress, &mut |_| {}).unwrap();
     assert_empty(temp.path());
     assert!(stats.runs > 1, "{stats:?}");
     assert!(stats.octree_leaves > 10, "{stats:?}");
@@ -462,8 +463,9 @@ fn twenty_million_triangles_bake_within_the_memory_budget() {
         ..OocOptions::with_budget(budget)
     };
     let start = std::time::Instant::now();
-    let (baked, info, stats) =
-        pipeline::bake_out_of_core(&input, &o, &mut no_progress, &mut |_| {}).unwrap();
+    let pipeline::OutOfCoreBake {
+        baked, info, stats, ..
+    } = pipeline::bake_out_of_core(&input, &o, &mut no_progress, &mut |_| {}).unwrap();
     let seconds = start.elapsed().as_secs_f64();
     baked.hierarchy().unwrap();
     let rss = ooc::peak_rss_bytes().unwrap();

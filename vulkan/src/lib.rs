@@ -18,7 +18,8 @@
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
 //!   CPU); a [`CameraDraw`] with a [`Morph`] draws through the geomorphing vertex stage.
 //! - [`render_snapshot`]: one frame of 1-4 orbiting cameras, read back (the
-//!   `caveclod render` command).
+//!   `caveclod render` command); [`render_octree_snapshot`] the same for the out-of-core
+//!   bake's multiresolution octree, each camera drawing its own cut.
 //!
 //! Everything is destroyed explicitly (`destroy(self, &Context)`); [`Context::destroy`]
 //! reports resources still alive as [`Error::Leaked`].
@@ -93,7 +94,10 @@ pub use image::{Image, ImageDesc, COLOUR_FORMAT, DEPTH_FORMAT};
 pub use indices::{CameraIndices, IndexSource};
 pub use mesh::{MorphInstances, VertexBuffer, VERTEX_STRIDE};
 pub use readback::{ImageDiff, RgbaImage};
-pub use snapshot::{orbit, palette, render_snapshot, Layout, Snapshot, SnapshotDesc};
+pub use snapshot::{
+    orbit, orbit_box, palette, render_octree_snapshot, render_snapshot, Layout, Snapshot,
+    SnapshotDesc,
+};
 pub use validation::{
     messenger_info, validation_layer_present, DebugMessenger, ValidationLog, VALIDATION_LAYER,
 };

@@ -1,11 +1,13 @@
 //! One-shot renders of a hierarchy from cameras orbiting it (the `caveclod render` CLI):
 //! each camera refines its own front for its own viewport, then all of them are drawn in
-//! one frame, into one split-screen target or one target each, and read back.
+//! one frame, into one split-screen target or one target each, and read back. The same for
+//! the multiresolution octree of an out-of-core bake (`caveclod render --octree`), each
+//! camera drawing its own cut.
 //!
 //! A `.clod` file stores no materials, so surfaces get colours from a fixed palette
 //! ([`palette`]): distinct hues, so surface boundaries show.
 
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
 use glam::Vec3;
 
 use crate::device::Context;
@@ -71,10 +73,12 @@ pub fn palette(s: usize) -> [f32; 4] {
 /// far enough for a 60° field of view to see the whole box.
 pub fn orbit(h: &Hierarchy<'_>, n: usize) -> Vec<LookAt> {
     let m = h.meta();
-    let (lo, hi) = (
-        Vec3::from_array(m.bounds_min),
-        Vec3::from_array(m.bounds_max),
-    );
+    orbit_box(m.bounds_min, m.bounds_max, n)
+}
+
+/// [`orbit`] around a box.
+pub fn orbit_box(min: [f32; 3], max: [f32; 3], n: usize) -> Vec<LookAt> {
+    let (lo, hi) = (Vec3::from_array(min), Vec3::from_array(max));
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
     let fov_y = 60f32.to_radians();
@@ -100,8 +104,11 @@ pub fn orbit(h: &Hierarchy<'_>, n: usize) -> Vec<LookAt> {
         .collect()
 }
 
-/// Renders `h` from [`orbit`] cameras as described, destroying everything it made.
-pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) -> Result<Snapshot> {
+/// Per camera its target and viewport; per target its size.
+type Placement = (Vec<(usize, Viewport)>, Vec<(u32, u32)>);
+
+/// Checks `desc` and places its cameras.
+fn placement(desc: &SnapshotDesc) -> Result<Placement> {
     if !(1..=4).contains(&desc.cameras) {
         return Err(Error::InvalidArgument(format!(
             "{} cameras: 1 to 4 supported",
@@ -114,9 +121,7 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
             desc.tolerance_px
         )));
     }
-    // Per camera its target and viewport; per target its size.
-    type Placement = (Vec<(usize, Viewport)>, Vec<(u32, u32)>);
-    let (viewports, targets): Placement = match desc.layout {
+    Ok(match desc.layout {
         Layout::SplitScreen => (
             Viewport::split_screen(desc.width, desc.height, desc.cameras)?
                 .into_iter()
@@ -130,7 +135,12 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
                 .collect(),
             vec![(desc.width, desc.height); desc.cameras],
         ),
-    };
+    })
+}
+
+/// Renders `h` from [`orbit`] cameras as described, destroying everything it made.
+pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) -> Result<Snapshot> {
+    let (viewports, targets) = placement(desc)?;
     let looks = orbit(h, desc.cameras);
     let config = CameraConfig::full(h);
     let words = CameraState::words_needed_for(h, &config);
@@ -147,9 +157,87 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
             .map_err(|e| Error::InvalidArgument(format!("camera {i}: refinement: {e}")))?;
         cams.push(cam);
     }
-    let colours: Vec<[f32; 4]> = (0..h.surface_count()).map(palette).collect();
-
     let vertices = VertexBuffer::from_hierarchy(ctx, "snapshot mesh", h)?;
+    let sources = cams
+        .iter()
+        .map(|camera| IndexSource::Camera {
+            hierarchy: h,
+            camera,
+        })
+        .collect();
+    let active = cams.iter().map(CameraState::active_polygon_count).collect();
+    draw(
+        ctx,
+        vertices,
+        h.surface_count(),
+        (viewports, targets),
+        &looks,
+        sources,
+        active,
+    )
+}
+
+/// Renders the multiresolution octree of an out-of-core bake from [`orbit_box`] cameras
+/// around its root: each camera selects its own cut ([`OctreeCut`]) at the tolerance and
+/// draws the cut's per-surface index lists from the octree's vertex buffer. `active_polygons`
+/// are the cuts' triangles.
+pub fn render_octree_snapshot(
+    ctx: &Context,
+    octree: &Octree<'_>,
+    desc: &SnapshotDesc,
+) -> Result<Snapshot> {
+    let (viewports, targets) = placement(desc)?;
+    let root = octree.nodes().first().copied().unwrap_or_default();
+    let looks = orbit_box(root.min, root.max, desc.cameras);
+    let surfaces = octree.surface_count();
+    let mut lists: Vec<Vec<Vec<u32>>> = Vec::with_capacity(desc.cameras);
+    let mut active = Vec::with_capacity(desc.cameras);
+    let mut memory = vec![0u32; OctreeCut::words_needed(octree)];
+    for (i, look) in looks.iter().enumerate() {
+        let mut cut = OctreeCut::new(octree, &mut memory)
+            .map_err(|e| Error::InvalidArgument(format!("camera {i}: {e}")))?;
+        let stats = cut
+            .select(octree, &look.view(viewports[i].1), desc.tolerance_px)
+            .map_err(|e| Error::InvalidArgument(format!("camera {i}: selection: {e}")))?;
+        let mut camera_lists: Vec<Vec<u32>> = (0..surfaces)
+            .map(|s| vec![0u32; cut.index_count(s)])
+            .collect();
+        let mut written = vec![0u32; surfaces];
+        let mut outs: Vec<&mut [u32]> = camera_lists.iter_mut().map(Vec::as_mut_slice).collect();
+        cut.emit_indices(octree, &mut outs, &mut written)
+            .map_err(|e| Error::InvalidArgument(format!("camera {i}: emission: {e}")))?;
+        lists.push(camera_lists);
+        active.push(stats.triangles);
+    }
+    let vertices = VertexBuffer::from_vertices(ctx, "octree", octree.vertices())?;
+    let refs: Vec<Vec<&[u32]>> = lists
+        .iter()
+        .map(|l| l.iter().map(Vec::as_slice).collect())
+        .collect();
+    let sources = refs.iter().map(|r| IndexSource::Lists(r)).collect();
+    draw(
+        ctx,
+        vertices,
+        surfaces,
+        (viewports, targets),
+        &looks,
+        sources,
+        active,
+    )
+}
+
+/// Draws one source per camera in one frame and reads the targets back; destroys the
+/// renderer, the index buffers and `vertices`, also on error.
+fn draw(
+    ctx: &Context,
+    vertices: VertexBuffer,
+    surfaces: usize,
+    (viewports, targets): Placement,
+    looks: &[LookAt],
+    sources: Vec<IndexSource<'_, '_>>,
+    active_polygons: Vec<u32>,
+) -> Result<Snapshot> {
+    let colours: Vec<[f32; 4]> = (0..surfaces).map(palette).collect();
     let renderer = Renderer::new(
         ctx,
         RendererDesc {
@@ -167,23 +255,21 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
             return Err(e);
         }
     };
-    let mut indices: Vec<CameraIndices> = (0..desc.cameras)
-        .map(|i| CameraIndices::new(&format!("camera {i}"), h.surface_count(), 1))
+    let mut indices: Vec<CameraIndices> = (0..sources.len())
+        .map(|i| CameraIndices::new(&format!("camera {i}"), surfaces, 1))
         .collect();
     let result = (|| -> Result<Snapshot> {
         let mut draws: Vec<CameraDraw<'_, '_>> = indices
             .iter_mut()
+            .zip(sources)
             .enumerate()
-            .map(|(i, ind)| CameraDraw {
+            .map(|(i, (ind, source))| CameraDraw {
                 target: viewports[i].0,
                 viewport: viewports[i].1,
                 view_proj: looks[i].view_proj(viewports[i].1),
                 vertices: &vertices,
                 indices: ind,
-                source: IndexSource::Camera {
-                    hierarchy: h,
-                    camera: &cams[i],
-                },
+                source,
                 colours: &colours,
                 morph: None,
             })
@@ -195,7 +281,7 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
         Ok(Snapshot {
             images,
             stats,
-            active_polygons: cams.iter().map(CameraState::active_polygon_count).collect(),
+            active_polygons,
         })
     })();
     let destroyed = renderer

@@ -173,6 +173,10 @@ enum Command {
         /// Enable the Vulkan validation layer (if installed) and print its messages.
         #[arg(long)]
         validate: bool,
+        /// Draw the multiresolution octree of an out-of-core bake (each camera its own cut)
+        /// instead of the hierarchy.
+        #[arg(long)]
+        octree: bool,
         /// Directory for the PNG files (created if missing).
         #[arg(long)]
         out: PathBuf,
@@ -249,6 +253,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 Stage::Assemble => bar.set_message("assembling"),
             };
             let mut ooc_stats = None;
+            let mut octree = None;
             let result = if out_of_core {
                 let options = OocOptions {
                     temp_dir,
@@ -279,9 +284,10 @@ fn run(cli: Cli) -> Result<(), String> {
                     on_stage(s)
                 });
                 ooc_bar.finish_and_clear();
-                r.map(|(b, i, st)| {
-                    ooc_stats = Some(st);
-                    (b, i)
+                r.map(|o| {
+                    ooc_stats = Some(o.stats);
+                    octree = o.octree;
+                    (o.baked, o.info)
                 })
             } else {
                 bake_file(&input, &ImportOptions { spacing }, &mut on_stage)
@@ -304,6 +310,10 @@ fn run(cli: Cli) -> Result<(), String> {
             if let Some(g) = &levels {
                 sections.extend(g.sections());
             }
+            let octree_parts = octree.as_ref().map(|o| o.parts());
+            if let Some(p) = &octree_parts {
+                sections.extend(p.sections());
+            }
             baked.write(&output, &sections).map_err(|e| e.to_string())?;
             with_hierarchy(&output, |h| {
                 let mut r = report::report(h, Some(&info));
@@ -322,8 +332,11 @@ fn run(cli: Cli) -> Result<(), String> {
                             "clusters": st.clusters,
                             "resolution": st.resolution,
                             "target_triangles": st.target_triangles,
-                            "octree_nodes": st.octree_nodes,
-                            "octree_leaves": st.octree_leaves,
+                            "sort_octree_nodes": st.octree_nodes,
+                            "sort_octree_leaves": st.octree_leaves,
+                            "lod_levels": st.lod_levels,
+                            "lod_nodes": st.lod_nodes,
+                            "lod_seconds": st.lod_seconds,
                             "sorted_runs": st.runs,
                             "temp_bytes": st.temp_bytes,
                             "read_seconds": st.seconds[0],
@@ -492,11 +505,13 @@ fn run(cli: Cli) -> Result<(), String> {
             separate,
             gpu,
             validate,
+            octree,
             out,
         } => with_hierarchy(&file, |h| {
             render(
                 h,
                 &RenderArgs {
+                    octree,
                     cameras,
                     tolerance,
                     width,
@@ -520,12 +535,28 @@ struct RenderArgs {
     separate: bool,
     gpu: bool,
     validate: bool,
+    octree: bool,
     out: PathBuf,
 }
 
 /// `caveclod render`: one frame of orbiting cameras, read back and written as PNG.
 fn render(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
-    use caveclod_vulkan::{render_snapshot, Context, HeadlessDesc, Layout, SnapshotDesc};
+    use caveclod_vulkan::{
+        render_octree_snapshot, render_snapshot, Context, HeadlessDesc, Layout, SnapshotDesc,
+    };
+    let octree = if a.octree {
+        match caveclod_core::Octree::from_hierarchy(h) {
+            Ok(Some(o)) => Some(o),
+            Ok(None) => {
+                return Err(
+                    "--octree: the file has no octree (bake it with --out-of-core)".to_string(),
+                )
+            }
+            Err(e) => return Err(format!("--octree: {e}")),
+        }
+    } else {
+        None
+    };
     if !(1..=4).contains(&a.cameras) {
         return Err(format!("--cameras {}: 1 to 4 supported", a.cameras));
     }
@@ -551,7 +582,10 @@ fn render(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
             Layout::SplitScreen
         },
     };
-    let snapshot = render_snapshot(&ctx, h, &desc);
+    let snapshot = match &octree {
+        Some(o) => render_octree_snapshot(&ctx, o, &desc),
+        None => render_snapshot(&ctx, h, &desc),
+    };
     let messages = ctx.take_validation_messages();
     ctx.destroy().map_err(|e| e.to_string())?;
     let snapshot = snapshot.map_err(|e| e.to_string())?;

@@ -16,10 +16,15 @@
 //! 4. [`cluster`]: leaf by leaf, corners are clustered on a grid whose resolution the
 //!    occupied-cell counts say will make the output fit the target, with one quadric per cluster
 //!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
-//!    optima.
+//!    optima;
+//! 5. [`multires`]: every coarser level is derived from the finest clustering by summing its
+//!    clusters' quadrics into the parent cells' clusters (exactly what clustering the input on
+//!    the coarser grid would give, without reading it again), and the levels are cut into
+//!    octree nodes stored as `OC..` sections of the `.clod` file, which
+//!    `caveclod_core::octree` selects per camera by projected error.
 //!
-//! The result is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands to
-//! the in-core pipeline for the view-dependent hierarchy. The target size comes from the
+//! The finest level is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands
+//! to the in-core pipeline for the view-dependent hierarchy. The target size comes from the
 //! budget ([`target_triangles_for_budget`]): the in-core hierarchy build needs about a
 //! kilobyte per triangle. Memory: the sort chunk (half the budget), the vertex cache (an
 //! eighth), the merge buffers (a quarter, after the chunk is freed), then one leaf and the
@@ -43,7 +48,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub use cluster::{ClusterOptions, Clusterer, Weights};
-pub use multires::{MultiresNode, MultiresOctree, MultiresOptions};
+pub use multires::{MultiresOctree, MultiresOptions};
 pub use temp::{parse_size, TempSpace};
 
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
