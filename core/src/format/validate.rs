@@ -39,9 +39,19 @@ pub(crate) struct Parsed<'a> {
     pub checksum: u64,
 }
 
-/// The section table of `bytes` after its header checks; entry `i` is valid if the function
-/// returned `Ok`.
+/// The section table of `bytes` after its header checks and the checksum; entry `i` is valid
+/// if the function returned `Ok`.
 pub(crate) fn section_table(bytes: &[u8]) -> Result<(SectionTable<'_>, u64), FormatError> {
+    section_table_checked(bytes, true)
+}
+
+/// [`section_table`], with the checksum of every byte after the header verified or not (a
+/// file a [`Hierarchy`](crate::Hierarchy) was made from was verified once already: looking a
+/// section up again must not read the whole file again).
+pub(crate) fn section_table_checked(
+    bytes: &[u8],
+    verify_checksum: bool,
+) -> Result<(SectionTable<'_>, u64), FormatError> {
     let header_len = core::mem::size_of::<FileHeader>();
     if bytes.len() < header_len {
         return Err(FormatError::Truncated {
@@ -96,7 +106,11 @@ pub(crate) fn section_table(bytes: &[u8]) -> Result<(SectionTable<'_>, u64), For
             len: bytes.len() as u64,
         });
     }
-    let computed = checksum64(&bytes[header_len..]);
+    let computed = if verify_checksum {
+        checksum64(&bytes[header_len..])
+    } else {
+        header.checksum
+    };
     if computed != header.checksum {
         return Err(FormatError::ChecksumMismatch {
             stored: header.checksum,
