@@ -453,3 +453,16 @@ fn an_out_of_core_bake_stores_the_octree_and_cameras_cut_it_by_distance() {
     assert_eq!(s.selected, 0);
     assert_eq!(b.selected(), &before[..]);
 }
+
+#[test]
+fn a_mesh_below_the_target_gets_a_few_levels_not_one_per_grid_halving() {
+    // Clustered at 2^21 cells per axis (what an input below the target gets): every triangle
+    // kept; the octree starts where coarsening begins to merge.
+    let mesh = field(40, false, false);
+    let (_, finest) = cluster_mesh_in(&mesh, cube(), ClusterOptions::at_resolution(1 << 21));
+    let o = multires::build(finest, 2, &MultiresOptions::default());
+    assert!(o.level_count <= 6, "{} levels", o.level_count);
+    assert!(o.nodes.len() < 100, "{} nodes", o.nodes.len());
+    assert!(o.level_triangles[0] as f64 >= 0.95 * mesh.triangles.len() as f64);
+    caveclod_core::Octree::new(o.parts()).expect("valid");
+}

@@ -2,7 +2,11 @@
 //! one, cut into octree nodes a renderer chooses per camera.
 //!
 //! # Levels
-//! Level 0 is the finest clustering (the [`Clusterer`] that made the hand-off mesh). Level
+//! Level 0 is the finest clustering (the [`Clusterer`] that made the hand-off mesh), or,
+//! when that grid is far finer than the mesh (an input below the target is clustered at
+//! 2^21 cells and keeps every triangle), the coarsest grid that still keeps 95% of its
+//! triangles: otherwise a small mesh would get a dozen levels that merge nothing and a node
+//! per triangle. Level
 //! `l + 1` clusters on cells twice as large: each level-`l` cluster joins the level-`l + 1`
 //! cluster of its parent cell (coordinates halved) with the same surface and a matching UV
 //! prediction at the parent cell's centre. Its quadric, corner sum, corner count and corner box
@@ -187,6 +191,18 @@ pub fn build(c: Clusterer, surface_count: u32, options: &MultiresOptions) -> Mul
     };
     let mut outs: Vec<LevelOut> = Vec::new();
     let mut shift = 0u32;
+    // A grid far finer than the mesh's edges (an input smaller than the target keeps every
+    // triangle at 2^21 cells) coarsens without merging anything for many levels: start at the
+    // coarsest grid that still keeps nearly all of the finest clustering's triangles.
+    let finest_triangles = level.triangles.len();
+    while shift < 31 && !level.cell_coords.iter().all(|c| *c == [0; 3]) {
+        let next = coarsen(&level, shift, tolerance, &weights);
+        if (next.triangles.len() as f64) < 0.95 * finest_triangles as f64 {
+            break;
+        }
+        level = next;
+        shift += 1;
+    }
     loop {
         let out = level_out(&level, shift, k, origin, unit, &weights, outs.last());
         let single_block = out.blocks.len() == 1;
