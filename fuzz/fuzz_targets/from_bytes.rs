@@ -1,4 +1,5 @@
-//! `Hierarchy::from_bytes` on arbitrary bytes, then a camera over whatever loads.
+//! `Hierarchy::from_bytes` on arbitrary bytes, then a camera over whatever loads (and an
+//! octree cut, when the file has valid octree sections).
 //!
 //! A 64-bit checksum stops nearly every mutation before the validator, so each input is
 //! tried twice: as given (header, length and checksum checks), and, when it fails on its
@@ -11,8 +12,8 @@
 use caveclod_core::format::FileHeader;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, OpError, RefineParams,
-    View,
+    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, Octree, OctreeCut,
+    OpError, RefineParams, View,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -123,11 +124,38 @@ fn exercise(h: &Hierarchy<'_>) {
     emit(h, &cam);
 }
 
+/// The octree sections, when present and valid: every view's cut, emitted into exactly sized
+/// buffers, partitions the output by the cut's counts and names only octree vertices.
+fn exercise_octree(h: &Hierarchy<'_>) {
+    let Ok(Some(t)) = Octree::from_hierarchy(h) else {
+        return;
+    };
+    let mut memory = vec![0u32; OctreeCut::words_needed(&t)];
+    let mut cut = OctreeCut::new(&t, &mut memory).expect("words_needed words are enough");
+    for (i, view) in views(h).iter().enumerate() {
+        let tolerance = [1.0, 0.1, 1e9, f32::NAN][i % 4];
+        let stats = cut.select(&t, view, tolerance).expect("a cut of its own octree");
+        let total = cut.total_index_count();
+        assert_eq!(total, 3 * stats.triangles as usize);
+        let mut out = vec![u32::MAX; total];
+        let mut offsets = vec![0u32; t.surface_count() + 1];
+        let n = cut
+            .emit_indices_packed(&t, &mut out, &mut offsets)
+            .expect("exactly sized buffers");
+        assert_eq!(n, total);
+        for s in 0..t.surface_count() {
+            assert_eq!((offsets[s + 1] - offsets[s]) as usize, cut.index_count(s));
+        }
+        assert!(out.iter().all(|&i| (i as usize) < t.vertices().len()));
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let mut words = aligned(data);
     let retry = match Hierarchy::from_bytes(as_bytes(&words, data.len())) {
         Ok(h) => {
             exercise(&h);
+            exercise_octree(&h);
             false
         }
         Err(FormatError::LengthMismatch { .. } | FormatError::ChecksumMismatch { .. }) => true,
@@ -141,6 +169,7 @@ fuzz_target!(|data: &[u8]| {
         bytes[..HEADER_LEN].copy_from_slice(bytemuck::bytes_of(&header));
         if let Ok(h) = Hierarchy::from_bytes(as_bytes(&words, data.len())) {
             exercise(&h);
+            exercise_octree(&h);
         }
     }
 });
