@@ -31,23 +31,8 @@ pub fn wide(p: [f32; 3]) -> P3 {
     p.map(f64::from)
 }
 
-/// SplitMix64: deterministic samples, so runs compare.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
+/// SplitMix64 (the tests' generator): deterministic samples, so runs compare.
+pub use caveclod_tests::meshes::Rng;
 
 /// A triangle soup: three corners per triangle.
 pub type Soup = Vec<[[f32; 3]; 3]>;
@@ -247,12 +232,12 @@ pub fn sample(tris: &[[[f32; 3]; 3]], count: usize, seed: u64) -> Samples {
     let mut rng = Rng(seed);
     let area = (0..count)
         .map(|_| {
-            let x = rng.unit() * total;
+            let x = rng.unit_f64() * total;
             let i = cumulative.partition_point(|&c| c <= x).min(tris.len() - 1);
             let t = &tris[i];
             let (a, b, c) = (wide(t[0]), wide(t[1]), wide(t[2]));
-            let s = rng.unit().sqrt();
-            let r = rng.unit();
+            let s = rng.unit_f64().sqrt();
+            let r = rng.unit_f64();
             axpy(axpy(a, s * (1.0 - r), sub(b, a)), s * r, sub(c, a))
         })
         .collect();
