@@ -8,12 +8,14 @@
 //!    looked up through a bounded cache, and turned into a triangle soup ([`soup`]) whose
 //!    records carry everything later stages need and a spatial key (the Morton code of the
 //!    centroid);
-//! 2. [`sort`]: the soup is sorted by key with an external merge sort whose chunks and merge
-//!    buffers are shares of the memory budget; merging counts the occupied octree cells at
-//!    every depth;
-//! 3. [`octree`]: the sorted file is the octree's storage: each node is a range of it; nodes
-//!    split until a leaf holds at most a set number of triangles or the maximum depth;
-//! 4. [`cluster`]: leaf by leaf, corners are clustered on a grid whose resolution the
+//! 2. [`sort`]: the soup is cut into sorted runs (a thread sorts and writes one chunk while
+//!    the reader fills the next); only their keys are merged into one file, counting the
+//!    occupied octree cells at every depth; the records are merged later, as they are
+//!    clustered;
+//! 3. [`octree`]: the sorted keys are the octree's storage: each node is a range of them;
+//!    nodes split until a leaf holds at most a set number of triangles or the maximum depth;
+//! 4. [`cluster`]: leaf by leaf, each thread merging its leaves' records from the runs,
+//!    corners are clustered on a grid whose resolution the
 //!    occupied-cell counts say will make the output fit the target, with one quadric per cluster
 //!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
 //!    optima;
@@ -26,10 +28,11 @@
 //! The finest level is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands
 //! to the in-core pipeline for the view-dependent hierarchy. The target size comes from the
 //! budget ([`target_triangles_for_budget`]): the in-core hierarchy build needs about a
-//! kilobyte per triangle. Memory: the sort chunk (half the budget), the vertex cache (an
-//! eighth), the merge buffers (a quarter, after the chunk is freed), then one leaf and the
-//! clusters (proportional to the output). Every temporary file lives in one [`TempSpace`]
-//! directory, removed when the simplification returns, with an error or without.
+//! kilobyte per triangle. Memory: the two sort chunks (half the budget), the vertex cache (an
+//! eighth), the merge buffers (a quarter, after the chunks are freed), then the clustering
+//! threads' merge buffers (a quarter) and the clusters (proportional to the output). Every
+//! temporary file lives in one [`TempSpace`] directory, removed when the simplification
+//! returns, with an error or without.
 //!
 //! In-memory meshes (glTF, which is not streamed) take the same clustering through
 //! [`cluster_mesh`].
@@ -293,26 +296,15 @@ pub fn simplify(
     }
     stats.input_triangles = sorted.triangles;
     stats.input_vertices = report.vertices;
-    stats.runs = sorted.runs as u64;
-    let file = std::fs::File::open(&sorted.path)
-        .map_err(|e| OocError::temp("reading the sorted soup", e))?;
+    stats.runs = sorted.runs.len() as u64;
+    let file = std::fs::File::open(&sorted.keys)
+        .map_err(|e| OocError::temp("reading the sorted keys", e))?;
     let tree = octree::Octree::build(
         &file,
         sorted.triangles,
         options.leaf_triangles,
         options.max_depth,
     )?;
-    if tree.largest_leaf * soup::RECORD_BYTES as u64 > budget / 2 {
-        return Err(OocError::Budget {
-            budget,
-            what: format!(
-                "an octree leaf at the maximum depth {} holding {} triangles",
-                options.max_depth, tree.largest_leaf
-            ),
-            needed: tree.largest_leaf * soup::RECORD_BYTES as u64 * 2,
-            hint: " or the maximum depth",
-        });
-    }
     let leaves = tree.leaves();
     stats.octree_nodes = tree.nodes.len() as u64;
     stats.octree_leaves = leaves.len() as u64;
@@ -351,6 +343,8 @@ pub fn simplify(
         parts.push(a);
         rest = b;
     }
+    // Merge buffers: a quarter of the budget, shared by the threads.
+    let merge_bytes = (budget / 4) as usize / threads;
     let cluster_options = |resolution| ClusterOptions {
         weights: options.weights,
         ..ClusterOptions::at_resolution(resolution)
@@ -359,12 +353,13 @@ pub fn simplify(
                c: &mut Clusterer,
                report: &mut dyn FnMut(u64)|
      -> Result<(), OocError> {
-        let mut buf = Vec::new();
+        // The part's triangles merged from the sorted runs, in sorted order.
+        let Some(first) = part.first() else {
+            return Ok(());
+        };
+        let mut merge = sorted.merge_from(first.first, merge_bytes)?;
         for leaf in part {
-            octree::read_leaf(&file, leaf, &mut buf)?;
-            for t in &buf {
-                c.add(t);
-            }
+            merge.take(leaf.count, &mut |t| c.add(t))?;
             report(leaf.count);
         }
         Ok(())

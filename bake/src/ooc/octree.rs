@@ -1,16 +1,18 @@
-//! The on-disk octree over the sorted soup.
+//! The octree over the sorted soup.
 //!
-//! Sorting by Morton key made every octree cell a contiguous range of the sorted file, so
-//! the octree is a small table of nodes (depth, key prefix, range, children) over that file;
-//! the triangles stay on disk. A node with more than `leaf_triangles` triangles is split into
-//! its non-empty children (found by binary searches on the keys in the file, a few reads
-//! each) until the maximum depth; a leaf at the maximum depth may hold more, which the memory
-//! check in [`Octree::build`] reports.
+//! Sorting by Morton key made every octree cell a contiguous range of the sorted order, so
+//! the octree is a small table of nodes (depth, key prefix, range, children) over the sorted
+//! key file ([`super::sort::SortedSoup::keys`]); the triangles stay on disk, in the sorted
+//! runs. A node with more than `leaf_triangles` triangles is split into its non-empty
+//! children (found by binary searches on the keys, a few reads each) until the maximum depth.
+//! Leaves are the units the clustering threads share out and report progress by; a
+//! clustering thread merges its leaves' triangles from the runs
+//! ([`super::sort::SortedSoup::merge_from`]) and never holds a whole leaf.
 
 use std::fs::File;
 use std::os::unix::fs::FileExt;
 
-use super::soup::{key_prefix, SoupTriangle, KEY_LEVELS, RECORD_BYTES};
+use super::soup::{key_prefix, KEY_LEVELS};
 use super::OocError;
 
 /// "No child".
@@ -48,9 +50,9 @@ pub struct Octree {
 }
 
 impl Octree {
-    /// Builds the octree over a sorted file of `triangles` records.
+    /// Builds the octree over a sorted file of `triangles` keys (`u64` each).
     pub fn build(
-        file: &File,
+        keys: &File,
         triangles: u64,
         leaf_triangles: u64,
         max_depth: u32,
@@ -58,7 +60,7 @@ impl Octree {
         let max_depth = max_depth.min(KEY_LEVELS);
         let key_at = |i: u64| -> Result<u64, OocError> {
             let mut b = [0u8; 8];
-            file.read_exact_at(&mut b, i * RECORD_BYTES as u64)
+            keys.read_exact_at(&mut b, i * 8)
                 .map_err(|e| OocError::temp("reading the sorted soup", e))?;
             Ok(u64::from_le_bytes(b))
         };
@@ -129,17 +131,6 @@ impl Octree {
     }
 }
 
-/// Reads a leaf's triangles into `out`.
-pub fn read_leaf(file: &File, leaf: &Node, out: &mut Vec<SoupTriangle>) -> Result<(), OocError> {
-    out.clear();
-    out.resize(leaf.count as usize, SoupTriangle::default());
-    file.read_exact_at(
-        bytemuck::cast_slice_mut(out.as_mut_slice()),
-        leaf.first * RECORD_BYTES as u64,
-    )
-    .map_err(|e| OocError::temp("reading an octree leaf", e))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -153,16 +144,9 @@ mod tests {
             .map(|i| (i * 2_654_435_761) % (1 << 63))
             .collect();
         keys.sort_unstable();
-        let recs: Vec<SoupTriangle> = keys
-            .iter()
-            .map(|&key| SoupTriangle {
-                key,
-                ..Default::default()
-            })
-            .collect();
         std::fs::File::create(&path)
             .unwrap()
-            .write_all(bytemuck::cast_slice(&recs))
+            .write_all(bytemuck::cast_slice(&keys))
             .unwrap();
         let f = File::open(&path).unwrap();
         let t = Octree::build(&f, 1000, 50, 21).unwrap();

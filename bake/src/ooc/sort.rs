@@ -1,46 +1,82 @@
-//! External merge sort of the soup by spatial key, in memory-bounded chunks.
+//! External merge sort of the soup by spatial key, in memory-bounded chunks, merged on demand.
 //!
-//! [`RunBuilder`] receives the soup from a reader: it fills a chunk as large as its share of
-//! the memory budget, sorts it by key (a sort of `(key, index)` pairs, then one gather into
-//! the output buffer, so the 96-byte records move once) and writes it as a sorted run. [`merge`]
-//! merges the runs with a heap into one sorted file, reading each run through a buffer of an
-//! equal share of the budget. An input that fits one chunk is written sorted straight away.
+//! [`RunBuilder`] receives the soup from a reader: it fills a chunk, and when the chunk is full
+//! a writer thread sorts it by key (a sort of `(key, index)` pairs, then one gather, so the
+//! 96-byte records move once) and writes it as a sorted run, while the reader fills a second
+//! chunk: reading and sorting overlap on two cores. The two chunks together take the memory
+//! share the builder is given. Each run is written twice: its records, and its keys alone
+//! (8 bytes a triangle).
 //!
-//! While merging, the sort counts the distinct octree cells the triangles' centroids fall in
-//! at every depth ([`SortedSoup::occupied`]): the number of clusters (and so of output
-//! triangles) a clustering level will give, known before clustering.
+//! The runs are never merged into one sorted file of records. [`RunBuilder::finish`] merges
+//! only the keys (a twelfth of the bytes) into one sorted key file, counting on the way the
+//! distinct octree cells the triangles' centroids fall in at every depth
+//! ([`SortedSoup::occupied`]): the number of clusters (and so of output triangles) a
+//! clustering level will give, known before clustering. The octree is built over that key
+//! file. The records are merged as they are consumed: [`SortedSoup::merge_from`] starts a
+//! k-way merge of the runs at any position of the sorted order (found by binary searches on
+//! the runs' keys), so each clustering thread merges its own range of the octree's leaves and
+//! clusters the triangles straight from the merge. That saves writing the sorted soup and
+//! reading it back (two passes over 96 bytes a triangle), and splits the merge over the
+//! clustering threads.
+//!
+//! The sorted order is by key, then by run, then by position in the run: the same wherever a
+//! merge starts, so the clustering sees the triangles in one order whatever the threads.
 
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::binary_heap::{BinaryHeap, PeekMut};
 use std::fs::File;
-use std::io::{BufReader, Read, Write};
+use std::io::{self, Write};
+use std::os::unix::fs::FileExt;
 use std::path::PathBuf;
+use std::thread::JoinHandle;
+
+use bytemuck::{Pod, Zeroable};
 
 use super::soup::{Cube, SoupTriangle, KEY_LEVELS, RECORD_BYTES};
 use super::stream::SoupSink;
-use super::temp::TempSpace;
+use super::temp::{SpillWriter, TempSpace};
 use super::OocError;
 
-/// The sorted soup on disk.
-pub struct SortedSoup {
-    /// The sorted file.
-    pub path: PathBuf,
+/// Bytes of chunk a triangle takes: its record and its `(key, index)` sort pair.
+const CHUNK_BYTES_PER_TRIANGLE: usize = RECORD_BYTES + std::mem::size_of::<(u64, u32)>();
+
+/// One sorted run on disk.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// Its records, sorted by key.
+    pub records: PathBuf,
+    /// Its keys alone, in the same order.
+    pub keys: PathBuf,
     /// Triangles in it.
+    pub count: u64,
+}
+
+/// The sorted soup on disk: sorted runs and the merged keys.
+pub struct SortedSoup {
+    /// The runs, in the order they were written.
+    pub runs: Vec<Run>,
+    /// Every key in sorted order (`u64` each): the octree's storage.
+    pub keys: PathBuf,
+    /// Triangles in all.
     pub triangles: u64,
     /// Bounding cube of the keys.
     pub cube: Cube,
     /// Distinct key prefixes (occupied octree cells) at depths `0..=KEY_LEVELS`.
     pub occupied: [u64; KEY_LEVELS as usize + 1],
-    /// Sorted runs written before merging.
-    pub runs: usize,
 }
+
+/// What a writer thread gives back: the emptied chunk (for reuse) and its run.
+type Written = Result<(Vec<SoupTriangle>, Run), OocError>;
 
 /// Collects the soup into sorted runs.
 pub struct RunBuilder<'a> {
     temp: &'a TempSpace,
     chunk: Vec<SoupTriangle>,
+    /// The other chunk, when the writer thread has given it back.
+    spare: Vec<SoupTriangle>,
+    writer: Option<JoinHandle<Written>>,
     capacity: usize,
-    runs: Vec<(PathBuf, u64)>,
+    runs: Vec<Run>,
     cube: Option<Cube>,
     total: u64,
     hint: u64,
@@ -48,16 +84,19 @@ pub struct RunBuilder<'a> {
 }
 
 impl<'a> RunBuilder<'a> {
-    /// A builder holding at most `chunk_bytes` of triangles at a time.
+    /// A builder holding at most `chunk_bytes` of triangles at a time (two chunks of half
+    /// that, one filling while the other is sorted and written).
     pub fn new(
         temp: &'a TempSpace,
         chunk_bytes: usize,
         progress: &'a mut dyn FnMut(bool, u64, u64),
     ) -> Self {
-        let capacity = (chunk_bytes / (RECORD_BYTES + 12)).max(1);
+        let capacity = (chunk_bytes / 2 / CHUNK_BYTES_PER_TRIANGLE).max(1);
         Self {
             temp,
             chunk: Vec::new(),
+            spare: Vec::new(),
+            writer: None,
             capacity,
             runs: Vec::new(),
             cube: None,
@@ -67,46 +106,104 @@ impl<'a> RunBuilder<'a> {
         }
     }
 
+    /// Waits for the writer thread, if one is busy, and takes back its chunk and run.
+    fn wait(&mut self) -> Result<(), OocError> {
+        if let Some(h) = self.writer.take() {
+            let (mut chunk, run) = h.join().unwrap_or_else(|_| {
+                Err(OocError::temp(
+                    "sorting a run",
+                    io::Error::other("the sort thread panicked"),
+                ))
+            })?;
+            chunk.clear();
+            self.spare = chunk;
+            self.runs.push(run);
+        }
+        Ok(())
+    }
+
+    /// Hands the full chunk to a writer thread and goes on with the other one.
     fn flush(&mut self) -> Result<(), OocError> {
         if self.chunk.is_empty() {
             return Ok(());
         }
-        let mut order: Vec<(u64, u32)> = self
-            .chunk
-            .iter()
-            .enumerate()
-            .map(|(i, t)| (t.key, i as u32))
-            .collect();
-        order.sort_unstable();
-        let what = format!("run {}", self.runs.len());
-        let terr = |e| OocError::temp(&format!("writing sorted {what}"), e);
-        let mut w = self.temp.create("run", 1 << 20).map_err(terr)?;
-        let mut buf: Vec<SoupTriangle> = Vec::with_capacity(4096);
-        for part in order.chunks(4096) {
-            buf.clear();
-            buf.extend(part.iter().map(|&(_, i)| self.chunk[i as usize]));
-            w.write_all(bytemuck::cast_slice(&buf)).map_err(terr)?;
-        }
-        let path = w.finish().map_err(terr)?;
-        self.runs.push((path, self.chunk.len() as u64));
-        self.chunk.clear();
+        self.wait()?;
+        let n = self.runs.len();
+        let terr = |e| OocError::temp(&format!("writing sorted run {n}"), e);
+        let records = self.temp.create("run", 1 << 20).map_err(terr)?;
+        let keys = self.temp.create("run-keys", 1 << 16).map_err(terr)?;
+        let chunk = std::mem::replace(&mut self.chunk, std::mem::take(&mut self.spare));
+        let count = chunk.len() as u64;
+        let h = std::thread::Builder::new()
+            .name("caveclod-sort".into())
+            .spawn(move || {
+                write_run(&chunk, records, keys)
+                    .map(|(records, keys)| {
+                        let run = Run {
+                            records,
+                            keys,
+                            count,
+                        };
+                        (chunk, run)
+                    })
+                    .map_err(|e| OocError::temp(&format!("writing sorted run {n}"), e))
+            })
+            .map_err(|e| OocError::temp("starting the sort thread", e))?;
+        self.writer = Some(h);
         Ok(())
     }
 
-    /// Writes the last run and merges all runs into one sorted file, using about
+    /// Makes room for one more triangle: grows the chunk up to its capacity (never past it,
+    /// as doubling would), or flushes it.
+    #[cold]
+    fn grow(&mut self) -> Result<(), OocError> {
+        let len = self.chunk.len();
+        if len >= self.capacity {
+            self.flush()?;
+        }
+        let len = self.chunk.len();
+        if len == self.chunk.capacity() {
+            let want = (len * 2).max(1024).min(self.capacity);
+            self.chunk.reserve_exact(want.max(len + 1) - len);
+        }
+        Ok(())
+    }
+
+    /// Writes the last run and merges the runs' keys into one sorted key file, using about
     /// `merge_bytes` of buffers. Progress: `(false, read, expected)` while reading,
     /// `(true, merged, total)` while merging.
     pub fn finish(mut self, merge_bytes: usize) -> Result<SortedSoup, OocError> {
         self.flush()?;
+        self.wait()?;
         self.chunk = Vec::new();
+        self.spare = Vec::new();
         let cube = self.cube.unwrap_or(Cube {
             origin: [0.0; 3],
             size: 1.0,
         });
-        let progress = self.progress;
-        merge(self.temp, self.runs, cube, merge_bytes, &mut |d, n| {
-            progress(true, d, n)
+        let runs = std::mem::take(&mut self.runs);
+        let progress = &mut *self.progress;
+        let (keys, triangles, occupied) =
+            merge_keys(self.temp, &runs, merge_bytes, &mut |d, n| {
+                progress(true, d, n)
+            })?;
+        Ok(SortedSoup {
+            runs,
+            keys,
+            triangles,
+            cube,
+            occupied,
         })
+    }
+}
+
+impl Drop for RunBuilder<'_> {
+    /// A builder dropped on an error still waits for its writer, so that nothing writes into
+    /// the temporary directory while it is removed.
+    fn drop(&mut self) {
+        if let Some(h) = self.writer.take() {
+            let _ = h.join();
+        }
     }
 }
 
@@ -119,17 +216,44 @@ impl SoupSink for RunBuilder<'_> {
         Ok(())
     }
 
-    fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
-        if self.chunk.len() >= self.capacity {
-            self.flush()?;
+    #[inline]
+    fn slot(&mut self) -> Result<&mut SoupTriangle, OocError> {
+        if self.chunk.len() == self.chunk.capacity() || self.chunk.len() >= self.capacity {
+            self.grow()?;
         }
-        self.chunk.push(*t);
         self.total += 1;
         if self.total % (1 << 16) == 0 {
             (self.progress)(false, self.total, self.hint.max(self.total));
         }
-        Ok(())
+        self.chunk.push(SoupTriangle::zeroed());
+        let last = self.chunk.len() - 1;
+        Ok(&mut self.chunk[last])
     }
+}
+
+/// Sorts a chunk by key and writes its records and its keys; returns their paths.
+fn write_run(
+    chunk: &[SoupTriangle],
+    mut records: SpillWriter,
+    mut keys: SpillWriter,
+) -> io::Result<(PathBuf, PathBuf)> {
+    let mut order: Vec<(u64, u32)> = chunk
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (t.key, i as u32))
+        .collect();
+    order.sort_unstable();
+    let mut buf: Vec<SoupTriangle> = Vec::with_capacity(4096);
+    let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
+    for part in order.chunks(4096) {
+        buf.clear();
+        buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
+        records.write_all(bytemuck::cast_slice(&buf))?;
+        kbuf.clear();
+        kbuf.extend(part.iter().map(|&(k, _)| k));
+        keys.write_all(bytemuck::cast_slice(&kbuf))?;
+    }
+    Ok((records.finish()?, keys.finish()?))
 }
 
 /// Counts the depths at which `key` starts a new cell after `prev`.
@@ -147,87 +271,225 @@ fn count_new_cells(occupied: &mut [u64; KEY_LEVELS as usize + 1], prev: Option<u
     }
 }
 
-/// Merges sorted runs into one sorted file.
-fn merge(
-    temp: &TempSpace,
-    runs: Vec<(PathBuf, u64)>,
-    cube: Cube,
-    merge_bytes: usize,
-    progress: &mut dyn FnMut(u64, u64),
-) -> Result<SortedSoup, OocError> {
-    let total: u64 = runs.iter().map(|r| r.1).sum();
-    let mut occupied = [0u64; KEY_LEVELS as usize + 1];
-    let rerr = |e| OocError::temp("reading a sorted run", e);
-    let n_runs = runs.len();
-    if n_runs == 1 {
-        // Already sorted: count the cells in one read.
-        let (path, count) = runs.into_iter().next().unwrap_or_default();
-        let mut r = BufReader::with_capacity(1 << 20, File::open(&path).map_err(rerr)?);
-        let mut prev = None;
-        let mut t = SoupTriangle::default();
-        for i in 0..count {
-            r.read_exact(bytemuck::bytes_of_mut(&mut t)).map_err(rerr)?;
-            count_new_cells(&mut occupied, prev, t.key);
-            prev = Some(t.key);
-            if i % (1 << 16) == 0 {
-                progress(i, count);
+/// A run's records (or keys) from a position on, read in blocks.
+struct Cursor<T: Pod> {
+    file: File,
+    /// Next record of the file to read into the block.
+    next: u64,
+    /// One past the last record to read.
+    end: u64,
+    block: Vec<T>,
+    at: usize,
+    len: usize,
+}
+
+impl<T: Pod> Cursor<T> {
+    /// Records `start..end` of `file`, read `block` at a time.
+    fn new(file: File, start: u64, end: u64, block: usize) -> io::Result<Self> {
+        let block = (block as u64).min(end.saturating_sub(start)).max(1) as usize;
+        let mut c = Self {
+            file,
+            next: start,
+            end,
+            block: vec![T::zeroed(); block],
+            at: 0,
+            len: 0,
+        };
+        c.refill()?;
+        Ok(c)
+    }
+
+    fn refill(&mut self) -> io::Result<()> {
+        let n = (self.end.saturating_sub(self.next)).min(self.block.len() as u64) as usize;
+        let size = std::mem::size_of::<T>() as u64;
+        self.file.read_exact_at(
+            bytemuck::cast_slice_mut(&mut self.block[..n]),
+            self.next * size,
+        )?;
+        self.next += n as u64;
+        self.at = 0;
+        self.len = n;
+        Ok(())
+    }
+
+    fn head(&self) -> Option<&T> {
+        (self.at < self.len).then(|| &self.block[self.at])
+    }
+
+    fn advance(&mut self) -> io::Result<()> {
+        self.at += 1;
+        if self.at == self.len {
+            self.refill()?;
+        }
+        Ok(())
+    }
+}
+
+/// A k-way merge of sorted cursors, by key then by cursor.
+struct Merge<T: Pod> {
+    cursors: Vec<Cursor<T>>,
+    heap: BinaryHeap<Reverse<(u64, u32)>>,
+    key: fn(&T) -> u64,
+}
+
+impl<T: Pod> Merge<T> {
+    fn new(cursors: Vec<Cursor<T>>, key: fn(&T) -> u64) -> Self {
+        let heap = cursors
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.head().map(|t| Reverse((key(t), i as u32))))
+            .collect();
+        Self { cursors, heap, key }
+    }
+
+    /// Calls `f` on the next `n` items in order.
+    fn take(&mut self, n: u64, f: &mut dyn FnMut(&T)) -> io::Result<()> {
+        for _ in 0..n {
+            let Some(mut top) = self.heap.peek_mut() else {
+                return Err(io::Error::other("the sorted runs end early"));
+            };
+            let i = top.0 .1;
+            let c = &mut self.cursors[i as usize];
+            f(&c.block[c.at]);
+            c.advance()?;
+            match c.head() {
+                // Sifts down when `top` drops: one or two comparisons while one run leads.
+                Some(t) => top.0 = ((self.key)(t), i),
+                None => {
+                    PeekMut::pop(top);
+                }
             }
         }
-        return Ok(SortedSoup {
-            path,
-            triangles: count,
-            cube,
-            occupied,
-            runs: 1,
-        });
+        Ok(())
     }
-    let buffer = (merge_bytes / n_runs.max(1)).clamp(RECORD_BYTES * 16, 1 << 22);
-    let mut readers = Vec::with_capacity(n_runs);
-    let mut left = Vec::with_capacity(n_runs);
-    let mut heap = BinaryHeap::with_capacity(n_runs);
-    let mut heads = vec![SoupTriangle::default(); n_runs];
-    for (i, (path, count)) in runs.iter().enumerate() {
-        let mut r = BufReader::with_capacity(buffer, File::open(path).map_err(rerr)?);
-        if *count > 0 {
-            r.read_exact(bytemuck::bytes_of_mut(&mut heads[i]))
-                .map_err(rerr)?;
-            heap.push(Reverse((heads[i].key, i)));
+}
+
+/// Records merged from the sorted runs, from some position of the sorted order on
+/// ([`SortedSoup::merge_from`]).
+pub struct SoupMerge(Merge<SoupTriangle>);
+
+impl SoupMerge {
+    /// Calls `f` on the next `n` triangles in sorted order.
+    pub fn take(&mut self, n: u64, f: &mut dyn FnMut(&SoupTriangle)) -> Result<(), OocError> {
+        self.0
+            .take(n, f)
+            .map_err(|e| OocError::temp("reading a sorted run", e))
+    }
+}
+
+impl SortedSoup {
+    /// A merge of the runs' records starting at position `first` of the sorted order, using
+    /// about `buffer_bytes` of read buffers.
+    pub fn merge_from(&self, first: u64, buffer_bytes: usize) -> Result<SoupMerge, OocError> {
+        let rerr = |e| OocError::temp("reading a sorted run", e);
+        let open = |p: &PathBuf| File::open(p).map_err(rerr);
+        let mut starts = vec![0u64; self.runs.len()];
+        if first >= self.triangles {
+            for (s, r) in starts.iter_mut().zip(&self.runs) {
+                *s = r.count;
+            }
+        } else if first > 0 {
+            // Before `first`: every key below its key, then the equal keys run by run.
+            let key = read_key(&open(&self.keys)?, first).map_err(rerr)?;
+            let mut need = first;
+            let mut equal = Vec::with_capacity(self.runs.len());
+            for (s, r) in starts.iter_mut().zip(&self.runs) {
+                let f = open(&r.keys)?;
+                let lo = lower_bound(&f, r.count, |k| k < key).map_err(rerr)?;
+                let hi = lower_bound(&f, r.count, |k| k <= key).map_err(rerr)?;
+                *s = lo;
+                equal.push(hi - lo);
+                need = need.checked_sub(lo).ok_or_else(disagree)?;
+            }
+            for (s, e) in starts.iter_mut().zip(equal) {
+                let t = need.min(e);
+                *s += t;
+                need -= t;
+            }
+            if need > 0 {
+                return Err(disagree());
+            }
         }
-        readers.push(r);
-        left.push(count.saturating_sub(1));
+        let block = (buffer_bytes / self.runs.len().max(1) / RECORD_BYTES).clamp(16, 1 << 15);
+        let cursors = self
+            .runs
+            .iter()
+            .zip(starts)
+            .map(|(r, s)| Cursor::new(open(&r.records)?, s, r.count, block).map_err(rerr))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(SoupMerge(Merge::new(cursors, |t: &SoupTriangle| t.key)))
     }
-    let werr = |e| OocError::temp("writing the sorted soup", e);
-    let mut w = temp.create("sorted", buffer.max(1 << 20)).map_err(werr)?;
+}
+
+fn disagree() -> OocError {
+    OocError::temp(
+        "reading the sorted runs",
+        io::Error::other("the runs disagree with the merged keys"),
+    )
+}
+
+/// Key `i` of a key file.
+fn read_key(f: &File, i: u64) -> io::Result<u64> {
+    let mut b = [0u8; 8];
+    f.read_exact_at(&mut b, i * 8)?;
+    Ok(u64::from_le_bytes(b))
+}
+
+/// The first index of a sorted key file of `count` keys whose key fails `before`.
+fn lower_bound(f: &File, count: u64, before: impl Fn(u64) -> bool) -> io::Result<u64> {
+    let (mut a, mut b) = (0, count);
+    while a < b {
+        let mid = a + (b - a) / 2;
+        if before(read_key(f, mid)?) {
+            a = mid + 1;
+        } else {
+            b = mid;
+        }
+    }
+    Ok(a)
+}
+
+/// Merges the runs' keys into one sorted key file, counting occupied cells; returns the file,
+/// the number of keys and the counts.
+fn merge_keys(
+    temp: &TempSpace,
+    runs: &[Run],
+    merge_bytes: usize,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(PathBuf, u64, [u64; KEY_LEVELS as usize + 1]), OocError> {
+    let total: u64 = runs.iter().map(|r| r.count).sum();
+    let rerr = |e| OocError::temp("reading a sorted run", e);
+    let werr = |e| OocError::temp("writing the sorted keys", e);
+    let block = (merge_bytes / runs.len().max(1) / 8).clamp(512, 1 << 19);
+    let cursors = runs
+        .iter()
+        .map(|r| {
+            let f = File::open(&r.keys).map_err(rerr)?;
+            Cursor::new(f, 0, r.count, block).map_err(rerr)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut merge = Merge::new(cursors, |k: &u64| *k);
+    let mut w = temp.create("sorted-keys", 1 << 20).map_err(werr)?;
+    let mut occupied = [0u64; KEY_LEVELS as usize + 1];
     let mut prev = None;
-    let mut done = 0u64;
-    while let Some(Reverse((key, i))) = heap.pop() {
-        w.write_all(bytemuck::bytes_of(&heads[i])).map_err(werr)?;
-        count_new_cells(&mut occupied, prev, key);
-        prev = Some(key);
-        done += 1;
-        if done % (1 << 16) == 0 {
-            progress(done, total);
-        }
-        if left[i] > 0 {
-            left[i] -= 1;
-            readers[i]
-                .read_exact(bytemuck::bytes_of_mut(&mut heads[i]))
-                .map_err(rerr)?;
-            heap.push(Reverse((heads[i].key, i)));
-        }
-    }
-    drop(readers);
-    for (path, _) in &runs {
-        let _ = std::fs::remove_file(path);
+    let mut out: Vec<u64> = Vec::with_capacity(1 << 16);
+    let mut done = 0;
+    while done < total {
+        let n = (total - done).min(1 << 16);
+        out.clear();
+        merge
+            .take(n, &mut |&k| {
+                count_new_cells(&mut occupied, prev, k);
+                prev = Some(k);
+                out.push(k);
+            })
+            .map_err(rerr)?;
+        w.write_all(bytemuck::cast_slice(&out)).map_err(werr)?;
+        done += n;
+        progress(done, total);
     }
     let path = w.finish().map_err(werr)?;
-    Ok(SortedSoup {
-        path,
-        triangles: total,
-        cube,
-        occupied,
-        runs: n_runs,
-    })
+    Ok((path, total, occupied))
 }
 
 #[cfg(test)]
@@ -235,48 +497,85 @@ mod tests {
     use super::*;
 
     #[test]
-    fn runs_merge_sorted_and_cells_are_counted() {
+    fn runs_merge_sorted_from_anywhere_and_cells_are_counted() {
         let temp = TempSpace::new(None, None).unwrap();
         let mut progress = |_, _, _| {};
         // Chunks of 10 triangles: 100 triangles make 10 runs.
-        let mut b = RunBuilder::new(&temp, 10 * (RECORD_BYTES + 12), &mut progress);
+        let mut b = RunBuilder::new(&temp, 20 * CHUNK_BYTES_PER_TRIANGLE, &mut progress);
         let cube = Cube::around([0.0; 3], [1.0; 3]);
         b.start(&cube, 100).unwrap();
         let mut keys = Vec::new();
         for i in 0..100u64 {
-            let key = (((i * 7919) % 97) << 40) | i;
-            keys.push(key);
+            // Repeated keys (i % 37), across runs and inside them.
+            let key = (((i % 37) * 7919) % 97) << 40;
+            keys.push((key, i));
             b.push(&SoupTriangle {
                 key,
+                // The input position, to check the order among equal keys.
+                corners: [super::super::soup::Corner {
+                    position: [i as f32, 0.0, 0.0],
+                    ..Default::default()
+                }; 3],
                 ..Default::default()
             })
             .unwrap();
         }
         let sorted = b.finish(1 << 16).unwrap();
-        assert_eq!(sorted.runs, 10);
+        assert_eq!(sorted.runs.len(), 10);
         assert_eq!(sorted.triangles, 100);
-        let bytes = std::fs::read(&sorted.path).unwrap();
-        let got: Vec<u64> = bytes
-            .chunks(RECORD_BYTES)
-            .map(|c| bytemuck::pod_read_unaligned::<SoupTriangle>(c).key)
-            .collect();
+        // By key, then by run (runs are consecutive inputs), then by position in the run.
         keys.sort_unstable();
-        assert_eq!(got, keys);
+        let bytes = std::fs::read(&sorted.keys).unwrap();
+        let got: Vec<u64> = bytes
+            .chunks(8)
+            .map(bytemuck::pod_read_unaligned::<u64>)
+            .collect();
+        assert_eq!(got, keys.iter().map(|k| k.0).collect::<Vec<_>>());
+        for first in [0, 1, 13, 50, 99, 100] {
+            let mut m = sorted.merge_from(first, 1 << 12).unwrap();
+            let mut got = Vec::new();
+            m.take(100 - first, &mut |t| {
+                got.push((t.key, t.corners[0].position[0] as u64))
+            })
+            .unwrap();
+            assert_eq!(got, keys[first as usize..], "from {first}");
+            assert!(m.take(1, &mut |_| {}).is_err());
+        }
         // Depth 0: one cell; at full depth, every distinct key.
         assert_eq!(sorted.occupied[0], 1);
-        assert_eq!(sorted.occupied[KEY_LEVELS as usize], 100);
         let at = |d: u32| {
             let mut p: Vec<u64> = keys
                 .iter()
-                .map(|&k| super::super::soup::key_prefix(k, d))
+                .map(|&(k, _)| super::super::soup::key_prefix(k, d))
                 .collect();
             p.dedup();
             p.len() as u64
         };
+        assert_eq!(sorted.occupied[KEY_LEVELS as usize], at(KEY_LEVELS));
         for d in 0..=KEY_LEVELS {
             assert_eq!(sorted.occupied[d as usize], at(d), "depth {d}");
         }
-        // Only the sorted file is left.
-        assert_eq!(std::fs::read_dir(temp.path()).unwrap().count(), 1);
+        // Records and keys of every run, and the merged keys.
+        assert_eq!(std::fs::read_dir(temp.path()).unwrap().count(), 21);
+    }
+
+    #[test]
+    fn a_writer_error_comes_back_and_nothing_is_left_writing() {
+        let parent = tempfile::tempdir().unwrap();
+        let temp = TempSpace::new(Some(parent.path()), Some(50 * RECORD_BYTES as u64)).unwrap();
+        let mut progress = |_, _, _| {};
+        let mut b = RunBuilder::new(&temp, 20 * CHUNK_BYTES_PER_TRIANGLE, &mut progress);
+        b.start(&Cube::around([0.0; 3], [1.0; 3]), 0).unwrap();
+        let mut result = Ok(());
+        for _ in 0..200 {
+            result = b.push(&SoupTriangle::default());
+            if result.is_err() {
+                break;
+            }
+        }
+        let e = result.err().or_else(|| b.finish(1 << 16).err()).unwrap();
+        assert!(e.to_string().contains("temporary space full"), "{e}");
+        drop(temp);
+        assert_eq!(std::fs::read_dir(parent.path()).unwrap().count(), 0);
     }
 }

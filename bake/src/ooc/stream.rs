@@ -44,8 +44,14 @@ pub trait SoupSink {
     /// Called once, before the first triangle: the input's bounding cube and its triangle
     /// count as far as the header tells (0 when unknown).
     fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError>;
+    /// Room for one more triangle, which the caller fills in completely (its key too):
+    /// readers build triangles in place, with no copy of the record on the way.
+    fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
     /// One triangle (its key already set).
-    fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError>;
+    fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
+        *self.slot()? = *t;
+        Ok(())
+    }
 }
 
 /// What a reader found besides the triangles.
@@ -87,47 +93,67 @@ pub fn stream_file(
     }
 }
 
-/// A direct-mapped cache of fixed-size records in a file.
+/// Records per block of a [`BlockCache`].
+const BLOCK_LEN: u64 = 1024;
+
+/// A direct-mapped cache of fixed-size records in a file: blocks of [`BLOCK_LEN`] records in a
+/// power-of-two number of slots (so a look-up is shifts and masks, no division).
 pub struct BlockCache<T: Pod> {
     file: File,
     count: u64,
-    block_len: u64,
+    mask: u64,
     tags: Vec<u64>,
     data: Vec<T>,
 }
 
 impl<T: Pod> BlockCache<T> {
-    /// A cache of about `bytes` over `count` records in `file`.
+    /// A cache of at most about `bytes` (at least two blocks) over `count` records in `file`.
     pub fn new(file: File, count: u64, bytes: usize) -> Self {
         let size = std::mem::size_of::<T>().max(1);
-        let block_len: u64 = 1024;
-        let slots = (bytes / (size * block_len as usize)).max(2);
-        let blocks = count.div_ceil(block_len) as usize;
-        let slots = slots.min(blocks.max(1));
+        let fit = (bytes / (size * BLOCK_LEN as usize)).max(2);
+        let blocks = count.div_ceil(BLOCK_LEN).max(1) as usize;
+        // The largest power of two that fits the budget, no larger than needed.
+        let slots =
+            (1usize << (usize::BITS - 1 - fit.leading_zeros())).min(blocks.next_power_of_two());
         Self {
             file,
             count,
-            block_len,
+            mask: slots as u64 - 1,
             tags: vec![u64::MAX; slots],
-            data: vec![T::zeroed(); slots * block_len as usize],
+            data: vec![T::zeroed(); slots * BLOCK_LEN as usize],
         }
     }
 
     /// Record `i` (below the count).
+    #[inline]
     pub fn get(&mut self, i: u64) -> io::Result<T> {
-        let block = i / self.block_len;
-        let slot = (block % self.tags.len() as u64) as usize;
-        let bl = self.block_len as usize;
+        self.get_ref(i).copied()
+    }
+
+    /// Record `i` (below the count), by reference: a record copied straight to where it goes
+    /// is not moved through a `Result` on the stack.
+    #[inline]
+    pub fn get_ref(&mut self, i: u64) -> io::Result<&T> {
+        let block = i / BLOCK_LEN;
+        let slot = (block & self.mask) as usize;
+        let bl = BLOCK_LEN as usize;
         if self.tags[slot] != block {
-            let start = block * self.block_len;
-            let n = (self.count - start).min(self.block_len) as usize;
-            let dst = &mut self.data[slot * bl..slot * bl + n];
-            let size = std::mem::size_of::<T>() as u64;
-            self.file
-                .read_exact_at(bytemuck::cast_slice_mut(dst), start * size)?;
-            self.tags[slot] = block;
+            self.load(block, slot)?;
         }
-        Ok(self.data[slot * bl + (i % self.block_len) as usize])
+        Ok(&self.data[slot * bl + (i % BLOCK_LEN) as usize])
+    }
+
+    #[cold]
+    fn load(&mut self, block: u64, slot: usize) -> io::Result<()> {
+        let bl = BLOCK_LEN as usize;
+        let start = block * BLOCK_LEN;
+        let n = (self.count - start).min(BLOCK_LEN) as usize;
+        let dst = &mut self.data[slot * bl..slot * bl + n];
+        let size = std::mem::size_of::<T>() as u64;
+        self.file
+            .read_exact_at(bytemuck::cast_slice_mut(dst), start * size)?;
+        self.tags[slot] = block;
+        Ok(())
     }
 }
 
@@ -178,6 +204,34 @@ impl Scalar {
             _ => 255.0,
         }
     }
+    fn is_int(self) -> bool {
+        !matches!(self, Self::F32 | Self::F64)
+    }
+    /// An integer type's value (a float type's, truncated).
+    #[inline]
+    fn decode_int(self, b: &[u8], big: bool) -> i64 {
+        macro_rules! get {
+            ($t:ty, $n:expr) => {{
+                let mut a = [0u8; $n];
+                a.copy_from_slice(&b[..$n]);
+                if big {
+                    i64::from(<$t>::from_be_bytes(a))
+                } else {
+                    i64::from(<$t>::from_le_bytes(a))
+                }
+            }};
+        }
+        match self {
+            Self::I8 => i64::from(b[0] as i8),
+            Self::U8 => i64::from(b[0]),
+            Self::I16 => get!(i16, 2),
+            Self::U16 => get!(u16, 2),
+            Self::I32 => get!(i32, 4),
+            Self::U32 => get!(u32, 4),
+            Self::F32 | Self::F64 => self.decode(b, big) as i64,
+        }
+    }
+    #[inline]
     fn decode(self, b: &[u8], big: bool) -> f64 {
         macro_rules! get {
             ($t:ty, $n:expr) => {{
@@ -340,6 +394,26 @@ fn read_exact(r: &mut impl Read, buf: &mut Vec<u8>, n: usize) -> Result<(), Stri
             e.to_string()
         }
     })
+}
+
+/// Calls `f` on the next `n` bytes of `r`: straight from its buffer when they are there (the
+/// common case: no copy, no call through `Read`), through `scratch` when they straddle a
+/// refill.
+#[inline]
+fn with_bytes<T>(
+    r: &mut BufReader<File>,
+    scratch: &mut Vec<u8>,
+    n: usize,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T, String> {
+    let buf = r.buffer();
+    if buf.len() >= n {
+        let v = f(&buf[..n]);
+        r.consume(n);
+        return Ok(v);
+    }
+    read_exact(r, scratch, n)?;
+    Ok(f(&scratch[..n]))
 }
 
 fn ply(
@@ -523,12 +597,13 @@ fn ply(
         v = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
         match &fixed {
             Some((stride, fields)) => {
-                read_exact(&mut r, &mut record, *stride)
-                    .map_err(|m| bad(&format!("vertex {i}"), m))?;
-                for &(offset, ty, s, scale) in fields {
-                    let x = ty.decode(&record[offset..], big);
-                    v[s] = if s >= 8 { x / scale } else { x };
-                }
+                with_bytes(&mut r, &mut record, *stride, |b| {
+                    for &(offset, ty, s, scale) in fields {
+                        let x = ty.decode(&b[offset..], big);
+                        v[s] = if s >= 8 { x / scale } else { x };
+                    }
+                })
+                .map_err(|m| bad(&format!("vertex {i}"), m))?;
             }
             None => items
                 .read(&mut r, &elements[vi], &mut |p, x, _| {
@@ -582,45 +657,85 @@ fn ply(
         vertices: vcount,
         ..Default::default()
     };
-    let mut idx: Vec<f64> = Vec::new();
+    // Binary faces whose only property is an integer index list (the usual layout): counts
+    // and indices decoded as integers straight from the read buffer.
+    let int_list = match (format, elements[fi].properties.as_slice()) {
+        (
+            Format::Binary { big },
+            [Property {
+                list: Some(ct), ty, ..
+            }],
+        ) if ct.is_int() && ty.is_int() => Some((big, *ct, *ty)),
+        _ => None,
+    };
+    let mut raw: Vec<i64> = Vec::new();
+    let mut idx: Vec<u64> = Vec::new();
     for f in 0..elements[fi].count {
         let at = || format!("face {f}");
-        items
-            .read(&mut r, &elements[fi], &mut |p, _, list| {
-                if p == face_list {
-                    idx.clear();
-                    idx.extend_from_slice(list);
+        raw.clear();
+        match int_list {
+            Some((big, ct, ty)) => {
+                let n = with_bytes(&mut r, &mut record, ct.size(), |b| ct.decode_int(b, big))
+                    .map_err(|m| bad(&at(), m))?;
+                if !(0..=1_000_000).contains(&n) {
+                    let list = &elements[fi].properties[0].name;
+                    return Err(bad(&at(), format!("list '{list}' has {n} entries")));
                 }
-            })
-            .map_err(|m| bad(&at(), m))?;
-        if idx.len() < 3 {
+                let s = ty.size();
+                with_bytes(&mut r, &mut record, n as usize * s, |b| {
+                    raw.extend(b.chunks_exact(s).map(|c| ty.decode_int(c, big)));
+                })
+                .map_err(|m| bad(&at(), m))?;
+            }
+            None => {
+                let mut fraction = None;
+                items
+                    .read(&mut r, &elements[fi], &mut |p, _, list| {
+                        if p == face_list {
+                            for &i in list {
+                                if i.fract() != 0.0 || !i.is_finite() {
+                                    fraction = Some(i);
+                                }
+                                raw.push(i as i64);
+                            }
+                        }
+                    })
+                    .map_err(|m| bad(&at(), m))?;
+                if let (Some(i), 3..) = (fraction, raw.len()) {
+                    return Err(bad(
+                        &at(),
+                        format!("vertex index {i} out of range ({vcount} vertices)"),
+                    ));
+                }
+            }
+        }
+        if raw.len() < 3 {
             report.skipped_faces += 1;
             continue;
         }
-        let mut corners = [Corner::default(); 3];
-        let mut get = |k: usize| -> Result<Corner, OocError> {
-            let i = idx[k];
-            if !(i >= 0.0 && i < vcount as f64) || i.fract() != 0.0 {
+        idx.clear();
+        for &i in &raw {
+            if i < 0 || i as u64 >= vcount {
                 return Err(bad(
                     &at(),
                     format!("vertex index {i} out of range ({vcount} vertices)"),
                 ));
             }
-            cache
-                .get(i as u64)
-                .map_err(|e| OocError::temp("reading the vertex file", e))
-        };
-        corners[0] = get(0)?;
+            idx.push(i as u64);
+        }
+        let terr = |e| OocError::temp("reading the vertex file", e);
         for k in 1..idx.len() - 1 {
-            corners[1] = get(k)?;
-            corners[2] = get(k + 1)?;
-            let t = SoupTriangle {
-                key: cube.key(&corners.map(|c| c.position)),
-                surface: 0,
-                flags,
-                corners,
-            };
-            sink.push(&t)?;
+            let t = sink.slot()?;
+            t.surface = 0;
+            t.flags = flags;
+            t.corners[0] = *cache.get_ref(idx[0]).map_err(terr)?;
+            t.corners[1] = *cache.get_ref(idx[k]).map_err(terr)?;
+            t.corners[2] = *cache.get_ref(idx[k + 1]).map_err(terr)?;
+            t.key = cube.key(&[
+                t.corners[0].position,
+                t.corners[1].position,
+                t.corners[2].position,
+            ]);
             report.triangles += 1;
         }
     }

@@ -12,12 +12,13 @@ use std::cell::Cell;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 /// A private temporary directory with a byte quota.
 pub struct TempSpace {
     dir: tempfile::TempDir,
-    used: Rc<Cell<u64>>,
+    used: Arc<AtomicU64>,
     quota: u64,
     next: Cell<u32>,
 }
@@ -33,7 +34,7 @@ impl TempSpace {
         };
         Ok(Self {
             dir,
-            used: Rc::new(Cell::new(0)),
+            used: Arc::new(AtomicU64::new(0)),
             quota: quota.unwrap_or(u64::MAX),
             next: Cell::new(0),
         })
@@ -46,7 +47,7 @@ impl TempSpace {
 
     /// Bytes written so far (files removed early still count).
     pub fn used(&self) -> u64 {
-        self.used.get()
+        self.used.load(Ordering::Relaxed)
     }
 
     /// A new file named after `what` with a sequence number, open for writing through a
@@ -65,11 +66,12 @@ impl TempSpace {
     }
 }
 
-/// A temporary file being written, counted against its space's quota.
+/// A temporary file being written, counted against its space's quota. It may be handed to
+/// another thread (the sort writes its runs from one).
 pub struct SpillWriter {
     inner: BufWriter<File>,
     path: PathBuf,
-    used: Rc<Cell<u64>>,
+    used: Arc<AtomicU64>,
     quota: u64,
 }
 
@@ -88,7 +90,7 @@ impl SpillWriter {
 
 impl Write for SpillWriter {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        let used = self.used.get() + buf.len() as u64;
+        let used = self.used.load(Ordering::Relaxed) + buf.len() as u64;
         if used > self.quota {
             return Err(io::Error::new(
                 io::ErrorKind::StorageFull,
@@ -96,7 +98,7 @@ impl Write for SpillWriter {
             ));
         }
         let n = self.inner.write(buf)?;
-        self.used.set(self.used.get() + n as u64);
+        self.used.fetch_add(n as u64, Ordering::Relaxed);
         Ok(n)
     }
 
