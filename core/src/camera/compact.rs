@@ -43,10 +43,10 @@ impl Front<'_> {
         // 2. Sort the active records by node id (free records, tagged with the top bit, sort
         //    last and are dropped) and the pairs by their owner.
         let len = self.active_len as usize;
-        self.active[..len].sort_unstable();
+        self.active[..len].sort_unstable_by_key(|a| a.node);
         self.active_len = self.active[..len]
             .iter()
-            .take_while(|&&a| a & FREE == 0)
+            .take_while(|a| a.node & FREE == 0)
             .count() as u32;
         self.free_head = NONE;
         self.sort_pairs();
@@ -65,7 +65,7 @@ impl Front<'_> {
                     NONE
                 } else {
                     records
-                        .binary_search(&s.corners[k])
+                        .binary_search_by_key(&s.corners[k], |a| a.node)
                         .map_or(NONE, |r| r as u32)
                 };
             }

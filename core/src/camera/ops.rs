@@ -10,7 +10,7 @@
 //! so a hierarchy that passed validation but has contradictory connectivity produces
 //! [`OpError::Inconsistent`], never a panic or an endless loop.
 
-use super::{CameraState, Front, PolySlot, FREE, NONE};
+use super::{ActiveVertex, CameraState, Front, PolySlot, FREE, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId};
 
@@ -182,16 +182,27 @@ impl Front<'_> {
         let fla = self.slots.get(fl as usize)?;
         let fra = self.slots.get(fl as usize + 1)?;
         let n = &s.neighbours;
-        let slots = [
-            self.want(h, n[0])?,
-            self.want(h, n[1])?,
-            self.want(h, n[2])?,
-            self.want(h, n[3])?,
-        ];
-        let left = fla.neighbours[1] == slots[0] && fla.neighbours[0] == slots[1];
-        let right =
-            s.f_r.is_none() || (fra.neighbours[2] == slots[2] && fra.neighbours[0] == slots[3]);
-        (left && right).then_some(slots)
+        // Refinement asks this of every stationary child whose parent could collapse, and
+        // most are refused because a neighbour is finer than the split left it: each link is
+        // compared as soon as its neighbour's slot is known, so a refusal stops early.
+        let mut slots = [NONE; 4];
+        slots[0] = self.want(h, n[0])?;
+        if fla.neighbours[1] != slots[0] {
+            return None;
+        }
+        slots[1] = self.want(h, n[1])?;
+        if fla.neighbours[0] != slots[1] {
+            return None;
+        }
+        slots[2] = self.want(h, n[2])?;
+        if s.f_r.is_some() && fra.neighbours[2] != slots[2] {
+            return None;
+        }
+        slots[3] = self.want(h, n[3])?;
+        if s.f_r.is_some() && fra.neighbours[0] != slots[3] {
+            return None;
+        }
+        Some(slots)
     }
 
     pub fn can_collapse(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
@@ -220,8 +231,8 @@ impl Front<'_> {
             .find(|&k| self.node_of(clw_slot.corners[k]) == Some(v))
             .ok_or(bad)?;
         let rv = clw_slot.corners[j0];
-        let ru = self.alloc_record(s.floating).ok_or(bad)?;
-        self.active[rv as usize] = s.stationary.0;
+        let ru = self.alloc_record(h, s.floating).ok_or(bad)?;
+        *self.active.get_mut(rv as usize).ok_or(bad)? = ActiveVertex::of(h, s.stationary);
         let k = self.pairs;
         let fl = self.base + 2 * k;
         let fr = fl + 1;
@@ -342,7 +353,7 @@ impl Front<'_> {
                 return Err(bad);
             }
         }
-        *self.active.get_mut(rv as usize).ok_or(bad)? = v.0;
+        *self.active.get_mut(rv as usize).ok_or(bad)? = ActiveVertex::of(h, v);
         self.free_record(ru);
         self.pair_of[v.index()] = NONE;
         self.active_nodes = self.active_nodes.saturating_sub(1);
@@ -401,10 +412,10 @@ impl Front<'_> {
         Ok(())
     }
 
-    fn alloc_record(&mut self, node: NodeId) -> Option<u32> {
+    fn alloc_record(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Option<u32> {
         let r = if self.free_head != NONE {
             let r = self.free_head;
-            let link = *self.active.get(r as usize)? & !FREE;
+            let link = self.active.get(r as usize)?.node & !FREE;
             self.free_head = if link == FREE - 1 { NONE } else { link };
             r
         } else {
@@ -415,7 +426,7 @@ impl Front<'_> {
             self.active_len += 1;
             r
         };
-        self.active[r as usize] = node.0;
+        self.active[r as usize] = ActiveVertex::of(h, node);
         Some(r)
     }
 
@@ -427,7 +438,10 @@ impl Front<'_> {
             self.free_head
         };
         if let Some(a) = self.active.get_mut(r as usize) {
-            *a = FREE | link;
+            *a = ActiveVertex {
+                node: FREE | link,
+                coarsen: NONE,
+            };
             self.free_head = r;
         }
     }

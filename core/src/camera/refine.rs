@@ -136,15 +136,14 @@ impl CameraState<'_> {
         );
         let mut st = RefineStats::default();
         let f = &mut self.front;
-        let nodes = h.nodes();
         let mut i = 0usize;
         while i < f.active_len as usize && st.operations() < max_ops {
             let a = f.active[i];
-            if a & FREE != 0 {
+            if a.node & FREE != 0 {
                 i += 1;
                 continue;
             }
-            let v = NodeId(a);
+            let v = NodeId(a.node);
             st.nodes_visited += 1;
             if let Some(b) = h.split_bounds(v) {
                 if c.wants_split(b) {
@@ -178,16 +177,12 @@ impl CameraState<'_> {
                     continue;
                 }
             }
-            // Coarsen: v is a stationary child (it shares its parent's position) whose parent
-            // no longer wants its split. Only node records and the parent's bounds are read
-            // unless the collapse is wanted.
-            let Some(node) = nodes.get(v.index()) else {
-                i += 1;
-                continue;
-            };
-            let parent = node.parent;
-            if let (Some(pn), Some(pb)) = (nodes.get(parent.index()), h.split_bounds(parent)) {
-                let wanted = pn.position == node.position && !c.wants_split(pb);
+            // Coarsen: v is a stationary child (it shares its parent's position, which its
+            // record says) whose parent no longer wants its split. Only the parent's bounds
+            // are read unless the collapse is wanted.
+            let parent = NodeId(a.coarsen);
+            if let Some(pb) = h.split_bounds(parent) {
+                let wanted = !c.wants_split(pb);
                 if let Some(slots) = wanted.then(|| f.collapse_slots(h, parent)).flatten() {
                     f.apply_collapse(h, parent, slots)?;
                     st.collapses += 1;
