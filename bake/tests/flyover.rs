@@ -1,7 +1,7 @@
 //! The fly-over experiment on a small generated terrain: every mode flies, reports the stable
 //! JSON keys, and per-camera state needs fewer operations than one shared state.
 
-use caveclod_bake::flyover::{fly, FlyoverOptions, Mode};
+use caveclod_bake::flyover::{fly, fly_interleaved, FlyoverOptions, Mode};
 use caveclod_tests::{bake, meshes};
 
 #[test]
@@ -67,4 +67,46 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         }
     )
     .is_err());
+}
+
+#[test]
+fn interleaved_flights_do_what_each_does_alone() {
+    let baked = bake(&meshes::terrain(64, 64, 3));
+    let h = baked.hierarchy();
+    let base = FlyoverOptions {
+        cameras: 2,
+        frames: 25,
+        tolerance: 2.0,
+        ..FlyoverOptions::default()
+    };
+    let options = [
+        base,
+        FlyoverOptions {
+            mode: Mode::Threads,
+            ..base
+        },
+        FlyoverOptions {
+            cameras: 1,
+            first_route: 1,
+            ..base
+        },
+    ];
+    // Segments of 10 frames: 10, 10 and 5.
+    let together = fly_interleaved(&h, &options, 10).expect("interleaved");
+    assert_eq!(together.len(), options.len());
+    for (o, t) in options.iter().zip(&together) {
+        let alone = fly(&h, o).expect("alone");
+        assert_eq!(t.names, alone.names);
+        assert_eq!(t.flight.segment_walls.len(), 3);
+        for (a, b) in t.flight.records.iter().zip(&alone.flight.records) {
+            assert_eq!(a.ops, b.ops);
+            assert_eq!(a.active_polygons, b.active_polygons);
+            assert_eq!(a.indices, b.indices);
+        }
+    }
+    let shared = FlyoverOptions {
+        mode: Mode::Shared,
+        ..base
+    };
+    assert!(fly_interleaved(&h, &[base, shared], 10).is_err());
 }

@@ -130,8 +130,19 @@ pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>,
     (names, views)
 }
 
-/// Flies `options` over `h`.
-pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
+/// A flight's views and cameras, sized, before the measured flight.
+struct Prepared {
+    names: Vec<&'static str>,
+    views: Vec<Vec<View>>,
+    params: RefineParams,
+    config: CameraConfig,
+    sizing: Option<Flight>,
+    budget: Option<u32>,
+}
+
+/// Checks `options`, computes the views and, for budgeted per-camera states, flies the
+/// sizing flight.
+fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, String> {
     if !(1..=4).contains(&options.cameras) {
         return Err(format!("cameras must be 1 to 4, not {}", options.cameras));
     }
@@ -143,51 +154,104 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
         tolerance_px: options.tolerance,
         ..RefineParams::default()
     };
-    let threads = options.mode == Mode::Threads;
     let full_config = CameraConfig::full(h);
-    let mut sizing = None;
-    let (flight, budget) = if options.mode == Mode::Shared {
-        (fly_shared(h, &views, &params, options.compact_every)?, None)
-    } else if options.full_capacity {
-        let f = fly_per_camera(
-            h,
-            &views,
-            &params,
-            &full_config,
-            1,
-            true,
-            threads,
-            options.compact_every,
-        )?;
-        (f, None)
+    if options.mode == Mode::Shared || options.full_capacity {
+        return Ok(Prepared {
+            names,
+            views,
+            params,
+            config: full_config,
+            sizing: None,
+            budget: None,
+        });
+    }
+    let s = fly_per_camera(
+        h,
+        &views,
+        &params,
+        &full_config,
+        SIZING_STRIDE,
+        false,
+        options.mode == Mode::Threads,
+        options.compact_every,
+    )?;
+    let largest = summarise(&s.records).active_max;
+    let budget =
+        ((f64::from(largest) * BUDGET_HEADROOM).ceil() as u32).max(h.base_polygon_count() as u32);
+    Ok(Prepared {
+        names,
+        views,
+        params,
+        config: CameraConfig::with_polygon_budget(h, budget),
+        sizing: Some(s),
+        budget: Some(budget),
+    })
+}
+
+/// Flies `options` over `h`.
+pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
+    let p = prepare(h, options)?;
+    let flight = if options.mode == Mode::Shared {
+        fly_shared(h, &p.views, &p.params, options.compact_every)?
     } else {
-        let s = fly_per_camera(
+        fly_per_camera(
             h,
-            &views,
-            &params,
-            &full_config,
-            SIZING_STRIDE,
-            false,
-            threads,
-            options.compact_every,
-        )?;
-        let largest = summarise(&s.records).active_max;
-        let budget = ((f64::from(largest) * BUDGET_HEADROOM).ceil() as u32)
-            .max(h.base_polygon_count() as u32);
-        let config = CameraConfig::with_polygon_budget(h, budget);
-        let f = fly_per_camera(
-            h,
-            &views,
-            &params,
-            &config,
+            &p.views,
+            &p.params,
+            &p.config,
             1,
             true,
-            threads,
+            options.mode == Mode::Threads,
             options.compact_every,
-        )?;
-        sizing = Some(s);
-        (f, Some(budget))
+        )?
     };
+    Ok(finish(h, options, p, flight))
+}
+
+/// Flies every one of `options` (per-camera modes only) over `h` interleaved in segments of
+/// `segment` frames ([`fly::fly_interleaved`]), so that flights compared with each other are
+/// measured under the same load. Each is sized by its own sizing flight first, as [`fly`]
+/// sizes it.
+pub fn fly_interleaved(
+    h: &Hierarchy<'_>,
+    options: &[FlyoverOptions],
+    segment: usize,
+) -> Result<Vec<Flyover>, String> {
+    if options.iter().any(|o| o.mode == Mode::Shared) {
+        return Err("the shared state flies on its own (fly), not interleaved".into());
+    }
+    let prepared = options
+        .iter()
+        .map(|o| prepare(h, o))
+        .collect::<Result<Vec<_>, _>>()?;
+    let groups: Vec<fly::Group<'_>> = prepared
+        .iter()
+        .zip(options)
+        .map(|(p, o)| fly::Group {
+            views: &p.views,
+            config: p.config,
+            threads: o.mode == Mode::Threads,
+            params: p.params,
+            compact_every: o.compact_every,
+        })
+        .collect();
+    let flights = fly::fly_interleaved(h, &groups, segment)?;
+    Ok(prepared
+        .into_iter()
+        .zip(flights)
+        .zip(options)
+        .map(|((p, f), o)| finish(h, o, p, f))
+        .collect())
+}
+
+/// The report of a measured flight.
+fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: Prepared, flight: Flight) -> Flyover {
+    let Prepared {
+        names,
+        sizing,
+        budget,
+        ..
+    } = p;
     let summary = summarise(&flight.records);
     let full_bytes = match &sizing {
         Some(sz) => sz.camera_bytes,
@@ -208,7 +272,7 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
         u64::from(summary.max_active_nodes),
         u64::from(summary.active_max),
     );
-    Ok(Flyover {
+    Flyover {
         options: *options,
         names,
         flight,
@@ -219,7 +283,7 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
         memory_budgeted: MemoryReport::new(h, budget_bytes, na, pa),
         budget_polygons,
         vertex_table_fill: h.vertex_table_fill(),
-    })
+    }
 }
 
 fn mib(bytes: u64) -> f64 {
