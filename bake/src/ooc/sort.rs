@@ -1,11 +1,11 @@
 //! External merge sort of the soup by spatial key, in memory-bounded chunks, merged on demand.
 //!
 //! [`RunBuilder`] receives the soup from a reader: it fills a chunk, and when the chunk is full
-//! a writer thread sorts it by key (a sort of `(key, index)` pairs, then one gather, so the
-//! 96-byte records move once) and writes it as a sorted run, while the reader fills a second
-//! chunk: reading and sorting overlap on two cores. The two chunks together take the memory
-//! share the builder is given. Each run is written twice: its records, and its keys alone
-//! (8 bytes a triangle).
+//! a writer thread keys its triangles (the Morton code of the centroid), sorts them by key (a
+//! radix sort of `(key, index)` pairs, then one gather, so the 96-byte records move once) and
+//! writes them as a sorted run, while the reader fills a second chunk: reading and sorting
+//! overlap on two cores. The two chunks together take the memory share the builder is given.
+//! Each run is written twice: its records, and its keys alone (8 bytes a triangle).
 //!
 //! The runs are never merged into one sorted file of records. [`RunBuilder::finish`] merges
 //! only the keys (a twelfth of the bytes) into one sorted key file, counting on the way the
@@ -20,7 +20,10 @@
 //! clustering threads.
 //!
 //! The sorted order is by key, then by run, then by position in the run: the same wherever a
-//! merge starts, so the clustering sees the triangles in one order whatever the threads.
+//! merge starts, so the clustering sees the triangles in one order whatever the threads. The
+//! merges take a run's triangles in stretches, up to the next best run's head, touching the
+//! heap once per stretch: runs of an input read in a spatially coherent order interleave
+//! little.
 
 use std::cmp::Reverse;
 use std::collections::binary_heap::{BinaryHeap, PeekMut};
@@ -37,8 +40,9 @@ use super::stream::SoupSink;
 use super::temp::{SpillWriter, TempSpace};
 use super::OocError;
 
-/// Bytes of chunk a triangle takes: its record and its `(key, index)` sort pair.
-const CHUNK_BYTES_PER_TRIANGLE: usize = RECORD_BYTES + std::mem::size_of::<(u64, u32)>();
+/// Bytes of chunk a triangle takes: its record and its `(key, index)` sort pair, twice (the
+/// radix sort's scatter buffer).
+const CHUNK_BYTES_PER_TRIANGLE: usize = RECORD_BYTES + 2 * std::mem::size_of::<(u64, u32)>();
 
 /// One sorted run on disk.
 #[derive(Clone, Debug)]
@@ -134,10 +138,14 @@ impl<'a> RunBuilder<'a> {
         let keys = self.temp.create("run-keys", 1 << 16).map_err(terr)?;
         let chunk = std::mem::replace(&mut self.chunk, std::mem::take(&mut self.spare));
         let count = chunk.len() as u64;
+        let cube = self.cube.unwrap_or(Cube {
+            origin: [0.0; 3],
+            size: 1.0,
+        });
         let h = std::thread::Builder::new()
             .name("caveclod-sort".into())
             .spawn(move || {
-                write_run(&chunk, records, keys)
+                write_run(&chunk, &cube, records, keys)
                     .map(|(records, keys)| {
                         let run = Run {
                             records,
@@ -231,29 +239,77 @@ impl SoupSink for RunBuilder<'_> {
     }
 }
 
-/// Sorts a chunk by key and writes its records and its keys; returns their paths.
+/// Keys a chunk's triangles on `cube`, sorts them by key and writes their records and their
+/// keys; returns the two paths.
 fn write_run(
     chunk: &[SoupTriangle],
+    cube: &Cube,
     mut records: SpillWriter,
     mut keys: SpillWriter,
 ) -> io::Result<(PathBuf, PathBuf)> {
     let mut order: Vec<(u64, u32)> = chunk
         .iter()
         .enumerate()
-        .map(|(i, t)| (t.key, i as u32))
+        .map(|(i, t)| (cube.key(&t.corners.map(|c| c.position)), i as u32))
         .collect();
-    order.sort_unstable();
+    radix_sort(&mut order);
     let mut buf: Vec<SoupTriangle> = Vec::with_capacity(4096);
     let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
     for part in order.chunks(4096) {
         buf.clear();
-        buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
+        buf.extend(part.iter().map(|&(key, i)| SoupTriangle {
+            key,
+            ..chunk[i as usize]
+        }));
         records.write_all(bytemuck::cast_slice(&buf))?;
         kbuf.clear();
         kbuf.extend(part.iter().map(|&(k, _)| k));
         keys.write_all(bytemuck::cast_slice(&kbuf))?;
     }
     Ok((records.finish()?, keys.finish()?))
+}
+
+/// Bits of a radix-sort digit.
+const DIGIT_BITS: u32 = 11;
+
+/// Sorts `(key, index)` pairs with increasing indices by key (so by key, then index): a
+/// stable least-significant-digit radix sort on 11-bit digits, skipping the digits every key
+/// shares (the high digits of a run's keys, which come from one region of the input, mostly
+/// are). Six passes at most, linear time, against the `n log n` comparisons of a sort.
+fn radix_sort(v: &mut Vec<(u64, u32)>) {
+    let Some(&(first, _)) = v.first() else {
+        return;
+    };
+    const DIGITS: usize = 64usize.div_ceil(DIGIT_BITS as usize);
+    const RADIX: usize = 1 << DIGIT_BITS;
+    let mask = RADIX as u64 - 1;
+    let mut varying = 0u64;
+    let mut counts = vec![[0usize; RADIX]; DIGITS];
+    for &(k, _) in v.iter() {
+        varying |= k ^ first;
+        for (d, c) in counts.iter_mut().enumerate() {
+            c[((k >> (d as u32 * DIGIT_BITS)) & mask) as usize] += 1;
+        }
+    }
+    let mut other = vec![(0u64, 0u32); v.len()];
+    for (d, c) in counts.iter_mut().enumerate() {
+        let shift = d as u32 * DIGIT_BITS;
+        if (varying >> shift) & mask == 0 {
+            continue;
+        }
+        let mut at = 0;
+        for n in c.iter_mut() {
+            let here = *n;
+            *n = at;
+            at += here;
+        }
+        for &(k, i) in v.iter() {
+            let b = ((k >> shift) & mask) as usize;
+            other[c[b]] = (k, i);
+            c[b] += 1;
+        }
+        std::mem::swap(v, &mut other);
+    }
 }
 
 /// Counts the depths at which `key` starts a new cell after `prev`.
@@ -342,21 +398,36 @@ impl<T: Pod> Merge<T> {
         Self { cursors, heap, key }
     }
 
-    /// Calls `f` on the next `n` items in order.
-    fn take(&mut self, n: u64, f: &mut dyn FnMut(&T)) -> io::Result<()> {
-        for _ in 0..n {
+    /// Calls `f` on the next `n` items in order. The leading run gives everything it has
+    /// before the next best head in one go, without touching the heap: inputs read in a
+    /// spatially coherent order (scans, terrains, exported models) make long stretches.
+    fn take(&mut self, n: u64, mut f: impl FnMut(&T)) -> io::Result<()> {
+        let mut left = n;
+        while left > 0 {
+            // The next best head: the smaller child of the heap's root.
+            let bound = match self.heap.as_slice() {
+                [_, b] => Some(b.0),
+                [_, b, c, ..] => Some(b.0.min(c.0)),
+                _ => None,
+            };
             let Some(mut top) = self.heap.peek_mut() else {
                 return Err(io::Error::other("the sorted runs end early"));
             };
             let i = top.0 .1;
             let c = &mut self.cursors[i as usize];
-            f(&c.block[c.at]);
-            c.advance()?;
-            match c.head() {
-                // Sifts down when `top` drops: one or two comparisons while one run leads.
-                Some(t) => top.0 = ((self.key)(t), i),
-                None => {
+            loop {
+                f(&c.block[c.at]);
+                left -= 1;
+                c.advance()?;
+                let Some(t) = c.head() else {
                     PeekMut::pop(top);
+                    break;
+                };
+                let k = (self.key)(t);
+                if left == 0 || bound.is_some_and(|b| (k, i) > b) {
+                    // Sifts down when `top` drops.
+                    top.0 = (k, i);
+                    break;
                 }
             }
         }
@@ -478,7 +549,7 @@ fn merge_keys(
         let n = (total - done).min(1 << 16);
         out.clear();
         merge
-            .take(n, &mut |&k| {
+            .take(n, |&k| {
                 count_new_cells(&mut occupied, prev, k);
                 prev = Some(k);
                 out.push(k);
@@ -506,16 +577,18 @@ mod tests {
         b.start(&cube, 100).unwrap();
         let mut keys = Vec::new();
         for i in 0..100u64 {
-            // Repeated keys (i % 37), across runs and inside them.
-            let key = (((i % 37) * 7919) % 97) << 40;
-            keys.push((key, i));
-            b.push(&SoupTriangle {
-                key,
+            // Repeated positions (so keys: i % 37), across runs and inside them.
+            let j = (i % 37) as f32;
+            let position = [(j * 0.618).fract(), (j * 0.37).fract(), j / 37.0];
+            let corner = super::super::soup::Corner {
+                position,
                 // The input position, to check the order among equal keys.
-                corners: [super::super::soup::Corner {
-                    position: [i as f32, 0.0, 0.0],
-                    ..Default::default()
-                }; 3],
+                uv: [i as f32, 0.0],
+                ..Default::default()
+            };
+            keys.push((cube.key(&[position; 3]), i));
+            b.push(&SoupTriangle {
+                corners: [corner; 3],
                 ..Default::default()
             })
             .unwrap();
@@ -535,7 +608,7 @@ mod tests {
             let mut m = sorted.merge_from(first, 1 << 12).unwrap();
             let mut got = Vec::new();
             m.take(100 - first, &mut |t| {
-                got.push((t.key, t.corners[0].position[0] as u64))
+                got.push((t.key, t.corners[0].uv[0] as u64))
             })
             .unwrap();
             assert_eq!(got, keys[first as usize..], "from {first}");
@@ -557,6 +630,33 @@ mod tests {
         }
         // Records and keys of every run, and the merged keys.
         assert_eq!(std::fs::read_dir(temp.path()).unwrap().count(), 21);
+    }
+
+    #[test]
+    fn radix_sort_orders_by_key_then_index() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut v: Vec<(u64, u32)> = (0..5000u32)
+            .map(|i| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1);
+                // High bits shared, a few distinct values repeated, and the full range.
+                let k = match i % 3 {
+                    0 => (7 << 50) | (state >> 40),
+                    1 => (7 << 50) | (state >> 61),
+                    _ => state,
+                };
+                (k, i)
+            })
+            .collect();
+        let mut want = v.clone();
+        want.sort_unstable();
+        radix_sort(&mut v);
+        assert_eq!(v, want);
+        let mut same = vec![(5u64, 0u32), (5, 1), (5, 2)];
+        radix_sort(&mut same);
+        assert_eq!(same, [(5, 0), (5, 1), (5, 2)]);
+        radix_sort(&mut Vec::new());
     }
 
     #[test]

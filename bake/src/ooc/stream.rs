@@ -44,10 +44,11 @@ pub trait SoupSink {
     /// Called once, before the first triangle: the input's bounding cube and its triangle
     /// count as far as the header tells (0 when unknown).
     fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError>;
-    /// Room for one more triangle, which the caller fills in completely (its key too):
-    /// readers build triangles in place, with no copy of the record on the way.
+    /// Room for one more triangle, which the caller fills in but for its key: the sink keys
+    /// triangles itself, on the cube given to [`SoupSink::start`] (the sort does it on its
+    /// own thread). Readers build triangles in place, with no copy of the record on the way.
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
-    /// One triangle (its key already set).
+    /// One triangle (its key is the sink's to set).
     fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
         *self.slot()? = *t;
         Ok(())
@@ -731,11 +732,6 @@ fn ply(
             t.corners[0] = *cache.get_ref(idx[0]).map_err(terr)?;
             t.corners[1] = *cache.get_ref(idx[k]).map_err(terr)?;
             t.corners[2] = *cache.get_ref(idx[k + 1]).map_err(terr)?;
-            t.key = cube.key(&[
-                t.corners[0].position,
-                t.corners[1].position,
-                t.corners[2].position,
-            ]);
             report.triangles += 1;
         }
     }
@@ -943,7 +939,7 @@ fn obj(
                 let tri = [corners[0], corners[k], corners[k + 1]];
                 let flags = tri[0].1 & tri[1].1 & tri[2].1 | color;
                 let t = SoupTriangle {
-                    key: cube.key(&tri.map(|c| c.0.position)),
+                    key: 0,
                     surface: sid,
                     flags,
                     corners: tri.map(|c| c.0),
