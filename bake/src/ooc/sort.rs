@@ -1,9 +1,8 @@
 //! External merge sort of the soup by spatial key, in memory-bounded chunks, merged on demand.
 //!
 //! [`RunBuilder`] receives the soup from a reader: it fills a chunk, and when the chunk is full
-//! a writer thread keys its triangles (the Morton code of the centroid), sorts them by key (a
-//! radix sort of `(key, index)` pairs, then one gather, so the 96-byte records move once) and
-//! writes them as a sorted run, while the reader fills a second chunk: reading and sorting
+//! a writer thread sorts its triangles by key (a radix sort of `(key, index)` pairs, then one
+//! gather, so the 96-byte records move once) and writes them as a sorted run, while the reader fills a second chunk: reading and sorting
 //! overlap on two cores. The two chunks together take the memory share the builder is given.
 //! Each run is written twice: its records, and its keys alone (8 bytes a triangle).
 //!
@@ -134,18 +133,15 @@ impl<'a> RunBuilder<'a> {
         self.wait()?;
         let n = self.runs.len();
         let terr = |e| OocError::temp(&format!("writing sorted run {n}"), e);
-        let records = self.temp.create("run", 1 << 20).map_err(terr)?;
+        // A small buffer: the writer's blocks are larger, and go to the file without a copy.
+        let records = self.temp.create("run", 1 << 16).map_err(terr)?;
         let keys = self.temp.create("run-keys", 1 << 16).map_err(terr)?;
         let chunk = std::mem::replace(&mut self.chunk, std::mem::take(&mut self.spare));
         let count = chunk.len() as u64;
-        let cube = self.cube.unwrap_or(Cube {
-            origin: [0.0; 3],
-            size: 1.0,
-        });
         let h = std::thread::Builder::new()
             .name("caveclod-sort".into())
             .spawn(move || {
-                write_run(&chunk, &cube, records, keys)
+                write_run(&chunk, records, keys)
                     .map(|(records, keys)| {
                         let run = Run {
                             records,
@@ -239,28 +235,24 @@ impl SoupSink for RunBuilder<'_> {
     }
 }
 
-/// Keys a chunk's triangles on `cube`, sorts them by key and writes their records and their
-/// keys; returns the two paths.
+/// Sorts a chunk's triangles by key and writes their records and their keys; returns the two
+/// paths.
 fn write_run(
     chunk: &[SoupTriangle],
-    cube: &Cube,
     mut records: SpillWriter,
     mut keys: SpillWriter,
 ) -> io::Result<(PathBuf, PathBuf)> {
     let mut order: Vec<(u64, u32)> = chunk
         .iter()
         .enumerate()
-        .map(|(i, t)| (cube.key(&t.corners.map(|c| c.position)), i as u32))
+        .map(|(i, t)| (t.key, i as u32))
         .collect();
     radix_sort(&mut order);
     let mut buf: Vec<SoupTriangle> = Vec::with_capacity(4096);
     let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
     for part in order.chunks(4096) {
         buf.clear();
-        buf.extend(part.iter().map(|&(key, i)| SoupTriangle {
-            key,
-            ..chunk[i as usize]
-        }));
+        buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
         records.write_all(bytemuck::cast_slice(&buf))?;
         kbuf.clear();
         kbuf.extend(part.iter().map(|&(k, _)| k));
@@ -586,8 +578,10 @@ mod tests {
                 uv: [i as f32, 0.0],
                 ..Default::default()
             };
-            keys.push((cube.key(&[position; 3]), i));
+            let key = cube.key(&[position; 3]);
+            keys.push((key, i));
             b.push(&SoupTriangle {
+                key,
                 corners: [corner; 3],
                 ..Default::default()
             })

@@ -93,8 +93,38 @@ impl Cube {
 
     /// Morton key of the centroid of three points at [`KEY_LEVELS`].
     pub fn key(&self, p: &[[f32; 3]; 3]) -> u64 {
-        let c = [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0);
-        morton(self.cell(c, KEY_LEVELS))
+        self.keyer().key(p)
+    }
+
+    /// [`Cube::key`] with the scale worked out once, for keying many triangles.
+    pub fn keyer(&self) -> Keyer {
+        Keyer {
+            origin: self.origin,
+            scale: (1u64 << KEY_LEVELS) as f64 / self.size,
+        }
+    }
+}
+
+/// Keys triangles on a cube ([`Cube::keyer`]): the same keys as [`Cube::key`], without its
+/// division per call.
+#[derive(Clone, Copy, Debug)]
+pub struct Keyer {
+    origin: [f64; 3],
+    scale: f64,
+}
+
+impl Keyer {
+    /// Morton key of the centroid of three points at [`KEY_LEVELS`].
+    #[inline]
+    pub fn key(&self, p: &[[f32; 3]; 3]) -> u64 {
+        let top = (1u64 << KEY_LEVELS) - 1;
+        // As in `Cube::cell`: truncation is the floor for the non-negative values that matter.
+        let c = [0, 1, 2].map(|k| {
+            let c = (p[0][k] + p[1][k] + p[2][k]) / 3.0;
+            let t = (f64::from(c) - self.origin[k]) * self.scale;
+            (t.max(0.0) as u64).min(top) as u32
+        });
+        morton(c)
     }
 }
 

@@ -44,11 +44,10 @@ pub trait SoupSink {
     /// Called once, before the first triangle: the input's bounding cube and its triangle
     /// count as far as the header tells (0 when unknown).
     fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError>;
-    /// Room for one more triangle, which the caller fills in but for its key: the sink keys
-    /// triangles itself, on the cube given to [`SoupSink::start`] (the sort does it on its
-    /// own thread). Readers build triangles in place, with no copy of the record on the way.
+    /// Room for one more triangle, which the caller fills in completely (its key too):
+    /// readers build triangles in place, with no copy of the record on the way.
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
-    /// One triangle (its key is the sink's to set).
+    /// One triangle (its key already set).
     fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
         *self.slot()? = *t;
         Ok(())
@@ -643,6 +642,7 @@ fn ply(
         });
     }
     let cube = Cube::around(lo, hi);
+    let keyer = cube.keyer();
     sink.start(&cube, elements[fi].count)?;
     let vf = File::open(&vpath).map_err(|e| OocError::temp("reading the vertex file", e))?;
     let mut cache = BlockCache::<Corner>::new(vf, vcount, cache_bytes);
@@ -732,6 +732,7 @@ fn ply(
             t.corners[0] = *cache.get_ref(idx[0]).map_err(terr)?;
             t.corners[1] = *cache.get_ref(idx[k]).map_err(terr)?;
             t.corners[2] = *cache.get_ref(idx[k + 1]).map_err(terr)?;
+            t.key = keyer.key(&t.corners.map(|c| c.position));
             report.triangles += 1;
         }
     }
@@ -843,6 +844,7 @@ fn obj(
     let mut tc = BlockCache::<[f32; 2]>::new(rd(&tp)?, nt, cache_bytes / 4);
     let mut nc = BlockCache::<[i16; 2]>::new(rd(&npth)?, nn, cache_bytes / 4);
     let cube = Cube::around(lo, hi);
+    let keyer = cube.keyer();
     sink.start(&cube, faces_hint)?;
     let mut report = StreamReport {
         vertices: np,
@@ -939,7 +941,7 @@ fn obj(
                 let tri = [corners[0], corners[k], corners[k + 1]];
                 let flags = tri[0].1 & tri[1].1 & tri[2].1 | color;
                 let t = SoupTriangle {
-                    key: 0,
+                    key: keyer.key(&tri.map(|c| c.0.position)),
                     surface: sid,
                     flags,
                     corners: tri.map(|c| c.0),
