@@ -191,6 +191,17 @@ pub struct Flight {
     pub segment_walls: Vec<Duration>,
 }
 
+/// The order in which one thread takes its cameras in frame `n`: forwards in even frames,
+/// backwards in odd ones, so the last camera of a frame is the first of the next and finds
+/// its state and the records it reads still in the caches; the others wait for their turn
+/// as long as in a fixed order, on average. (With a front per camera larger than a quarter
+/// of the cache, a fixed order makes every camera start cold.) A renderer may order its
+/// cameras freely within a frame.
+fn camera_order(n: usize, cameras: usize) -> impl Iterator<Item = usize> {
+    let backwards = n % 2 == 1;
+    (0..cameras).map(move |k| if backwards { cameras - 1 - k } else { k })
+}
+
 /// Whether a state compacts before its `n`-th refinement (every `every`, 0 = never).
 fn compact_now(n: usize, every: usize) -> bool {
     every > 0 && n % every == every - 1
@@ -269,10 +280,10 @@ pub fn fly_per_camera(
             .step_by(stride)
             .enumerate()
         {
-            for (c, cam) in cams.iter_mut().enumerate() {
+            for c in camera_order(n, cams.len()) {
                 frame(
                     h,
-                    cam,
+                    &mut cams[c],
                     &views[c][f],
                     params,
                     outs[c].as_mut(),
@@ -363,10 +374,10 @@ fn fly_segment(
     let (views, params, compact_every) = (group.views, &group.params, group.compact_every);
     if !group.threads {
         for f in frames {
-            for (c, cam) in g.cams.iter_mut().enumerate() {
+            for c in camera_order(f, g.cams.len()) {
                 frame(
                     h,
-                    cam,
+                    &mut g.cams[c],
                     &views[c][f],
                     params,
                     Some(&mut g.outs[c]),
