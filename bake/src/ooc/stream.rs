@@ -572,8 +572,11 @@ fn ply(
     // Vertices to fixed records.
     let vcount = elements[vi].count;
     let mut vfile = temp
-        .create("vertices", 1 << 20)
+        .create("vertices", 1 << 16)
         .map_err(|e| OocError::temp("creating the vertex file", e))?;
+    let verr = |e| OocError::temp("writing the vertex file", e);
+    // Records go to the file a block at a time (one write call, one quota check).
+    let mut block: Vec<Corner> = Vec::with_capacity(1 << 14);
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     let mut v = [0f64; 12];
     // Binary vertices without lists have a fixed stride: one read, decodes at offsets.
@@ -622,20 +625,21 @@ fn ply(
             hi[k] = hi[k].max(p[k]);
         }
         let c8 = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
-        let corner = Corner {
+        block.push(Corner {
             position: p,
             uv: [v[6] as f32, 1.0 - v[7] as f32],
             normal: encode_normal([v[3] as f32, v[4] as f32, v[5] as f32]),
             color: [c8(v[8]), c8(v[9]), c8(v[10]), c8(v[11])],
-        };
-        vfile
-            .write_all(bytemuck::bytes_of(&corner))
-            .map_err(|e| OocError::temp("writing the vertex file", e))?;
+        });
+        if block.len() == block.capacity() {
+            vfile.write_all(bytemuck::cast_slice(&block)).map_err(verr)?;
+            block.clear();
+        }
     }
     let _ = v;
-    let vpath = vfile
-        .finish()
-        .map_err(|e| OocError::temp("writing the vertex file", e))?;
+    vfile.write_all(bytemuck::cast_slice(&block)).map_err(verr)?;
+    drop(block);
+    let vpath = vfile.finish().map_err(verr)?;
     if vcount == 0 {
         return Err(OocError::Empty {
             file: name.to_string(),
