@@ -632,12 +632,16 @@ fn ply(
             color: [c8(v[8]), c8(v[9]), c8(v[10]), c8(v[11])],
         });
         if block.len() == block.capacity() {
-            vfile.write_all(bytemuck::cast_slice(&block)).map_err(verr)?;
+            vfile
+                .write_all(bytemuck::cast_slice(&block))
+                .map_err(verr)?;
             block.clear();
         }
     }
     let _ = v;
-    vfile.write_all(bytemuck::cast_slice(&block)).map_err(verr)?;
+    vfile
+        .write_all(bytemuck::cast_slice(&block))
+        .map_err(verr)?;
     drop(block);
     let vpath = vfile.finish().map_err(verr)?;
     if vcount == 0 {
