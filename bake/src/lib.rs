@@ -5,6 +5,7 @@
 //! hierarchy of half-edge collapses ([`hierarchy`], [`quadric`]), the `.clod` writer
 //! ([`baked`]), and the reports and exports of the `caveclod` command-line tool.
 
+pub mod aligned;
 pub mod baked;
 pub mod demo;
 pub mod export;

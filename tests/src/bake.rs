@@ -3,49 +3,13 @@
 //! The tests, examples and benchmarks of the runtime use exactly the hierarchies users get
 //! from `caveclod bake`: no second, test-only builder whose behaviour could drift from it.
 
+pub use caveclod_bake::aligned::AlignedBytes;
 use caveclod_bake::baked::Baked;
 use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;
 use caveclod_core::Hierarchy;
 
 use crate::meshes::TestMesh;
-
-/// Owned bytes in 8-byte aligned storage, so `Hierarchy::from_bytes` can cast in place.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct AlignedBytes {
-    words: Vec<u64>,
-    len: usize,
-}
-
-impl AlignedBytes {
-    /// `len` zero bytes.
-    pub fn zeroed(len: usize) -> Self {
-        Self {
-            words: vec![0; len.div_ceil(8)],
-            len,
-        }
-    }
-
-    /// A copy of `bytes`.
-    pub fn from_slice(bytes: &[u8]) -> Self {
-        let mut out = Self::zeroed(bytes.len());
-        out.copy_from_slice(bytes);
-        out
-    }
-}
-
-impl std::ops::Deref for AlignedBytes {
-    type Target = [u8];
-    fn deref(&self) -> &[u8] {
-        &bytemuck::cast_slice(&self.words)[..self.len]
-    }
-}
-
-impl std::ops::DerefMut for AlignedBytes {
-    fn deref_mut(&mut self) -> &mut [u8] {
-        &mut bytemuck::cast_slice_mut(&mut self.words)[..self.len]
-    }
-}
 
 /// A test mesh as an imported mesh: per-corner normal and UV streams (so seams stay seams),
 /// no colours, one surface per distinct surface id.

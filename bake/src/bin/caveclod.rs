@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use caveclod_bake::aligned::AlignedBytes;
 use caveclod_bake::baked::write_atomically;
 use caveclod_bake::demo::{self, DemoOptions};
 use caveclod_bake::export::{self, Level};
@@ -200,22 +201,15 @@ fn main() -> ExitCode {
 }
 
 /// Reads a .clod file into 8-byte aligned memory.
-fn read_clod(path: &Path) -> Result<Vec<u64>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut words = vec![0u64; bytes.len().div_ceil(8)];
-    bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
-    words.push(bytes.len() as u64);
-    Ok(words)
-}
-
 fn with_hierarchy<T>(
     path: &Path,
     f: impl FnOnce(&Hierarchy<'_>) -> Result<T, String>,
 ) -> Result<T, String> {
-    let mut words = read_clod(path)?;
-    let len = words.pop().unwrap_or(0) as usize;
-    let bytes = &bytemuck::cast_slice::<u64, u8>(&words)[..len];
-    let h = Hierarchy::from_bytes(bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    // Cache-line aligned: no record straddles two lines.
+    let file = AlignedBytes::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let h = file
+        .hierarchy()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     f(&h)
 }
 

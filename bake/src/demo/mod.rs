@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use caveclod_core::{checksum64, Hierarchy};
 
+use crate::aligned::AlignedBytes;
 use crate::baked::{write_atomically, Baked};
 use crate::flyover::{fly, fly_interleaved, Flyover, FlyoverOptions, Mode};
 use crate::import::ImportOptions;
@@ -49,16 +50,6 @@ impl Default for DemoOptions {
     }
 }
 
-/// 64 bytes on a 64-byte boundary: what a loaded file is kept in. The format starts every
-/// section on a multiple of 64 bytes, so in memory aligned like this no 32-byte record (the
-/// bounds a refinement pass reads for every active node, the split records) straddles two
-/// cache lines; in a buffer aligned only to 8 or 16 bytes half of them do, and refinement
-/// misses 13% more first-level and 20% more last-level lines (callgrind, the demo's flights
-/// at 60 frames, 2 MB last level).
-#[repr(C, align(64))]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CacheLine([u8; 64]);
-
 /// A baked input, loaded.
 pub struct Loaded {
     /// The input file.
@@ -69,16 +60,16 @@ pub struct Loaded {
     pub baked_now: bool,
     /// Bake time if baked now.
     pub bake_seconds: f64,
-    /// The file's bytes in cache lines.
-    lines: Vec<CacheLine>,
-    len: usize,
+    /// The file's bytes, cache-line aligned.
+    bytes: AlignedBytes,
 }
 
 impl Loaded {
     /// The hierarchy (validated again on each call; cheap next to a flight).
     pub fn hierarchy(&self) -> Result<Hierarchy<'_>, String> {
-        let bytes = &bytemuck::cast_slice::<CacheLine, u8>(&self.lines)[..self.len];
-        Hierarchy::from_bytes(bytes).map_err(|e| format!("{}: {e}", self.clod.display()))
+        self.bytes
+            .hierarchy()
+            .map_err(|e| format!("{}: {e}", self.clod.display()))
     }
 }
 
@@ -106,15 +97,12 @@ pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, S
             out
         }
     };
-    let mut lines = vec![CacheLine([0; 64]); file.len().div_ceil(64)];
-    bytemuck::cast_slice_mut::<CacheLine, u8>(&mut lines)[..file.len()].copy_from_slice(&file);
     let loaded = Loaded {
         input: input.to_path_buf(),
         clod,
         baked_now,
         bake_seconds: start.elapsed().as_secs_f64(),
-        lines,
-        len: file.len(),
+        bytes: AlignedBytes::from_slice(&file),
     };
     loaded.hierarchy()?;
     Ok(loaded)
