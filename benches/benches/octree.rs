@@ -17,31 +17,19 @@ use std::time::{Duration, Instant};
 
 use caveclod_bake::ooc::OocOptions;
 use caveclod_bake::{generate, pipeline};
+use caveclod_benches::low_pass_view;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, Hierarchy, Octree, OctreeCut, RefineParams, View};
 use criterion::{Criterion, Throughput};
 
 const TOLERANCE_PX: f32 = 1.0;
-const HEIGHT: f32 = 720.0;
 
 /// Frame `i` of `n` of a low pass along the diagonal, looking ahead and 15 degrees down.
 fn view_at(i: usize, n: usize, size: f32, top: f32) -> View {
     let u = i as f32 / n.max(1) as f32;
     let p = size * (0.1 + 0.8 * u);
     let eye = Vec3::new(p, top + 0.02 * size, p);
-    let forward = Vec3::new(1.0, 0.0, 1.0).normalize();
-    let pitch = 15f32.to_radians();
-    let dir = forward * pitch.cos() - Vec3::Y * pitch.sin();
-    View::perspective(
-        eye,
-        eye + dir,
-        Vec3::Y,
-        60f32.to_radians(),
-        16.0 / 9.0,
-        0.1,
-        3.0 * size,
-        HEIGHT,
-    )
+    low_pass_view(eye, Vec3::new(1.0, 0.0, 1.0).normalize(), 3.0 * size)
 }
 
 /// One hierarchy frame: refine and emit; returns the triangles drawn.

@@ -20,6 +20,7 @@
 use std::cell::Cell;
 use std::time::{Duration, Instant};
 
+use caveclod_benches::low_pass_view;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, Hierarchy, NodeId, RefineParams, RefineStats, View};
 use caveclod_tests::{bake, meshes};
@@ -58,18 +59,7 @@ fn view_at(u: f32, size: f32, ground: &Ground) -> View {
         floor = floor.max(ground.at(p + forward.x * d, p + forward.z * d));
     }
     let eye = Vec3::new(p, floor + 0.015 * size, p);
-    let pitch = 15f32.to_radians();
-    let dir = forward * pitch.cos() - Vec3::Y * pitch.sin();
-    View::perspective(
-        eye,
-        eye + dir,
-        Vec3::Y,
-        FOV_Y_DEG.to_radians(),
-        ASPECT,
-        0.1,
-        2.0 * size,
-        HEIGHT,
-    )
+    low_pass_view(eye, forward, 2.0 * size)
 }
 
 /// A view from far above the terrain's centre, where the base mesh is nearly enough.
