@@ -46,6 +46,7 @@ mod hierarchy;
 mod ids;
 mod memory;
 pub mod octree;
+mod outputs;
 mod records;
 mod view;
 

@@ -47,8 +47,9 @@
 //! diagonal (the triangles that collapse there are no longer drawn). A node's error is the
 //! largest error of the clusters its cells and its triangles use, raised to its children's so
 //! that it never grows down the tree. The tests check it against the distances of the input's
-//! vertices to each level's triangles; on the smooth generated terrain it is about a sixth of
-//! the vertex displacement bound inside the surface. Neighbouring nodes drawn at different
+//! vertices to each level's triangles; on the tests' bumpy field, at the finest level, the
+//! median node inside the field has a quarter of the error of the nodes on its border (about
+//! half a cell against two). Neighbouring nodes drawn at different
 //! levels do not share vertices: what the overlap leaves of a gap between them is bounded by
 //! the coarser node's error, which the run-time selection keeps under its pixel tolerance.
 //!

@@ -6,6 +6,7 @@
 use super::CameraState;
 use crate::hierarchy::Hierarchy;
 use crate::ids::PolyId;
+use crate::outputs::{check_lists, Shortfall};
 
 /// Why indices could not be emitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,22 +142,20 @@ impl CameraState<'_> {
             return Err(EmitError::WrongHierarchy);
         }
         let ns = h.surface_count();
-        if out.len() < ns || written.len() < ns {
-            return Err(EmitError::TooFewOutputs {
-                needed: ns,
-                given: out.len().min(written.len()),
-            });
-        }
-        for (s, o) in out.iter().enumerate().take(ns) {
-            let needed = self.index_count(s);
-            if o.len() < needed {
-                return Err(EmitError::OutputTooSmall {
-                    surface: s as u16,
-                    needed,
-                    given: o.len(),
-                });
+        check_lists(out, written, ns, |s| self.index_count(s)).map_err(|e| match e {
+            Shortfall::TooFewOutputs { needed, given } => {
+                EmitError::TooFewOutputs { needed, given }
             }
-        }
+            Shortfall::TooSmall {
+                surface,
+                needed,
+                given,
+            } => EmitError::OutputTooSmall {
+                surface: surface as u16,
+                needed,
+                given,
+            },
+        })?;
         written[..ns].fill(0);
         let mut total = 0;
         self.for_each_triangle(h, |s, tri| {

@@ -13,6 +13,7 @@
 use glam::Vec3;
 
 use super::model::{Octree, OctreeNode};
+use crate::outputs::{check_lists, Shortfall};
 use crate::view::View;
 
 /// Why a cut could not be made, selected or emitted.
@@ -308,22 +309,18 @@ impl<'m> OctreeCut<'m> {
             return Err(CutError::WrongOctree);
         }
         let ns = o.surface_count();
-        if out.len() < ns || written.len() < ns {
-            return Err(CutError::TooFewOutputs {
-                needed: ns,
-                given: out.len().min(written.len()),
-            });
-        }
-        for (s, list) in out.iter().enumerate().take(ns) {
-            let needed = self.index_count(s);
-            if list.len() < needed {
-                return Err(CutError::OutputTooSmall {
-                    surface: Some(s as u32),
-                    needed,
-                    given: list.len(),
-                });
-            }
-        }
+        check_lists(out, written, ns, |s| self.index_count(s)).map_err(|e| match e {
+            Shortfall::TooFewOutputs { needed, given } => CutError::TooFewOutputs { needed, given },
+            Shortfall::TooSmall {
+                surface,
+                needed,
+                given,
+            } => CutError::OutputTooSmall {
+                surface: Some(surface as u32),
+                needed,
+                given,
+            },
+        })?;
         written[..ns].fill(0);
         let mut total = 0;
         self.for_each_range(o, |s, src| {
