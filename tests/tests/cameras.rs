@@ -137,3 +137,111 @@ fn capacity_and_hierarchy_errors_are_typed() {
         Err(OpError::WrongHierarchy)
     );
 }
+
+/// Refinement remembers refused collapses until something they depend on changes; it must
+/// then do exactly what refinement that checks every wanted collapse every frame does. Two
+/// cameras fly the same views (closing in, pulling away and turning, so fronts coarsen as
+/// well as refine); one forgets its refusals before every pass. Their statistics and their
+/// fronts must agree frame by frame, while the first does skip checks.
+#[test]
+fn remembered_collapse_refusals_change_nothing() {
+    let baked = bake(&meshes::terrain(64, 64, 5));
+    let h = baked.hierarchy();
+    let mut mem_a = vec![0u32; CameraState::words_needed(&h)];
+    let mut mem_b = mem_a.clone();
+    let mut a = CameraState::new(&h, &mut mem_a).expect("sized");
+    let mut b = CameraState::new(&h, &mut mem_b).expect("sized");
+    let params = RefineParams {
+        tolerance_px: 0.5,
+        ..RefineParams::default()
+    };
+    let (mut remembered, mut refused) = (0u64, 0u64);
+    for f in 0..240 {
+        let t = f as f32 * 0.04;
+        let r = 8.0 + 30.0 * (0.5 + 0.5 * (t * 0.7).cos());
+        let eye = Vec3::new(32.0 + r * t.cos(), 3.0 + 0.2 * r, 32.0 + r * t.sin());
+        let target = Vec3::new(32.0 + 10.0 * (t * 1.3).sin(), 0.0, 32.0);
+        let v = View::perspective(eye, target, Vec3::Y, 1.0, 1.6, 0.1, 500.0, 720.0);
+        if f % 50 == 25 {
+            a.compact(&h);
+            b.compact(&h);
+        }
+        b.forget_refused_collapses();
+        let sa = a.refine(&h, &v, &params).expect("refine a");
+        let sb = b.refine(&h, &v, &params).expect("refine b");
+        assert_eq!(sb.refusals_remembered, 0, "frame {f}");
+        assert_eq!(
+            (sa.splits, sa.collapses, sa.active_nodes, sa.active_polygons),
+            (sb.splits, sb.collapses, sb.active_nodes, sb.active_polygons),
+            "frame {f}"
+        );
+        assert_eq!(
+            sa.collapses_refused + sa.refusals_remembered,
+            sb.collapses_refused,
+            "frame {f}: the same collapses are wanted and refused"
+        );
+        let mut na: Vec<_> = a.active_nodes().collect();
+        let mut nb: Vec<_> = b.active_nodes().collect();
+        na.sort_unstable();
+        nb.sort_unstable();
+        assert_eq!(na, nb, "frame {f}");
+        check_front(&h, &a).expect("front a");
+        remembered += u64::from(sa.refusals_remembered);
+        refused += u64::from(sb.collapses_refused);
+    }
+    assert!(
+        remembered > refused / 2,
+        "{remembered} of {refused} refusals remembered"
+    );
+}
+
+/// A camera that may hold 65,535 pairs or more keeps its split-to-pair map in 32-bit
+/// entries (below that, 16-bit); both must refine and coarsen alike.
+#[test]
+fn wide_and_narrow_pair_maps_refine_alike() {
+    let baked = bake(&meshes::terrain(258, 258, 3));
+    let h = baked.hierarchy();
+    let splits = h.splits().len() as u32;
+    assert!(
+        splits >= 65_535,
+        "{splits} splits: too few for a 32-bit map"
+    );
+    let wide = CameraConfig::full(&h);
+    let narrow = CameraConfig {
+        max_pairs: 65_534,
+        ..wide
+    };
+    let mut mem_w = vec![0u32; CameraState::words_needed_for(&h, &wide)];
+    let mut mem_n = vec![0u32; CameraState::words_needed_for(&h, &narrow)];
+    assert!(
+        mem_n.len() + (splits as usize) / 2 - 1 <= mem_w.len(),
+        "16-bit entries"
+    );
+    let mut w = CameraState::with_config(&h, &mut mem_w, &wide).expect("sized");
+    let mut n = CameraState::with_config(&h, &mut mem_n, &narrow).expect("sized");
+    let params = RefineParams::default();
+    for f in 0..12 {
+        let t = f as f32 * 0.3;
+        let eye = Vec3::new(
+            129.0 + 60.0 * t.cos(),
+            4.0 + 2.0 * f as f32,
+            129.0 + 60.0 * t.sin(),
+        );
+        let v = View::perspective(
+            eye,
+            Vec3::new(129.0, 0.0, 129.0),
+            Vec3::Y,
+            1.0,
+            1.6,
+            0.1,
+            900.0,
+            720.0,
+        );
+        let sw = w.refine(&h, &v, &params).expect("refine wide");
+        let sn = n.refine(&h, &v, &params).expect("refine narrow");
+        assert_eq!(sw, sn, "frame {f}");
+    }
+    assert!(w.split_count() > 1000, "{} splits applied", w.split_count());
+    check_front(&h, &w).expect("wide front");
+    check_front(&h, &n).expect("narrow front");
+}

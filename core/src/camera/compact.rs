@@ -50,10 +50,10 @@ impl Front<'_> {
             .count() as u32;
         self.free_head = NONE;
         self.sort_pairs();
+        self.refused.fill(0);
         for (k, owner) in self.owner[..self.pairs as usize].iter().enumerate() {
-            if let Some(p) = self.pair_of.get_mut(owner.index()) {
-                *p = k as u32;
-            }
+            // In range: validated owners, and k < max_pairs, which the map's width holds.
+            let _ = self.pair_of.set(owner.index(), k as u32);
         }
         // 3. Ids back into references.
         let records = &self.active[..self.active_len as usize];

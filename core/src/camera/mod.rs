@@ -9,11 +9,12 @@
 //!
 //! | array | length | what |
 //! |---|---|---|
-//! | `pair_of` | splittable nodes | the face pair a split node's split created, or `NONE` |
+//! | `pair_of` | splittable nodes (halved with 16-bit entries, when `max_pairs` < 65,535) | the face pair a split node's split created, or `NONE` |
 //! | `owner` | `max_pairs` | the node whose split created each live pair |
 //! | `active` | 2 × (roots + `max_pairs`) | the active node list: active-vertex records (node, coarsening parent) with a free list |
 //! | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
 //! | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
+//! | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
 //! | `stack` | `stack_len` | the explicit stack of forced splits |
 //!
 //! Design decisions:
@@ -35,6 +36,15 @@
 //!   from its own record, without reading the node records of the node and its parent on
 //!   every visit: those reads were a fifth of a pass's cache misses, and four cameras' worth
 //!   of them no longer fit the caches one camera's fit.
+//! - **A refused collapse is remembered until something it depends on changes.** Most
+//!   collapses that refinement wants are illegal (a neighbour is still finer than the split
+//!   left it, or the floating child is split), and asking again costs a chain of dependent
+//!   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
+//!   neighbours' polygons): on the St. Helens flyover, about ten refused checks per collapse
+//!   applied, every frame. Legality depends only on the pair's two slots (their links and
+//!   corners) and on the children being unsplit, so one bit per pair, set on a refusal, is
+//!   cleared by every write to either slot and by the collapse of either child; a set bit
+//!   answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every bit.
 //! - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 //!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 //!   memory gets a hard polygon budget for free.
@@ -42,6 +52,7 @@
 mod compact;
 mod emit;
 mod ops;
+mod pair_map;
 mod refine;
 
 pub use emit::EmitError;
@@ -52,6 +63,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId};
+use pair_map::PairMap;
 
 /// Absent link / empty entry.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -194,11 +206,13 @@ pub struct CameraState<'m> {
 pub(crate) struct Front<'m> {
     pub hierarchy: u64,
     pub base: u32,
-    pub pair_of: &'m mut [u32],
+    pub pair_of: PairMap<'m>,
     pub owner: &'m mut [NodeId],
     pub active: &'m mut [ActiveVertex],
     pub slots: &'m mut [PolySlot],
     pub surface_polygons: &'m mut [u32],
+    /// A bit per pair: its collapse was refused and neither slot nor child changed since.
+    pub refused: &'m mut [u32],
     pub pairs: u32,
     /// High-water mark of `active`.
     pub active_len: u32,
@@ -218,7 +232,7 @@ fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
         .saturating_add(mp.saturating_mul(2))
         .saturating_mul(SLOT_WORDS);
     [
-        ns,
+        PairMap::words(ns, mp),
         mp,
         h.roots()
             .len()
@@ -226,10 +240,16 @@ fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
             .saturating_mul(ACTIVE_WORDS),
         slots,
         h.surface_count(),
+        refused_words(mp),
         c.stack_len as usize,
     ]
     .iter()
     .fold(0usize, |a, &b| a.saturating_add(b))
+}
+
+/// Words of the refused-collapse bits for `max_pairs` pairs.
+fn refused_words(max_pairs: usize) -> usize {
+    max_pairs.div_ceil(32)
 }
 
 impl<'m> CameraState<'m> {
@@ -270,21 +290,23 @@ impl<'m> CameraState<'m> {
             });
         }
         let mp = config.max_pairs as usize;
-        let (pair_of, rest) = memory.split_at_mut(ns);
+        let (pair_of, rest) = memory.split_at_mut(PairMap::words(ns, mp));
         let (owner, rest) = rest.split_at_mut(mp);
         let (active, rest) = rest.split_at_mut(ACTIVE_WORDS * (h.roots().len() + mp));
         let (slots, rest) = rest.split_at_mut(SLOT_WORDS * (h.base_polygon_count() + 2 * mp));
         let (surface_polygons, rest) = rest.split_at_mut(h.surface_count());
+        let (refused, rest) = rest.split_at_mut(refused_words(mp));
         let (stack, _) = rest.split_at_mut(config.stack_len as usize);
         let mut cam = Self {
             front: Front {
                 hierarchy: h.checksum(),
                 base: h.base_polygon_count() as u32,
-                pair_of,
+                pair_of: PairMap::new(pair_of, ns, mp),
                 owner: bytemuck::cast_slice_mut(owner),
                 active: bytemuck::cast_slice_mut(active),
                 slots: bytemuck::cast_slice_mut(slots),
                 surface_polygons,
+                refused,
                 pairs: 0,
                 active_len: 0,
                 free_head: NONE,
@@ -301,10 +323,11 @@ impl<'m> CameraState<'m> {
     /// Back to the base mesh.
     pub fn reset(&mut self, h: &Hierarchy<'_>) {
         let f = &mut self.front;
-        f.pair_of.fill(NONE);
+        f.pair_of.clear();
         f.pairs = 0;
         f.free_head = NONE;
         f.surface_polygons.fill(0);
+        f.refused.fill(0);
         // Active-vertex record `i` of the base mesh is root `i`.
         for (i, r) in h.roots().iter().enumerate() {
             f.active[i] = ActiveVertex {
@@ -364,7 +387,8 @@ impl<'m> CameraState<'m> {
     /// Bytes this camera occupies: its words plus the struct itself.
     pub fn bytes(&self) -> usize {
         let f = &self.front;
-        4 * (f.pair_of.len() + f.owner.len() + f.surface_polygons.len() + self.stack.len())
+        f.pair_of.bytes()
+            + 4 * (f.owner.len() + f.surface_polygons.len() + f.refused.len() + self.stack.len())
             + core::mem::size_of_val(&*f.active)
             + core::mem::size_of_val(&*f.slots)
             + core::mem::size_of::<Self>()
@@ -431,7 +455,7 @@ impl<'m> CameraState<'m> {
 impl Front<'_> {
     #[inline]
     pub fn is_split(&self, node: NodeId) -> bool {
-        self.pair_of.get(node.index()).is_some_and(|&p| p != NONE)
+        self.pair_of.get(node.index()).is_some_and(|p| p != NONE)
     }
 
     #[inline]
@@ -455,7 +479,7 @@ impl Front<'_> {
             return Some(poly.0);
         }
         let c = h.polygons().get(poly.index())?.creator;
-        let pair = *self.pair_of.get(c.node()?.index())?;
+        let pair = self.pair_of.get(c.node()?.index())?;
         if pair == NONE {
             return None;
         }

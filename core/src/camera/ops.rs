@@ -119,8 +119,13 @@ impl Front<'_> {
             .ok_or(OpError::Inconsistent { node })
     }
 
+    /// The slot for writing. Every write to a pair's slot can change whether the pair's
+    /// collapse is legal, so it forgets a refusal remembered for that pair.
     #[inline]
     fn slot_mut(&mut self, slot: u32, node: NodeId) -> Result<&mut PolySlot, OpError> {
+        if let Some(pair) = slot.checked_sub(self.base) {
+            self.forget_refusal(pair / 2);
+        }
         self.slots
             .get_mut(slot as usize)
             .ok_or(OpError::Inconsistent { node })
@@ -174,7 +179,7 @@ impl Front<'_> {
     #[inline]
     pub fn collapse_slots(&self, h: &Hierarchy<'_>, v: NodeId) -> Option<[u32; 4]> {
         let s = h.split(v)?;
-        let pair = *self.pair_of.get(v.index())?;
+        let pair = self.pair_of.get(v.index())?;
         if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
             return None;
         }
@@ -207,6 +212,30 @@ impl Front<'_> {
 
     pub fn can_collapse(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
         self.collapse_slots(h, v).is_some()
+    }
+
+    /// Whether pair `pair`'s collapse was refused and nothing it depends on changed since.
+    #[inline]
+    pub fn refusal_remembered(&self, pair: u32) -> bool {
+        self.refused
+            .get(pair as usize / 32)
+            .is_some_and(|w| w & (1 << (pair % 32)) != 0)
+    }
+
+    /// Remembers that pair `pair`'s collapse is refused.
+    #[inline]
+    pub fn remember_refusal(&mut self, pair: u32) {
+        if let Some(w) = self.refused.get_mut(pair as usize / 32) {
+            *w |= 1 << (pair % 32);
+        }
+    }
+
+    /// Forgets a refusal remembered for pair `pair`.
+    #[inline]
+    pub fn forget_refusal(&mut self, pair: u32) {
+        if let Some(w) = self.refused.get_mut(pair as usize / 32) {
+            *w &= !(1 << (pair % 32));
+        }
     }
 
     /// Applies the split of `v` given its neighbours' slots from
@@ -290,7 +319,7 @@ impl Front<'_> {
             }
         };
         self.owner[k as usize] = v;
-        self.pair_of[v.index()] = k;
+        self.pair_of.set(v.index(), k).ok_or(bad)?;
         self.pairs += 1;
         self.active_nodes += 1;
         self.churn = self.churn.saturating_add(1);
@@ -315,7 +344,7 @@ impl Front<'_> {
     ) -> Result<(), OpError> {
         let bad = OpError::Inconsistent { node: v };
         let s = h.split(v).ok_or(OpError::Leaf { node: v })?;
-        let k = *self.pair_of.get(v.index()).ok_or(bad)?;
+        let k = self.pair_of.get(v.index()).ok_or(bad)?;
         if k == NONE || k >= self.pairs {
             return Err(OpError::NotSplit { node: v });
         }
@@ -355,7 +384,11 @@ impl Front<'_> {
         }
         *self.active.get_mut(rv as usize).ok_or(bad)? = ActiveVertex::of(h, v);
         self.free_record(ru);
-        self.pair_of[v.index()] = NONE;
+        self.pair_of.set(v.index(), NONE).ok_or(bad)?;
+        // v is active again: its parent's collapse may have become legal.
+        if let Some(pp) = h.node(v).and_then(|n| self.pair_of.get(n.parent.index())) {
+            self.forget_refusal(pp);
+        }
         self.active_nodes = self.active_nodes.saturating_sub(1);
         self.churn = self.churn.saturating_add(1);
         for f in [s.f_l, s.f_r] {
@@ -373,6 +406,7 @@ impl Front<'_> {
     fn remove_pair(&mut self, k: u32, v: NodeId) -> Result<(), OpError> {
         let last = self.pairs - 1;
         self.pairs = last;
+        self.forget_refusal(last);
         if k == last {
             return Ok(());
         }
@@ -397,10 +431,9 @@ impl Front<'_> {
         }
         let owner = self.owner[last as usize];
         self.owner[k as usize] = owner;
-        *self
-            .pair_of
-            .get_mut(owner.index())
-            .ok_or(OpError::Inconsistent { node: v })? = k;
+        self.pair_of
+            .set(owner.index(), k)
+            .ok_or(OpError::Inconsistent { node: v })?;
         for (old, new) in [(old_l, new_l), (old_r, new_r)] {
             let nbrs = self.slot(new, v)?.neighbours;
             for m in nbrs {
@@ -535,6 +568,15 @@ impl CameraState<'_> {
     /// `true` if `node` is active, can be split, and every present `fn0..fn3` is active.
     pub fn can_split(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
         self.is_for(h) && self.front.can_split(h, node)
+    }
+
+    /// Forgets every collapse refusal that refinement remembers, so the next
+    /// [`refine`](Self::refine) checks every wanted collapse again. Refinement never needs
+    /// this (a refusal is forgotten as soon as anything it depends on changes); it exists so
+    /// tests can compare refinement with and without the memory.
+    #[doc(hidden)]
+    pub fn forget_refused_collapses(&mut self) {
+        self.front.refused.fill(0);
     }
 
     /// `true` if `node` is split, both children are active, and `f_l`, `f_r` have exactly

@@ -11,7 +11,7 @@
 
 use glam::Vec3;
 
-use super::{CameraState, OpError, FREE};
+use super::{CameraState, OpError, FREE, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 use crate::records::SplitBounds;
@@ -63,6 +63,12 @@ pub struct RefineStats {
     pub capacity_refusals: u32,
     /// Wanted splits abandoned because the forced-split stack was full.
     pub stack_overflows: u32,
+    /// Wanted collapses checked and found illegal (a neighbour finer than the split left
+    /// it, or the floating child split).
+    pub collapses_refused: u32,
+    /// Wanted collapses not checked again: refused before, and neither of the pair's
+    /// polygons nor its children changed since.
+    pub refusals_remembered: u32,
 }
 
 impl RefineStats {
@@ -195,14 +201,23 @@ impl CameraState<'_> {
             }
             // Coarsen: v is a stationary child (it shares its parent's position, which its
             // record says) whose parent no longer wants its split. Only the parent's bounds
-            // are read unless the collapse is wanted.
+            // are read unless the collapse is wanted; a collapse refused before and not
+            // changed since is not checked again (see the module docs of `camera`).
             let parent = NodeId(a.coarsen);
             if let Some(pb) = h.split_bounds(parent) {
-                let wanted = !c.wants_split(pb);
-                if let Some(slots) = wanted.then(|| f.collapse_slots(h, parent)).flatten() {
-                    f.apply_collapse(h, parent, slots)?;
-                    st.collapses += 1;
-                    continue; // the record now holds the parent: look again
+                if !c.wants_split(pb) {
+                    let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
+                    if pair != NONE && f.refusal_remembered(pair) {
+                        st.refusals_remembered += 1;
+                    } else if pair != NONE {
+                        if let Some(slots) = f.collapse_slots(h, parent) {
+                            f.apply_collapse(h, parent, slots)?;
+                            st.collapses += 1;
+                            continue; // the record now holds the parent: look again
+                        }
+                        st.collapses_refused += 1;
+                        f.remember_refusal(pair);
+                    }
                 }
             }
             i += 1;
