@@ -35,7 +35,9 @@
 #![no_std]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
-#![forbid(unsafe_code)]
+// One `unsafe` block with the `prefetch` feature: the cache hint in `prefetch.rs`.
+#![cfg_attr(feature = "prefetch", deny(unsafe_code))]
+#![cfg_attr(not(feature = "prefetch"), forbid(unsafe_code))]
 
 pub mod camera;
 mod checksum;
@@ -47,6 +49,7 @@ mod ids;
 mod memory;
 pub mod octree;
 mod outputs;
+mod prefetch;
 mod records;
 mod view;
 

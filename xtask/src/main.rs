@@ -5,8 +5,9 @@
 //!   `spirv-val`), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
 //! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
-//!   no_std build for a microcontroller target, and the core crate's tests under miri. Every step prints a
-//!   header and its wall time; the run ends with `N passed, M failed`.
+//!   no_std build for a microcontroller target, clippy on the core crate without its
+//!   `prefetch` feature (where it forbids `unsafe`), and the core crate's tests under miri.
+//!   Every step prints a header and its wall time; the run ends with `N passed, M failed`.
 //! - `check-shaders`: the committed SPIR-V (`vulkan/spirv`) is up to date and valid: the
 //!   manifest's source hash equals the hash of the current shader sources (computed by
 //!   [`shader_manifest`], the same file the shader builder includes), its entry points are
@@ -44,7 +45,8 @@ commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
                         spirv-val and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
-  test                  setup, then shader check, fmt, clippy, tests, no_std build, miri
+  test                  setup, then shader check, fmt, clippy, tests, no_std build,
+                        clippy without prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   demo [ARGS..]         cargo run --release -p caveclod-bake --bin caveclod -- demo ARGS
 ";
@@ -367,6 +369,19 @@ fn test_steps() -> Vec<(String, Step)> {
         step(
             "cargo build -p caveclod-core --target thumbv7em-none-eabihf",
             &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
+        ),
+        // Without its default `prefetch` feature the core crate forbids `unsafe`.
+        step(
+            "cargo clippy -p caveclod-core --no-default-features -- -D warnings",
+            &[
+                "clippy",
+                "-p",
+                "caveclod-core",
+                "--no-default-features",
+                "--",
+                "-D",
+                "warnings",
+            ],
         ),
         (
             format!("cargo +{NIGHTLY} miri test -p caveclod-core"),
