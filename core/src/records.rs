@@ -167,7 +167,7 @@ pub fn octahedral_encode(n: [f32; 3]) -> [i16; 2] {
 
 /// Decodes [`octahedral_encode`].
 pub fn octahedral_decode(e: [i16; 2]) -> [f32; 3] {
-    let (u, v) = (e[0] as f32 / 32767.0, e[1] as f32 / 32767.0);
+    let (u, v) = (e[0] as f32 * (1.0 / 32767.0), e[1] as f32 * (1.0 / 32767.0));
     let z = 1.0 - u.abs() - v.abs();
     let (x, y) = if z >= 0.0 {
         (u, v)
@@ -179,7 +179,8 @@ pub fn octahedral_decode(e: [i16; 2]) -> [f32; 3] {
     };
     let l = libm::sqrtf(x * x + y * y + z * z);
     if l > 0.0 {
-        [x / l, y / l, z / l]
+        let r = 1.0 / l;
+        [x * r, y * r, z * r]
     } else {
         [0.0, 0.0, 1.0]
     }

@@ -3,7 +3,7 @@
 
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    CameraConfig, CameraError, CameraState, Hierarchy, OpError, RefineParams, View,
+    CameraConfig, CameraError, CameraState, Hierarchy, OpError, RefineParams, RefineStats, View,
 };
 use caveclod_tests::check::check_front;
 use caveclod_tests::{bake, meshes};
@@ -192,6 +192,60 @@ fn remembered_collapse_refusals_change_nothing() {
     assert!(
         remembered > refused / 2,
         "{remembered} of {refused} refusals remembered"
+    );
+}
+
+/// Certificates skip the bounds of questions whose answers cannot have changed since they
+/// were last asked; refinement must then decide exactly as refinement that reads every
+/// bound. Two cameras fly the same views (closing in, pulling away, turning, with a jump, a
+/// change of tolerance and of the culling switches on the way); one forgets its
+/// certificates before every pass. Their statistics and fronts must agree frame by frame,
+/// while the first does skip reads.
+#[test]
+fn certificates_change_nothing() {
+    let baked = bake(&meshes::terrain(64, 64, 5));
+    let h = baked.hierarchy();
+    let mut mem_a = vec![0u32; CameraState::words_needed(&h)];
+    let mut mem_b = mem_a.clone();
+    let mut a = CameraState::new(&h, &mut mem_a).expect("sized");
+    let mut b = CameraState::new(&h, &mut mem_b).expect("sized");
+    let (mut certified, mut visited) = (0u64, 0u64);
+    for f in 0..320 {
+        let t = f as f32 * 0.03;
+        let r = 6.0 + 30.0 * (0.5 + 0.5 * (t * 0.7).cos());
+        let mut eye = Vec3::new(32.0 + r * t.cos(), 2.0 + 0.2 * r, 32.0 + r * t.sin());
+        if (150..160).contains(&f) {
+            eye += Vec3::new(25.0, 10.0, -5.0); // a jump there and back
+        }
+        let target = Vec3::new(32.0 + 12.0 * (t * 1.3).sin(), 0.0, 32.0 + 6.0 * t.cos());
+        let v = View::perspective(eye, target, Vec3::Y, 1.0, 1.6, 0.1, 500.0, 720.0);
+        let params = RefineParams {
+            tolerance_px: if (200..240).contains(&f) { 1.5 } else { 0.5 },
+            frustum_culling: !(250..270).contains(&f),
+            backface_culling: !(280..300).contains(&f),
+            ..RefineParams::default()
+        };
+        if f % 50 == 25 {
+            a.compact(&h);
+            b.compact(&h);
+        }
+        b.forget_certificates();
+        let sa = a.refine(&h, &v, &params).expect("refine a");
+        let sb = b.refine(&h, &v, &params).expect("refine b");
+        assert_eq!(sb.certified, 0, "frame {f}");
+        assert_eq!(RefineStats { certified: 0, ..sa }, sb, "frame {f}");
+        let mut na: Vec<_> = a.active_nodes().collect();
+        let mut nb: Vec<_> = b.active_nodes().collect();
+        na.sort_unstable();
+        nb.sort_unstable();
+        assert_eq!(na, nb, "frame {f}");
+        check_front(&h, &a).expect("front a");
+        certified += u64::from(sa.certified);
+        visited += u64::from(sa.nodes_visited);
+    }
+    assert!(
+        certified * 5 > visited,
+        "{certified} answers certified in {visited} visits"
     );
 }
 

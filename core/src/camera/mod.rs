@@ -11,7 +11,7 @@
 //! |---|---|---|
 //! | `pair_of` | splittable nodes (halved with 16-bit entries, when `max_pairs` < 65,535) | the face pair a split node's split created, or `NONE` |
 //! | `owner` | `max_pairs` | the node whose split created each live pair |
-//! | `active` | 2 × (roots + `max_pairs`) | the active node list: active-vertex records (node, coarsening parent) with a free list |
+//! | `active` | 4 × (roots + `max_pairs`) | the active node list: active-vertex records (node, coarsening parent, two certificates) with a free list |
 //! | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
 //! | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
 //! | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
@@ -45,10 +45,18 @@
 //!   corners) and on the children being unsplit, so one bit per pair, set on a refusal, is
 //!   cleared by every write to either slot and by the collapse of either child; a set bit
 //!   answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every bit.
+//! - **Settled answers are certified, not asked again.** A visit asks whether the node's
+//!   split is wanted and, for a stationary child, whether its parent's still is; the answer
+//!   rarely changes, yet each question reads a bounds record from wherever the hierarchy
+//!   keeps it. The record keeps, per question, the odometer reading up to which the answer
+//!   provably stands (the eye's path length, or that plus the frustum planes' sweep), and a
+//!   visit before then reads nothing but its record (see `certificate`): on the St. Helens
+//!   flyover nearly every question of a moving pass is answered so. 8 bytes per record.
 //! - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 //!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 //!   memory gets a hard polygon budget for free.
 
+mod certificate;
 mod compact;
 mod emit;
 mod ops;
@@ -63,6 +71,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId};
+use certificate::Odometer;
 use pair_map::PairMap;
 
 /// Absent link / empty entry.
@@ -84,13 +93,19 @@ const SLOT_WORDS: usize = core::mem::size_of::<PolySlot>() / 4;
 
 /// An active-vertex record: the active node it holds and that node's coarsening parent.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub(crate) struct ActiveVertex {
     /// The node (a [`NodeId`]), or [`FREE`] with the free-list link in the low bits.
     pub node: u32,
     /// The node's parent if the node is the parent's stationary child (the collapse this
     /// node's visits may trigger), else `NONE`.
     pub coarsen: u32,
+    /// While the camera's path odometer reads less, the node's own split is certainly not
+    /// wanted, and a visit need not read its bounds (see `certificate`); `-∞` when unknown.
+    pub sure_until: f32,
+    /// While the camera's sweep odometer reads less, the coarsening parent's split is
+    /// certainly still wanted (no collapse), and a visit need not read its bounds.
+    pub kept_until: f32,
 }
 
 const ACTIVE_WORDS: usize = core::mem::size_of::<ActiveVertex>() / 4;
@@ -111,6 +126,8 @@ impl ActiveVertex {
         Self {
             node: node.0,
             coarsen,
+            sure_until: f32::NEG_INFINITY,
+            kept_until: f32::NEG_INFINITY,
         }
     }
 }
@@ -222,6 +239,8 @@ pub(crate) struct Front<'m> {
     pub active_polygons: u32,
     /// Operations since the last [`compact`](CameraState::compact).
     pub churn: u32,
+    /// The eye's path length, for the records' certificates.
+    pub odometer: Odometer,
 }
 
 fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
@@ -313,6 +332,7 @@ impl<'m> CameraState<'m> {
                 active_nodes: 0,
                 active_polygons: 0,
                 churn: 0,
+                odometer: Odometer::new(),
             },
             stack: bytemuck::cast_slice_mut(stack),
         };
@@ -333,6 +353,8 @@ impl<'m> CameraState<'m> {
             f.active[i] = ActiveVertex {
                 node: r.0,
                 coarsen: NONE,
+                sure_until: f32::NEG_INFINITY,
+                kept_until: f32::NEG_INFINITY,
             };
         }
         f.active_len = h.roots().len() as u32;

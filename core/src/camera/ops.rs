@@ -474,6 +474,8 @@ impl Front<'_> {
             *a = ActiveVertex {
                 node: FREE | link,
                 coarsen: NONE,
+                sure_until: f32::NEG_INFINITY,
+                kept_until: f32::NEG_INFINITY,
             };
             self.free_head = r;
         }
@@ -577,6 +579,15 @@ impl CameraState<'_> {
     #[doc(hidden)]
     pub fn forget_refused_collapses(&mut self) {
         self.front.refused.fill(0);
+    }
+
+    /// Forgets every certificate (see [`RefineStats::certified`](crate::RefineStats)), so
+    /// the next [`refine`](Self::refine) reads every bound it asks about. Refinement never
+    /// needs this (a certificate lapses as soon as the view may have changed its answer);
+    /// it exists so tests and benchmarks can compare refinement with and without them.
+    #[doc(hidden)]
+    pub fn forget_certificates(&mut self) {
+        self.front.odometer = super::certificate::Odometer::new();
     }
 
     /// `true` if `node` is split, both children are active, and `f_l`, `f_r` have exactly

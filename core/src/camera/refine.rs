@@ -70,6 +70,9 @@ pub struct RefineStats {
     /// Wanted collapses not checked again: refused before, and neither of the pair's
     /// polygons nor its children changed since.
     pub refusals_remembered: u32,
+    /// Questions a certificate answered without reading bounds: a node's own split still
+    /// unwanted, or its coarsening parent's still wanted (see the module docs of `camera`).
+    pub certified: u32,
 }
 
 impl RefineStats {
@@ -131,6 +134,11 @@ impl Criterion {
 
     #[inline(always)]
     fn wants_split(&self, b: &SplitBounds) -> bool {
+        self.judge(b) == Verdict::Split
+    }
+
+    #[inline(always)]
+    fn judge(&self, b: &SplitBounds) -> Verdict {
         let p = Vec3::from_array(b.point);
         let pe = p - self.eye;
         let pem2 = pe.length_squared();
@@ -142,25 +150,38 @@ impl Criterion {
         // rounds to at most dir2 · pem2, which stays under rhs · pem2 when dir2 is a relative
         // 2^-20 under rhs (each product rounds by at most 2^-24).
         if uni2 < rhs && dir2 < rhs * SHY {
-            return false;
+            return Verdict::TooFine;
         }
+        let yes = |wanted: bool| if wanted { Verdict::Split } else { Verdict::No };
         if self.frustum && !self.sphere_visible(p, b.radius) {
-            return false;
+            return Verdict::No;
         }
         let big_uniform = uni2 >= rhs;
         if b.cone_sin2 >= 1.0 {
             // No cone: no backface test, and the directional error counts in full.
-            return big_uniform || dir2 >= rhs;
+            return yes(big_uniform || dir2 >= rhs);
         }
         if !self.backface && b.dir_error <= 0.0 {
-            return big_uniform;
+            return yes(big_uniform);
         }
         let vdot = pe.dot(Vec3::from_array(b.cone_normal()));
         if self.backface && vdot > 0.0 && vdot * vdot > pem2 * b.cone_sin2 {
-            return false;
+            return Verdict::No;
         }
-        big_uniform || dir2 * (pem2 - vdot * vdot) >= rhs * pem2
+        yes(big_uniform || dir2 * (pem2 - vdot * vdot) >= rhs * pem2)
     }
+}
+
+/// What [`Criterion::judge`] says of a split.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Verdict {
+    /// Wanted.
+    Split,
+    /// Not wanted because neither error projects to the tolerance (the eye would have to
+    /// come closer: see `certificate`).
+    TooFine,
+    /// Not wanted for another reason (outside the frustum, facing away).
+    No,
 }
 
 impl CameraState<'_> {
@@ -179,7 +200,8 @@ impl CameraState<'_> {
         } else {
             f32::INFINITY
         };
-        let c = Criterion::new(view, scale * scale, params);
+        let tz2 = scale * scale;
+        let c = Criterion::new(view, tz2, params);
         // A hard bound on work, whatever the data: no pass applies more operations than four
         // per split record.
         let max_ops = params.max_ops.min(
@@ -189,6 +211,15 @@ impl CameraState<'_> {
         );
         let mut st = RefineStats::default();
         let f = &mut self.front;
+        let live = (f.active_len as usize).min(f.active.len());
+        let reading = f.odometer.advance(
+            h,
+            view,
+            tz2,
+            params.frustum_culling,
+            params.backface_culling,
+            &mut f.active[..live],
+        );
         let mut i = 0usize;
         while i < f.active_len as usize && st.operations() < max_ops {
             let a = f.active[i];
@@ -203,14 +234,35 @@ impl CameraState<'_> {
             // visits of a pass are independent, but a miss on the record being decided stalls
             // the branches that depend on it (see `crate::prefetch`).
             if let Some(ahead) = f.active.get(i + PREFETCH_AHEAD) {
-                for n in [ahead.node, ahead.coarsen] {
+                let own = if ahead.sure_until > reading.path {
+                    NONE
+                } else {
+                    ahead.node
+                };
+                let parent = if ahead.kept_until > reading.sweep {
+                    NONE
+                } else {
+                    ahead.coarsen
+                };
+                for n in [own, parent] {
                     if let Some(b) = h.split_bounds(NodeId(n)) {
                         prefetch::bounds(b);
                     }
                 }
             }
-            if let Some(b) = h.split_bounds(v) {
-                if c.wants_split(b) {
+            // A certificate says the node's split is still unwanted: skip its bounds.
+            let bounds = if a.sure_until > reading.path {
+                st.certified += 1;
+                None
+            } else {
+                h.split_bounds(v)
+            };
+            if let Some(b) = bounds {
+                let verdict = c.judge(b);
+                if verdict == Verdict::TooFine {
+                    f.active[i].sure_until = f.odometer.sure_until(b);
+                }
+                if verdict == Verdict::Split {
                     if f.pairs as usize >= f.owner.len() {
                         st.capacity_refusals += 1;
                         i += 1;
@@ -246,8 +298,18 @@ impl CameraState<'_> {
             // are read unless the collapse is wanted; a collapse refused before and not
             // changed since is not checked again (see the module docs of `camera`).
             let parent = NodeId(a.coarsen);
-            if let Some(pb) = h.split_bounds(parent) {
-                if !c.wants_split(pb) {
+            // A certificate says the parent's split is still wanted: skip its bounds.
+            let parent_bounds = if a.kept_until > reading.sweep {
+                st.certified += 1;
+                None
+            } else {
+                h.split_bounds(parent)
+            };
+            if let Some(pb) = parent_bounds {
+                if c.wants_split(pb) {
+                    let cone = (c.backface && pb.cone_sin2 < 1.0).then(|| pb.cone_normal());
+                    f.active[i].kept_until = f.odometer.kept_until(pb, cone);
+                } else {
                     let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
                     if pair != NONE && f.refusal_remembered(pair) {
                         st.refusals_remembered += 1;
