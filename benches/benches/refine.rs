@@ -221,6 +221,14 @@ fn bench_refine(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[Vie
     let mut g = c.benchmark_group("refine");
     g.throughput(Throughput::Elements(u64::from(active)));
     g.bench_function("settled_pass", |b| b.iter(|| must(cam.refine(h, near, &p))));
+    // The baseline in the same run: every pass forgets the certificates first, so it reads
+    // every bound it asks about (plus one sweep of the records to forget them).
+    g.bench_function("settled_pass_uncertified", |b| {
+        b.iter(|| {
+            cam.forget_certificates();
+            must(cam.refine(h, near, &p))
+        })
+    });
 
     // Moving camera: start settled at the first view, then one step per iteration. One
     // untimed lap of the path measures the front it carries on average.
@@ -242,6 +250,12 @@ fn bench_refine(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[Vie
         st
     };
     g.bench_function("moving_pass", |b| b.iter(|| step(&mut cam)));
+    g.bench_function("moving_pass_uncertified", |b| {
+        b.iter(|| {
+            cam.forget_certificates();
+            step(&mut cam)
+        })
+    });
     g.finish();
     let (n, o, a) = acc.get();
     if n > 0 {
