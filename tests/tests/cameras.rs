@@ -138,6 +138,16 @@ fn capacity_and_hierarchy_errors_are_typed() {
     );
 }
 
+/// Requires `a` and `b` to hold the same active nodes in frame `f`, and `a` a sound front.
+fn assert_same_fronts(h: &Hierarchy<'_>, a: &CameraState<'_>, b: &CameraState<'_>, f: usize) {
+    let mut na: Vec<_> = a.active_nodes().collect();
+    let mut nb: Vec<_> = b.active_nodes().collect();
+    na.sort_unstable();
+    nb.sort_unstable();
+    assert_eq!(na, nb, "frame {f}");
+    check_front(h, a).expect("front a");
+}
+
 /// Refinement remembers refused collapses until something they depend on changes; it must
 /// then do exactly what refinement that checks every wanted collapse every frame does. Two
 /// cameras fly the same views (closing in, pulling away and turning, so fronts coarsen as
@@ -180,12 +190,7 @@ fn remembered_collapse_refusals_change_nothing() {
             sb.collapses_refused,
             "frame {f}: the same collapses are wanted and refused"
         );
-        let mut na: Vec<_> = a.active_nodes().collect();
-        let mut nb: Vec<_> = b.active_nodes().collect();
-        na.sort_unstable();
-        nb.sort_unstable();
-        assert_eq!(na, nb, "frame {f}");
-        check_front(&h, &a).expect("front a");
+        assert_same_fronts(&h, &a, &b, f);
         remembered += u64::from(sa.refusals_remembered);
         refused += u64::from(sb.collapses_refused);
     }
@@ -234,12 +239,7 @@ fn certificates_change_nothing() {
         let sb = b.refine(&h, &v, &params).expect("refine b");
         assert_eq!(sb.certified, 0, "frame {f}");
         assert_eq!(RefineStats { certified: 0, ..sa }, sb, "frame {f}");
-        let mut na: Vec<_> = a.active_nodes().collect();
-        let mut nb: Vec<_> = b.active_nodes().collect();
-        na.sort_unstable();
-        nb.sort_unstable();
-        assert_eq!(na, nb, "frame {f}");
-        check_front(&h, &a).expect("front a");
+        assert_same_fronts(&h, &a, &b, f);
         certified += u64::from(sa.certified);
         visited += u64::from(sa.nodes_visited);
     }

@@ -250,14 +250,8 @@ impl CameraState<'_> {
                     }
                 }
             }
-            // A certificate says the node's split is still unwanted: skip its bounds.
-            let bounds = if a.sure_until > reading.path {
-                st.certified += 1;
-                None
-            } else {
-                h.split_bounds(v)
-            };
-            if let Some(b) = bounds {
+            // A certificate may say the node's split is still unwanted: then skip its bounds.
+            if let Some(b) = uncertified(h, v, a.sure_until, reading.path, &mut st) {
                 let verdict = c.judge(b);
                 if verdict == Verdict::TooFine {
                     f.active[i].sure_until = f.odometer.sure_until(b);
@@ -298,14 +292,8 @@ impl CameraState<'_> {
             // are read unless the collapse is wanted; a collapse refused before and not
             // changed since is not checked again (see the module docs of `camera`).
             let parent = NodeId(a.coarsen);
-            // A certificate says the parent's split is still wanted: skip its bounds.
-            let parent_bounds = if a.kept_until > reading.sweep {
-                st.certified += 1;
-                None
-            } else {
-                h.split_bounds(parent)
-            };
-            if let Some(pb) = parent_bounds {
+            // A certificate may say the parent's split is still wanted: then skip its bounds.
+            if let Some(pb) = uncertified(h, parent, a.kept_until, reading.sweep, &mut st) {
                 if c.wants_split(pb) {
                     let cone = (c.backface && pb.cone_sin2 < 1.0).then(|| pb.cone_normal());
                     f.active[i].kept_until = f.odometer.kept_until(pb, cone);
@@ -329,6 +317,24 @@ impl CameraState<'_> {
         st.active_nodes = f.active_nodes;
         st.active_polygons = f.active_polygons;
         Ok(st)
+    }
+}
+
+/// The bounds of `node`, unless a certificate good until `until` still holds at `reading`
+/// (counted in `st`): then `None`, as for a node without bounds.
+#[inline(always)]
+fn uncertified<'h>(
+    h: &Hierarchy<'h>,
+    node: NodeId,
+    until: f32,
+    reading: f32,
+    st: &mut RefineStats,
+) -> Option<&'h SplitBounds> {
+    if until > reading {
+        st.certified += 1;
+        None
+    } else {
+        h.split_bounds(node)
     }
 }
 
