@@ -16,8 +16,8 @@
 //!   too fine to split while the eye stays farther than `m / t` from its point (`t` the
 //!   tolerance in radians): for `d - m / t` of path, by the triangle inequality.
 //! - **sweep**: the path plus, per pass, how far any frustum plane moved anywhere in the
-//!   hierarchy's bounding box (`|Δn| · B + |Δn · o + Δw|` for a plane `n · x + w`, `o` and
-//!   `B` the box's centre and half diagonal), plus that pass's rounding allowance. A parent
+//!   hierarchy's bounding box (`|Δn · o + Δw| + Σ |Δn_i| h_i` for a plane `n · x + w`, `o`
+//!   and `h` the box's centre and half extents), plus that pass's rounding allowance. A parent
 //!   whose split is wanted keeps wanting it while its error still projects over the
 //!   tolerance (`m / t - d` of path), its sphere stays inside every plane (the smallest
 //!   plane distance plus the radius, of sweep) and, with backface culling, the eye stays
@@ -86,19 +86,17 @@ pub(crate) struct Readings {
     pub sweep: f32,
 }
 
-/// The hierarchy's bounding box as the sweep needs it: centre, half diagonal (rounded up)
-/// and the largest `|x| + |y| + |z|` of a point in it.
-fn box_of(h: &Hierarchy<'_>) -> (Vec3, f64, f64) {
+/// The hierarchy's bounding box in `f64` (exact): centre and half extents.
+fn box_of(h: &Hierarchy<'_>) -> ([f64; 3], [f64; 3]) {
     let m = h.meta();
-    let (lo, hi) = (
-        Vec3::from_array(m.bounds_min),
-        Vec3::from_array(m.bounds_max),
-    );
-    let centre = (lo + hi) * 0.5;
-    let half = distance(hi, centre).max(distance(lo, centre)) * (1.0 + 1e-6);
-    let far = lo.abs().max(hi.abs());
-    let l1 = (f64::from(far.x) + f64::from(far.y) + f64::from(far.z)) * (1.0 + 1e-6);
-    (centre, half, l1)
+    let mut centre = [0.0; 3];
+    let mut half = [0.0; 3];
+    for k in 0..3 {
+        let (lo, hi) = (f64::from(m.bounds_min[k]), f64::from(m.bounds_max[k]));
+        centre[k] = (lo + hi) * 0.5;
+        half[k] = (hi - lo) * 0.5;
+    }
+    (centre, half)
 }
 
 impl Odometer {
@@ -236,24 +234,22 @@ impl Odometer {
 }
 
 /// How far any of `planes` moved, anywhere in the hierarchy's box, from `last`, plus the
-/// pass's rounding allowance for the frustum test (rounded up).
+/// pass's rounding allowance for the frustum test (rounded up). Over a box, the largest
+/// `|Δn · x + Δw|` is `|Δn · centre + Δw| + Σ |Δn_i| half_i`.
 fn sweep_of_planes(h: &Hierarchy<'_>, last: &[Vec4], planes: &[Vec4]) -> f64 {
-    let (o, half, l1) = box_of(h);
+    let (centre, half) = box_of(h);
+    // The largest `|x| + |y| + |z|` of a point in the box.
+    let l1: f64 = (0..3).map(|k| centre[k].abs() + half[k]).sum();
     let mut most = 0.0f64;
     let (mut n_max, mut w_max) = (0.0f64, 0.0f64);
     for (a, b) in last.iter().zip(planes) {
-        let dn = [
-            f64::from(b.x) - f64::from(a.x),
-            f64::from(b.y) - f64::from(a.y),
-            f64::from(b.z) - f64::from(a.z),
-        ];
-        let dw = f64::from(b.w) - f64::from(a.w);
-        let dn_len = libm::sqrt(dn[0] * dn[0] + dn[1] * dn[1] + dn[2] * dn[2]);
-        let at_centre =
-            dn[0] * f64::from(o.x) + dn[1] * f64::from(o.y) + dn[2] * f64::from(o.z) + dw;
-        most = most.max(dn_len * half + at_centre.abs());
-        n_max = n_max.max(f64::from(b.truncate().abs().max_element()));
-        w_max = w_max.max(f64::from(b.w).abs());
+        let (a, b) = (a.to_array(), b.to_array());
+        let d: [f64; 4] = core::array::from_fn(|k| f64::from(b[k]) - f64::from(a[k]));
+        let at_centre = d[0] * centre[0] + d[1] * centre[1] + d[2] * centre[2] + d[3];
+        let spread = d[0].abs() * half[0] + d[1].abs() * half[1] + d[2].abs() * half[2];
+        most = most.max(at_centre.abs() + spread);
+        n_max = n_max.max(b[..3].iter().fold(0.0f64, |m, x| m.max(f64::from(x.abs()))));
+        w_max = w_max.max(f64::from(b[3]).abs());
     }
     (most + (n_max * l1 + w_max) * FRUSTUM_ROUNDING) * (1.0 + 1e-12)
 }
