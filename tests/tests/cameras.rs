@@ -247,6 +247,53 @@ fn certificates_change_nothing() {
         certified * 5 > visited,
         "{certified} answers certified in {visited} visits"
     );
+    // Settled: a pass that repeats the last view reads no bounds at all, whatever the
+    // answers (too fine, outside the frustum, facing away, a collapse refused).
+    let v = View::perspective(
+        Vec3::new(20.0, 3.0, 50.0),
+        Vec3::new(40.0, 0.0, 20.0),
+        Vec3::Y,
+        1.0,
+        1.6,
+        0.1,
+        500.0,
+        720.0,
+    );
+    let params = RefineParams {
+        tolerance_px: 0.5,
+        ..RefineParams::default()
+    };
+    for _ in 0..100 {
+        if a.refine(&h, &v, &params).expect("settle").operations() == 0 {
+            break;
+        }
+    }
+    let settled = a.refine(&h, &v, &params).expect("settled pass");
+    assert_eq!(settled.operations(), 0, "not settled: {settled:?}");
+    // A visit asks about its node if that can split, and about the parent when the node is
+    // the parent's stationary child.
+    let questions: usize = a
+        .active_nodes()
+        .map(|n| {
+            let own = h.split_bounds(n).is_some();
+            let parent = h.node(n).is_some_and(|node| {
+                h.node(node.parent).is_some_and(|p| {
+                    p.position == node.position && h.split_bounds(node.parent).is_some()
+                })
+            });
+            usize::from(own) + usize::from(parent)
+        })
+        .sum();
+    let questions = questions as u32;
+    assert!(
+        settled.certified * 100 >= questions * 99,
+        "{} of {questions} questions certified: {settled:?}",
+        settled.certified
+    );
+    assert!(
+        settled.refusals_remembered > 0,
+        "no refused collapse to certify: {settled:?}"
+    );
 }
 
 /// A camera that may hold 65,535 pairs or more keeps its split-to-pair map in 32-bit

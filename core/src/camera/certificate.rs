@@ -2,14 +2,16 @@
 //! little, so a pass need not read the bounds that gave them.
 //!
 //! A settled pass asks two questions per active node and almost always gets the same
-//! answers: the node's own split is not wanted (its error projects under the tolerance),
-//! and, for a stationary child, its parent's split still is (so no collapse). Each answer
-//! costs a read of a 32-byte bounds record wherever the hierarchy keeps it, one cache line
-//! per question; four cameras' worth of those lines no longer fit the caches that one
-//! camera's fit, which is what made four cameras cost more than four times one. Yet each
-//! answer can only change once the view has moved by some distance the visit can compute,
-//! so the visit writes into the node's active record the odometer reading up to which its
-//! answer holds, and later visits skip the bounds until the odometer gets there.
+//! answers: is the node's own split wanted (no: its error projects under the tolerance, or
+//! it lies outside the frustum, or it faces away), and, for a stationary child, is its
+//! parent's split still wanted (yes: no collapse; or no, and the collapse was refused
+//! before). Each answer costs a read of a 32-byte bounds record wherever the hierarchy
+//! keeps it, one cache line per question; four cameras' worth of those lines no longer fit
+//! the caches that one camera's fit, which is what made four cameras cost more than four
+//! times one. Yet each answer can only change once the view has moved by some distance the
+//! visit can compute, so the visit writes into the node's active record the odometer
+//! reading up to which its answer holds, and later visits skip the bounds until the
+//! odometer gets there.
 //!
 //! Each camera keeps two odometers, summed in `f64` and rounded up:
 //! - **path**: the eye's path length. A node of error `m` at distance `d` from the eye stays
@@ -24,6 +26,18 @@
 //!   outside the cone's back region (the cone test's margin over its Lipschitz constant
 //!   2, of path); the certificate is the least of the three on the sweep odometer, which
 //!   grows at least as fast as the path.
+//! - A split **not wanted** stays so while any of three reasons stands: the error projects
+//!   under the tolerance (path, as above), the sphere lies outside a frustum plane (that
+//!   plane's distance past the radius, of sweep), or the cone faces away from the eye (the
+//!   test's margin over the Lipschitz constant, of path). (A fourth, a directional error
+//!   seen too edge-on, is left uncertified: it never decided a visit on the St. Helens
+//!   flights, where every unwanted split read got a certificate from the three.)
+//!
+//! Each record holds two `f32` certificates, the sign saying which answer and odometer:
+//! the own one is positive for "not wanted" until a path reading, negative for "not
+//! wanted" until a sweep reading (frustum reasons); the parent's is positive for "wanted"
+//! and negative for "not wanted", both until a sweep reading (a slack in path is one in
+//! sweep, too). Readings are never negative, so 0 ([`UNKNOWN`]) holds at none, either sign.
 //!
 //! The margins cover every rounding of the `f32` tests: the errors and the cone compare
 //! products of differences from the eye, each rounding by at most 2⁻²⁴ relative, and the
@@ -84,6 +98,30 @@ pub(crate) struct Odometer {
 pub(crate) struct Readings {
     pub path: f32,
     pub sweep: f32,
+}
+
+/// A certificate that says nothing: it holds at no reading, read as either sign.
+pub(crate) const UNKNOWN: f32 = 0.0;
+
+/// Whether an own certificate still says the node's split is not wanted: a positive one
+/// until the path reads it, a negative one until the sweep reads its magnitude.
+#[inline(always)]
+pub(crate) fn own_holds(cert: f32, at: Readings) -> bool {
+    cert > at.path || -cert > at.sweep
+}
+
+/// What a parent certificate still says of the parent's split (both signs count on the
+/// sweep): wanted (`Some(true)`, positive), not wanted (`Some(false)`, negative), or
+/// nothing (`None`, lapsed).
+#[inline(always)]
+pub(crate) fn parent_says(cert: f32, at: Readings) -> Option<bool> {
+    if cert > at.sweep {
+        Some(true)
+    } else if -cert > at.sweep {
+        Some(false)
+    } else {
+        None
+    }
 }
 
 /// The hierarchy's bounding box in `f64` (exact): centre and half extents.
@@ -157,8 +195,8 @@ impl Odometer {
             }
             None => {
                 for r in records.iter_mut() {
-                    r.sure_until = f32::NEG_INFINITY;
-                    r.kept_until = f32::NEG_INFINITY;
+                    r.own_cert = UNKNOWN;
+                    r.parent_cert = UNKNOWN;
                 }
                 self.path = 0.0;
                 self.sweep = 0.0;
@@ -173,23 +211,75 @@ impl Odometer {
         }
     }
 
-    /// The path reading up to which a node with these bounds certainly does not want its
-    /// split (its errors project under the tolerance); `-∞` when there is no slack.
-    pub fn sure_until(&self, b: &SplitBounds) -> f32 {
-        let Some((eye, _)) = self.last else {
-            return f32::NEG_INFINITY;
-        };
-        let d = distance(Vec3::from_array(b.point), eye);
-        let m = f64::from(b.uni_error.max(b.dir_error));
-        let slack = d * (1.0 - 1e-12) - m / self.tolerance * (1.0 + MARGIN);
-        until(self.path, slack)
+    /// The own certificate of a node whose split the criterion just did not want
+    /// ([`own_holds`]); [`UNKNOWN`] when there is no slack.
+    pub fn unwanted_own(&self, b: &SplitBounds) -> f32 {
+        let slack = self.unwanted_slack(b);
+        if slack.path > 0.0 && slack.path >= slack.sweep {
+            until(self.path, slack.path)
+        } else {
+            -until(self.sweep, slack.sweep)
+        }
     }
 
-    /// The sweep reading up to which a node with these bounds, whose split the criterion
-    /// just wanted, certainly keeps wanting it; `-∞` when there is no slack.
-    pub fn kept_until(&self, b: &SplitBounds, cone_normal: Option<[f32; 3]>) -> f32 {
+    /// The parent certificate of a parent whose split the criterion just did not want
+    /// ([`parent_says`]); [`UNKNOWN`] when there is no slack. Parent certificates count on
+    /// the sweep, which grows at least as fast as the path.
+    pub fn unwanted_parent(&self, b: &SplitBounds) -> f32 {
+        let slack = self.unwanted_slack(b);
+        -until(self.sweep, slack.path.max(slack.sweep))
+    }
+
+    /// How far the view may move while a node with these bounds certainly does not want its
+    /// split, for any of three reasons:
+    /// - its errors project under the tolerance (`d - m / t` of path);
+    /// - its sphere lies outside a frustum plane (that plane's distance past the radius, of
+    ///   sweep);
+    /// - its normal cone faces away from the eye (the cone test's margin over its Lipschitz
+    ///   constant, of path).
+    ///
+    /// The first is the common case and needs no more work; the others are looked at only
+    /// without it.
+    fn unwanted_slack(&self, b: &SplitBounds) -> Slack {
         let Some((eye, planes)) = self.last else {
-            return f32::NEG_INFINITY;
+            return Slack::NONE;
+        };
+        let point = Vec3::from_array(b.point);
+        let d = distance(point, eye);
+        let m = f64::from(b.uni_error.max(b.dir_error));
+        let too_fine = d * (1.0 - 1e-12) - m / self.tolerance * (1.0 + MARGIN);
+        if too_fine > 0.0 {
+            return Slack {
+                path: too_fine,
+                sweep: 0.0,
+            };
+        }
+        let mut slack = Slack {
+            path: too_fine,
+            sweep: 0.0,
+        };
+        if self.key.frustum {
+            let r = f64::from(b.radius);
+            for p in &planes[..self.key.planes as usize] {
+                let (s, magnitude) = plane_distance(*p, point, r);
+                // Outside while `s + r < 0`, with the rounding of the f64 sum kept out.
+                slack.sweep = slack.sweep.max(-(s + r) - magnitude * 1e-12);
+            }
+        }
+        if self.key.backface && b.cone_sin2 < 1.0 {
+            let g = self.cone_gap(point, d, b.cone_sin2, b.cone_normal(), MARGIN);
+            // Facing away while `vdot > (sin + MARGIN) · d`.
+            slack.path = slack.path.max(g / CONE_LIPSCHITZ - MARGIN * d);
+        }
+        slack
+    }
+
+    /// The parent certificate of a parent whose split the criterion just wanted
+    /// ([`parent_says`]); [`UNKNOWN`] when there is no slack. `cone_normal` is the decoded
+    /// cone axis when the backface test applies.
+    pub fn wanted_parent(&self, b: &SplitBounds, cone_normal: Option<[f32; 3]>) -> f32 {
+        let Some((eye, planes)) = self.last else {
+            return UNKNOWN;
         };
         let point = Vec3::from_array(b.point);
         let d = distance(point, eye);
@@ -205,32 +295,60 @@ impl Odometer {
         if self.key.frustum {
             let r = f64::from(b.radius);
             for p in &planes[..self.key.planes as usize] {
-                let (n, w) = (p.truncate(), f64::from(p.w));
-                let s = f64::from(n.x) * f64::from(point.x)
-                    + f64::from(n.y) * f64::from(point.y)
-                    + f64::from(n.z) * f64::from(point.z)
-                    + w;
-                let magnitude = f64::from(n.abs().dot(point.abs())) + w.abs() + r;
+                let (s, magnitude) = plane_distance(*p, point, r);
                 slack = slack.min(s + r - magnitude * 1e-12);
             }
         }
         if self.key.backface && has_cone {
             let Some(n) = cone_normal else {
-                return f32::NEG_INFINITY;
+                return UNKNOWN;
             };
-            let pe = [
-                f64::from(point.x) - f64::from(eye.x),
-                f64::from(point.y) - f64::from(eye.y),
-                f64::from(point.z) - f64::from(eye.z),
-            ];
-            let vdot = pe[0] * f64::from(n[0]) + pe[1] * f64::from(n[1]) + pe[2] * f64::from(n[2]);
-            let sin = libm::sqrt(f64::from(b.cone_sin2));
-            // Not facing away while vdot <= (sin - MARGIN) · d.
-            let g = vdot - (sin - MARGIN) * d;
+            // Not facing away while `vdot <= (sin - MARGIN) · d`.
+            let g = self.cone_gap(point, d, b.cone_sin2, n, -MARGIN);
             slack = slack.min(-g / CONE_LIPSCHITZ - MARGIN * d);
         }
         until(self.sweep, slack)
     }
+
+    /// `vdot - (sin + margin) · d` for the cone of axis `n` and `sin² = sin2` at `point`,
+    /// `d` away from the last eye, in `f64`: the backface test's answer with a margin. It
+    /// changes by at most [`CONE_LIPSCHITZ`] per unit of eye movement.
+    fn cone_gap(&self, point: Vec3, d: f64, sin2: f32, n: [f32; 3], margin: f64) -> f64 {
+        let eye = self.last.map_or(Vec3::ZERO, |(eye, _)| eye);
+        let pe = [
+            f64::from(point.x) - f64::from(eye.x),
+            f64::from(point.y) - f64::from(eye.y),
+            f64::from(point.z) - f64::from(eye.z),
+        ];
+        let vdot = pe[0] * f64::from(n[0]) + pe[1] * f64::from(n[1]) + pe[2] * f64::from(n[2]);
+        vdot - (libm::sqrt(f64::from(sin2)) + margin) * d
+    }
+}
+
+/// Slack of an answer, in eye path and in sweep; not positive where it has none that way.
+#[derive(Clone, Copy, Debug)]
+struct Slack {
+    path: f64,
+    sweep: f64,
+}
+
+impl Slack {
+    const NONE: Self = Self {
+        path: 0.0,
+        sweep: 0.0,
+    };
+}
+
+/// A plane's signed distance `n · x + w` to `x` in `f64` (exact products of `f32`s, one
+/// rounding per sum), and the magnitude of its terms plus `r`, which bounds that rounding.
+fn plane_distance(p: Vec4, x: Vec3, r: f64) -> (f64, f64) {
+    let (n, w) = (p.truncate(), f64::from(p.w));
+    let s = f64::from(n.x) * f64::from(x.x)
+        + f64::from(n.y) * f64::from(x.y)
+        + f64::from(n.z) * f64::from(x.z)
+        + w;
+    let magnitude = f64::from(n.abs().dot(x.abs())) + w.abs() + r;
+    (s, magnitude)
 }
 
 /// How far any of `planes` moved, anywhere in the hierarchy's box, from `last`, plus the
@@ -254,12 +372,13 @@ fn sweep_of_planes(h: &Hierarchy<'_>, last: &[Vec4], planes: &[Vec4]) -> f64 {
     (most + (n_max * l1 + w_max) * FRUSTUM_ROUNDING) * (1.0 + 1e-12)
 }
 
-/// `reading + slack`, rounded down to `f32`; `-∞` when `slack` is not positive (or NaN).
+/// `reading + slack`, rounded down to `f32`; [`UNKNOWN`] when `slack` is not positive (or
+/// NaN). Never negative, so that either sign of it encodes a certificate.
 fn until(reading: f64, slack: f64) -> f32 {
     if slack > 0.0 {
         round_down(reading + slack * (1.0 - 1e-12))
     } else {
-        f32::NEG_INFINITY
+        UNKNOWN
     }
 }
 
@@ -283,10 +402,10 @@ fn round_up(x: f64) -> f32 {
     }
 }
 
-/// The largest `f32` not above `x` (`x` positive); `-∞` for a non-finite `x`.
+/// The largest `f32` not above `x` (`x` positive); [`UNKNOWN`] (0) for a non-finite `x`.
 fn round_down(x: f64) -> f32 {
     if !x.is_finite() {
-        return f32::NEG_INFINITY;
+        return UNKNOWN;
     }
     let r = x as f32;
     if f64::from(r) > x {
@@ -308,9 +427,17 @@ mod tests {
                 assert!(f64::from(round_down(x)) <= x, "{x}");
             }
         }
-        assert_eq!(round_down(f64::INFINITY), f32::NEG_INFINITY);
-        assert_eq!(until(5.0, 0.0), f32::NEG_INFINITY);
-        assert_eq!(until(5.0, f64::NAN), f32::NEG_INFINITY);
+        assert_eq!(round_down(f64::INFINITY), UNKNOWN);
+        assert_eq!(until(5.0, 0.0), UNKNOWN);
+        assert_eq!(until(5.0, f64::NAN), UNKNOWN);
+        // UNKNOWN holds at no reading, read as either sign.
+        let at = Readings {
+            path: 0.0,
+            sweep: 0.0,
+        };
+        assert!(!own_holds(UNKNOWN, at) && !own_holds(-UNKNOWN, at));
+        assert_eq!(parent_says(UNKNOWN, at), None);
+        assert_eq!(parent_says(-UNKNOWN, at), None);
         assert!(until(5.0, 1.0) < 6.0 && until(5.0, 1.0) > 5.99);
     }
 }

@@ -474,8 +474,8 @@ impl Front<'_> {
             *a = ActiveVertex {
                 node: FREE | link,
                 coarsen: NONE,
-                sure_until: f32::NEG_INFINITY,
-                kept_until: f32::NEG_INFINITY,
+                own_cert: super::UNKNOWN,
+                parent_cert: super::UNKNOWN,
             };
             self.free_head = r;
         }

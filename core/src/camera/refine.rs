@@ -11,6 +11,7 @@
 
 use glam::{Vec3, Vec4};
 
+use super::certificate::{own_holds, parent_says};
 use super::{CameraState, OpError, FREE, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
@@ -71,7 +72,8 @@ pub struct RefineStats {
     /// polygons nor its children changed since.
     pub refusals_remembered: u32,
     /// Questions a certificate answered without reading bounds: a node's own split still
-    /// unwanted, or its coarsening parent's still wanted (see the module docs of `camera`).
+    /// unwanted, or its coarsening parent's still wanted or still unwanted (see the module
+    /// docs of `camera`).
     pub certified: u32,
 }
 
@@ -134,11 +136,6 @@ impl Criterion {
 
     #[inline(always)]
     fn wants_split(&self, b: &SplitBounds) -> bool {
-        self.judge(b) == Verdict::Split
-    }
-
-    #[inline(always)]
-    fn judge(&self, b: &SplitBounds) -> Verdict {
         let p = Vec3::from_array(b.point);
         let pe = p - self.eye;
         let pem2 = pe.length_squared();
@@ -150,38 +147,25 @@ impl Criterion {
         // rounds to at most dir2 · pem2, which stays under rhs · pem2 when dir2 is a relative
         // 2^-20 under rhs (each product rounds by at most 2^-24).
         if uni2 < rhs && dir2 < rhs * SHY {
-            return Verdict::TooFine;
+            return false;
         }
-        let yes = |wanted: bool| if wanted { Verdict::Split } else { Verdict::No };
         if self.frustum && !self.sphere_visible(p, b.radius) {
-            return Verdict::No;
+            return false;
         }
         let big_uniform = uni2 >= rhs;
         if b.cone_sin2 >= 1.0 {
             // No cone: no backface test, and the directional error counts in full.
-            return yes(big_uniform || dir2 >= rhs);
+            return big_uniform || dir2 >= rhs;
         }
         if !self.backface && b.dir_error <= 0.0 {
-            return yes(big_uniform);
+            return big_uniform;
         }
         let vdot = pe.dot(Vec3::from_array(b.cone_normal()));
         if self.backface && vdot > 0.0 && vdot * vdot > pem2 * b.cone_sin2 {
-            return Verdict::No;
+            return false;
         }
-        yes(big_uniform || dir2 * (pem2 - vdot * vdot) >= rhs * pem2)
+        big_uniform || dir2 * (pem2 - vdot * vdot) >= rhs * pem2
     }
-}
-
-/// What [`Criterion::judge`] says of a split.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Verdict {
-    /// Wanted.
-    Split,
-    /// Not wanted because neither error projects to the tolerance (the eye would have to
-    /// come closer: see `certificate`).
-    TooFine,
-    /// Not wanted for another reason (outside the frustum, facing away).
-    No,
 }
 
 impl CameraState<'_> {
@@ -234,12 +218,12 @@ impl CameraState<'_> {
             // visits of a pass are independent, but a miss on the record being decided stalls
             // the branches that depend on it (see `crate::prefetch`).
             if let Some(ahead) = f.active.get(i + PREFETCH_AHEAD) {
-                let own = if ahead.sure_until > reading.path {
+                let own = if own_holds(ahead.own_cert, reading) {
                     NONE
                 } else {
                     ahead.node
                 };
-                let parent = if ahead.kept_until > reading.sweep {
+                let parent = if parent_says(ahead.parent_cert, reading).is_some() {
                     NONE
                 } else {
                     ahead.coarsen
@@ -251,12 +235,16 @@ impl CameraState<'_> {
                 }
             }
             // A certificate may say the node's split is still unwanted: then skip its bounds.
-            if let Some(b) = uncertified(h, v, a.sure_until, reading.path, &mut st) {
-                let verdict = c.judge(b);
-                if verdict == Verdict::TooFine {
-                    f.active[i].sure_until = f.odometer.sure_until(b);
-                }
-                if verdict == Verdict::Split {
+            let bounds = if own_holds(a.own_cert, reading) {
+                st.certified += 1;
+                None
+            } else {
+                h.split_bounds(v)
+            };
+            if let Some(b) = bounds {
+                if !c.wants_split(b) {
+                    f.active[i].own_cert = f.odometer.unwanted_own(b);
+                } else {
                     if f.pairs as usize >= f.owner.len() {
                         st.capacity_refusals += 1;
                         i += 1;
@@ -289,27 +277,39 @@ impl CameraState<'_> {
             }
             // Coarsen: v is a stationary child (it shares its parent's position, which its
             // record says) whose parent no longer wants its split. Only the parent's bounds
-            // are read unless the collapse is wanted; a collapse refused before and not
+            // are read unless a certificate answers; a collapse refused before and not
             // changed since is not checked again (see the module docs of `camera`).
             let parent = NodeId(a.coarsen);
-            // A certificate may say the parent's split is still wanted: then skip its bounds.
-            if let Some(pb) = uncertified(h, parent, a.kept_until, reading.sweep, &mut st) {
-                if c.wants_split(pb) {
-                    let cone = (c.backface && pb.cone_sin2 < 1.0).then(|| pb.cone_normal());
-                    f.active[i].kept_until = f.odometer.kept_until(pb, cone);
-                } else {
-                    let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
-                    if pair != NONE && f.refusal_remembered(pair) {
-                        st.refusals_remembered += 1;
-                    } else if pair != NONE {
-                        if let Some(slots) = f.collapse_slots(h, parent) {
-                            f.apply_collapse(h, parent, slots)?;
-                            st.collapses += 1;
-                            continue; // the record now holds the parent: look again
-                        }
-                        st.collapses_refused += 1;
-                        f.remember_refusal(pair);
+            let unwanted = match parent_says(a.parent_cert, reading) {
+                Some(wanted) => {
+                    st.certified += 1;
+                    !wanted
+                }
+                None => match h.split_bounds(parent) {
+                    Some(pb) if c.wants_split(pb) => {
+                        let cone = (c.backface && pb.cone_sin2 < 1.0).then(|| pb.cone_normal());
+                        f.active[i].parent_cert = f.odometer.wanted_parent(pb, cone);
+                        false
                     }
+                    Some(pb) => {
+                        f.active[i].parent_cert = f.odometer.unwanted_parent(pb);
+                        true
+                    }
+                    None => false,
+                },
+            };
+            if unwanted {
+                let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
+                if pair != NONE && f.refusal_remembered(pair) {
+                    st.refusals_remembered += 1;
+                } else if pair != NONE {
+                    if let Some(slots) = f.collapse_slots(h, parent) {
+                        f.apply_collapse(h, parent, slots)?;
+                        st.collapses += 1;
+                        continue; // the record now holds the parent: look again
+                    }
+                    st.collapses_refused += 1;
+                    f.remember_refusal(pair);
                 }
             }
             i += 1;
@@ -317,24 +317,6 @@ impl CameraState<'_> {
         st.active_nodes = f.active_nodes;
         st.active_polygons = f.active_polygons;
         Ok(st)
-    }
-}
-
-/// The bounds of `node`, unless a certificate good until `until` still holds at `reading`
-/// (counted in `st`): then `None`, as for a node without bounds.
-#[inline(always)]
-fn uncertified<'h>(
-    h: &Hierarchy<'h>,
-    node: NodeId,
-    until: f32,
-    reading: f32,
-    st: &mut RefineStats,
-) -> Option<&'h SplitBounds> {
-    if until > reading {
-        st.certified += 1;
-        None
-    } else {
-        h.split_bounds(node)
     }
 }
 
