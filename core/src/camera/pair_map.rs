@@ -61,6 +61,15 @@ impl<'m> PairMap<'m> {
 
     /// Sets the pair of node `i`; `None` past the end or for a pair index the width cannot
     /// hold (which a camera's own bookkeeping never produces).
+    /// Asks for entry `i`'s cache line ahead of its use (see `crate::prefetch`).
+    #[inline(always)]
+    pub fn prefetch(&self, i: usize) {
+        match self {
+            Self::Narrow(m) => m.get(i).map(crate::prefetch::line),
+            Self::Wide(m) => m.get(i).map(crate::prefetch::line),
+        };
+    }
+
     #[inline]
     pub fn set(&mut self, i: usize, pair: u32) -> Option<()> {
         match self {

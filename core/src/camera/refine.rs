@@ -19,8 +19,8 @@ use crate::prefetch;
 use crate::records::SplitBounds;
 use crate::view::View;
 
-/// How many active records ahead a pass loads the bounds it will read.
-const PREFETCH_AHEAD: usize = 8;
+/// How many active records ahead a pass asks for the bounds and pair-map entries it will read.
+const PREFETCH_AHEAD: usize = 16;
 
 /// Knobs of [`CameraState::refine`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -223,11 +223,12 @@ impl CameraState<'_> {
                 } else {
                     ahead.node
                 };
-                let parent = if parent_says(ahead.parent_cert, reading).is_some() {
-                    NONE
-                } else {
-                    ahead.coarsen
-                };
+                let says = parent_says(ahead.parent_cert, reading);
+                let parent = if says.is_some() { NONE } else { ahead.coarsen };
+                // A parent not certainly wanted may mean a refusal to look up.
+                if says != Some(true) {
+                    f.pair_of.prefetch(ahead.coarsen as usize);
+                }
                 for n in [own, parent] {
                     if let Some(b) = h.split_bounds(NodeId(n)) {
                         prefetch::bounds(b);
