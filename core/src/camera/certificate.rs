@@ -51,7 +51,7 @@
 //! as does an eye or a plane that is not finite. Writing a record (a split, a collapse, a
 //! reset) forgets its certificates.
 
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 
 use super::ActiveVertex;
 use crate::hierarchy::Hierarchy;
@@ -65,6 +65,10 @@ const MARGIN: f64 = 1.0 / (1u32 << 16) as f64;
 /// Per pass, the sweep odometer's allowance for the frustum test's rounding, relative to
 /// the largest magnitude of its terms (the test rounds by less than 2⁻²¹ of it).
 const FRUSTUM_ROUNDING: f64 = 1.0 / (1u32 << 19) as f64;
+
+/// The allowance for `f32` rounding in [`Odometer::plane_slacks`], relative to the terms'
+/// magnitude.
+const PLANE_ROUNDING: f32 = 1.0 / (1u32 << 19) as f32;
 
 /// Bounds on the cone test's change per unit of eye movement: `|n| + sin α <= 2` for the
 /// decoded unit normal (a few ulps over 1).
@@ -89,8 +93,12 @@ pub(crate) struct Odometer {
     /// The last pass's eye and planes; `None` before the first pass.
     last: Option<(Vec3, [Vec4; 6])>,
     key: Key,
-    /// Tolerance in radians (`sqrt(tz2)`).
-    tolerance: f64,
+    /// The reciprocal of the tolerance in radians (`1 / sqrt(tz2)`).
+    inv_tolerance: f64,
+    /// The last pass's frustum planes transposed, four to a vector (`x`, `y`, `z`, `w`),
+    /// and which lanes hold a plane the pass used.
+    planes_t: [[Vec4; 4]; 2],
+    used: [BVec4A; 2],
 }
 
 /// The readings a pass compares certificates with, rounded up to `f32`.
@@ -150,7 +158,9 @@ impl Odometer {
                 frustum: false,
                 backface: false,
             },
-            tolerance: 0.0,
+            inv_tolerance: 0.0,
+            planes_t: [[Vec4::ZERO; 4]; 2],
+            used: [BVec4A::FALSE; 2],
         }
     }
 
@@ -201,10 +211,19 @@ impl Odometer {
                 self.path = 0.0;
                 self.sweep = 0.0;
                 self.key = key;
-                self.tolerance = libm::sqrt(f64::from(tz2));
+                self.inv_tolerance = 1.0 / libm::sqrt(f64::from(tz2));
             }
         }
         self.last = finite.then_some((view.eye, view.planes));
+        let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
+        for (k, (group, used)) in self.planes_t.iter_mut().zip(&mut self.used).enumerate() {
+            *used = (lane + Vec4::splat(4.0 * k as f32)).cmplt(Vec4::splat(planes as f32));
+            for (component, c) in group.iter_mut().zip(0..) {
+                *component = Vec4::from_array(core::array::from_fn(|l| {
+                    view.planes.get(4 * k + l).map_or(0.0, |p| p.to_array()[c])
+                }));
+            }
+        }
         Readings {
             path: round_up(self.path),
             sweep: round_up(self.sweep),
@@ -241,13 +260,13 @@ impl Odometer {
     /// The first is the common case and needs no more work; the others are looked at only
     /// without it.
     fn unwanted_slack(&self, b: &SplitBounds) -> Slack {
-        let Some((eye, planes)) = self.last else {
+        let Some((eye, _)) = self.last else {
             return Slack::NONE;
         };
         let point = Vec3::from_array(b.point);
         let d = distance(point, eye);
         let m = f64::from(b.uni_error.max(b.dir_error));
-        let too_fine = d * (1.0 - 1e-12) - m / self.tolerance * (1.0 + MARGIN);
+        let too_fine = d * (1.0 - 1e-12) - m * self.inv_tolerance * (1.0 + MARGIN);
         if too_fine > 0.0 {
             return Slack {
                 path: too_fine,
@@ -259,14 +278,10 @@ impl Odometer {
             sweep: 0.0,
         };
         if self.key.frustum {
-            let r = f64::from(b.radius);
-            for p in &planes[..self.key.planes as usize] {
-                let (s, magnitude) = plane_distance(*p, point, r);
-                // Outside while `s + r < 0`, with the rounding of the f64 sum kept out.
-                slack.sweep = slack.sweep.max(-(s + r) - magnitude * 1e-12);
-            }
+            slack.sweep = self.plane_slacks(point, b.radius).outside;
         }
-        if self.key.backface && b.cone_sin2 < 1.0 {
+        // Outside a plane already gives a certificate; the cone test costs a decode.
+        if self.key.backface && b.cone_sin2 < 1.0 && slack.sweep <= 0.0 {
             let g = self.cone_gap(point, d, b.cone_sin2, b.cone_normal(), MARGIN);
             // Facing away while `vdot > (sin + MARGIN) · d`.
             slack.path = slack.path.max(g / CONE_LIPSCHITZ - MARGIN * d);
@@ -278,7 +293,7 @@ impl Odometer {
     /// ([`parent_says`]); [`UNKNOWN`] when there is no slack. `cone_normal` is the decoded
     /// cone axis when the backface test applies.
     pub fn wanted_parent(&self, b: &SplitBounds, cone_normal: Option<[f32; 3]>) -> f32 {
-        let Some((eye, planes)) = self.last else {
+        let Some((eye, _)) = self.last else {
             return UNKNOWN;
         };
         let point = Vec3::from_array(b.point);
@@ -291,13 +306,9 @@ impl Odometer {
         } else {
             b.uni_error.max(b.dir_error)
         };
-        let mut slack = f64::from(m) / self.tolerance * (1.0 - MARGIN) - d * (1.0 + 1e-12);
+        let mut slack = f64::from(m) * self.inv_tolerance * (1.0 - MARGIN) - d * (1.0 + 1e-12);
         if self.key.frustum {
-            let r = f64::from(b.radius);
-            for p in &planes[..self.key.planes as usize] {
-                let (s, magnitude) = plane_distance(*p, point, r);
-                slack = slack.min(s + r - magnitude * 1e-12);
-            }
+            slack = slack.min(self.plane_slacks(point, b.radius).inside);
         }
         if self.key.backface && has_cone {
             let Some(n) = cone_normal else {
@@ -308,6 +319,31 @@ impl Odometer {
             slack = slack.min(-g / CONE_LIPSCHITZ - MARGIN * d);
         }
         until(self.sweep, slack)
+    }
+
+    /// How far a sphere at `p` of radius `r` is inside every plane of the last pass (the
+    /// least `n · p + w + r`) and outside one (the largest `-(n · p + w + r)`), rounded
+    /// down: computed in `f32` four planes at a time, less `2⁻¹⁹` of the terms' magnitude,
+    /// which bounds the evaluation's rounding (under `2⁻²¹` of it) with room to spare.
+    fn plane_slacks(&self, p: Vec3, r: f32) -> Planes {
+        let mut inside = f32::INFINITY;
+        let mut outside = f32::NEG_INFINITY;
+        for ([x, y, z, w], used) in self.planes_t.iter().zip(self.used) {
+            let rr = Vec4::splat(r);
+            let sr = *x * p.x + *y * p.y + *z * p.z + *w + rr;
+            let magnitude =
+                x.abs() * p.x.abs() + y.abs() * p.y.abs() + z.abs() * p.z.abs() + w.abs() + rr;
+            if !magnitude.is_finite() {
+                return Planes::NONE;
+            }
+            let err = magnitude * PLANE_ROUNDING;
+            inside = inside.min(Vec4::select(used, sr - err, Vec4::INFINITY).min_element());
+            outside = outside.max(Vec4::select(used, -sr - err, Vec4::NEG_INFINITY).max_element());
+        }
+        Planes {
+            inside: f64::from(inside),
+            outside: f64::from(outside),
+        }
     }
 
     /// `vdot - (sin + margin) · d` for the cone of axis `n` and `sin² = sin2` at `point`,
@@ -325,6 +361,20 @@ impl Odometer {
     }
 }
 
+/// [`Odometer::plane_slacks`]: how far inside every plane, and outside one.
+#[derive(Clone, Copy, Debug)]
+struct Planes {
+    inside: f64,
+    outside: f64,
+}
+
+impl Planes {
+    const NONE: Self = Self {
+        inside: f64::NEG_INFINITY,
+        outside: f64::NEG_INFINITY,
+    };
+}
+
 /// Slack of an answer, in eye path and in sweep; not positive where it has none that way.
 #[derive(Clone, Copy, Debug)]
 struct Slack {
@@ -337,18 +387,6 @@ impl Slack {
         path: 0.0,
         sweep: 0.0,
     };
-}
-
-/// A plane's signed distance `n · x + w` to `x` in `f64` (exact products of `f32`s, one
-/// rounding per sum), and the magnitude of its terms plus `r`, which bounds that rounding.
-fn plane_distance(p: Vec4, x: Vec3, r: f64) -> (f64, f64) {
-    let (n, w) = (p.truncate(), f64::from(p.w));
-    let s = f64::from(n.x) * f64::from(x.x)
-        + f64::from(n.y) * f64::from(x.y)
-        + f64::from(n.z) * f64::from(x.z)
-        + w;
-    let magnitude = f64::from(n.abs().dot(x.abs())) + w.abs() + r;
-    (s, magnitude)
 }
 
 /// How far any of `planes` moved, anywhere in the hierarchy's box, from `last`, plus the
