@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use plotters::chart::DualCoordChartContext;
 use plotters::prelude::*;
 
 /// Colours of up to four series.
@@ -26,7 +27,18 @@ pub struct Series<'a> {
 
 type PlotResult = Result<(), Box<dyn std::error::Error>>;
 
-/// A line chart with axis labels and a legend; `log_y` for quantities over decades.
+/// A second `y` axis on the right: the left axis's values times `scale`, described by `desc`
+/// (the same data in another unit).
+#[derive(Clone, Copy)]
+pub struct SecondAxis<'a> {
+    /// Right-axis value per left-axis unit.
+    pub scale: f64,
+    /// The right axis's label.
+    pub desc: &'a str,
+}
+
+/// A line chart with axis labels and a legend; `log_y` for quantities over decades; `right`
+/// for a second `y` axis in another unit.
 pub fn lines(
     file: &Path,
     title: &str,
@@ -34,53 +46,88 @@ pub fn lines(
     y_desc: &str,
     series: &[Series<'_>],
     log_y: bool,
+    right: Option<SecondAxis<'_>>,
 ) -> PlotResult {
     let root = SVGBackend::new(file, (1000, 600)).into_drawing_area();
     root.fill(&WHITE)?;
     let pts = || series.iter().flat_map(|s| s.points.iter());
     let x_max = pts().map(|p| p.0).fold(1.0f64, f64::max);
-    let y_max = pts().map(|p| p.1).fold(1.0f64, f64::max) * 1.15;
+    // Room above the data for the legend: 15% on a linear axis, half a decade on a log one.
+    let headroom = if log_y { 3.2 } else { 1.15 };
+    let y_max = pts().map(|p| p.1).fold(1.0f64, f64::max) * headroom;
+    // Counts (cameras) get a tick per whole number rather than halves.
+    let whole_x = pts().all(|p| p.0.fract() == 0.0) && x_max <= 20.0;
+    let x_labels = if whole_x { x_max as usize + 1 } else { 10 };
     let mut builder = ChartBuilder::on(&root);
     builder
         .caption(title, ("sans-serif", 22))
         .margin(14)
         .x_label_area_size(44)
-        .y_label_area_size(84);
+        .y_label_area_size(84)
+        .right_y_label_area_size(if right.is_some() { 84 } else { 0 });
     if log_y {
         let y_min = pts()
             .map(|p| p.1)
             .filter(|&y| y > 0.0)
             .fold(f64::INFINITY, f64::min)
             .clamp(0.1, 1.0);
-        let mut chart = builder.build_cartesian_2d(0f64..x_max, (y_min..y_max).log_scale())?;
+        let chart = builder.build_cartesian_2d(0f64..x_max, (y_min..y_max).log_scale())?;
+        let mut chart = match right {
+            Some(r) => chart
+                .set_secondary_coord(0f64..x_max, (y_min * r.scale..y_max * r.scale).log_scale()),
+            None => chart.set_secondary_coord(0f64..x_max, (y_min..y_max).log_scale()),
+        };
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .draw()?;
-        draw_series(&mut chart, series)?;
-    } else {
-        let mut chart = builder.build_cartesian_2d(0f64..x_max, 0f64..y_max)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
+            .x_labels(x_labels)
+            .x_label_formatter(&|v| short(*v))
             .y_label_formatter(&|v| short(*v))
             .draw()?;
+        if let Some(r) = right {
+            chart
+                .configure_secondary_axes()
+                .y_desc(r.desc)
+                .y_label_formatter(&|v| short(*v))
+                .draw()?;
+        }
+        draw_series(&mut chart, series)?;
+    } else {
+        let chart = builder.build_cartesian_2d(0f64..x_max, 0f64..y_max)?;
+        let scale = right.map_or(1.0, |r| r.scale);
+        let mut chart = chart.set_secondary_coord(0f64..x_max, 0f64..y_max * scale);
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_labels(x_labels)
+            .x_label_formatter(&|v| short(*v))
+            .y_label_formatter(&|v| short(*v))
+            .draw()?;
+        if let Some(r) = right {
+            chart
+                .configure_secondary_axes()
+                .y_desc(r.desc)
+                .y_label_formatter(&|v| short(*v))
+                .draw()?;
+        }
         draw_series(&mut chart, series)?;
     }
     root.present()?;
     Ok(())
 }
 
-fn draw_series<'a, DB: DrawingBackend + 'a, X, Y>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+fn draw_series<'a, DB: DrawingBackend + 'a, X, Y, X2, Y2>(
+    chart: &mut DualCoordChartContext<'a, DB, Cartesian2d<X, Y>, Cartesian2d<X2, Y2>>,
     series: &[Series<'_>],
 ) -> PlotResult
 where
     DB::ErrorType: 'static,
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
+    X2: Ranged,
+    Y2: Ranged,
 {
     for (i, s) in series.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
@@ -103,14 +150,14 @@ where
     Ok(())
 }
 
-/// 12k, 3.4M: short tick labels.
+/// 12k, 3.4M, 250, 10, 0.25: short tick labels (whole numbers without decimals).
 fn short(v: f64) -> String {
     let a = v.abs();
     if a >= 1e6 {
         format!("{:.1}M", v / 1e6)
     } else if a >= 1e4 {
         format!("{:.0}k", v / 1e3)
-    } else if a >= 100.0 {
+    } else if a >= 100.0 || (v - v.round()).abs() < 1e-9 {
         format!("{v:.0}")
     } else {
         format!("{v:.2}")
