@@ -5,6 +5,8 @@
 use std::path::Path;
 
 use plotters::chart::DualCoordChartContext;
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// Colours of up to four series.
@@ -77,45 +79,50 @@ pub fn lines(
                 .set_secondary_coord(0f64..x_max, (y_min * r.scale..y_max * r.scale).log_scale()),
             None => chart.set_secondary_coord(0f64..x_max, (y_min..y_max).log_scale()),
         };
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .x_labels(x_labels)
-            .x_label_formatter(&|v| short(*v))
-            .y_label_formatter(&|v| short(*v))
-            .draw()?;
-        if let Some(r) = right {
-            chart
-                .configure_secondary_axes()
-                .y_desc(r.desc)
-                .y_label_formatter(&|v| short(*v))
-                .draw()?;
-        }
-        draw_series(&mut chart, series)?;
+        draw_chart(&mut chart, (x_desc, y_desc, x_labels), right, series)?;
     } else {
         let chart = builder.build_cartesian_2d(0f64..x_max, 0f64..y_max)?;
         let scale = right.map_or(1.0, |r| r.scale);
         let mut chart = chart.set_secondary_coord(0f64..x_max, 0f64..y_max * scale);
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .x_labels(x_labels)
-            .x_label_formatter(&|v| short(*v))
-            .y_label_formatter(&|v| short(*v))
-            .draw()?;
-        if let Some(r) = right {
-            chart
-                .configure_secondary_axes()
-                .y_desc(r.desc)
-                .y_label_formatter(&|v| short(*v))
-                .draw()?;
-        }
-        draw_series(&mut chart, series)?;
+        draw_chart(&mut chart, (x_desc, y_desc, x_labels), right, series)?;
     }
     root.present()?;
     Ok(())
+}
+
+/// The axes (and the right one, if any), then the series and their legend.
+fn draw_chart<'a, DB: DrawingBackend + 'a, Y, Y2>(
+    chart: &mut DualCoordChartContext<
+        'a,
+        DB,
+        Cartesian2d<RangedCoordf64, Y>,
+        Cartesian2d<RangedCoordf64, Y2>,
+    >,
+    (x_desc, y_desc, x_labels): (&str, &str, usize),
+    right: Option<SecondAxis<'_>>,
+    series: &[Series<'_>],
+) -> PlotResult
+where
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y2: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_labels(x_labels)
+        .x_label_formatter(&|v| short(*v))
+        .y_label_formatter(&|v| short(*v))
+        .draw()?;
+    if let Some(r) = right {
+        chart
+            .configure_secondary_axes()
+            .y_desc(r.desc)
+            .y_label_formatter(&|v| short(*v))
+            .draw()?;
+    }
+    draw_series(chart, series)
 }
 
 fn draw_series<'a, DB: DrawingBackend + 'a, X, Y, X2, Y2>(
