@@ -16,6 +16,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         full_capacity: false,
         first_route: 0,
         compact_every: 30,
+        frames_in_flight: 2,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(
@@ -56,8 +57,22 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         ops(&p),
         ops(&s)
     );
-    // Threads change nothing but the schedule: the same operations.
+    // Threads change nothing but the schedule: the same operations, whether the cameras
+    // keep in step every frame or run up to two frames apart.
     assert_eq!(ops(&p), ops(&t));
+    for frames_in_flight in [1, 3] {
+        let other = fly(
+            &h,
+            &FlyoverOptions {
+                mode: Mode::Threads,
+                frames_in_flight,
+                ..options
+            },
+        )
+        .expect("threads");
+        assert_eq!(other.json()["frames_in_flight"], frames_in_flight);
+        assert_eq!(ops(&p), ops(&other.json()), "{frames_in_flight} in flight");
+    }
     assert!(per.human().contains("per camera, budgeted"));
     assert!(fly(
         &h,

@@ -116,6 +116,11 @@ enum Command {
         /// (0: never).
         #[arg(long, default_value_t = 30)]
         compact_every: usize,
+        /// Frames in flight: index lists per camera, and with --threads how far apart the
+        /// camera threads may run (1: a barrier every frame).
+        #[arg(long, default_value_t = caveclod_bake::flyover::gate::FRAMES_IN_FLIGHT as u8,
+              value_parser = clap::value_parser!(u8).range(1..=8))]
+        frames_in_flight: u8,
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
@@ -402,6 +407,7 @@ fn run(cli: Cli) -> Result<(), String> {
             threads,
             full_capacity,
             compact_every,
+            frames_in_flight,
             json,
         } => {
             let options = FlyoverOptions {
@@ -418,6 +424,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 full_capacity,
                 first_route: 0,
                 compact_every,
+                frames_in_flight: usize::from(frames_in_flight),
             };
             let print = |f: &Flyover| {
                 if json {

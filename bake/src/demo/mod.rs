@@ -18,6 +18,7 @@ use caveclod_core::{checksum64, Hierarchy};
 
 use crate::aligned::AlignedBytes;
 use crate::baked::{write_atomically, Baked};
+use crate::flyover::gate::FRAMES_IN_FLIGHT;
 use crate::flyover::{fly, fly_interleaved, Flyover, FlyoverOptions, Mode};
 use crate::import::ImportOptions;
 use crate::pipeline::bake_file;
@@ -514,7 +515,12 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
          from flights in the same run. The per-camera flights (4 cameras on one thread and on a \
          thread each, 2 and 3 cameras, each camera alone) are flown interleaved, {SEGMENT} \
          frames of each in turn, each with its own states, so the flights compared ran under \
-         the same load; the shared state flies on its own.\n"
+         the same load; the shared state flies on its own. Each camera emits into {} index \
+         lists in turn ({} frames in flight), so a camera's thread may start its next frame \
+         while another camera finishes this one, up to {} frame(s) ahead of the slowest.\n",
+        FRAMES_IN_FLIGHT,
+        FRAMES_IN_FLIGHT,
+        FRAMES_IN_FLIGHT - 1
     );
     let _ = writeln!(
         s,

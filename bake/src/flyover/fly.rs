@@ -2,10 +2,11 @@
 //! (one thread, or one thread per camera) or the paper's baseline of one shared state
 //! re-refined to each camera's view in turn.
 
-use std::sync::Barrier;
 use std::time::{Duration, Instant};
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, RefineStats, View};
+
+use super::gate::FrameGate;
 
 /// Per-frame figures of one camera.
 #[derive(Clone, Debug, Default)]
@@ -144,6 +145,13 @@ impl IndexBuffers {
     }
 }
 
+/// A camera's index lists: one per frame in flight (`count`, 0 when it does not emit).
+fn index_lists(h: &Hierarchy<'_>, config: &CameraConfig, count: usize) -> Vec<IndexBuffers> {
+    (0..count)
+        .map(|_| IndexBuffers::new(h, config.max_pairs))
+        .collect()
+}
+
 /// Refines `cam` to `view`, emits its indices, and records the frame.
 pub fn frame(
     h: &Hierarchy<'_>,
@@ -208,8 +216,10 @@ fn compact_now(n: usize, every: usize) -> bool {
 }
 
 /// One flight of every camera, each with its own state of capacity `config`, over every
-/// `stride`-th frame; `emit` also writes the index lists each frame; each state compacts
-/// every `compact_every` of its frames (0: never).
+/// `stride`-th frame; `emit` also writes the index lists each frame, into one of
+/// `in_flight` lists per camera in turn (frames in flight, see `gate`), and with `threads`
+/// a camera's thread runs at most `in_flight - 1` frames ahead of the slowest; each state
+/// compacts every `compact_every` of its frames (0: never).
 #[allow(clippy::too_many_arguments)]
 pub fn fly_per_camera(
     h: &Hierarchy<'_>,
@@ -219,8 +229,10 @@ pub fn fly_per_camera(
     stride: usize,
     emit: bool,
     threads: bool,
+    in_flight: usize,
     compact_every: usize,
 ) -> Result<Flight, String> {
+    let in_flight = in_flight.max(1);
     let start = Instant::now();
     let words = CameraState::words_needed_for(h, config);
     let mut memories: Vec<Vec<u32>> = views.iter().map(|_| vec![0u32; words]).collect();
@@ -229,38 +241,41 @@ pub fn fly_per_camera(
         cams.push(CameraState::with_config(h, m, config).map_err(|e| e.to_string())?);
     }
     let camera_bytes = cams.first().map_or(0, CameraState::bytes);
-    let mut outs: Vec<Option<IndexBuffers>> = views
+    let mut outs: Vec<Vec<IndexBuffers>> = views
         .iter()
-        .map(|_| emit.then(|| IndexBuffers::new(h, config.max_pairs)))
+        .map(|_| index_lists(h, config, if emit { in_flight } else { 0 }))
         .collect();
     let frames = views.first().map_or(0, Vec::len).div_ceil(stride);
     let records = if threads {
-        let barrier = Barrier::new(views.len());
+        let gate = FrameGate::new(views.len(), in_flight);
         std::thread::scope(|scope| {
             let handles: Vec<_> = cams
                 .into_iter()
                 .zip(outs.iter_mut())
                 .zip(views)
-                .map(|((mut cam, out), cam_views)| {
-                    let barrier = &barrier;
+                .enumerate()
+                .map(|(c, ((mut cam, out), cam_views))| {
+                    let gate = &gate;
                     // The camera state moves to its thread (`Send`); every thread reads the
-                    // one hierarchy (`Sync`). Frames stay in step, as a renderer's would.
+                    // one hierarchy (`Sync`). Frames stay within the frames in flight of
+                    // each other, as a renderer's would.
                     scope.spawn(move || -> Result<Record, String> {
                         let mut rec = Record::with_capacity(frames);
                         let mut failed = Ok(());
                         for (n, view) in cam_views.iter().step_by(stride).enumerate() {
+                            gate.enter(n);
                             if failed.is_ok() {
                                 failed = frame(
                                     h,
                                     &mut cam,
                                     view,
                                     params,
-                                    out.as_mut(),
+                                    out.get_mut(n % in_flight),
                                     &mut rec,
                                     compact_now(n, compact_every),
                                 );
                             }
-                            barrier.wait();
+                            gate.leave(c);
                         }
                         failed.map(|()| rec)
                     })
@@ -286,7 +301,7 @@ pub fn fly_per_camera(
                     &mut cams[c],
                     &views[c][f],
                     params,
-                    outs[c].as_mut(),
+                    outs[c].get_mut(n % in_flight),
                     &mut records[c],
                     compact_now(n, compact_every),
                 )?;
@@ -347,8 +362,10 @@ pub struct Group<'v> {
     pub views: &'v [Vec<View>],
     /// The capacity of every camera of the group.
     pub config: CameraConfig,
-    /// A thread per camera (frames in step, as in [`fly_per_camera`]).
+    /// A thread per camera (frames within the frames in flight, as in [`fly_per_camera`]).
     pub threads: bool,
+    /// Frames in flight: index lists per camera, and how far apart camera threads may run.
+    pub in_flight: usize,
     /// Refinement knobs.
     pub params: RefineParams,
     /// Each state compacts every this many of its frames (0: never).
@@ -358,13 +375,14 @@ pub struct Group<'v> {
 /// Camera states, index lists and records of one group.
 struct Flying<'m> {
     cams: Vec<CameraState<'m>>,
-    outs: Vec<IndexBuffers>,
+    /// Per camera, its index lists (one per frame in flight).
+    outs: Vec<Vec<IndexBuffers>>,
     records: Vec<Record>,
     walls: Vec<Duration>,
 }
 
 /// Frames `frames` of one group: each camera refines, emits and records its frame; with
-/// threads, a thread per camera, frames in step.
+/// threads, a thread per camera, frames within the group's frames in flight.
 fn fly_segment(
     h: &Hierarchy<'_>,
     g: &mut Flying<'_>,
@@ -372,6 +390,7 @@ fn fly_segment(
     frames: std::ops::Range<usize>,
 ) -> Result<(), String> {
     let (views, params, compact_every) = (group.views, &group.params, group.compact_every);
+    let in_flight = group.in_flight.max(1);
     if !group.threads {
         for f in frames {
             for c in camera_order(f, g.cams.len()) {
@@ -380,7 +399,7 @@ fn fly_segment(
                     &mut g.cams[c],
                     &views[c][f],
                     params,
-                    Some(&mut g.outs[c]),
+                    g.outs[c].get_mut(f % in_flight),
                     &mut g.records[c],
                     compact_now(f, compact_every),
                 )?;
@@ -388,7 +407,7 @@ fn fly_segment(
         }
         return Ok(());
     }
-    let barrier = Barrier::new(g.cams.len());
+    let gate = FrameGate::new(g.cams.len(), in_flight);
     std::thread::scope(|scope| {
         let handles: Vec<_> = g
             .cams
@@ -396,23 +415,25 @@ fn fly_segment(
             .zip(g.outs.iter_mut())
             .zip(g.records.iter_mut())
             .zip(views)
-            .map(|(((cam, out), rec), cam_views)| {
-                let (barrier, frames) = (&barrier, frames.clone());
+            .enumerate()
+            .map(|(c, (((cam, out), rec), cam_views))| {
+                let (gate, frames) = (&gate, frames.clone());
                 scope.spawn(move || -> Result<(), String> {
                     let mut failed = Ok(());
-                    for f in frames {
+                    for (n, f) in frames.enumerate() {
+                        gate.enter(n);
                         if failed.is_ok() {
                             failed = frame(
                                 h,
                                 cam,
                                 &cam_views[f],
                                 params,
-                                Some(out),
+                                out.get_mut(f % in_flight),
                                 rec,
                                 compact_now(f, compact_every),
                             );
                         }
-                        barrier.wait();
+                        gate.leave(c);
                     }
                     failed
                 })
@@ -459,7 +480,7 @@ pub fn fly_interleaved(
             outs: g
                 .views
                 .iter()
-                .map(|_| IndexBuffers::new(h, g.config.max_pairs))
+                .map(|_| index_lists(h, &g.config, g.in_flight.max(1)))
                 .collect(),
             records: g
                 .views

@@ -11,6 +11,7 @@
 //! Views are computed before the flight, so it times only the runtime (refine and emit).
 
 pub mod fly;
+pub mod gate;
 pub mod routes;
 
 use std::fmt::Write as _;
@@ -70,6 +71,10 @@ pub struct FlyoverOptions {
     /// together no longer fit the caches one camera alone fits (measured: 4 cameras took
     /// 7.5-9x one camera's refinement time without it, 4.0x with it every 30 frames).
     pub compact_every: usize,
+    /// Frames in flight (at least 1): each camera emits into this many index lists in turn,
+    /// and with a thread per camera a camera may run this many frames less one ahead of the
+    /// slowest (see [`gate`]); 1 is a barrier every frame.
+    pub frames_in_flight: usize,
 }
 
 impl Default for FlyoverOptions {
@@ -82,6 +87,7 @@ impl Default for FlyoverOptions {
             full_capacity: false,
             first_route: 0,
             compact_every: 30,
+            frames_in_flight: gate::FRAMES_IN_FLIGHT,
         }
     }
 }
@@ -173,6 +179,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         SIZING_STRIDE,
         false,
         options.mode == Mode::Threads,
+        options.frames_in_flight,
         options.compact_every,
     )?;
     let largest = summarise(&s.records).active_max;
@@ -202,6 +209,7 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
             1,
             true,
             options.mode == Mode::Threads,
+            options.frames_in_flight,
             options.compact_every,
         )?
     };
@@ -231,6 +239,7 @@ pub fn fly_interleaved(
             views: &p.views,
             config: p.config,
             threads: o.mode == Mode::Threads,
+            in_flight: o.frames_in_flight,
             params: p.params,
             compact_every: o.compact_every,
         })
@@ -330,6 +339,7 @@ impl Flyover {
             "cameras": self.options.cameras,
             "frames": self.options.frames,
             "tolerance_px": self.options.tolerance,
+            "frames_in_flight": self.options.frames_in_flight,
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
             },
@@ -364,9 +374,16 @@ impl Flyover {
             self.options.frames,
             self.options.tolerance,
             match self.options.mode {
-                Mode::Shared => "one shared state re-refined for each camera in turn (baseline)",
-                Mode::Threads => "a state per camera, one thread per camera",
-                Mode::PerCamera => "a state per camera, one thread",
+                Mode::Shared =>
+                    "one shared state re-refined for each camera in turn (baseline)".to_string(),
+                Mode::Threads => format!(
+                    "a state per camera, one thread per camera, {} frame(s) in flight",
+                    self.options.frames_in_flight
+                ),
+                Mode::PerCamera => format!(
+                    "a state per camera, one thread, {} frame(s) in flight",
+                    self.options.frames_in_flight
+                ),
             }
         );
         if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
