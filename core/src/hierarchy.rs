@@ -182,7 +182,9 @@ impl<'a> Hierarchy<'a> {
     #[inline]
     pub fn vertex_keys(&self, position: PositionId) -> &'a [VertexKey] {
         let o = self.parts.vertex_table_offsets;
-        match (o.get(position.index()), o.get(position.index() + 1)) {
+        // `checked_add`: an absent id (`NONE`) is `usize::MAX` on a 32-bit target.
+        let next = position.index().checked_add(1).and_then(|i| o.get(i));
+        match (o.get(position.index()), next) {
             (Some(&a), Some(&b)) => self
                 .parts
                 .vertex_table

@@ -18,7 +18,6 @@ use caveclod_core::{checksum64, Hierarchy};
 
 use crate::aligned::AlignedBytes;
 use crate::baked::{write_atomically, Baked};
-use crate::flyover::gate::FRAMES_IN_FLIGHT;
 use crate::flyover::{fly, fly_interleaved, Flyover, FlyoverOptions, Mode};
 use crate::import::ImportOptions;
 use crate::pipeline::bake_file;
@@ -518,9 +517,9 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
          the same load; the shared state flies on its own. Each camera emits into {} index \
          lists in turn ({} frames in flight), so a camera's thread may start its next frame \
          while another camera finishes this one, up to {} frame(s) ahead of the slowest.\n",
-        FRAMES_IN_FLIGHT,
-        FRAMES_IN_FLIGHT,
-        FRAMES_IN_FLIGHT - 1
+        pc.options.frames_in_flight,
+        pc.options.frames_in_flight,
+        pc.options.frames_in_flight.saturating_sub(1)
     );
     let _ = writeln!(
         s,

@@ -364,7 +364,8 @@ pub struct Group<'v> {
     pub config: CameraConfig,
     /// A thread per camera (frames within the frames in flight, as in [`fly_per_camera`]).
     pub threads: bool,
-    /// Frames in flight: index lists per camera, and how far apart camera threads may run.
+    /// Frames in flight: index lists per camera, and how far apart camera threads may run
+    /// (0 counts as 1).
     pub in_flight: usize,
     /// Refinement knobs.
     pub params: RefineParams,

@@ -51,14 +51,20 @@ impl FrameGate {
         }
     }
 
-    /// Camera `c` finished a frame.
+    /// Camera `c` finished a frame. Waiters wait for the slowest camera, so only the
+    /// slowest finishing a frame can let one go: the others wake nobody.
     pub fn leave(&self, c: usize) {
         let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
-        if let Some(d) = done.get_mut(c) {
-            *d += 1;
-        }
+        let slowest = done.iter().copied().min();
+        let Some(d) = done.get_mut(c) else {
+            return;
+        };
+        let was_slowest = Some(*d) == slowest;
+        *d += 1;
         drop(done);
-        self.changed.notify_all();
+        if was_slowest {
+            self.changed.notify_all();
+        }
     }
 }
 

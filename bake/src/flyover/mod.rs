@@ -339,7 +339,9 @@ impl Flyover {
             "cameras": self.options.cameras,
             "frames": self.options.frames,
             "tolerance_px": self.options.tolerance,
-            "frames_in_flight": self.options.frames_in_flight,
+            // The shared state emits each camera's turn into one list.
+            "frames_in_flight": (self.options.mode != Mode::Shared)
+                .then_some(self.options.frames_in_flight),
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
             },
