@@ -178,6 +178,15 @@ impl<'a> Hierarchy<'a> {
         self.parts.positions.get(n.position.index()).map(|p| p.xyz)
     }
 
+    /// Asks for the cache line of `position`'s entry in the vertex table's offsets, ahead
+    /// of a [`vertex_index`](Self::vertex_index) at that position.
+    #[inline]
+    pub(crate) fn prefetch_vertex_keys(&self, position: PositionId) {
+        if let Some(o) = self.parts.vertex_table_offsets.get(position.index()) {
+            crate::prefetch::line(o);
+        }
+    }
+
     /// The vertex-table entries of a position: one per surface group with a vertex there.
     #[inline]
     pub fn vertex_keys(&self, position: PositionId) -> &'a [VertexKey] {

@@ -169,6 +169,59 @@ fn full_split_reaches_the_full_resolution_mesh_and_full_collapse_the_base_mesh()
     assert_base_mesh(&h, &cam);
 }
 
+/// Every surface's indices, packed, with the offsets.
+fn emitted(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> (Vec<u32>, Vec<u32>) {
+    let total = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![0u32; total];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    assert_eq!(
+        cam.emit_indices_packed(h, &mut out, &mut offsets),
+        Ok(total)
+    );
+    (out, offsets)
+}
+
+/// A camera with the index cache emits exactly what one without it looks up through the
+/// hierarchy, after splits, collapses, refinement and compaction, and costs 16 bytes per
+/// polygon slot more.
+#[test]
+fn the_index_cache_changes_no_index() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let plain_config = caveclod_core::CameraConfig {
+        index_cache: false,
+        ..caveclod_core::CameraConfig::full(&h)
+    };
+    let mut memory = vec![0u32; CameraState::words_needed(&h)];
+    let mut plain_memory = vec![0u32; CameraState::words_needed_for(&h, &plain_config)];
+    let slots = h.base_polygon_count() + 2 * h.splits().len();
+    assert_eq!(memory.len() - plain_memory.len(), 4 * slots);
+    let mut cam = CameraState::new(&h, &mut memory).expect("memory");
+    let mut plain = CameraState::with_config(&h, &mut plain_memory, &plain_config).expect("memory");
+    assert_eq!(cam.bytes() - plain.bytes(), 16 * slots);
+    assert_eq!(emitted(&h, &cam), emitted(&h, &plain));
+    for (i, view) in views(&h, 8).iter().enumerate() {
+        let st = cam.refine(&h, view, &params(i)).expect("refine");
+        assert_eq!(plain.refine(&h, view, &params(i)), Ok(st));
+        assert_eq!(emitted(&h, &cam), emitted(&h, &plain), "view {i}");
+        if i % 3 == 2 {
+            cam.compact(&h);
+            plain.compact(&h);
+            assert_eq!(
+                emitted(&h, &cam),
+                emitted(&h, &plain),
+                "compacted, view {i}"
+            );
+        }
+    }
+    split_all(&h, &mut cam);
+    split_all(&h, &mut plain);
+    assert_eq!(emitted(&h, &cam), emitted(&h, &plain));
+    collapse_all(&h, &mut cam);
+    collapse_all(&h, &mut plain);
+    assert_eq!(emitted(&h, &cam), emitted(&h, &plain));
+}
+
 #[test]
 fn refinement_settles_and_coarsens_again() {
     let file = golden();
@@ -313,6 +366,7 @@ fn too_little_camera_memory_is_refused() {
     let config = caveclod_core::CameraConfig {
         max_pairs: ns + 1,
         stack_len: 64,
+        index_cache: true,
     };
     assert_eq!(
         CameraState::with_config(&h, &mut memory, &config).err(),
@@ -330,6 +384,7 @@ fn a_full_camera_refuses_splits_without_failing() {
     let config = caveclod_core::CameraConfig {
         max_pairs: 3,
         stack_len: 256,
+        index_cache: true,
     };
     let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
     let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
@@ -460,6 +515,7 @@ fn refine_stats_count_every_split_applied() {
         let config = caveclod_core::CameraConfig {
             max_pairs,
             stack_len: 256,
+            index_cache: true,
         };
         let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
         let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");

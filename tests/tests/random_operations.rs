@@ -1,13 +1,14 @@
 //! proptest: random legal split / collapse / forced-split sequences and random camera paths on
 //! three generated meshes. After every step the front passes every invariant of
 //! `check_front` (active sets equal the sets derived from scratch, neighbour links symmetric,
-//! corners above their leaves, emitted indices in the right surface group), and a second
-//! camera over the same hierarchy never changes.
+//! corners above their leaves, emitted indices in the right surface group), a camera without
+//! the index cache that takes the same steps emits the same indices, and a second camera over
+//! the same hierarchy never changes.
 
 use std::sync::OnceLock;
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::{CameraState, NodeId, RefineParams, View};
+use caveclod_core::{CameraConfig, CameraState, NodeId, RefineParams, View};
 use caveclod_tests::check::check_front;
 use caveclod_tests::{bake, meshes, BakedMesh};
 use proptest::prelude::*;
@@ -84,6 +85,16 @@ fn snapshot_sorted(
     (nodes, polys)
 }
 
+/// Every surface's indices, packed, with the offsets.
+fn emitted(h: &caveclod_core::Hierarchy<'_>, cam: &CameraState<'_>) -> (Vec<u32>, Vec<u32>) {
+    let total = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
+    let mut out = vec![0u32; total];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    cam.emit_indices_packed(h, &mut out, &mut offsets)
+        .expect("emit");
+    (out, offsets)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
 
@@ -95,6 +106,11 @@ proptest! {
         let mut other_mem = vec![0u32; CameraState::words_needed(&h)];
         let mut cam = CameraState::new(&h, &mut mem).expect("sized");
         let mut other = CameraState::new(&h, &mut other_mem).expect("sized");
+        // The same steps on a camera without the index cache: it must emit the same indices.
+        let plain_config = CameraConfig { index_cache: false, ..CameraConfig::full(&h) };
+        let mut plain_mem = vec![0u32; CameraState::words_needed_for(&h, &plain_config)];
+        let mut plain = CameraState::with_config(&h, &mut plain_mem, &plain_config).expect("sized");
+        let mut plain_stack = vec![NodeId::NONE; 1024];
         let far = View::perspective(Vec3::new(500.0, 300.0, 500.0), Vec3::ZERO, Vec3::Y, 1.0, 1.0, 0.1, 1e4, 512.0);
         other.refine(&h, &far, &RefineParams::default()).expect("refine");
         let other_before = snapshot(&h, &other);
@@ -106,11 +122,13 @@ proptest! {
                     let v = NodeId(x % ns);
                     let legal = cam.can_split(&h, v);
                     prop_assert_eq!(cam.split(&h, v).is_ok(), legal);
+                    prop_assert_eq!(plain.split(&h, v).is_ok(), legal);
                 }
                 Step::ForceSplit(x) => {
                     // Any node, created or not: the forced split creates it first.
                     let v = NodeId(x % ns);
                     let applied = cam.force_split(&h, v, &mut stack).expect("force split");
+                    prop_assert_eq!(plain.force_split(&h, v, &mut plain_stack), Ok(applied));
                     prop_assert!(cam.is_split(v));
                     prop_assert!(applied > 0 || !cam.is_node_active(&h, v));
                 }
@@ -118,10 +136,12 @@ proptest! {
                     let v = NodeId(x % ns);
                     let legal = cam.can_collapse(&h, v);
                     prop_assert_eq!(cam.collapse(&h, v).is_ok(), legal);
+                    prop_assert_eq!(plain.collapse(&h, v).is_ok(), legal);
                 }
                 Step::Compact => {
                     let before = snapshot_sorted(&h, &cam);
                     cam.compact(&h);
+                    plain.compact(&h);
                     prop_assert_eq!(snapshot_sorted(&h, &cam), before);
                 }
                 Step::Refine { eye, target, tolerance, max_ops } => {
@@ -129,11 +149,13 @@ proptest! {
                     let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
                     let st = cam.refine(&h, &view, &params).expect("refine");
                     prop_assert!(st.operations() <= max_ops);
+                    prop_assert_eq!(plain.refine(&h, &view, &params), Ok(st));
                 }
             }
             if let Err(e) = check_front(&h, &cam) {
                 prop_assert!(false, "{}", e);
             }
+            prop_assert_eq!(emitted(&h, &cam), emitted(&h, &plain));
         }
         prop_assert_eq!(snapshot(&h, &other), other_before);
     }

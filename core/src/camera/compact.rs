@@ -80,6 +80,10 @@ impl Front<'_> {
             }
             self.slots[slot] = s;
         }
+        // The pairs moved: their index-cache entries are looked up again.
+        if self.caches_indices() {
+            self.cache_slots(h, self.base as usize, live);
+        }
         self.churn = 0;
     }
 

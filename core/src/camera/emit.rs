@@ -1,30 +1,18 @@
-//! Index emission: each active polygon's three vertex indices, found through the vertex
-//! table, appended to the index list of its surface, in slot order (deterministic for a
-//! given history of operations). Output goes into caller-provided slices; too little room
-//! is an error naming the surface, never a panic.
+//! Index emission: each active polygon's three vertex indices, appended to the index list
+//! of its surface, in slot order (deterministic for a given history of operations). Output
+//! goes into caller-provided slices; too little room is an error naming the surface, never a
+//! panic.
 //!
-//! Each polygon's indices are the end of a chain of reads at unrelated addresses: the slot's
-//! polygon (for a split's pair, the split record), the polygon record (surface and group),
-//! per corner the active-vertex record (the node), the node record (the position), and the
-//! vertex table's row for the position and its entry for the group. Followed polygon by
-//! polygon, each read waits for the one before it, and once the hierarchy and the cameras
-//! outgrow the caches every link is a miss. Emission therefore takes [`BATCH`] slots at a
-//! time and follows one link for all of them before the next, so the misses of a link are
-//! independent and the core overlaps them; the indices, their order and the errors are
-//! those of the polygon-by-polygon walk (the first missing vertex in slot and corner order).
-//! `emit/packed` (a 1M-polygon terrain, 36k polygons emitted) went from 683 µs to 571-583 µs
-//! (0.84-0.85x, the two builds benchmarked one after the other), and the demo's cameras (10k
-//! polygons each, mostly in cache) emit in 0.121-0.127 ms where they took 0.133-0.153 ms (5
-//! alternating runs). The last two links run in the loop that hands out the triangles: a
-//! separate pass for them was slower in cache (0.134-0.150 ms in the demo). 32 slots per
-//! batch keep the batch's arrays under 1 KB of stack; on the bench (with the separate pass) 16
-//! measured as 32, and 64 was 4% faster, not worth twice the stack on a small target.
+//! With the index cache (the default; see `index_cache`) emission copies each slot's entry;
+//! without it, it follows the chain of reads through the hierarchy, [`BATCH`] slots at a
+//! time. Either way the indices, their order and the errors are the same: the first corner
+//! without a vertex, in slot and corner order, is [`EmitError::MissingVertex`].
 
-use super::{CameraState, NONE};
+use super::index_cache::BATCH;
+use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
-use crate::ids::{PolyId, PositionId};
+use crate::ids::PolyId;
 use crate::outputs::{check_lists, Shortfall};
-use crate::records::Polygon;
 
 /// Why indices could not be emitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,10 +94,6 @@ impl core::fmt::Display for EmitError {
 
 impl core::error::Error for EmitError {}
 
-/// Slots per batch: enough independent reads per link to keep the core's miss queue busy,
-/// few enough that a batch's gathered links stay in the first-level cache (768 bytes).
-const BATCH: usize = 32;
-
 impl CameraState<'_> {
     /// Indices each surface's list needs: `3 ×` its active polygons.
     pub fn index_count(&self, surface: usize) -> usize {
@@ -119,11 +103,8 @@ impl CameraState<'_> {
             .map_or(0, |&n| 3 * n as usize)
     }
 
-    /// Calls `sink(surface, [i0, i1, i2])` for every active polygon in emission order.
-    ///
-    /// Slots are taken [`BATCH`] at a time, and each batch goes through the chain of reads
-    /// one link at a time for all its polygons (see the module docs), so the reads of one
-    /// link are independent and their misses overlap.
+    /// Calls `sink(surface, [i0, i1, i2])` for every active polygon in emission order:
+    /// from the index cache, or looked up [`BATCH`] slots at a time without one.
     #[inline]
     fn for_each_triangle(
         &self,
@@ -131,51 +112,36 @@ impl CameraState<'_> {
         mut sink: impl FnMut(usize, [u32; 3]),
     ) -> Result<(), EmitError> {
         let f = &self.front;
-        let polys = h.polygons();
-        let nodes = h.nodes();
         let live = ((f.base + 2 * f.pairs) as usize).min(f.slots.len());
-        // Per slot of the batch: its polygon, then that polygon's record; per corner: its
-        // node, then the node's position (`NONE` where a link is missing).
-        let mut ids = [PolyId::NONE; BATCH];
-        let mut records: [Option<&Polygon>; BATCH] = [None; BATCH];
-        let mut corners = [[NONE; 3]; BATCH];
+        let mut hand_out = |slot: usize, t: &SlotTriangle| {
+            // A slot without a polygon holds nothing to draw (none is live in a consistent
+            // camera).
+            if t.surface == NO_POLYGON {
+                return Ok(());
+            }
+            if let Some(corner) = t.indices.iter().position(|&i| i == NONE) {
+                return Err(EmitError::MissingVertex {
+                    poly: f.poly_at(h, slot as u32).unwrap_or(PolyId::NONE),
+                    corner: corner as u8,
+                });
+            }
+            sink(usize::from(t.surface), t.indices);
+            Ok(())
+        };
+        if let Some(cached) = f.triangles.get(..live).filter(|_| f.caches_indices()) {
+            for (slot, t) in cached.iter().enumerate() {
+                hand_out(slot, t)?;
+            }
+            return Ok(());
+        }
         let mut start = 0;
         while start < live {
-            let batch = &f.slots[start..live.min(start + BATCH)];
-            // Link 1: the polygon each slot holds (a base polygon, or one side of the split
-            // that owns the pair: the split record) and the node each corner's record holds.
-            for (k, ps) in batch.iter().enumerate() {
-                ids[k] = f.poly_at(h, (start + k) as u32).unwrap_or(PolyId::NONE);
-                for (c, &r) in corners[k].iter_mut().zip(&ps.corners) {
-                    *c = f.node_of(r).map_or(NONE, |n| n.0);
-                }
+            let n = (live - start).min(BATCH);
+            let g = f.gather(h, start as u32, n);
+            for k in 0..n {
+                hand_out(start + k, &g.entry(h, k))?;
             }
-            // Link 2: the polygon records, and each corner's position.
-            for k in 0..batch.len() {
-                records[k] = polys.get(ids[k].index());
-                for c in &mut corners[k] {
-                    *c = nodes.get(*c as usize).map_or(NONE, |n| n.position.0);
-                }
-            }
-            // Links 3 and 4: the vertex table's row of each position and the group's entry,
-            // then the triangle. A slot without a polygon holds nothing to draw (none is live
-            // in a consistent camera).
-            for k in 0..batch.len() {
-                let Some(poly) = records[k] else {
-                    continue;
-                };
-                let mut tri = [0u32; 3];
-                for (c, &pos) in corners[k].iter().enumerate() {
-                    tri[c] = h.vertex_index(poly.group, PositionId(pos)).ok_or(
-                        EmitError::MissingVertex {
-                            poly: ids[k],
-                            corner: c as u8,
-                        },
-                    )?;
-                }
-                sink(poly.surface.index(), tri);
-            }
-            start += batch.len();
+            start += n;
         }
         Ok(())
     }

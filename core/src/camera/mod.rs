@@ -15,6 +15,7 @@
 //! | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
 //! | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
 //! | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
+//! | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
 //! | `stack` | `stack_len` | the explicit stack of forced splits |
 //!
 //! Design decisions:
@@ -53,6 +54,16 @@
 //!   sweep), and a visit before then reads nothing but its record (see `certificate`): on
 //!   the St. Helens flyover about five questions in six of a moving pass are answered so,
 //!   and all but a handful of a settled pass. 8 bytes per record.
+//! - **Emission copies; operations keep the copy exact.** A polygon's vertex indices change
+//!   only when a corner moves to another active-vertex record: a record keeps its position
+//!   for life (a split hands it to the stationary child, which shares the position). So the
+//!   index cache keeps each slot's three indices with its surface and group, and an
+//!   operation rewrites just the corners it moves (one vertex-table row per split or
+//!   collapse: every moved corner lands on the same position) and the pair it creates; a
+//!   pair filling a hole brings its entries. Emission then copies the cache in slot order.
+//!   Without it, every frame followed five dependent reads per polygon across the hierarchy,
+//!   which four cameras' emissions pushed out of each other's caches. 16 bytes per slot;
+//!   [`CameraConfig::index_cache`] turns it off for a runtime short of memory.
 //! - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 //!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 //!   memory gets a hard polygon budget for free.
@@ -60,6 +71,7 @@
 mod certificate;
 mod compact;
 mod emit;
+mod index_cache;
 mod ops;
 mod pair_map;
 mod refine;
@@ -113,6 +125,22 @@ pub(crate) struct ActiveVertex {
 
 const ACTIVE_WORDS: usize = core::mem::size_of::<ActiveVertex>() / 4;
 
+/// A slot's entry in the index cache: its polygon's vertex indices (`NONE` where a corner
+/// has no vertex in the polygon's surface group), surface and surface group (`surface` is
+/// [`NO_POLYGON`] for a slot without a polygon: the right side of a split on a border).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub(crate) struct SlotTriangle {
+    pub indices: [u32; 3],
+    pub surface: u16,
+    pub group: u16,
+}
+
+/// The surface of a slot without a polygon (validation keeps surface ids below it).
+pub(crate) const NO_POLYGON: u16 = u16::MAX;
+
+const TRIANGLE_WORDS: usize = core::mem::size_of::<SlotTriangle>() / 4;
+
 impl ActiveVertex {
     /// The record of `node`, with its coarsening parent read from the node records: its
     /// parent if that has a split and the two share a position.
@@ -143,6 +171,11 @@ pub struct CameraConfig {
     pub max_pairs: u32,
     /// Entries of the forced-split stack.
     pub stack_len: u32,
+    /// Keep each active polygon's vertex indices between frames, so emission copies them
+    /// instead of looking every polygon up in the hierarchy (16 bytes per polygon slot; see
+    /// the [module docs](self)). On in [`full`](Self::full) and
+    /// [`with_polygon_budget`](Self::with_polygon_budget).
+    pub index_cache: bool,
 }
 
 impl CameraConfig {
@@ -151,6 +184,7 @@ impl CameraConfig {
         Self {
             max_pairs: h.splits().len() as u32,
             stack_len: Self::default_stack(h),
+            index_cache: true,
         }
     }
 
@@ -161,6 +195,7 @@ impl CameraConfig {
         Self {
             max_pairs: extra.min(h.splits().len() as u32),
             stack_len: Self::default_stack(h),
+            index_cache: true,
         }
     }
 
@@ -233,6 +268,8 @@ pub(crate) struct Front<'m> {
     pub surface_polygons: &'m mut [u32],
     /// A bit per pair: its collapse was refused and neither slot nor child changed since.
     pub refused: &'m mut [u32],
+    /// The index cache: per slot its triangle (empty when the camera keeps none).
+    pub triangles: &'m mut [SlotTriangle],
     pub pairs: u32,
     /// High-water mark of `active`.
     pub active_len: u32,
@@ -246,13 +283,26 @@ pub(crate) struct Front<'m> {
     pub odometer: Odometer,
 }
 
+/// Polygon slots of a camera with room for `max_pairs` splits.
+fn slot_count(h: &Hierarchy<'_>, max_pairs: usize) -> usize {
+    h.base_polygon_count()
+        .saturating_add(max_pairs.saturating_mul(2))
+}
+
+/// Words of the index cache for `slots` slots, if kept.
+fn cache_words(slots: usize, kept: bool) -> usize {
+    if kept {
+        slots.saturating_mul(TRIANGLE_WORDS)
+    } else {
+        0
+    }
+}
+
 fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
     let ns = h.splits().len();
     let mp = c.max_pairs as usize;
-    let slots = h
-        .base_polygon_count()
-        .saturating_add(mp.saturating_mul(2))
-        .saturating_mul(SLOT_WORDS);
+    let slots = slot_count(h, mp);
+    let triangles = cache_words(slots, c.index_cache);
     [
         PairMap::words(ns, mp),
         mp,
@@ -260,9 +310,10 @@ fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
             .len()
             .saturating_add(mp)
             .saturating_mul(ACTIVE_WORDS),
-        slots,
+        slots.saturating_mul(SLOT_WORDS),
         h.surface_count(),
         refused_words(mp),
+        triangles,
         c.stack_len as usize,
     ]
     .iter()
@@ -315,9 +366,11 @@ impl<'m> CameraState<'m> {
         let (pair_of, rest) = memory.split_at_mut(PairMap::words(ns, mp));
         let (owner, rest) = rest.split_at_mut(mp);
         let (active, rest) = rest.split_at_mut(ACTIVE_WORDS * (h.roots().len() + mp));
-        let (slots, rest) = rest.split_at_mut(SLOT_WORDS * (h.base_polygon_count() + 2 * mp));
+        let slot_total = slot_count(h, mp);
+        let (slots, rest) = rest.split_at_mut(SLOT_WORDS * slot_total);
         let (surface_polygons, rest) = rest.split_at_mut(h.surface_count());
         let (refused, rest) = rest.split_at_mut(refused_words(mp));
+        let (triangles, rest) = rest.split_at_mut(cache_words(slot_total, config.index_cache));
         let (stack, _) = rest.split_at_mut(config.stack_len as usize);
         let mut cam = Self {
             front: Front {
@@ -329,6 +382,7 @@ impl<'m> CameraState<'m> {
                 slots: bytemuck::cast_slice_mut(slots),
                 surface_polygons,
                 refused,
+                triangles: bytemuck::cast_slice_mut(triangles),
                 pairs: 0,
                 active_len: 0,
                 free_head: NONE,
@@ -377,6 +431,7 @@ impl<'m> CameraState<'m> {
         }
         f.active_polygons = f.base;
         f.churn = 0;
+        f.cache_slots(h, 0, f.base as usize);
     }
 
     /// `true` if this camera was made for `h`.
@@ -416,6 +471,7 @@ impl<'m> CameraState<'m> {
             + 4 * (f.owner.len() + f.surface_polygons.len() + f.refused.len() + self.stack.len())
             + core::mem::size_of_val(&*f.active)
             + core::mem::size_of_val(&*f.slots)
+            + core::mem::size_of_val(&*f.triangles)
             + core::mem::size_of::<Self>()
     }
 

@@ -10,9 +10,10 @@
 //! so a hierarchy that passed validation but has contradictory connectivity produces
 //! [`OpError::Inconsistent`], never a panic or an endless loop.
 
+use super::index_cache::Known;
 use super::{ActiveVertex, CameraState, Front, PolySlot, FREE, NONE};
 use crate::hierarchy::Hierarchy;
-use crate::ids::{NodeId, PolyId};
+use crate::ids::{NodeId, PolyId, PositionId};
 
 /// Why an operation was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -254,6 +255,11 @@ impl Front<'_> {
             });
         }
         let [ccw, clw, rclw, rccw] = slots;
+        self.prefetch_cached(clw);
+        self.prefetch_cached(rccw);
+        if self.caches_indices() {
+            Self::prefetch_row(h, Self::position_of(h, s.floating));
+        }
         // The active-vertex record of v: a corner of fl_clw.
         let clw_slot = *self.slot(clw, v)?;
         let j0 = (0..3)
@@ -265,6 +271,16 @@ impl Front<'_> {
         let k = self.pairs;
         let fl = self.base + 2 * k;
         let fr = fl + 1;
+        // Where the children's records stand, for the index cache (see `index_cache`), and
+        // the entries of the walk's first and last polygons before their corners moved.
+        let (at_stationary, at_floating) = if self.caches_indices() {
+            (
+                Self::position_of(h, s.stationary),
+                Self::position_of(h, s.floating),
+            )
+        } else {
+            (PositionId(NONE), PositionId(NONE))
+        };
         // Walk from fl_clw around v to fr_ccw, moving corners to the floating child.
         let mut fa = clw;
         let mut j = j0;
@@ -272,6 +288,9 @@ impl Front<'_> {
         first.neighbours[next(j)] = fl;
         let vl = first.corners[prev(j)];
         first.corners[j] = ru;
+        let mut known = Known::default();
+        let first_before = self.cache_corner(h, fa, j, at_floating, &mut known);
+        let mut last_before = first_before;
         let mut vr = NONE;
         let mut steps = 0u32;
         loop {
@@ -285,9 +304,11 @@ impl Front<'_> {
             if nx == NONE {
                 break;
             }
+            self.prefetch_cached(nx);
             fa = nx;
             j = self.corner(fa, rv, v)?;
             self.slot_mut(fa, v)?.corners[j] = ru;
+            last_before = self.cache_corner(h, fa, j, at_floating, &mut known);
             steps += 1;
             if steps > self.active_polygons {
                 return Err(bad);
@@ -318,6 +339,27 @@ impl Front<'_> {
                 neighbours: [NONE; 3],
             }
         };
+        if self.caches_indices() {
+            // f_l = (vs, vt, vl): fl_clw's corner j0 before and after it moved, and its vl.
+            let polys = h.polygons();
+            let known = first_before
+                .zip(self.triangles.get(clw as usize))
+                .map(|(b, a)| (b.group, [b.indices[j0], a.indices[j0], b.indices[prev(j0)]]));
+            let entry = self.new_entry(h, polys.get(s.f_l.index()), known, |f| {
+                [at_stationary, at_floating, f.record_position(h, vl)]
+            });
+            self.set_cached(fl, entry);
+            // f_r = (vs, vr, vt): likewise from fr_ccw, where the walk ended (corner j).
+            let known = last_before
+                .filter(|_| fa == rccw)
+                .zip(self.triangles.get(fa as usize))
+                .map(|(b, a)| (b.group, [b.indices[j], b.indices[next(j)], a.indices[j]]));
+            let fr_poly = s.f_r.get().and_then(|f| polys.get(f.index()));
+            let entry = self.new_entry(h, fr_poly, known, |f| {
+                [at_stationary, f.record_position(h, vr), at_floating]
+            });
+            self.set_cached(fr, entry);
+        }
         self.owner[k as usize] = v;
         self.pair_of.set(v.index(), k).ok_or(bad)?;
         self.pairs += 1;
@@ -351,6 +393,8 @@ impl Front<'_> {
         let fl = self.base + 2 * k;
         let fr = fl + 1;
         let [ccw, clw, rclw, rccw] = slots;
+        self.prefetch_cached(clw);
+        self.prefetch_cached(fl);
         let fla = *self.slot(fl, v)?;
         let (rv, ru) = (fla.corners[0], fla.corners[1]);
         if ccw != NONE {
@@ -359,11 +403,22 @@ impl Front<'_> {
         if rclw != NONE {
             self.relink(rclw, fr, rccw, v)?;
         }
+        // Where v's record will stand, for the index cache (see `index_cache`), and its
+        // indices in the groups of f_l and f_r (their corner 0, vs, stands there).
+        let at_v = if self.caches_indices() {
+            Self::position_of(h, v)
+        } else {
+            PositionId(NONE)
+        };
+        let mut known = Known::default();
+        known.learn_from(self.triangles.get(fl as usize), 0);
+        known.learn_from(self.triangles.get(fr as usize), 0);
         let mut fa = clw;
         let mut j = self.corner(fa, ru, v)?;
         let first = self.slot_mut(fa, v)?;
         first.neighbours[next(j)] = ccw;
         first.corners[j] = rv;
+        self.cache_corner(h, fa, j, at_v, &mut known);
         let mut steps = 0u32;
         loop {
             if fa == rccw {
@@ -374,9 +429,11 @@ impl Front<'_> {
             if nx == NONE {
                 break;
             }
+            self.prefetch_cached(nx);
             fa = nx;
             j = self.corner(fa, ru, v)?;
             self.slot_mut(fa, v)?.corners[j] = rv;
+            self.cache_corner(h, fa, j, at_v, &mut known);
             steps += 1;
             if steps > self.active_polygons {
                 return Err(bad);
@@ -428,6 +485,7 @@ impl Front<'_> {
             let mut moved = *self.slot(old, v)?;
             moved.neighbours = moved.neighbours.map(map);
             *self.slot_mut(new, v)? = moved;
+            self.move_cached(old, new);
         }
         let owner = self.owner[last as usize];
         self.owner[k as usize] = owner;
