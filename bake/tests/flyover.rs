@@ -17,6 +17,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         first_route: 0,
         compact_every: 30,
         frames_in_flight: 2,
+        index_cache: true,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(
@@ -105,6 +106,10 @@ fn interleaved_flights_do_what_each_does_alone() {
             first_route: 1,
             ..base
         },
+        FlyoverOptions {
+            index_cache: false,
+            ..base
+        },
     ];
     // Segments of 10 frames: 10, 10 and 5.
     let together = fly_interleaved(&h, &options, 10).expect("interleaved");
@@ -119,6 +124,17 @@ fn interleaved_flights_do_what_each_does_alone() {
             assert_eq!(a.indices, b.indices);
         }
     }
+    // The index cache changes what a frame costs, not what it does.
+    for (a, b) in together[0]
+        .flight
+        .records
+        .iter()
+        .zip(&together[3].flight.records)
+    {
+        assert_eq!(a.ops, b.ops);
+        assert_eq!(a.indices, b.indices);
+    }
+    assert!(together[0].flight.camera_bytes > together[3].flight.camera_bytes);
     let shared = FlyoverOptions {
         mode: Mode::Shared,
         ..base

@@ -121,6 +121,10 @@ enum Command {
         #[arg(long, default_value_t = caveclod_bake::flyover::gate::FRAMES_IN_FLIGHT as u8,
               value_parser = clap::value_parser!(u8).range(1..=8))]
         frames_in_flight: u8,
+        /// Emit without the index cache: look every active polygon up every frame, as the
+        /// paper's cameras did (the library keeps each polygon's indices by default).
+        #[arg(long)]
+        no_index_cache: bool,
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
@@ -408,6 +412,7 @@ fn run(cli: Cli) -> Result<(), String> {
             full_capacity,
             compact_every,
             frames_in_flight,
+            no_index_cache,
             json,
         } => {
             let options = FlyoverOptions {
@@ -425,6 +430,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 first_route: 0,
                 compact_every,
                 frames_in_flight: usize::from(frames_in_flight),
+                index_cache: !no_index_cache,
             };
             let print = |f: &Flyover| {
                 if json {

@@ -76,6 +76,11 @@ impl Record {
         percentile(Self::steady(&self.refine_ns), 0.99) as f64 * 1e-6
     }
 
+    /// Median emission time per frame, ms.
+    pub fn emit_ms_median(&self) -> f64 {
+        percentile(Self::steady(&self.emit_ns), 0.5) as f64 * 1e-6
+    }
+
     pub fn emit_ms_mean(&self) -> f64 {
         mean(Self::steady(&self.emit_ns).iter().map(|&x| x as f64)) * 1e-6
     }
@@ -317,17 +322,19 @@ pub fn fly_per_camera(
     })
 }
 
-/// The paper's baseline: one state, re-refined to each camera's view in turn every frame; it
-/// compacts every `compact_every` frames too (before the first camera's turn).
+/// The paper's baseline: one state of capacity `config`, re-refined to each camera's view in
+/// turn every frame; it compacts every `compact_every` frames too (before the first camera's
+/// turn).
 pub fn fly_shared(
     h: &Hierarchy<'_>,
     views: &[Vec<View>],
     params: &RefineParams,
+    config: &CameraConfig,
     compact_every: usize,
 ) -> Result<Flight, String> {
     let start = Instant::now();
-    let mut memory = vec![0u32; CameraState::words_needed(h)];
-    let mut cam = CameraState::new(h, &mut memory).map_err(|e| e.to_string())?;
+    let mut memory = vec![0u32; CameraState::words_needed_for(h, config)];
+    let mut cam = CameraState::with_config(h, &mut memory, config).map_err(|e| e.to_string())?;
     let mut out = IndexBuffers::new(h, cam.max_pairs());
     let frames = views.first().map_or(0, Vec::len);
     let mut records: Vec<Record> = views

@@ -12,13 +12,16 @@
 //! build alternating): one thread's flight time over the threads' was 1.38-1.76x with a
 //! barrier per frame and 1.62-1.98x with two frames in flight. Replaying a flight's per-frame
 //! work on two cores, with the cameras started in random orders, gives 1.80x and 1.91-1.94x
-//! for the two.
+//! for the two. Once the index cache made emission a copy, a camera's frame took half as
+//! long and waiting for the slowest camera weighed more: with two frames in flight 1.43-1.86x
+//! (two runs of ten under 1.6x), with three 1.74-1.96x (ten runs of each, alternating), so
+//! the fly-over keeps three, as a triple-buffered renderer does.
 
 use std::sync::{Condvar, Mutex, PoisonError};
 
-/// Frames in flight unless a flight says otherwise: a camera may run one frame ahead of
+/// Frames in flight unless a flight says otherwise: a camera may run two frames ahead of
 /// the slowest camera.
-pub const FRAMES_IN_FLIGHT: usize = 2;
+pub const FRAMES_IN_FLIGHT: usize = 3;
 
 /// Counts each camera's finished frames and holds a camera back from frame `n` until every
 /// camera has finished frame `n - in_flight`.

@@ -75,6 +75,10 @@ pub struct FlyoverOptions {
     /// and with a thread per camera a camera may run this many frames less one ahead of the
     /// slowest (see [`gate`]); 1 is a barrier every frame.
     pub frames_in_flight: usize,
+    /// Keep each camera's index cache ([`CameraConfig::index_cache`], the library's
+    /// default); without it, emission looks every active polygon up every frame, as the
+    /// paper's cameras did.
+    pub index_cache: bool,
 }
 
 impl Default for FlyoverOptions {
@@ -88,6 +92,7 @@ impl Default for FlyoverOptions {
             first_route: 0,
             compact_every: 30,
             frames_in_flight: gate::FRAMES_IN_FLIGHT,
+            index_cache: true,
         }
     }
 }
@@ -160,7 +165,10 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         tolerance_px: options.tolerance,
         ..RefineParams::default()
     };
-    let full_config = CameraConfig::full(h);
+    let full_config = CameraConfig {
+        index_cache: options.index_cache,
+        ..CameraConfig::full(h)
+    };
     if options.mode == Mode::Shared || options.full_capacity {
         return Ok(Prepared {
             names,
@@ -189,7 +197,10 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         names,
         views,
         params,
-        config: CameraConfig::with_polygon_budget(h, budget),
+        config: CameraConfig {
+            index_cache: options.index_cache,
+            ..CameraConfig::with_polygon_budget(h, budget)
+        },
         sizing: Some(s),
         budget: Some(budget),
     })
@@ -199,7 +210,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
 pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
     let p = prepare(h, options)?;
     let flight = if options.mode == Mode::Shared {
-        fly_shared(h, &p.views, &p.params, options.compact_every)?
+        fly_shared(h, &p.views, &p.params, &p.config, options.compact_every)?
     } else {
         fly_per_camera(
             h,
@@ -274,7 +285,10 @@ fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: Prepared, flight: Flig
     let budget_bytes = if budget.is_some() {
         flight.camera_bytes
     } else {
-        let config = CameraConfig::with_polygon_budget(h, budget_polygons);
+        let config = CameraConfig {
+            index_cache: options.index_cache,
+            ..CameraConfig::with_polygon_budget(h, budget_polygons)
+        };
         4 * CameraState::words_needed_for(h, &config) + std::mem::size_of::<CameraState<'_>>()
     };
     let (na, pa) = (
@@ -342,6 +356,7 @@ impl Flyover {
             // The shared state emits each camera's turn into one list.
             "frames_in_flight": (self.options.mode != Mode::Shared)
                 .then_some(self.options.frames_in_flight),
+            "index_cache": self.options.index_cache,
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
             },
@@ -386,6 +401,10 @@ impl Flyover {
                     "a state per camera, one thread, {} frame(s) in flight",
                     self.options.frames_in_flight
                 ),
+            } + if self.options.index_cache {
+                ""
+            } else {
+                ", no index cache (every polygon looked up every frame)"
             }
         );
         if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
