@@ -637,7 +637,8 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
     let h = terrain.hierarchy()?;
     say(&format!(
         "flying 4 cameras over {} polygons: a state per camera, one shared state, a thread per \
-         camera, 2 and 3 cameras, and each camera alone ({} frames each)",
+         camera, 2 and 3 cameras, each camera alone, and 4 without the index cache ({} frames \
+         each)",
         h.polygon_count(),
         options.frames
     ));
