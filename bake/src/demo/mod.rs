@@ -562,9 +562,10 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
     );
     let _ = writeln!(
         s,
-        "## The index cache\n\nThe per-camera flights above keep the index cache (the \
-         library's default, `CameraConfig::index_cache`): the operations keep each active \
-         polygon's indices, and emission copies them. The paper's cameras looked every active \
+        "## The index cache\n\nThe flights above keep the index cache (the library's \
+         default, `CameraConfig::index_cache`; the shared state too, whose emission is not \
+         compared): the operations keep each active polygon's indices, and emission copies \
+         them. The paper's cameras looked every active \
          polygon up through the hierarchy every frame instead; four cameras doing that, a \
          state each, flew interleaved with the flights above (per frame, medians per camera, \
          summed over the cameras):\n\n\

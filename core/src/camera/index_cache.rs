@@ -8,7 +8,7 @@
 //! corner of the slot moves to another active-vertex record, since a record keeps its
 //! position for life. A split moves corners only onto its floating child and a collapse
 //! only back onto its node, so an operation rewrites each moved corner from the group its
-//! slot's entry keeps and one position (one vertex-table row for the whole operation): the
+//! slot's entry keeps and one position (one vertex-table row for all the moved corners): the
 //! indices of a position in a group are learned once per operation (`Known`), and a
 //! collapse knows its node's from the pair it removes (corner 0 of `f_l` and `f_r`). The
 //! pair a split creates shares its corners with the first and last polygons of that walk

@@ -58,8 +58,8 @@
 //!   only when a corner moves to another active-vertex record: a record keeps its position
 //!   for life (a split hands it to the stationary child, which shares the position). So the
 //!   index cache keeps each slot's three indices with its surface and group, and an
-//!   operation rewrites just the corners it moves (one vertex-table row per split or
-//!   collapse: every moved corner lands on the same position) and the pair it creates; a
+//!   operation rewrites just the corners it moves (one vertex-table row for all of them:
+//!   every moved corner lands on the same position) and the pair it creates; a
 //!   pair filling a hole brings its entries. Emission then copies the cache in slot order.
 //!   Without it, every frame followed five dependent reads per polygon across the hierarchy,
 //!   which four cameras' emissions pushed out of each other's caches. 16 bytes per slot;

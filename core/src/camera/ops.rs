@@ -439,6 +439,12 @@ impl Front<'_> {
                 return Err(bad);
             }
         }
+        // The walk must end at fr_ccw, as the split's did: a border before it means the
+        // connectivity contradicts the hierarchy, and corners would be left on the record
+        // the collapse frees.
+        if rccw != NONE && fa != rccw {
+            return Err(bad);
+        }
         *self.active.get_mut(rv as usize).ok_or(bad)? = ActiveVertex::of(h, v);
         self.free_record(ru);
         self.pair_of.set(v.index(), NONE).ok_or(bad)?;
