@@ -255,10 +255,21 @@ impl Front<'_> {
             });
         }
         let [ccw, clw, rclw, rccw] = slots;
+        // Where the children's records stand, for the index cache (see `index_cache`); the
+        // entries the walk starts and ends at, and the floating child's vertex-table row,
+        // are asked for now so their misses overlap the walk's.
+        let (at_stationary, at_floating) = if self.caches_indices() {
+            (
+                Self::position_of(h, s.stationary),
+                Self::position_of(h, s.floating),
+            )
+        } else {
+            (PositionId(NONE), PositionId(NONE))
+        };
         self.prefetch_cached(clw);
         self.prefetch_cached(rccw);
         if self.caches_indices() {
-            Self::prefetch_row(h, Self::position_of(h, s.floating));
+            Self::prefetch_row(h, at_floating);
         }
         // The active-vertex record of v: a corner of fl_clw.
         let clw_slot = *self.slot(clw, v)?;
@@ -271,17 +282,8 @@ impl Front<'_> {
         let k = self.pairs;
         let fl = self.base + 2 * k;
         let fr = fl + 1;
-        // Where the children's records stand, for the index cache (see `index_cache`), and
-        // the entries of the walk's first and last polygons before their corners moved.
-        let (at_stationary, at_floating) = if self.caches_indices() {
-            (
-                Self::position_of(h, s.stationary),
-                Self::position_of(h, s.floating),
-            )
-        } else {
-            (PositionId(NONE), PositionId(NONE))
-        };
-        // Walk from fl_clw around v to fr_ccw, moving corners to the floating child.
+        // Walk from fl_clw around v to fr_ccw, moving corners to the floating child (and
+        // keeping the entries of its first and last polygons as they were, for the new pair).
         let mut fa = clw;
         let mut j = j0;
         let first = self.slot_mut(fa, v)?;
