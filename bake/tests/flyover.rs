@@ -18,6 +18,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         compact_every: 30,
         frames_in_flight: 2,
         index_cache: true,
+        pin_threads: true,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(

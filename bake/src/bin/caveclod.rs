@@ -125,6 +125,10 @@ enum Command {
         /// paper's cameras did (the library keeps each polygon's indices by default).
         #[arg(long)]
         no_index_cache: bool,
+        /// With --threads, leave the camera threads to the system instead of pinning each to
+        /// a core with the cameras shared out by cost.
+        #[arg(long)]
+        no_pin: bool,
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
@@ -413,6 +417,7 @@ fn run(cli: Cli) -> Result<(), String> {
             compact_every,
             frames_in_flight,
             no_index_cache,
+            no_pin,
             json,
         } => {
             let options = FlyoverOptions {
@@ -431,6 +436,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 compact_every,
                 frames_in_flight: usize::from(frames_in_flight),
                 index_cache: !no_index_cache,
+                pin_threads: !no_pin,
             };
             let print = |f: &Flyover| {
                 if json {

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, RefineStats, View};
 
 use super::gate::FrameGate;
+use super::placement::{balance, Cores};
 
 /// Per-frame figures of one camera.
 #[derive(Clone, Debug, Default)]
@@ -223,8 +224,9 @@ fn compact_now(n: usize, every: usize) -> bool {
 /// One flight of every camera, each with its own state of capacity `config`, over every
 /// `stride`-th frame; `emit` also writes the index lists each frame, into one of
 /// `in_flight` lists per camera in turn (frames in flight, see `gate`), and with `threads`
-/// a camera's thread runs at most `in_flight - 1` frames ahead of the slowest; each state
-/// compacts every `compact_every` of its frames (0: never).
+/// a camera's thread runs at most `in_flight - 1` frames ahead of the slowest, pinned to a
+/// core when `pin_by` gives the cameras' costs to balance the cores by (see `placement`);
+/// each state compacts every `compact_every` of its frames (0: never).
 #[allow(clippy::too_many_arguments)]
 pub fn fly_per_camera(
     h: &Hierarchy<'_>,
@@ -236,6 +238,7 @@ pub fn fly_per_camera(
     threads: bool,
     in_flight: usize,
     compact_every: usize,
+    pin_by: Option<&[f64]>,
 ) -> Result<Flight, String> {
     let in_flight = in_flight.max(1);
     let start = Instant::now();
@@ -253,6 +256,12 @@ pub fn fly_per_camera(
     let frames = views.first().map_or(0, Vec::len).div_ceil(stride);
     let records = if threads {
         let gate = FrameGate::new(views.len(), in_flight);
+        let cores = pin_by.and_then(|_| Cores::available());
+        let core_of = match (&cores, pin_by) {
+            (Some(cores), Some(costs)) => balance(costs, cores.len()),
+            _ => Vec::new(),
+        };
+        let (cores, core_of) = (&cores, &core_of);
         std::thread::scope(|scope| {
             let handles: Vec<_> = cams
                 .into_iter()
@@ -265,6 +274,7 @@ pub fn fly_per_camera(
                     // one hierarchy (`Sync`). Frames stay within the frames in flight of
                     // each other, as a renderer's would.
                     scope.spawn(move || -> Result<Record, String> {
+                        pin(cores, core_of, c);
                         let mut rec = Record::with_capacity(frames);
                         let mut failed = Ok(());
                         for (n, view) in cam_views.iter().step_by(stride).enumerate() {
@@ -378,6 +388,9 @@ pub struct Group<'v> {
     pub params: RefineParams,
     /// Each state compacts every this many of its frames (0: never).
     pub compact_every: usize,
+    /// With threads, pin each camera's thread to a core, the cameras shared out by their
+    /// cost over the previous segment (see `placement`).
+    pub pin: bool,
 }
 
 /// Camera states, index lists and records of one group.
@@ -416,6 +429,12 @@ fn fly_segment(
         return Ok(());
     }
     let gate = FrameGate::new(g.cams.len(), in_flight);
+    let cores = if group.pin { Cores::available() } else { None };
+    let core_of = match &cores {
+        Some(cores) => balance(&recent_costs(&g.records, frames.start), cores.len()),
+        None => Vec::new(),
+    };
+    let (cores, core_of) = (&cores, &core_of);
     std::thread::scope(|scope| {
         let handles: Vec<_> = g
             .cams
@@ -427,6 +446,7 @@ fn fly_segment(
             .map(|(c, (((cam, out), rec), cam_views))| {
                 let (gate, frames) = (&gate, frames.clone());
                 scope.spawn(move || -> Result<(), String> {
+                    pin(cores, core_of, c);
                     let mut failed = Ok(());
                     for (n, f) in frames.enumerate() {
                         gate.enter(n);
@@ -452,6 +472,33 @@ fn fly_segment(
             .try_for_each(|t| t.join().map_err(|_| "camera thread panicked".to_string())?)
     })
 }
+
+/// Pins the calling camera thread `c` to its core, if the flight pins.
+fn pin(cores: &Option<Cores>, core_of: &[usize], c: usize) {
+    if let (Some(cores), Some(&k)) = (cores, core_of.get(c)) {
+        // A refusal leaves the thread where the system puts it; the flight is still valid.
+        let _ = cores.pin(k);
+    }
+}
+
+/// Each camera's refinement and emission time over its last `SEGMENT_COST_FRAMES` frames
+/// before frame `before` (equal costs before any frame was flown).
+fn recent_costs(records: &[Record], before: usize) -> Vec<f64> {
+    records
+        .iter()
+        .map(|r| {
+            let end = before.min(r.refine_ns.len()).min(r.emit_ns.len());
+            let start = end.saturating_sub(SEGMENT_COST_FRAMES);
+            (start..end)
+                .map(|i| (r.refine_ns[i] + r.emit_ns[i]) as f64)
+                .sum::<f64>()
+                .max(1.0)
+        })
+        .collect()
+}
+
+/// Frames of each camera's recent past that its cost is measured over, for pinning.
+const SEGMENT_COST_FRAMES: usize = 30;
 
 /// Flies several groups of cameras over the same frames, interleaved: every group flies
 /// frames `0..segment`, then every group `segment..2 * segment`, and so on, each group with

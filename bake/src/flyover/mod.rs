@@ -12,6 +12,7 @@
 
 pub mod fly;
 pub mod gate;
+pub mod placement;
 pub mod routes;
 
 use std::fmt::Write as _;
@@ -79,6 +80,9 @@ pub struct FlyoverOptions {
     /// default); without it, emission looks every active polygon up every frame, as the
     /// paper's cameras did.
     pub index_cache: bool,
+    /// With a thread per camera, pin each thread to a core and share the cameras out so
+    /// the cores carry equal work (see [`placement`]); otherwise the system places them.
+    pub pin_threads: bool,
 }
 
 impl Default for FlyoverOptions {
@@ -93,6 +97,7 @@ impl Default for FlyoverOptions {
             compact_every: 30,
             frames_in_flight: gate::FRAMES_IN_FLIGHT,
             index_cache: true,
+            pin_threads: true,
         }
     }
 }
@@ -189,6 +194,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         options.mode == Mode::Threads,
         options.frames_in_flight,
         options.compact_every,
+        None,
     )?;
     let largest = summarise(&s.records).active_max;
     let budget =
@@ -203,6 +209,18 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         },
         sizing: Some(s),
         budget: Some(budget),
+    })
+}
+
+/// The cameras' costs to balance pinned threads by: their mean refinement time in the
+/// sizing flight (`None`: no pinning).
+fn pin_costs(options: &FlyoverOptions, p: &Prepared) -> Option<Vec<f64>> {
+    if !options.pin_threads || options.mode != Mode::Threads {
+        return None;
+    }
+    Some(match &p.sizing {
+        Some(s) => s.records.iter().map(Record::refine_ms_mean).collect(),
+        None => vec![1.0; p.views.len()],
     })
 }
 
@@ -222,6 +240,7 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
             options.mode == Mode::Threads,
             options.frames_in_flight,
             options.compact_every,
+            pin_costs(options, &p).as_deref(),
         )?
     };
     Ok(finish(h, options, p, flight))
@@ -253,6 +272,7 @@ pub fn fly_interleaved(
             in_flight: o.frames_in_flight,
             params: p.params,
             compact_every: o.compact_every,
+            pin: o.pin_threads,
         })
         .collect();
     let flights = fly::fly_interleaved(h, &groups, segment)?;
@@ -357,6 +377,7 @@ impl Flyover {
             "frames_in_flight": (self.options.mode != Mode::Shared)
                 .then_some(self.options.frames_in_flight),
             "index_cache": self.options.index_cache,
+            "pinned": (self.options.mode == Mode::Threads).then_some(self.options.pin_threads),
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
             },
@@ -394,7 +415,12 @@ impl Flyover {
                 Mode::Shared =>
                     "one shared state re-refined for each camera in turn (baseline)".to_string(),
                 Mode::Threads => format!(
-                    "a state per camera, one thread per camera, {} frame(s) in flight",
+                    "a state per camera, one thread per camera{}, {} frame(s) in flight",
+                    if self.options.pin_threads {
+                        " (pinned, cores balanced)"
+                    } else {
+                        ""
+                    },
                     self.options.frames_in_flight
                 ),
                 Mode::PerCamera => format!(
