@@ -1,9 +1,10 @@
 //! Where the camera threads run: each pinned to a core, the cameras shared out so that the
 //! cores carry equal work.
 //!
-//! Four camera threads on two cores, left to the operating system, sometimes ran three on
-//! one core for a while; and any placement that puts the two busiest cameras on one core
-//! makes every frame wait for that core. Cameras differ (on the St. Helens demo one camera's
+//! Four camera threads on two cores, left to the operating system, go where it puts them
+//! (not measured where; the spread of the results suggests three on one core at times), and
+//! any placement that puts the two busiest cameras on one core makes every frame wait for
+//! that core. Cameras differ (on the St. Helens demo one camera's
 //! frame costs 0.12 ms and another's 0.17 ms), so threads are pinned, and the cameras are
 //! shared out by the longest-processing-time rule: the busiest camera first, each to the
 //! core with the least work so far, by each camera's cost over the frames flown before
