@@ -256,11 +256,7 @@ pub fn fly_per_camera(
     let frames = views.first().map_or(0, Vec::len).div_ceil(stride);
     let records = if threads {
         let gate = FrameGate::new(views.len(), in_flight);
-        let cores = pin_by.and_then(|_| Cores::available());
-        let core_of = match (&cores, pin_by) {
-            (Some(cores), Some(costs)) => balance(costs, cores.len()),
-            _ => Vec::new(),
-        };
+        let (cores, core_of) = placement(pin_by);
         let (cores, core_of) = (&cores, &core_of);
         std::thread::scope(|scope| {
             let handles: Vec<_> = cams
@@ -429,11 +425,8 @@ fn fly_segment(
         return Ok(());
     }
     let gate = FrameGate::new(g.cams.len(), in_flight);
-    let cores = if group.pin { Cores::available() } else { None };
-    let core_of = match &cores {
-        Some(cores) => balance(&recent_costs(&g.records, frames.start), cores.len()),
-        None => Vec::new(),
-    };
+    let costs = group.pin.then(|| recent_costs(&g.records, frames.start));
+    let (cores, core_of) = placement(costs.as_deref());
     let (cores, core_of) = (&cores, &core_of);
     std::thread::scope(|scope| {
         let handles: Vec<_> = g
@@ -471,6 +464,18 @@ fn fly_segment(
             .into_iter()
             .try_for_each(|t| t.join().map_err(|_| "camera thread panicked".to_string())?)
     })
+}
+
+/// The cores to pin camera threads to and each camera's core, balanced by `costs` (none
+/// without costs, or with fewer than two cores).
+fn placement(costs: Option<&[f64]>) -> (Option<Cores>, Vec<usize>) {
+    match (costs, costs.and_then(|_| Cores::available())) {
+        (Some(costs), Some(cores)) => {
+            let core_of = balance(costs, cores.len());
+            (Some(cores), core_of)
+        }
+        _ => (None, Vec::new()),
+    }
 }
 
 /// Pins the calling camera thread `c` to its core, if the flight pins.
