@@ -23,8 +23,8 @@
 //! overlaps them: that took `emit/packed` (a 1M-polygon terrain, 36k polygons) from 683 µs
 //! to 571-583 µs, and the demo's cameras from 0.133-0.153 ms to 0.121-0.127 ms per frame. 32
 //! slots per batch keep the batch's arrays under 1 KB of stack; 64 was 4% faster on the
-//! bench, not worth twice the stack on a small target. Compaction, which re-orders the
-//! pairs, and a reset fill the cache the same way.
+//! bench, not worth twice the stack on a small target. A reset fills the base slots' entries
+//! the same way; compaction moves each pair's entries with the pair.
 
 use super::{Front, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
@@ -200,10 +200,8 @@ impl Front<'_> {
         }
     }
 
-    /// Fills the entries of slots `from..to` through the hierarchy: the base slots at a
-    /// reset, the pairs after compaction re-ordered them. (Moving the entries with every
-    /// swap of compaction's heapsort instead cost about the same in the demo, 1.64 against
-    /// 1.56 ms per compacting frame, and touched every entry at random.)
+    /// Fills the entries of slots `from..to` through the hierarchy (the base slots, at a
+    /// reset).
     pub fn cache_slots(&mut self, h: &Hierarchy<'_>, from: usize, to: usize) {
         let to = to.min(self.triangles.len());
         let mut start = from;
