@@ -19,6 +19,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         frames_in_flight: 2,
         index_cache: true,
         pin_threads: true,
+        hashed_pair_map: false,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(
@@ -111,6 +112,11 @@ fn interleaved_flights_do_what_each_does_alone() {
             index_cache: false,
             ..base
         },
+        FlyoverOptions {
+            index_cache: false,
+            hashed_pair_map: true,
+            ..base
+        },
     ];
     // Segments of 10 frames: 10, 10 and 5.
     let together = fly_interleaved(&h, &options, 10).expect("interleaved");
@@ -125,17 +131,17 @@ fn interleaved_flights_do_what_each_does_alone() {
             assert_eq!(a.indices, b.indices);
         }
     }
-    // The index cache changes what a frame costs, not what it does.
-    for (a, b) in together[0]
-        .flight
-        .records
-        .iter()
-        .zip(&together[3].flight.records)
-    {
-        assert_eq!(a.ops, b.ops);
-        assert_eq!(a.indices, b.indices);
+    // The index cache and the pair map's layout change what a frame costs, not what it does.
+    for lean in [&together[3], &together[4]] {
+        for (a, b) in together[0].flight.records.iter().zip(&lean.flight.records) {
+            assert_eq!(a.ops, b.ops);
+            assert_eq!(a.indices, b.indices);
+        }
     }
     assert!(together[0].flight.camera_bytes > together[3].flight.camera_bytes);
+    // Hashed only where that is smaller (this terrain's budgets may not be).
+    assert!(together[3].flight.camera_bytes >= together[4].flight.camera_bytes);
+    assert_eq!(together[4].json()["hashed_pair_map"], true);
     let shared = FlyoverOptions {
         mode: Mode::Shared,
         ..base

@@ -367,6 +367,7 @@ fn too_little_camera_memory_is_refused() {
         max_pairs: ns + 1,
         stack_len: 64,
         index_cache: true,
+        hashed_pair_map: false,
     };
     assert_eq!(
         CameraState::with_config(&h, &mut memory, &config).err(),
@@ -385,6 +386,7 @@ fn a_full_camera_refuses_splits_without_failing() {
         max_pairs: 3,
         stack_len: 256,
         index_cache: true,
+        hashed_pair_map: true,
     };
     let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
     let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
@@ -516,6 +518,8 @@ fn refine_stats_count_every_split_applied() {
             max_pairs,
             stack_len: 256,
             index_cache: true,
+            // Both layouts of the pair map (small budgets hash where asked).
+            hashed_pair_map: max_pairs % 2 == 0,
         };
         let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
         let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");

@@ -3,7 +3,9 @@
 //! `check_front` (active sets equal the sets derived from scratch, neighbour links symmetric,
 //! corners above their leaves, emitted indices in the right surface group), a camera without
 //! the index cache that takes the same steps emits the same indices, and a second camera over
-//! the same hierarchy never changes.
+//! the same hierarchy never changes. A second property runs a budgeted camera whose pair map
+//! is hashed beside one whose map is an array, through the same steps until the smaller
+//! budget is reached: they must keep the same front and emit the same indices.
 
 use std::sync::OnceLock;
 
@@ -12,6 +14,12 @@ use caveclod_core::{CameraConfig, CameraState, NodeId, RefineParams, View};
 use caveclod_tests::check::check_front;
 use caveclod_tests::{bake, meshes, BakedMesh};
 use proptest::prelude::*;
+
+/// A terrain large enough that a camera holding a seventh of its splits hashes its pair map.
+fn larger_baked() -> &'static BakedMesh {
+    static B: OnceLock<BakedMesh> = OnceLock::new();
+    B.get_or_init(|| bake(&meshes::terrain(40, 40, 6)))
+}
 
 fn meshes_baked() -> &'static [BakedMesh; 3] {
     static B: OnceLock<[BakedMesh; 3]> = OnceLock::new();
@@ -158,5 +166,58 @@ proptest! {
             prop_assert_eq!(emitted(&h, &cam), emitted(&h, &plain));
         }
         prop_assert_eq!(snapshot(&h, &other), other_before);
+    }
+
+    /// A budgeted camera may keep its pair map hashed (`CameraConfig::hashed_pair_map`).
+    /// One camera that does and one that keeps the array take the same steps; until the
+    /// budget refuses a split, their fronts, in record and slot order, and their emissions
+    /// must be equal.
+    #[test]
+    fn hashed_and_array_pair_maps_agree(steps in prop::collection::vec(step(), 1..120)) {
+        let baked = larger_baked();
+        let h = baked.hierarchy();
+        let ns = h.splits().len() as u32;
+        let array = CameraConfig { max_pairs: ns / 7, ..CameraConfig::full(&h) };
+        let hashed = CameraConfig { hashed_pair_map: true, ..array };
+        let mut mem_a = vec![0u32; CameraState::words_needed_for(&h, &hashed)];
+        let mut mem_b = vec![0u32; CameraState::words_needed_for(&h, &array)];
+        // A seventh of the splits hash into less memory than the array (`pair_map`'s rule).
+        prop_assert!(mem_a.len() < mem_b.len());
+        let mut a = CameraState::with_config(&h, &mut mem_a, &hashed).expect("sized");
+        let mut b = CameraState::with_config(&h, &mut mem_b, &array).expect("sized");
+        let (mut stack_a, mut stack_b) = (vec![NodeId::NONE; 1024], vec![NodeId::NONE; 1024]);
+        for s in steps {
+            match s {
+                Step::Split(x) => {
+                    let v = NodeId(x % ns);
+                    prop_assert_eq!(a.split(&h, v), b.split(&h, v));
+                }
+                Step::ForceSplit(x) => {
+                    let v = NodeId(x % ns);
+                    prop_assert_eq!(
+                        a.force_split(&h, v, &mut stack_a),
+                        b.force_split(&h, v, &mut stack_b)
+                    );
+                }
+                Step::Collapse(x) => {
+                    let v = NodeId(x % ns);
+                    prop_assert_eq!(a.collapse(&h, v), b.collapse(&h, v));
+                }
+                Step::Compact => {
+                    a.compact(&h);
+                    b.compact(&h);
+                }
+                Step::Refine { eye, target, tolerance, max_ops } => {
+                    let view = View::perspective(Vec3::from(eye), Vec3::from(target), Vec3::Y, 1.0, 1.3, 0.05, 1e3, 400.0);
+                    let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
+                    prop_assert_eq!(a.refine(&h, &view, &params), b.refine(&h, &view, &params));
+                }
+            }
+            if let Err(e) = check_front(&h, &a) {
+                prop_assert!(false, "{}", e);
+            }
+            prop_assert_eq!(snapshot(&h, &a), snapshot(&h, &b));
+            prop_assert_eq!(emitted(&h, &a), emitted(&h, &b));
+        }
     }
 }

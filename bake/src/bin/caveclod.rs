@@ -129,6 +129,10 @@ enum Command {
         /// a core with the cameras shared out by cost.
         #[arg(long)]
         no_pin: bool,
+        /// Keep each budgeted camera's split-to-pair map hashed where that is smaller than an
+        /// array over the hierarchy (less memory, slower refinement).
+        #[arg(long)]
+        hashed_pair_map: bool,
         /// Print the report as one JSON object.
         #[arg(long)]
         json: bool,
@@ -418,6 +422,7 @@ fn run(cli: Cli) -> Result<(), String> {
             frames_in_flight,
             no_index_cache,
             no_pin,
+            hashed_pair_map,
             json,
         } => {
             let options = FlyoverOptions {
@@ -437,6 +442,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 frames_in_flight: usize::from(frames_in_flight),
                 index_cache: !no_index_cache,
                 pin_threads: !no_pin,
+                hashed_pair_map,
             };
             let print = |f: &Flyover| {
                 if json {

@@ -124,6 +124,9 @@ pub struct Flights {
     /// up every frame, without the index cache the other flights keep (the library's
     /// default).
     pub uncached: Flyover,
+    /// Four cameras as lean in memory as the library allows: no index cache, and the
+    /// split-to-pair map hashed (`CameraConfig::hashed_pair_map`).
+    pub lean: Flyover,
 }
 
 /// The display rate the report converts per-frame figures at, for comparison with the CAVECLOD
@@ -139,7 +142,7 @@ pub const SEGMENT: usize = 30;
 
 /// Flies every run of the demo: the shared state on its own, and the per-camera flights (four
 /// cameras on one thread and on a thread each, two and three cameras, each camera alone, four
-/// cameras without the index cache) interleaved in segments of [`SEGMENT`] frames, so that the
+/// cameras without the index cache, four without it and with hashed pair maps) interleaved in segments of [`SEGMENT`] frames, so that the
 /// ratios compare flights measured under the same load.
 pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let base = FlyoverOptions {
@@ -171,6 +174,11 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         index_cache: false,
         ..base
     });
+    options.push(FlyoverOptions {
+        index_cache: false,
+        hashed_pair_map: true,
+        ..base
+    });
     let mut flown = fly_interleaved(h, &options, SEGMENT)?.into_iter();
     let mut next = || flown.next().ok_or("an interleaved flight is missing");
     let per_camera = next()?;
@@ -178,6 +186,7 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let fewer = vec![next()?, next()?];
     let alone = (0..4).map(|_| next()).collect::<Result<Vec<_>, _>>()?;
     let uncached = next()?;
+    let lean = next()?;
     Ok(Flights {
         per_camera,
         shared,
@@ -185,6 +194,7 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         fewer,
         alone,
         uncached,
+        lean,
     })
 }
 
@@ -267,13 +277,15 @@ fn write_csv(path: &Path, f: &Flights) -> Result<(), String> {
         .into_iter()
         .chain(f.fewer.iter())
         .chain(f.alone.iter())
-        .chain([&f.uncached]);
+        .chain([&f.uncached, &f.lean]);
     for fl in all {
-        let mode = if fl.options.index_cache {
-            fl.options.mode.name().to_string()
-        } else {
-            format!("{}-no-index-cache", fl.options.mode.name())
-        };
+        let mut mode = fl.options.mode.name().to_string();
+        if !fl.options.index_cache {
+            mode += "-no-index-cache";
+        }
+        if fl.options.hashed_pair_map {
+            mode += "-hashed-pair-map";
+        }
         for (c, (name, r)) in fl.names.iter().zip(&fl.flight.records).enumerate() {
             for i in 0..r.ops.len() {
                 let _ = writeln!(
@@ -383,6 +395,10 @@ fn write_plots(out: &Path, f: &Flights) -> Result<Vec<PathBuf>, String> {
     let ours: Vec<(f64, f64)> = (1..=8u64)
         .map(|c| (c as f64, mib(m.static_bytes + c * m.camera_bytes)))
         .collect();
+    let lean_bytes = f.lean.memory_budgeted.camera_bytes;
+    let lean: Vec<(f64, f64)> = (1..=8u64)
+        .map(|c| (c as f64, mib(m.static_bytes + c * lean_bytes)))
+        .collect();
     let paper: Vec<(f64, f64)> = (1..=8u64)
         .map(|c| {
             (
@@ -401,6 +417,11 @@ fn write_plots(out: &Path, f: &Flights) -> Result<Vec<PathBuf>, String> {
             Series {
                 label: "caveclod (cameras sized to their flight + 10%)".into(),
                 points: &ours,
+                baseline: false,
+            },
+            Series {
+                label: "caveclod, lean cameras (no index cache, hashed pair map)".into(),
+                points: &lean,
                 baseline: false,
             },
             Series {
@@ -532,8 +553,8 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
         s,
         "\nTimes are wall-clock on this machine, shared with whatever else runs; ratios come \
          from flights in the same run. The per-camera flights (4 cameras on one thread and on a \
-         thread each, 2 and 3 cameras, each camera alone, 4 cameras without the index cache) are \
-         flown interleaved, {SEGMENT} \
+         thread each, 2 and 3 cameras, each camera alone, 4 cameras without the index cache, 4 \
+         lean ones) are flown interleaved, {SEGMENT} \
          frames of each in turn, each with its own states, so the flights compared ran under \
          the same load; the shared state flies on its own. Each camera emits into {} index \
          lists in turn ({} frames in flight), so a camera's thread may start its next frame \
@@ -553,36 +574,47 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
         pc.summary.ops_mean * DISPLAY_FPS,
         f.shared.summary.ops_mean * DISPLAY_FPS,
     );
-    let u = &f.uncached;
-    let (r0, e0, r1, e1) = (
+    let (u, l) = (&f.uncached, &f.lean);
+    let (r0, e0, r1, e1, r2, e2) = (
         refine_ms_all_cameras(pc),
         emit_ms_all_cameras(pc),
         refine_ms_all_cameras(u),
         emit_ms_all_cameras(u),
+        refine_ms_all_cameras(l),
+        emit_ms_all_cameras(l),
     );
     let _ = writeln!(
         s,
-        "## The index cache\n\nThe flights above keep the index cache (the library's \
-         default, `CameraConfig::index_cache`; the shared state too, whose emission is not \
-         compared): the operations keep each active polygon's indices, and emission copies \
-         them. The paper's cameras looked every active \
-         polygon up through the hierarchy every frame instead; four cameras doing that, a \
-         state each, flew interleaved with the flights above (per frame, medians per camera, \
-         summed over the cameras):\n\n\
-         | | index cache | looked up every frame | ratio |\n|---|---|---|---|\n\
-         | refinement | {r0:.3} ms | {r1:.3} ms | {:.2}x |\n\
-         | emission | {e0:.3} ms | {e1:.3} ms | {:.2}x |\n\
-         | both | {:.3} ms | {:.3} ms | {:.2}x |\n\
-         | per-camera memory / the paper's | {:.2} ({} B) | {:.2} ({} B) | |\n",
-        r0 / r1.max(1e-9),
-        e0 / e1.max(1e-9),
+        "## The index cache, and cameras lean in memory\n\nThe flights above keep the index \
+         cache (the library's default, `CameraConfig::index_cache`; the shared state too, \
+         whose emission is not compared): the operations keep each active polygon's indices, \
+         and emission copies them. The paper's cameras looked every active polygon up through \
+         the hierarchy every frame instead; four cameras doing that, a state each, flew \
+         interleaved with the flights above, and four more that also keep their map from \
+         split to pair hashed (`CameraConfig::hashed_pair_map`), as lean in memory as the \
+         library allows (per frame, medians per camera, summed over the cameras; ratios \
+         against the first column):\n\n\
+         | | index cache | looked up every frame | looked up, hashed pair map |\n\
+         |---|---|---|---|\n\
+         | refinement | {r0:.3} ms | {r1:.3} ms ({:.2}x) | {r2:.3} ms ({:.2}x) |\n\
+         | emission | {e0:.3} ms | {e1:.3} ms ({:.2}x) | {e2:.3} ms ({:.2}x) |\n\
+         | both | {:.3} ms | {:.3} ms ({:.2}x) | {:.3} ms ({:.2}x) |\n\
+         | per-camera memory / the paper's | {:.2} ({} B) | {:.2} ({} B) | {:.2} ({} B) |\n",
+        r1 / r0.max(1e-9),
+        r2 / r0.max(1e-9),
+        e1 / e0.max(1e-9),
+        e2 / e0.max(1e-9),
         r0 + e0,
         r1 + e1,
-        (r0 + e0) / (r1 + e1).max(1e-9),
+        (r1 + e1) / (r0 + e0).max(1e-9),
+        r2 + e2,
+        (r2 + e2) / (r0 + e0).max(1e-9),
         pc.memory_budgeted.camera_ratio(),
         pc.memory_budgeted.camera_bytes,
         u.memory_budgeted.camera_ratio(),
         u.memory_budgeted.camera_bytes,
+        l.memory_budgeted.camera_ratio(),
+        l.memory_budgeted.camera_bytes,
     );
     let _ = writeln!(
         s,
@@ -638,8 +670,8 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
     let h = terrain.hierarchy()?;
     say(&format!(
         "flying 4 cameras over {} polygons: a state per camera, one shared state, a thread per \
-         camera, 2 and 3 cameras, each camera alone, and 4 without the index cache ({} frames \
-         each)",
+         camera, 2 and 3 cameras, each camera alone, 4 without the index cache and 4 lean in \
+         memory ({} frames each)",
         h.polygon_count(),
         options.frames
     ));

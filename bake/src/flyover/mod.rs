@@ -83,6 +83,9 @@ pub struct FlyoverOptions {
     /// With a thread per camera, pin each thread to a core and share the cameras out so
     /// the cores carry equal work (see [`placement`]); otherwise the system places them.
     pub pin_threads: bool,
+    /// Keep each budgeted camera's split-to-pair map hashed where that is smaller
+    /// ([`CameraConfig::hashed_pair_map`]): less memory, slower refinement.
+    pub hashed_pair_map: bool,
 }
 
 impl Default for FlyoverOptions {
@@ -98,6 +101,7 @@ impl Default for FlyoverOptions {
             frames_in_flight: gate::FRAMES_IN_FLIGHT,
             index_cache: true,
             pin_threads: true,
+            hashed_pair_map: false,
         }
     }
 }
@@ -172,6 +176,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     };
     let full_config = CameraConfig {
         index_cache: options.index_cache,
+        hashed_pair_map: options.hashed_pair_map,
         ..CameraConfig::full(h)
     };
     if options.mode == Mode::Shared || options.full_capacity {
@@ -205,6 +210,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         params,
         config: CameraConfig {
             index_cache: options.index_cache,
+            hashed_pair_map: options.hashed_pair_map,
             ..CameraConfig::with_polygon_budget(h, budget)
         },
         sizing: Some(s),
@@ -307,6 +313,7 @@ fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: Prepared, flight: Flig
     } else {
         let config = CameraConfig {
             index_cache: options.index_cache,
+            hashed_pair_map: options.hashed_pair_map,
             ..CameraConfig::with_polygon_budget(h, budget_polygons)
         };
         4 * CameraState::words_needed_for(h, &config) + std::mem::size_of::<CameraState<'_>>()
@@ -377,6 +384,7 @@ impl Flyover {
             "frames_in_flight": (self.options.mode != Mode::Shared)
                 .then_some(self.options.frames_in_flight),
             "index_cache": self.options.index_cache,
+            "hashed_pair_map": self.options.hashed_pair_map,
             "pinned": (self.options.mode == Mode::Threads).then_some(self.options.pin_threads),
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
@@ -431,6 +439,10 @@ impl Flyover {
                 ""
             } else {
                 ", no index cache (every polygon looked up every frame)"
+            } + if self.options.hashed_pair_map {
+                ", hashed pair map"
+            } else {
+                ""
             }
         );
         if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
