@@ -274,6 +274,62 @@ fn bench_refine(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[Vie
     }
 }
 
+/// Budgeted cameras, as the demo sizes them (the largest front of a lap of the moving path,
+/// plus 10%): one with the split-to-pair map as an array by node (the default), one with it
+/// hashed (`CameraConfig::hashed_pair_map`), each stepping along the moving path; the
+/// array is the hashed map's baseline in the same run.
+fn bench_budgeted(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
+    let p = RefineParams::default();
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut full = must(CameraState::new(h, &mut memory));
+    settle(&mut full, h, &moving[0], &p);
+    let mut largest = full.active_polygon_count();
+    for v in moving.iter().skip(1).chain(moving.first()) {
+        largest = largest.max(must(full.refine(h, v, &p)).active_polygons);
+    }
+    drop(full);
+    let array = CameraConfig::with_polygon_budget(h, largest + largest / 10);
+    let hashed = CameraConfig {
+        hashed_pair_map: true,
+        ..array
+    };
+    let mut mem_a = vec![0u32; CameraState::words_needed_for(h, &array)];
+    let mut mem_h = vec![0u32; CameraState::words_needed_for(h, &hashed)];
+    let mut a = must(CameraState::with_config(h, &mut mem_a, &array));
+    let mut b = must(CameraState::with_config(h, &mut mem_h, &hashed));
+    eprintln!(
+        "budgeted cameras: {} polygons, {} bytes with the array, {} hashed",
+        largest + largest / 10,
+        a.bytes(),
+        b.bytes()
+    );
+    assert!(b.bytes() < a.bytes(), "the budget is small enough to hash");
+    let mut g = c.benchmark_group("budgeted");
+    for (name, cam) in [
+        ("moving_pass", &mut a),
+        ("moving_pass_hashed_pair_map", &mut b),
+    ] {
+        settle(cam, h, &moving[0], &p);
+        let mean_front = lap(cam, h, moving, &p);
+        g.throughput(Throughput::Elements(mean_front));
+        let mut k = 0usize;
+        g.bench_function(name, |bch| {
+            bch.iter(|| {
+                k = (k + 1) % moving.len();
+                must(cam.refine(h, &moving[k], &p))
+            })
+        });
+    }
+    g.finish();
+    // The same steps for both cameras, then the same emission.
+    for cam in [&mut a, &mut b] {
+        cam.reset(h);
+        settle(cam, h, &moving[0], &p);
+        lap(cam, h, moving, &p);
+    }
+    same_emission(h, &a, &b, "the pair map's layout changes no index");
+}
+
 fn bench_emit(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[View]) {
     let p = RefineParams::default();
     let mut memory = vec![0u32; CameraState::words_needed(h)];
@@ -433,6 +489,7 @@ fn main() {
         .configure_from_args();
     bench_ops(&mut c, &h, &near, &far);
     bench_refine(&mut c, &h, &near, &moving);
+    bench_budgeted(&mut c, &h, &moving);
     bench_emit(&mut c, &h, &near, &moving);
     c.final_summary();
 }

@@ -182,7 +182,7 @@ pub struct CameraConfig {
     /// than an array over every splittable node (a budget of fewer than about a sixth of the
     /// hierarchy's splits; see `pair_map`). Off in [`full`](Self::full) and
     /// [`with_polygon_budget`](Self::with_polygon_budget): on the St. Helens demo it takes a
-    /// budgeted camera from 1.23 to 1.04 MB, and refinement about 5% longer, because the
+    /// budgeted camera from 1.23 to 1.04 MB, and refinement about 7% longer, because the
     /// array keeps the entries of nearby nodes together and the table scatters them.
     pub hashed_pair_map: bool,
 }

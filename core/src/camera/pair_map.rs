@@ -15,11 +15,12 @@
 //!   from a multiplicative hash, and deletion by shifting the rest of the run back (no
 //!   tombstones), keep lookups short: about 1.5 entries read for a split node and 2.5 for an
 //!   unsplit one. On the St. Helens demo it shrinks the map from 296 to 111 KB per camera, but
-//!   refinement took 4-8% longer (the camera's each route alone, medians, eight and ten
-//!   interleaved runs): node ids are numbered depth-first, so the array keeps the entries a
-//!   pass and its operations read together in a few lines, and the hash scatters them. Hashing
-//!   blocks of eight consecutive nodes together did not measurably help. So the array is the
-//!   default, and the table is for a runtime that counts bytes.
+//!   refinement took 4-8% longer (each route's camera alone, medians, eight and ten
+//!   interleaved runs; 0.97-1.23x, median 1.07x, in five runs of the `budgeted/` bench):
+//!   node ids are numbered depth-first, so the array keeps the entries a pass and its
+//!   operations read together in a few lines, and the hash scatters them. Hashing blocks of
+//!   eight consecutive nodes together did not measurably help. So the array is the default,
+//!   and the table is for a runtime that counts bytes.
 
 use super::NONE;
 use bytemuck::{Pod, Zeroable};
