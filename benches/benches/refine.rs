@@ -287,7 +287,7 @@ fn bench_budgeted(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
     for v in moving.iter().skip(1).chain(moving.first()) {
         largest = largest.max(must(full.refine(h, v, &p)).active_polygons);
     }
-    drop(full);
+    drop(memory); // the full camera is done with it
     let array = CameraConfig::with_polygon_budget(h, largest + largest / 10);
     let hashed = CameraConfig {
         hashed_pair_map: true,
