@@ -142,8 +142,9 @@ pub const SEGMENT: usize = 30;
 
 /// Flies every run of the demo: the shared state on its own, and the per-camera flights (four
 /// cameras on one thread and on a thread each, two and three cameras, each camera alone, four
-/// cameras without the index cache, four without it and with hashed pair maps) interleaved in segments of [`SEGMENT`] frames, so that the
-/// ratios compare flights measured under the same load.
+/// cameras without the index cache, four without it and with hashed pair maps) interleaved in
+/// segments of [`SEGMENT`] frames, so that the ratios compare flights measured under the same
+/// load.
 pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let base = FlyoverOptions {
         cameras: 4,
