@@ -4,8 +4,8 @@
 //! corners above their leaves, emitted indices in the right surface group), a camera without
 //! the index cache that takes the same steps emits the same indices, and a second camera over
 //! the same hierarchy never changes. A second property runs a budgeted camera whose pair map
-//! is hashed beside one whose map is an array, through the same steps until the smaller
-//! budget is reached: they must keep the same front and emit the same indices.
+//! is hashed beside one with the same budget whose map is an array, through the same steps
+//! (capacity refusals included): they must keep the same front and emit the same indices.
 
 use std::sync::OnceLock;
 
@@ -169,9 +169,9 @@ proptest! {
     }
 
     /// A budgeted camera may keep its pair map hashed (`CameraConfig::hashed_pair_map`).
-    /// One camera that does and one that keeps the array take the same steps; until the
-    /// budget refuses a split, their fronts, in record and slot order, and their emissions
-    /// must be equal.
+    /// One camera that does and one that keeps the array, with the same budget, take the same
+    /// steps: their results (capacity refusals included), their fronts in record and slot
+    /// order, and their emissions must be equal.
     #[test]
     fn hashed_and_array_pair_maps_agree(steps in prop::collection::vec(step(), 1..120)) {
         let baked = larger_baked();

@@ -89,8 +89,7 @@ impl Front<'_> {
     /// Maps the encoded links back to the slots their pairs now occupy.
     fn links_to_slots(&mut self, live: usize) {
         let (base, pairs) = (self.base, self.pairs);
-        for slot in 0..live {
-            let mut s = self.slots[slot];
+        for s in &mut self.slots[..live] {
             for l in &mut s.neighbours {
                 if *l == NONE || *l < base {
                     continue;
@@ -101,7 +100,6 @@ impl Front<'_> {
                     _ => NONE,
                 };
             }
-            self.slots[slot] = s;
         }
     }
 

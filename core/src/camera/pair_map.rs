@@ -13,14 +13,15 @@
 //!   nodes): only the split nodes, in an open-addressed table of `2 × max_pairs + 1` entries of
 //!   6 bytes (the node, and the pair in 16 bits), never more than half full. Linear probing
 //!   from a multiplicative hash, and deletion by shifting the rest of the run back (no
-//!   tombstones), keep lookups short: about 1.5 entries read for a split node and 2.5 for an
-//!   unsplit one. On the St. Helens demo it shrinks the map from 296 to 111 KB per camera, but
-//!   refinement took 4-8% longer (each route's camera alone, medians, eight and ten
-//!   interleaved runs; 0.97-1.23x, median 1.07x, in five runs of the `budgeted/` bench):
-//!   node ids are numbered depth-first, so the array keeps the entries a pass and its
-//!   operations read together in a few lines, and the hash scatters them. Hashing blocks of
-//!   eight consecutive nodes together did not measurably help. So the array is the default,
-//!   and the table is for a runtime that counts bytes.
+//!   tombstones), keep lookups short: at half load, linear probing expects about 1.5 entries
+//!   read for a split node and 2.5 for an unsplit one (Knuth's estimates; not counted here).
+//!   On the St. Helens demo it shrinks the map from 296 to 111 KB per camera, but refinement
+//!   took 1.04-1.16x as long (median 1.07x; the four routes' cameras each alone, ten
+//!   alternating pairs of demo runs; 0.97-1.23x, median 1.07x, in five runs of the
+//!   `budgeted/` bench): node ids are numbered depth-first, so the array keeps the entries a
+//!   pass and its operations read together in a few lines, and the hash scatters them.
+//!   Hashing blocks of eight consecutive nodes together did not measurably help. So the array
+//!   is the default, and the table is for a runtime that counts bytes.
 
 use super::NONE;
 use bytemuck::{Pod, Zeroable};
