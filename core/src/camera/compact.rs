@@ -67,40 +67,16 @@ impl Front<'_> {
     /// Rewrites every link into a pair's slot as `base + 2 * owner + side`, which survives
     /// the pairs' re-ordering (links into base slots, below `base`, stay as they are).
     fn links_to_owners(&mut self, live: usize) {
-        let (base, pairs) = (self.base, self.pairs);
-        for s in &mut self.slots[..live] {
-            for l in &mut s.neighbours {
-                if *l == NONE || *l < base {
-                    continue;
-                }
-                let rel = *l - base;
-                *l = match self.owner.get((rel / 2) as usize) {
-                    Some(o) if rel / 2 < pairs => {
-                        o.0.checked_mul(2)
-                            .and_then(|x| x.checked_add(base + rel % 2))
-                            .unwrap_or(NONE)
-                    }
-                    _ => NONE,
-                };
-            }
-        }
+        let (owner, pairs) = (&*self.owner, self.pairs);
+        let owner_of = |k: u32| owner.get(k as usize).filter(|_| k < pairs).map(|o| o.0);
+        map_pair_links(&mut self.slots[..live], self.base, owner_of);
     }
 
     /// Maps the encoded links back to the slots their pairs now occupy.
     fn links_to_slots(&mut self, live: usize) {
-        let (base, pairs) = (self.base, self.pairs);
-        for s in &mut self.slots[..live] {
-            for l in &mut s.neighbours {
-                if *l == NONE || *l < base {
-                    continue;
-                }
-                let rel = *l - base;
-                *l = match self.pair_of.get((rel / 2) as usize) {
-                    Some(k) if k < pairs => base + 2 * k + rel % 2,
-                    _ => NONE,
-                };
-            }
-        }
+        let (pair_of, pairs) = (&self.pair_of, self.pairs);
+        let pair_now = |owner: u32| pair_of.get(owner as usize).filter(|&k| k < pairs);
+        map_pair_links(&mut self.slots[..live], self.base, pair_now);
     }
 
     /// Sorts the active records by node (free records, tagged with the top bit, sort last
@@ -205,6 +181,24 @@ impl Front<'_> {
         let owner = self.owner.get(k)?;
         let p = self.pair_of.get(owner.index())? as usize;
         (p < n).then_some(p)
+    }
+}
+
+/// Rewrites every link at or above `base` (into a pair's slot, `base + 2 * x + side`) to
+/// `base + 2 * to(x) + side`, and to `NONE` where `to` has no answer or the sum would not fit;
+/// links into base slots and absent links stay as they are.
+fn map_pair_links(slots: &mut [PolySlot], base: u32, to: impl Fn(u32) -> Option<u32>) {
+    for s in slots {
+        for l in &mut s.neighbours {
+            if *l == NONE || *l < base {
+                continue;
+            }
+            let rel = *l - base;
+            *l = to(rel / 2)
+                .and_then(|x| x.checked_mul(2))
+                .and_then(|x| x.checked_add(base + rel % 2))
+                .unwrap_or(NONE);
+        }
     }
 }
 
