@@ -73,11 +73,17 @@ impl Loaded {
     }
 }
 
-/// Bakes `input` into `cache` once: the cached file's name carries a checksum of the input and
-/// the crate version, so a changed input or baker bakes again.
+/// Bakes `input` into `cache` once: the cached file's name carries a checksum of the input,
+/// the crate version and the format's major version, so a changed input, baker or format
+/// bakes again.
 pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, String> {
     let bytes = std::fs::read(input).map_err(|e| format!("{}: {e}", input.display()))?;
-    let key = checksum64(&bytes) ^ checksum64(env!("CARGO_PKG_VERSION").as_bytes());
+    let version = format!(
+        "{} format {}",
+        env!("CARGO_PKG_VERSION"),
+        caveclod_core::format::VERSION_MAJOR
+    );
+    let key = checksum64(&bytes) ^ checksum64(version.as_bytes());
     let stem = input
         .file_stem()
         .map_or("input".into(), |s| s.to_string_lossy().into_owned());
@@ -85,9 +91,13 @@ pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, S
     let clod = cache.join(format!("{stem}-{key:016x}.clod"));
     let start = Instant::now();
     let mut baked_now = false;
-    let file = match std::fs::read(&clod) {
-        Ok(b) if !rebake => b,
-        _ => {
+    // A cached file that no longer loads (damaged, or left by another build) is baked again.
+    let cached = std::fs::read(&clod)
+        .ok()
+        .filter(|b| !rebake && AlignedBytes::from_slice(b).hierarchy().is_ok());
+    let file = match cached {
+        Some(b) => b,
+        None => {
             let (baked, _info): (Baked, _) =
                 bake_file(input, &ImportOptions::default(), &mut |_| {})
                     .map_err(|e| e.to_string())?;
