@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use caveclod_core::format::{serialized_len, write_into, ExtraSection, WriteError};
 use caveclod_core::{
-    BaseFace, Creator, Hierarchy, HierarchyParts, Node, NodeId, PolyId, Polygon, Position,
+    BaseFace, Creator, Hierarchy, HierarchyParts, Node, NodeId, PolyId, PolyKey, Polygon, Position,
     PositionId, Split, SplitBounds, SurfaceGroupId, SurfaceId, Vertex, VertexKey,
 };
 
@@ -136,6 +136,8 @@ impl Baked {
                 creator[col.fr as usize] = Creator::new(s, true);
             }
         }
+        let polygons_creator: Vec<Creator> =
+            order.iter().map(|&(f, _)| creator[f as usize]).collect();
         let polygons = order
             .iter()
             .map(|&(f, rot)| {
@@ -156,6 +158,19 @@ impl Baked {
                 PolyId(poly_new[f as usize])
             }
         };
+        // Splits name their neighbours by key (`PolyKey`): base polygons by id, the others by
+        // creator and side.
+        let base_keys = base_count as u32;
+        let key = |p: PolyId| match p.get() {
+            None => PolyKey::NONE,
+            Some(p) if (p.0 as usize) < base_count => PolyKey::base(p),
+            Some(p) => {
+                let c: Creator = polygons_creator[p.index()];
+                c.node().map_or(PolyKey::NONE, |node| {
+                    PolyKey::created(base_keys, node, c.is_right())
+                })
+            }
+        };
         let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
         let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];
         for (c, col) in h.collapses.iter().enumerate() {
@@ -171,7 +186,7 @@ impl Baked {
                 floating: NodeId(new_id(col.u)),
                 f_l: pid(col.fl),
                 f_r: pid(col.fr),
-                neighbours: col.neighbours.map(pid),
+                neighbours: col.neighbours.map(|f| key(pid(f))),
             };
             bounds[split_new[c] as usize] = SplitBounds::new(
                 w.positions[h.node_position[old] as usize],

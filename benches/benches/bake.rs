@@ -65,7 +65,7 @@ fn forced(
             todo.push(parent);
         }
         for f in s.neighbours {
-            if let Some(c) = f.get().and_then(|f| h.polygons()[f.index()].creator.node()) {
+            if let Some((c, _)) = f.creator(h.base_polygon_count() as u32) {
                 todo.push(c);
             }
         }

@@ -6,7 +6,7 @@
 //! [`CameraState`](crate::CameraState).
 
 use crate::format::{self, FormatError, HierarchyParts, Tag};
-use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};
+use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId};
 use crate::records::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
@@ -225,13 +225,29 @@ impl<'a> Hierarchy<'a> {
         )
     }
 
-    /// The node whose split creates `poly`; `NONE` for a base polygon.
+    /// The polygon a [`PolyKey`] names; `None` for `NONE` or a key no polygon has.
     #[inline]
-    pub(crate) fn creator(&self, poly: PolyId) -> NodeId {
-        self.parts.polygons[poly.index()]
-            .creator
-            .node()
-            .unwrap_or(NodeId::NONE)
+    pub fn polygon_of(&self, key: PolyKey) -> Option<PolyId> {
+        let base = self.parts.base.len() as u32;
+        match key.creator(base) {
+            Some((node, right)) => {
+                let s = self.split(node)?;
+                (if right { s.f_r } else { s.f_l }).get()
+            }
+            None => (key.is_some() && key.0 < base).then_some(PolyId(key.0)),
+        }
+    }
+
+    /// The [`PolyKey`] of `poly`; `None` for an id out of range.
+    #[inline]
+    pub fn key_of(&self, poly: PolyId) -> Option<PolyKey> {
+        let p = self.parts.polygons.get(poly.index())?;
+        Some(match p.creator.node() {
+            Some(node) => {
+                PolyKey::created(self.parts.base.len() as u32, node, p.creator.is_right())
+            }
+            None => PolyKey::base(poly),
+        })
     }
 
     /// Bytes of static data: every section's records.

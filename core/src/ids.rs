@@ -96,3 +96,68 @@ id_type!(
     SurfaceGroupId,
     u16
 );
+id_type!(
+    /// A polygon named by where it comes from rather than by its place in the polygon array:
+    /// a base polygon's [`PolyId`], or `base_polygons + 2 · node + side` for a polygon that
+    /// `node`'s split creates (side 1 for `f_r`), the slot the polygon would take in a camera
+    /// whose pairs were numbered by node. [`Split::neighbours`](crate::Split) names polygons
+    /// so: a camera finds a neighbour's slot from the key and its own map from split to pair,
+    /// without reading the neighbour's polygon record (which was most of the cache misses of a
+    /// split's or collapse's legality check).
+    PolyKey,
+    u32
+);
+
+impl PolyKey {
+    /// The key of base polygon `poly`.
+    #[inline]
+    pub const fn base(poly: PolyId) -> Self {
+        Self(poly.0)
+    }
+
+    /// The key of the polygon `node`'s split creates, `f_r` if `right`, in a hierarchy of
+    /// `base_polygons` base polygons. (Wraps rather than panics on counts no valid file has;
+    /// validation refuses such keys.)
+    #[inline]
+    pub const fn created(base_polygons: u32, node: NodeId, right: bool) -> Self {
+        Self(
+            base_polygons
+                .wrapping_add(node.0.wrapping_mul(2))
+                .wrapping_add(right as u32),
+        )
+    }
+
+    /// The split that creates the polygon and whether it is that split's `f_r`; `None` for a
+    /// base polygon (a key under `base_polygons`) and for [`Self::NONE`].
+    #[inline]
+    pub const fn creator(self, base_polygons: u32) -> Option<(NodeId, bool)> {
+        if self.is_none() || self.0 < base_polygons {
+            return None;
+        }
+        let rel = self.0 - base_polygons;
+        Some((NodeId(rel >> 1), rel & 1 == 1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn poly_keys_name_base_polygons_and_creators() {
+        for nb in [1u32, 3, 1000] {
+            for node in [0u32, 1, 77, 1 << 30] {
+                for right in [false, true] {
+                    let k = PolyKey::created(nb, NodeId(node), right);
+                    assert!(k.0 >= nb);
+                    assert_eq!(k.creator(nb), Some((NodeId(node), right)));
+                }
+            }
+            for b in 0..nb.min(10) {
+                assert_eq!(PolyKey::base(PolyId(b)), PolyKey(b));
+                assert_eq!(PolyKey(b).creator(nb), None);
+            }
+            assert_eq!(PolyKey::NONE.creator(nb), None);
+        }
+    }
+}

@@ -60,7 +60,7 @@ pub use checksum::checksum64;
 pub use format::{FormatError, HierarchyParts, WriteError};
 pub use glam;
 pub use hierarchy::Hierarchy;
-pub use ids::{NodeId, PolyId, PositionId, SurfaceGroupId, SurfaceId};
+pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
 pub use octree::{CutError, Octree, OctreeCut, OctreeFormatError, SelectStats};
 pub use records::{

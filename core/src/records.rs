@@ -8,7 +8,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId, SurfaceId};
+use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
 /// How a node position may move under a collapse (CAVECLOD §3.2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -86,9 +86,12 @@ pub struct Split {
     pub f_l: PolyId,
     /// The polygon right of the new edge, `(stationary, v_r, floating)`; `NONE` on a border.
     pub f_r: PolyId,
-    /// The neighbours the split needs: `[fl_ccw, fl_clw, fr_clw, fr_ccw]`. `fl_clw` always
-    /// exists; the others are `NONE` on a border, and `fr_ccw` exists iff `f_r` does.
-    pub neighbours: [PolyId; 4],
+    /// The neighbours the split needs: `[fl_ccw, fl_clw, fr_clw, fr_ccw]`, by [`PolyKey`]
+    /// (so a camera finds their slots without reading their polygon records;
+    /// [`Hierarchy::polygon_of`](crate::Hierarchy::polygon_of) gives their [`PolyId`]s).
+    /// `fl_clw` always exists; the others are `NONE` on a border, and `fr_ccw` exists iff
+    /// `f_r` does.
+    pub neighbours: [PolyKey; 4],
 }
 
 /// What the refinement criteria of a splittable node read: its point, bounding sphere,

@@ -10,7 +10,7 @@ mod common;
 use std::collections::BTreeMap;
 
 use caveclod_core::format::{tags, FileHeader, SectionEntry, Tag};
-use caveclod_core::{FormatError, Hierarchy, Node, Position};
+use caveclod_core::{FormatError, Hierarchy, Node, PolyKey, Position, Split};
 use common::{exercise, fix_checksum, golden, header, set_header, Aligned, Rng};
 
 const HEADER_LEN: usize = size_of::<FileHeader>();
@@ -324,6 +324,97 @@ fn a_node_parent_out_of_range_is_refused() {
             assert_eq!(value, u64::from(bad));
         }
         other => panic!("expected Invalid NODE parent, got {other:?}"),
+    }
+}
+
+/// A split's neighbours are polygon keys, and each names a polygon: the key of a base
+/// polygon, or of a split's `f_l` or `f_r`, and that polygon's key is the key again.
+#[test]
+fn split_neighbour_keys_name_polygons() {
+    let f = golden();
+    let h = Hierarchy::from_bytes(f.bytes()).expect("golden");
+    let nb = h.base_polygon_count() as u32;
+    let (mut base, mut created) = (0, 0);
+    for s in h.splits() {
+        for key in s.neighbours.into_iter().filter(|k| k.is_some()) {
+            let poly = h.polygon_of(key).expect("a neighbour key names a polygon");
+            assert_eq!(h.key_of(poly), Some(key));
+            match key.creator(nb) {
+                None => base += 1,
+                Some((node, right)) => {
+                    created += 1;
+                    let own = h.split(node).expect("the creator has a split");
+                    assert_eq!(Some(poly), if right { own.f_r } else { own.f_l }.get());
+                }
+            }
+        }
+    }
+    assert!(
+        base > 0 && created > 0,
+        "{base} base and {created} created neighbours"
+    );
+    assert_eq!(h.polygon_of(PolyKey::NONE), None);
+    assert_eq!(
+        h.polygon_of(PolyKey(nb + 2 * h.splits().len() as u32)),
+        None
+    );
+}
+
+/// A split's neighbour key that names no polygon, or one of the split's own, is refused with
+/// the split, the field and the key.
+#[test]
+fn bad_split_neighbour_keys_are_refused() {
+    let f = golden();
+    let h = Hierarchy::from_bytes(f.bytes()).expect("golden");
+    let nb = h.base_polygon_count() as u32;
+    let ns = h.splits().len() as u32;
+    // A split without a right polygon (the golden terrain has borders).
+    let without_fr = h
+        .splits()
+        .iter()
+        .position(|s| s.f_r.is_none())
+        .expect("a border split") as u32;
+    let i = h
+        .splits()
+        .iter()
+        .enumerate()
+        .position(|(i, s)| i as u32 != without_fr && s.neighbours[1].is_some())
+        .expect("a split");
+    let cases = [
+        (PolyKey(nb + 2 * ns), "polygon key out of range"),
+        (PolyKey(u32::MAX - 1), "polygon key out of range"),
+        (
+            PolyKey::created(nb, caveclod_core::NodeId(i as u32), false),
+            "one of the split's own polygons",
+        ),
+        (
+            PolyKey::created(nb, caveclod_core::NodeId(without_fr), true),
+            "names the f_r of a split that has none",
+        ),
+    ];
+    let range = section_range(f.bytes(), tags::SPLITS);
+    // `fl_clw` (index 1) is present in every split.
+    let at = range.start + i * size_of::<Split>() + 16 + 4;
+    for (bad, reason) in cases {
+        let mut g = golden();
+        g.bytes_mut()[at..at + 4].copy_from_slice(&bad.0.to_le_bytes());
+        fix_checksum(g.bytes_mut());
+        match Hierarchy::from_bytes(g.bytes()) {
+            Err(FormatError::Invalid {
+                tag,
+                record,
+                field,
+                problem,
+                value,
+            }) => {
+                assert_eq!(tag, tags::SPLITS);
+                assert_eq!(record, i as u64);
+                assert_eq!(field, "fl_clw");
+                assert_eq!(problem, reason);
+                assert_eq!(value, u64::from(bad.0));
+            }
+            other => panic!("{bad:?}: expected Invalid SPLT fl_clw, got {other:?}"),
+        }
     }
 }
 

@@ -43,7 +43,7 @@
 //!   collapses that refinement wants are illegal (a neighbour is still finer than the split
 //!   left it, or the floating child is split), and asking again costs a chain of dependent
 //!   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
-//!   neighbours' polygons): on the St. Helens flyover, about ten refused checks per collapse
+//!   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks per collapse
 //!   applied, every frame. Legality depends only on the pair's two slots (their links and
 //!   corners) and on the children being unsplit, so one bit per pair, set on a refusal, is
 //!   cleared by every write to either slot and by the collapse of either child; a set bit
@@ -85,7 +85,7 @@ pub use refine::{RefineParams, RefineStats};
 use bytemuck::{Pod, Zeroable};
 
 use crate::hierarchy::Hierarchy;
-use crate::ids::{NodeId, PolyId};
+use crate::ids::{NodeId, PolyId, PolyKey};
 use certificate::{Odometer, UNKNOWN};
 use pair_map::PairMap;
 
@@ -567,15 +567,23 @@ impl Front<'_> {
     /// creator's pair (two reads: the polygon's creator and the camera's `pair_of`).
     #[inline]
     pub fn slot_of(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<u32> {
-        if poly.0 < self.base {
-            return Some(poly.0);
-        }
-        let c = h.polygons().get(poly.index())?.creator;
-        let pair = self.pair_of.get(c.node()?.index())?;
+        self.slot_of_key(h.key_of(poly)?)
+    }
+
+    /// The slot of an active polygon named by its [`PolyKey`]: a base polygon's key is its
+    /// slot; any other's says its creator and side, so one read of the camera's `pair_of`
+    /// answers.
+    #[inline]
+    pub fn slot_of_key(&self, key: PolyKey) -> Option<u32> {
+        let Some((node, right)) = key.creator(self.base) else {
+            // A base polygon's key is its slot (`NONE` is no base polygon's).
+            return (key.0 < self.base).then_some(key.0);
+        };
+        let pair = self.pair_of.get(node.index())?;
         if pair == NONE {
             return None;
         }
-        Some(self.base + 2 * pair + c.is_right() as u32)
+        Some(self.base + 2 * pair + right as u32)
     }
 
     /// The polygon in a slot, if the slot is live.

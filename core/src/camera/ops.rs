@@ -13,7 +13,7 @@
 use super::index_cache::Known;
 use super::{ActiveVertex, CameraState, Front, PolySlot, FREE, NONE};
 use crate::hierarchy::Hierarchy;
-use crate::ids::{NodeId, PolyId, PositionId};
+use crate::ids::{NodeId, PolyKey, PositionId};
 
 /// Why an operation was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,11 +105,11 @@ impl Front<'_> {
     /// Slot of a neighbour that must be active, or `NONE` for an absent one; `None` if a
     /// present neighbour is inactive.
     #[inline]
-    fn want(&self, h: &Hierarchy<'_>, f: PolyId) -> Option<u32> {
+    fn want(&self, f: PolyKey) -> Option<u32> {
         if f.is_none() {
             Some(NONE)
         } else {
-            self.slot_of(h, f)
+            self.slot_of_key(f)
         }
     }
 
@@ -164,10 +164,10 @@ impl Front<'_> {
         }
         let n = &s.neighbours;
         Some([
-            self.want(h, n[0])?,
-            self.want(h, n[1])?,
-            self.want(h, n[2])?,
-            self.want(h, n[3])?,
+            self.want(n[0])?,
+            self.want(n[1])?,
+            self.want(n[2])?,
+            self.want(n[3])?,
         ])
     }
 
@@ -192,19 +192,19 @@ impl Front<'_> {
         // most are refused because a neighbour is finer than the split left it: each link is
         // compared as soon as its neighbour's slot is known, so a refusal stops early.
         let mut slots = [NONE; 4];
-        slots[0] = self.want(h, n[0])?;
+        slots[0] = self.want(n[0])?;
         if fla.neighbours[1] != slots[0] {
             return None;
         }
-        slots[1] = self.want(h, n[1])?;
+        slots[1] = self.want(n[1])?;
         if fla.neighbours[0] != slots[1] {
             return None;
         }
-        slots[2] = self.want(h, n[2])?;
+        slots[2] = self.want(n[2])?;
         if s.f_r.is_some() && fra.neighbours[2] != slots[2] {
             return None;
         }
-        slots[3] = self.want(h, n[3])?;
+        slots[3] = self.want(n[3])?;
         if s.f_r.is_some() && fra.neighbours[0] != slots[3] {
             return None;
         }
@@ -602,10 +602,15 @@ impl Front<'_> {
                 if f.is_none() {
                     continue;
                 }
-                match self.slot_of(h, f) {
+                match self.slot_of_key(f) {
                     Some(slot) => slots[k] = slot,
                     None => {
-                        *stack.get_mut(top).ok_or(full)? = h.creator(f);
+                        // Inactive: its creator is not split yet (a base polygon is
+                        // always active).
+                        let (creator, _) = f
+                            .creator(self.base)
+                            .ok_or(OpError::Inconsistent { node: v })?;
+                        *stack.get_mut(top).ok_or(full)? = creator;
                         top += 1;
                         pushed = true;
                     }

@@ -39,7 +39,7 @@ use bytemuck::{Pod, Zeroable};
 /// The file's first eight bytes.
 pub const MAGIC: [u8; 8] = *b"CAVECLOD";
 /// The major version this crate reads and writes. Files of another major version are refused.
-pub const VERSION_MAJOR: u16 = 1;
+pub const VERSION_MAJOR: u16 = 2;
 /// The minor version this crate writes. Readers accept any minor version of their major.
 pub const VERSION_MINOR: u16 = 0;
 /// Alignment of every section's start, in bytes.

@@ -313,6 +313,16 @@ pub(crate) fn validate(
             found: nb as u64,
         });
     }
+    // Splits name their neighbours by `PolyKey`: base polygons, then two keys per split.
+    if nb as u64 + 2 * ns as u64 >= u32::MAX as u64 {
+        return Err(invalid(
+            tags::META,
+            0,
+            "counts",
+            "more polygon keys (base polygons + 2 per split) than 32 bits can name",
+            nb as u64 + 2 * ns as u64,
+        ));
+    }
     if parts.surface_count > u16::MAX as u32 || parts.surface_group_count > u16::MAX as u32 {
         return Err(invalid(
             tags::META,
@@ -613,14 +623,18 @@ pub(crate) fn validate(
             ));
         }
         for (k, &f) in s.neighbours.iter().enumerate() {
-            if f.is_some() && (f.index() >= np || f == s.f_l || f == s.f_r) {
-                return Err(invalid(
-                    t,
-                    i,
-                    fields[k],
-                    "polygon id out of range or one of the split's own polygons",
-                    f.0.into(),
-                ));
+            let problem = match f.creator(nb as u32) {
+                // A base polygon's key, or `NONE`.
+                None => None,
+                Some((node, _)) if node.index() >= ns => Some("polygon key out of range"),
+                Some((node, _)) if node.index() == i => Some("one of the split's own polygons"),
+                Some((node, true)) if parts.splits[node.index()].f_r.is_none() => {
+                    Some("names the f_r of a split that has none")
+                }
+                Some(_) => None,
+            };
+            if let Some(problem) = problem {
+                return Err(invalid(t, i, fields[k], problem, f.0.into()));
             }
         }
         if s.neighbours[1].is_none() {
