@@ -102,8 +102,8 @@ id_type!(
     /// `node`'s split creates (side 1 for `f_r`), the slot the polygon would take in a camera
     /// whose pairs were numbered by node. [`Split::neighbours`](crate::Split) names polygons
     /// so: a camera finds a neighbour's slot from the key and its own map from split to pair,
-    /// without reading the neighbour's polygon record (which was most of the cache misses of a
-    /// split's or collapse's legality check).
+    /// without reading the neighbour's polygon record (a dependent cache miss per neighbour
+    /// in a split's or collapse's legality check).
     PolyKey,
     u32
 );

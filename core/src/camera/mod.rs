@@ -43,11 +43,12 @@
 //!   collapses that refinement wants are illegal (a neighbour is still finer than the split
 //!   left it, or the floating child is split), and asking again costs a chain of dependent
 //!   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
-//!   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks per collapse
-//!   applied, every frame. Legality depends only on the pair's two slots (their links and
-//!   corners) and on the children being unsplit, so one bit per pair, set on a refusal, is
-//!   cleared by every write to either slot and by the collapse of either child; a set bit
-//!   answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every bit.
+//!   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks
+//!   per collapse applied, every frame. Legality depends only on the pair's two slots (their
+//!   links and corners) and on the children being unsplit, so one bit per pair, set on a
+//!   refusal, is cleared by every write to either slot and by the collapse of either child;
+//!   a set bit answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every
+//!   bit.
 //! - **Settled answers are certified, not asked again.** A visit asks whether the node's
 //!   split is wanted and, for a stationary child, whether its parent's still is; the answer
 //!   rarely changes, yet each question reads a bounds record from wherever the hierarchy
