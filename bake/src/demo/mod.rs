@@ -94,8 +94,10 @@ pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, S
     // A cached file that no longer loads (damaged, or left by another build) is baked again.
     let cached = std::fs::read(&clod)
         .ok()
-        .filter(|b| !rebake && AlignedBytes::from_slice(b).hierarchy().is_ok());
-    let file = match cached {
+        .filter(|_| !rebake)
+        .map(|b| AlignedBytes::from_slice(&b))
+        .filter(|b| b.hierarchy().is_ok());
+    let bytes = match cached {
         Some(b) => b,
         None => {
             let (baked, _info): (Baked, _) =
@@ -104,18 +106,20 @@ pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, S
             let out = baked.to_bytes(&[]).map_err(|e| e.to_string())?;
             write_atomically(&clod, &out).map_err(|e| e.to_string())?;
             baked_now = true;
-            out
+            let bytes = AlignedBytes::from_slice(&out);
+            bytes
+                .hierarchy()
+                .map_err(|e| format!("{}: {e}", clod.display()))?;
+            bytes
         }
     };
-    let loaded = Loaded {
+    Ok(Loaded {
         input: input.to_path_buf(),
         clod,
         baked_now,
         bake_seconds: start.elapsed().as_secs_f64(),
-        bytes: AlignedBytes::from_slice(&file),
-    };
-    loaded.hierarchy()?;
-    Ok(loaded)
+        bytes,
+    })
 }
 
 /// The measured flights.

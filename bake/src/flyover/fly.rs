@@ -8,6 +8,7 @@ use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, RefineSt
 
 use super::gate::FrameGate;
 use super::placement::{balance, Cores};
+use crate::aligned::CameraPool;
 
 /// Per-frame figures of one camera.
 #[derive(Clone, Debug, Default)]
@@ -242,10 +243,9 @@ pub fn fly_per_camera(
 ) -> Result<Flight, String> {
     let in_flight = in_flight.max(1);
     let start = Instant::now();
-    let words = CameraState::words_needed_for(h, config);
-    let mut memories: Vec<Vec<u32>> = views.iter().map(|_| vec![0u32; words]).collect();
+    let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
     let mut cams = Vec::with_capacity(views.len());
-    for m in memories.iter_mut() {
+    for m in pool.memories() {
         cams.push(CameraState::with_config(h, m, config).map_err(|e| e.to_string())?);
     }
     let camera_bytes = cams.first().map_or(0, CameraState::bytes);
@@ -339,8 +339,9 @@ pub fn fly_shared(
     compact_every: usize,
 ) -> Result<Flight, String> {
     let start = Instant::now();
-    let mut memory = vec![0u32; CameraState::words_needed_for(h, config)];
-    let mut cam = CameraState::with_config(h, &mut memory, config).map_err(|e| e.to_string())?;
+    let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), 1);
+    let memory = pool.memories().next().ok_or("no camera memory")?;
+    let mut cam = CameraState::with_config(h, memory, config).map_err(|e| e.to_string())?;
     let mut out = IndexBuffers::new(h, cam.max_pairs());
     let frames = views.first().map_or(0, Vec::len);
     let mut records: Vec<Record> = views
@@ -521,18 +522,21 @@ pub fn fly_interleaved(
     segment: usize,
 ) -> Result<Vec<Flight>, String> {
     let segment = segment.max(1);
-    let mut memories: Vec<Vec<Vec<u32>>> = groups
+    // Every group's cameras in one pool, so that all of them, the cameras flown alone too,
+    // get the same kind of pages.
+    let words = groups
         .iter()
-        .map(|g| {
-            let words = CameraState::words_needed_for(h, &g.config);
-            g.views.iter().map(|_| vec![0u32; words]).collect()
-        })
-        .collect();
+        .map(|g| CameraState::words_needed_for(h, &g.config))
+        .max()
+        .unwrap_or(0);
+    let mut pool = CameraPool::new(words, groups.iter().map(|g| g.views.len()).sum());
+    let mut memories = pool.memories();
     let mut flying = Vec::with_capacity(groups.len());
-    for (g, mem) in groups.iter().zip(memories.iter_mut()) {
+    for g in groups {
         let frames = g.views.first().map_or(0, Vec::len);
-        let mut cams = Vec::with_capacity(mem.len());
-        for m in mem.iter_mut() {
+        let mut cams = Vec::with_capacity(g.views.len());
+        for _ in g.views {
+            let m = memories.next().ok_or("the camera pool is short")?;
             cams.push(CameraState::with_config(h, m, &g.config).map_err(|e| e.to_string())?);
         }
         flying.push(Flying {
