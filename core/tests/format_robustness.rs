@@ -212,6 +212,28 @@ fn section_range(bytes: &[u8], tag: Tag) -> std::ops::Range<usize> {
     start..start + e.record_size as usize * e.record_count as usize
 }
 
+/// Loads `bytes` and requires `FormatError::Invalid` naming `tag`, `record`, `field` and
+/// `value`; returns the rule it names as broken.
+fn refused_as(bytes: &[u8], tag: Tag, record: usize, field: &str, value: u64) -> &'static str {
+    match Hierarchy::from_bytes(bytes) {
+        Err(FormatError::Invalid {
+            tag: t,
+            record: r,
+            field: f,
+            problem,
+            value: v,
+        }) => {
+            assert_eq!(
+                (t, r, f, v),
+                (tag, record as u64, field, value),
+                "{problem}"
+            );
+            problem
+        }
+        other => panic!("expected Invalid {tag} record {record} {field}, got {other:?}"),
+    }
+}
+
 #[test]
 fn bad_magic_is_refused() {
     let mut f = golden();
@@ -310,21 +332,7 @@ fn a_node_parent_out_of_range_is_refused() {
         Err(FormatError::ChecksumMismatch { .. })
     ));
     fix_checksum(f.bytes_mut());
-    match Hierarchy::from_bytes(f.bytes()) {
-        Err(FormatError::Invalid {
-            tag,
-            record,
-            field,
-            value,
-            ..
-        }) => {
-            assert_eq!(tag, tags::NODES);
-            assert_eq!(record, i as u64);
-            assert_eq!(field, "parent");
-            assert_eq!(value, u64::from(bad));
-        }
-        other => panic!("expected Invalid NODE parent, got {other:?}"),
-    }
+    refused_as(f.bytes(), tags::NODES, i, "parent", u64::from(bad));
 }
 
 /// A split's neighbours are polygon keys, and each names a polygon: the key of a base
@@ -399,22 +407,8 @@ fn bad_split_neighbour_keys_are_refused() {
         let mut g = golden();
         g.bytes_mut()[at..at + 4].copy_from_slice(&bad.0.to_le_bytes());
         fix_checksum(g.bytes_mut());
-        match Hierarchy::from_bytes(g.bytes()) {
-            Err(FormatError::Invalid {
-                tag,
-                record,
-                field,
-                problem,
-                value,
-            }) => {
-                assert_eq!(tag, tags::SPLITS);
-                assert_eq!(record, i as u64);
-                assert_eq!(field, "fl_clw");
-                assert_eq!(problem, reason);
-                assert_eq!(value, u64::from(bad.0));
-            }
-            other => panic!("{bad:?}: expected Invalid SPLT fl_clw, got {other:?}"),
-        }
+        let problem = refused_as(g.bytes(), tags::SPLITS, i, "fl_clw", u64::from(bad.0));
+        assert_eq!(problem, reason, "{bad:?}");
     }
 }
 
@@ -427,21 +421,13 @@ fn a_nan_position_is_refused() {
     let at = range.start + i * size_of::<Position>() + 4; // the y coordinate
     f.bytes_mut()[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     fix_checksum(f.bytes_mut());
-    match Hierarchy::from_bytes(f.bytes()) {
-        Err(FormatError::Invalid {
-            tag,
-            record,
-            field,
-            value,
-            ..
-        }) => {
-            assert_eq!(tag, tags::POSITIONS);
-            assert_eq!(record, i as u64);
-            assert_eq!(field, "xyz");
-            assert_eq!(value, u64::from(f32::NAN.to_bits()));
-        }
-        other => panic!("expected Invalid POSN xyz, got {other:?}"),
-    }
+    refused_as(
+        f.bytes(),
+        tags::POSITIONS,
+        i,
+        "xyz",
+        u64::from(f32::NAN.to_bits()),
+    );
 }
 
 #[test]
