@@ -494,11 +494,19 @@ fn bench_cameras(c: &mut Criterion, h: &Hierarchy<'_>, s: f32, ground: &Ground) 
         .memories()
         .map(|m| must(CameraState::with_config(h, m, &config)))
         .collect();
-    let mut mean_front = 0;
-    for (cam, path) in cams.iter_mut().zip(&paths) {
-        settle(cam, h, &path[0], &p);
-        mean_front += lap(cam, h, path, &p);
-    }
+    let fronts: Vec<u64> = cams
+        .iter_mut()
+        .zip(&paths)
+        .map(|(cam, path)| {
+            settle(cam, h, &path[0], &p);
+            lap(cam, h, path, &p)
+        })
+        .collect();
+    eprintln!(
+        "four cameras, {} polygons each at most: mean fronts {fronts:?} polygons",
+        largest + largest / 10
+    );
+    let mean_front: u64 = fronts.iter().sum();
     let mut g = c.benchmark_group("cameras");
     g.throughput(Throughput::Elements(RUN as u64 * mean_front));
     let step = Cell::new(0usize);
