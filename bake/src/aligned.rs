@@ -100,6 +100,30 @@ impl AlignedBytes {
     pub fn hierarchy(&self) -> Result<Hierarchy<'_>, FormatError> {
         Hierarchy::from_bytes(self.bytes())
     }
+
+    /// How many bytes of the memory mapping that holds these bytes the kernel backs with
+    /// huge pages (`AnonHugePages` in `/proc/self/smaps`); `None` where that cannot be read
+    /// (another OS) or no mapping holds them. The mapping may be larger than the buffer.
+    pub fn huge_page_bytes(&self) -> Option<u64> {
+        let at = self.bytes().as_ptr() as u64;
+        let smaps = std::fs::read_to_string("/proc/self/smaps").ok()?;
+        let mut inside = false;
+        for line in smaps.lines() {
+            let mut words = line.split_whitespace();
+            let first = words.next().unwrap_or("");
+            if let Some((lo, hi)) = first.split_once('-') {
+                if let (Ok(lo), Ok(hi)) = (u64::from_str_radix(lo, 16), u64::from_str_radix(hi, 16))
+                {
+                    inside = lo <= at && at < hi;
+                    continue;
+                }
+            }
+            if inside && first == "AnonHugePages:" {
+                return words.next()?.parse::<u64>().ok().map(|kb| kb * 1024);
+            }
+        }
+        None
+    }
 }
 
 impl std::ops::Deref for AlignedBytes {
@@ -212,6 +236,12 @@ mod tests {
         let firsts: Vec<u32> = pool.memories().map(|m| m[0] + m[1000]).collect();
         assert_eq!(firsts, [2, 4, 6]);
         assert_eq!(CameraPool::new(0, 2).memories().count(), 2);
+        if cfg!(target_os = "linux") {
+            // The mapping of a buffer is found, whether or not the kernel granted huge pages.
+            assert!(AlignedBytes::zeroed(HUGE_PAGES_FROM)
+                .huge_page_bytes()
+                .is_some());
+        }
         let mut z = AlignedBytes::zeroed(100);
         assert!(z.iter().all(|&b| b == 0));
         z[99] = 1;

@@ -580,6 +580,17 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
     );
     let _ = writeln!(
         s,
+        "The terrain's hierarchy ({} bytes) lies in memory of which the system backs {} with \
+         huge pages, as are the flights' camera states where it grants them (transparent huge \
+         pages, asked for with `madvise`; see `aligned.rs`).\n",
+        terrain.bytes.len(),
+        terrain.bytes.huge_page_bytes().map_or(
+            "an unknown amount (not Linux)".to_string(),
+            |b| format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64)
+        )
+    );
+    let _ = writeln!(
+        s,
         "In the paper's unit, at {DISPLAY_FPS:.0} frames per second: {:.0} refinement operations \
          per camera per second with a state per camera, {:.0} with one shared state (the paper, \
          Grand Canyon at a 7% tolerance: under about 2,000 against 14,868 on average). Each \
