@@ -18,7 +18,10 @@
 //! 4.06-4.34x (median 4.17) against 4.05-4.43x (4.20), lower in 7 pairs; threads
 //! 1.65-1.93x (median 1.72; one run at 1.07, not seen in five more) against 1.54-1.86x
 //! (1.64), higher in 9. Where the system refuses (huge pages `never`, another OS), the
-//! memory is ordinary pages.
+//! memory is ordinary pages, and memory the allocator hands out again after the process
+//! touched it keeps the pages it has: the demo's run that bakes the terrain (and so freed
+//! much memory before loading it) got 2 MiB of huge pages for it, the runs that read the
+//! cached file 24 MiB. The demo's report says which.
 
 use std::path::Path;
 
