@@ -71,7 +71,8 @@ impl AlignedBytes {
         } else {
             64
         };
-        // Reserved, not yet touched: a large allocation is fresh pages of its own mapping.
+        // Reserved, not yet written: a large allocation is usually fresh pages of its own
+        // mapping (see the module docs for when it is not).
         let mut buf: Vec<u8> = Vec::with_capacity(len + align);
         let start = buf.as_ptr().align_offset(align).min(align);
         if align == HUGE_PAGE {
