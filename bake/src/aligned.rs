@@ -19,9 +19,9 @@
 //! 1.65-1.93x (median 1.72; one run at 1.07, not seen in five more) against 1.54-1.86x
 //! (1.64), higher in 9. Where the system refuses (huge pages `never`, another OS), the
 //! memory is ordinary pages, and memory the allocator hands out again after the process
-//! touched it keeps the pages it has: the demo's run that bakes the terrain (and so freed
-//! much memory before loading it) got 2 MiB of huge pages for it, the runs that read the
-//! cached file 24 MiB. The demo's report says which.
+//! touched it keeps the pages it has: one demo run that baked the terrain (and so freed
+//! much memory before loading it) got 2 MiB of huge pages for it, another 24 MiB, as the
+//! runs that read the cached file do. The demo's report says which.
 
 use std::path::Path;
 
