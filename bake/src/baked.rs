@@ -163,13 +163,7 @@ impl Baked {
         let base_keys = base_count as u32;
         let key = |p: PolyId| match p.get() {
             None => PolyKey::NONE,
-            Some(p) if (p.0 as usize) < base_count => PolyKey::base(p),
-            Some(p) => {
-                let c: Creator = polygons_creator[p.index()];
-                c.node().map_or(PolyKey::NONE, |node| {
-                    PolyKey::created(base_keys, node, c.is_right())
-                })
-            }
+            Some(p) => polygons_creator[p.index()].key(base_keys, p),
         };
         let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
         let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];

@@ -282,16 +282,26 @@ fn bench_refine(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[Vie
 /// plus 10%): one with the split-to-pair map as an array by node (the default), one with it
 /// hashed (`CameraConfig::hashed_pair_map`), each stepping along the moving path; the
 /// array is the hashed map's baseline in the same run.
-fn bench_budgeted(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
-    let p = RefineParams::default();
+/// The largest front a full-capacity camera reaches over one lap of each path, each from
+/// the front settled for the path's first view: what the demo sizes its cameras by.
+fn largest_front(h: &Hierarchy<'_>, paths: &[&[View]], p: &RefineParams) -> u32 {
     let mut memory = vec![0u32; CameraState::words_needed(h)];
     let mut full = must(CameraState::new(h, &mut memory));
-    settle(&mut full, h, &moving[0], &p);
-    let mut largest = full.active_polygon_count();
-    for v in moving.iter().skip(1).chain(moving.first()) {
-        largest = largest.max(must(full.refine(h, v, &p)).active_polygons);
+    let mut largest = 0;
+    for path in paths {
+        full.reset(h);
+        settle(&mut full, h, &path[0], p);
+        largest = largest.max(full.active_polygon_count());
+        for v in path.iter().skip(1).chain(path.first()) {
+            largest = largest.max(must(full.refine(h, v, p)).active_polygons);
+        }
     }
-    drop(memory); // the full camera is done with it
+    largest
+}
+
+fn bench_budgeted(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
+    let p = RefineParams::default();
+    let largest = largest_front(h, &[moving], &p);
     let array = CameraConfig::with_polygon_budget(h, largest + largest / 10);
     let hashed = CameraConfig {
         hashed_pair_map: true,
@@ -477,17 +487,8 @@ fn bench_cameras(c: &mut Criterion, h: &Hierarchy<'_>, s: f32, ground: &Ground) 
                 .collect()
         })
         .collect();
-    let mut memory = vec![0u32; CameraState::words_needed(h)];
-    let mut full = must(CameraState::new(h, &mut memory));
-    let mut largest = 0;
-    for path in &paths {
-        full.reset(h);
-        settle(&mut full, h, &path[0], &p);
-        for v in path {
-            largest = largest.max(must(full.refine(h, v, &p)).active_polygons);
-        }
-    }
-    drop(memory); // the full camera is done with it
+    let path_slices: Vec<&[View]> = paths.iter().map(Vec::as_slice).collect();
+    let largest = largest_front(h, &path_slices, &p);
     let config = CameraConfig::with_polygon_budget(h, largest + largest / 10);
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, &config), 4);
     let mut cams: Vec<CameraState<'_>> = pool
@@ -506,9 +507,9 @@ fn bench_cameras(c: &mut Criterion, h: &Hierarchy<'_>, s: f32, ground: &Ground) 
         "four cameras, {} polygons each at most: mean fronts {fronts:?} polygons",
         largest + largest / 10
     );
-    let mean_front: u64 = fronts.iter().sum();
+    let fronts_sum: u64 = fronts.iter().sum();
     let mut g = c.benchmark_group("cameras");
-    g.throughput(Throughput::Elements(RUN as u64 * mean_front));
+    g.throughput(Throughput::Elements(RUN as u64 * fronts_sum));
     let step = Cell::new(0usize);
     let refusals = Cell::new(0u32);
     let pass = |cam: &mut CameraState<'_>, path: &[View], r: usize| {

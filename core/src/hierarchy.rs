@@ -242,12 +242,7 @@ impl<'a> Hierarchy<'a> {
     #[inline]
     pub fn key_of(&self, poly: PolyId) -> Option<PolyKey> {
         let p = self.parts.polygons.get(poly.index())?;
-        Some(match p.creator.node() {
-            Some(node) => {
-                PolyKey::created(self.parts.base.len() as u32, node, p.creator.is_right())
-            }
-            None => PolyKey::base(poly),
-        })
+        Some(p.creator.key(self.parts.base.len() as u32, poly))
     }
 
     /// Bytes of static data: every section's records.

@@ -220,6 +220,16 @@ impl Creator {
     pub const fn is_right(self) -> bool {
         self.0 & 1 == 1
     }
+
+    /// The [`PolyKey`] of polygon `poly`, whose creator this is, in a hierarchy of
+    /// `base_polygons` base polygons.
+    #[inline]
+    pub const fn key(self, base_polygons: u32, poly: PolyId) -> PolyKey {
+        match self.node() {
+            Some(node) => PolyKey::created(base_polygons, node, self.is_right()),
+            None => PolyKey::base(poly),
+        }
+    }
 }
 
 /// A polygon of the full-resolution mesh.

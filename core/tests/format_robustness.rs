@@ -402,7 +402,7 @@ fn bad_split_neighbour_keys_are_refused() {
     ];
     let range = section_range(f.bytes(), tags::SPLITS);
     // `fl_clw` (index 1) is present in every split.
-    let at = range.start + i * size_of::<Split>() + 16 + 4;
+    let at = range.start + i * size_of::<Split>() + std::mem::offset_of!(Split, neighbours) + 4;
     for (bad, reason) in cases {
         let mut g = golden();
         g.bytes_mut()[at..at + 4].copy_from_slice(&bad.0.to_le_bytes());
