@@ -117,6 +117,8 @@ fn interleaved_flights_do_what_each_does_alone() {
             hashed_pair_map: true,
             ..base
         },
+        // Flown again, with fresh states (and the first one's sizing flight).
+        base,
     ];
     // Segments of 10 frames: 10, 10 and 5.
     let together = fly_interleaved(&h, &options, 10).expect("interleaved");
@@ -138,6 +140,11 @@ fn interleaved_flights_do_what_each_does_alone() {
             assert_eq!(a.indices, b.indices);
         }
     }
+    assert_eq!(together[5].budget, together[0].budget);
+    assert_eq!(
+        together[5].flight.camera_bytes,
+        together[0].flight.camera_bytes
+    );
     assert!(together[0].flight.camera_bytes > together[3].flight.camera_bytes);
     // Hashed only where that is smaller (this terrain's budgets may not be).
     assert!(together[3].flight.camera_bytes >= together[4].flight.camera_bytes);

@@ -194,6 +194,7 @@ pub fn frame(
 }
 
 /// What one flight of several cameras measured.
+#[derive(Clone)]
 pub struct Flight {
     /// Per camera.
     pub records: Vec<Record>,
@@ -386,8 +387,11 @@ pub struct Group<'v> {
     /// Each state compacts every this many of its frames (0: never).
     pub compact_every: usize,
     /// With threads, pin each camera's thread to a core, the cameras shared out by their
-    /// cost over the previous segment (see `placement`).
+    /// cost over the previous segment (see `placement`), or in the first segment by these
+    /// costs (from a sizing flight; equal costs without).
     pub pin: bool,
+    /// Each camera's cost before the flight, for pinning its first segment.
+    pub first_costs: Option<&'v [f64]>,
 }
 
 /// Camera states, index lists and records of one group.
@@ -426,7 +430,10 @@ fn fly_segment(
         return Ok(());
     }
     let gate = FrameGate::new(g.cams.len(), in_flight);
-    let costs = group.pin.then(|| recent_costs(&g.records, frames.start));
+    let costs = group.pin.then(|| match group.first_costs {
+        Some(first) if frames.start == 0 => first.to_vec(),
+        _ => recent_costs(&g.records, frames.start),
+    });
     let (cores, core_of) = placement(costs.as_deref());
     let (cores, core_of) = (&cores, &core_of);
     std::thread::scope(|scope| {

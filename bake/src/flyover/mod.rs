@@ -249,13 +249,13 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
             pin_costs(options, &p).as_deref(),
         )?
     };
-    Ok(finish(h, options, p, flight))
+    Ok(finish(h, options, &p, flight))
 }
 
 /// Flies every one of `options` (per-camera modes only) over `h` interleaved in segments of
 /// `segment` frames ([`fly::fly_interleaved`]), so that flights compared with each other are
-/// measured under the same load. Each is sized by its own sizing flight first, as [`fly`]
-/// sizes it.
+/// measured under the same load. Each is sized by a sizing flight first, as [`fly`] sizes it;
+/// options given more than once (flown again, with fresh states) share theirs.
 pub fn fly_interleaved(
     h: &Hierarchy<'_>,
     options: &[FlyoverOptions],
@@ -264,40 +264,52 @@ pub fn fly_interleaved(
     if options.iter().any(|o| o.mode == Mode::Shared) {
         return Err("the shared state flies on its own (fly), not interleaved".into());
     }
-    let prepared = options
-        .iter()
-        .map(|o| prepare(h, o))
-        .collect::<Result<Vec<_>, _>>()?;
-    let groups: Vec<fly::Group<'_>> = prepared
+    let mut prepared: Vec<Prepared> = Vec::new();
+    let mut which = Vec::with_capacity(options.len());
+    for (i, o) in options.iter().enumerate() {
+        match options[..i].iter().position(|earlier| earlier == o) {
+            Some(j) => which.push(which[j]),
+            None => {
+                prepared.push(prepare(h, o)?);
+                which.push(prepared.len() - 1);
+            }
+        }
+    }
+    let first_costs: Vec<Option<Vec<f64>>> = which
         .iter()
         .zip(options)
-        .map(|(p, o)| fly::Group {
-            views: &p.views,
-            config: p.config,
-            threads: o.mode == Mode::Threads,
-            in_flight: o.frames_in_flight,
-            params: p.params,
-            compact_every: o.compact_every,
-            pin: o.pin_threads,
+        .map(|(&k, o)| pin_costs(o, &prepared[k]))
+        .collect();
+    let groups: Vec<fly::Group<'_>> = which
+        .iter()
+        .zip(options)
+        .zip(&first_costs)
+        .map(|((&k, o), first)| {
+            let p = &prepared[k];
+            fly::Group {
+                views: &p.views,
+                config: p.config,
+                threads: o.mode == Mode::Threads,
+                in_flight: o.frames_in_flight,
+                params: p.params,
+                compact_every: o.compact_every,
+                pin: o.pin_threads,
+                first_costs: first.as_deref(),
+            }
         })
         .collect();
     let flights = fly::fly_interleaved(h, &groups, segment)?;
-    Ok(prepared
-        .into_iter()
+    Ok(which
+        .iter()
         .zip(flights)
         .zip(options)
-        .map(|((p, f), o)| finish(h, o, p, f))
+        .map(|((&k, f), o)| finish(h, o, &prepared[k], f))
         .collect())
 }
 
 /// The report of a measured flight.
-fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: Prepared, flight: Flight) -> Flyover {
-    let Prepared {
-        names,
-        sizing,
-        budget,
-        ..
-    } = p;
+fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: &Prepared, flight: Flight) -> Flyover {
+    let (names, sizing, budget) = (p.names.clone(), p.sizing.clone(), p.budget);
     let summary = summarise(&flight.records);
     let full_bytes = match &sizing {
         Some(sz) => sz.camera_bytes,
