@@ -8,11 +8,12 @@
 //! frame costs 0.12 ms and another's 0.17 ms), so threads are pinned, and the cameras are
 //! shared out by the longest-processing-time rule: the busiest camera first, each to the
 //! core with the least work so far, by each camera's cost in the sizing flight, or, in
-//! interleaved segments, over the segment before (equal costs without either). Measured on the demo, one thread's flight time
-//! over the threads': 1.51-1.88x left to the system against 1.80-1.96x pinned and balanced
-//! this way (ten alternating pairs of runs); in probes of six pairs each, 1.44-1.92x left to
-//! the system against 1.77-1.89x pinned with the cameras paired by hand, and 1.36-1.88x
-//! against 1.62-1.76x pinned by camera index alone (the two busiest cameras together).
+//! interleaved segments, over the segment before (equal costs without either). Measured on
+//! the demo, one thread's flight time over the threads': 1.51-1.88x left to the system
+//! against 1.80-1.96x pinned and balanced this way (ten alternating pairs of runs); in probes
+//! of six pairs each, 1.44-1.92x left to the system against 1.77-1.89x pinned with the
+//! cameras paired by hand, and 1.36-1.88x against 1.62-1.76x pinned by camera index alone
+//! (the two busiest cameras together).
 
 use core_affinity::CoreId;
 
