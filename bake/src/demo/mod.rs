@@ -164,9 +164,9 @@ pub const SEGMENT: usize = 30;
 /// These two fly whole flights in turn, not the segments the other flights take turns in:
 /// every segment of threads ends as a barrier would (the camera threads that finish first
 /// wait for the last, and a core idles meanwhile: on the St. Helens demo the first of four
-/// threads finished 0.5-2 ms before the last, in segments of 14-25 ms), which a renderer's
-/// threads pay once, not every few frames. Ten pairs of whole flights (`caveclod flyover`
-/// with and without `--threads`) gave 1.71-2.18x (median 1.86); sixteen alternating pairs of
+/// threads finished 1.4-1.8 ms before the last on average, in segments of 15-18 ms), which a
+/// renderer's threads pay once, not every few frames. Ten pairs of whole flights (`caveclod flyover`
+/// with and without `--threads`) gave 1.71-2.18x (median 1.90); sixteen alternating pairs of
 /// demo runs, whole flights against 30-frame segments, 1.63-1.94x (median 1.81) against
 /// 1.46-1.89x (median 1.76). A whole flight takes 0.14-0.3 s here, so the two flights of a
 /// round still run within half a second of each other.
