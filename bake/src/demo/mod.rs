@@ -165,19 +165,19 @@ pub const SEGMENT: usize = 30;
 /// every segment of threads ends as a barrier would (the camera threads that finish first
 /// wait for the last, and a core idles meanwhile: on the St. Helens demo the first of four
 /// threads finished 1.4-1.8 ms before the last on average, in segments of 15-18 ms), which a
-/// renderer's threads pay once, not every few frames. Ten pairs of whole flights (`caveclod flyover`
-/// with and without `--threads`) gave 1.71-2.18x (median 1.90); sixteen alternating pairs of
-/// demo runs, whole flights against 30-frame segments, 1.63-1.94x (median 1.81) against
-/// 1.46-1.89x (median 1.76). A whole flight takes 0.14-0.3 s here, so the two flights of a
-/// round still run within half a second of each other.
+/// renderer's threads pay once, not every few frames. Ten pairs of whole flights (`caveclod
+/// flyover` with and without `--threads`) gave 1.71-2.18x (median 1.90); sixteen alternating
+/// pairs of demo runs, whole flights against 30-frame segments, 1.63-1.94x (median 1.81)
+/// against 1.46-1.89x (median 1.76). A whole flight takes 0.14-0.3 s here, so the two
+/// flights of a round still run within half a second of each other.
 pub const THREADS_ROUNDS: usize = 5;
 
 /// Flies every run of the demo: the shared state on its own; four cameras on one thread and
-/// on a thread each, whole flights in turn, [`THREADS_ROUNDS`] times; and the
-/// per-camera flights (four cameras on one thread, two and three cameras, each camera alone,
-/// four cameras without the index cache, four without it and with hashed pair maps)
-/// interleaved in segments of [`SEGMENT`] frames, so that the ratios compare flights
-/// measured under the same load.
+/// on a thread each, whole flights in turn, [`THREADS_ROUNDS`] times; and the per-camera
+/// flights (four cameras on one thread, two and three cameras, each camera alone, four
+/// cameras without the index cache, four without it and with hashed pair maps) interleaved
+/// in segments of [`SEGMENT`] frames, so that the ratios compare flights measured under the
+/// same load.
 pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let base = FlyoverOptions {
         cameras: 4,
