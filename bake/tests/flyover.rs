@@ -1,7 +1,9 @@
 //! The fly-over experiment on a small generated terrain: every mode flies, reports the stable
 //! JSON keys, and per-camera state needs fewer operations than one shared state.
 
-use caveclod_bake::flyover::{fly, fly_interleaved, FlyoverOptions, Mode};
+use caveclod_bake::flyover::{
+    fly, fly_interleaved, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings,
+};
 use caveclod_tests::{bake, meshes};
 
 #[test]
@@ -141,6 +143,22 @@ fn interleaved_flights_do_what_each_does_alone() {
         }
     }
     assert_eq!(together[5].budget, together[0].budget);
+    // The repeat shares the first one's sizing flight rather than flying it again (a flight
+    // flown again would not take the same nanoseconds).
+    let sizing_wall = |f: &Flyover| f.sizing.as_ref().map(|s| s.wall);
+    assert!(sizing_wall(&together[0]).is_some());
+    assert_eq!(sizing_wall(&together[5]), sizing_wall(&together[0]));
+    assert_ne!(sizing_wall(&together[3]), sizing_wall(&together[0]));
+    // Across calls too, given one set of sizings.
+    let mut sizings = Sizings::default();
+    let first = fly_interleaved_sharing(&h, &options[..1], 10, &mut sizings).expect("first");
+    let again = fly_interleaved_sharing(&h, &options[..2], 10, &mut sizings).expect("again");
+    assert_eq!(sizing_wall(&again[0]), sizing_wall(&first[0]));
+    assert_eq!(
+        again[0].flight.records[0].ops,
+        first[0].flight.records[0].ops
+    );
+    assert_ne!(sizing_wall(&again[1]), sizing_wall(&first[0]));
     assert_eq!(
         together[5].flight.camera_bytes,
         together[0].flight.camera_bytes

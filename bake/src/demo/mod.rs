@@ -18,7 +18,7 @@ use caveclod_core::{checksum64, Hierarchy};
 
 use crate::aligned::AlignedBytes;
 use crate::baked::{write_atomically, Baked};
-use crate::flyover::{fly, fly_interleaved, Flyover, FlyoverOptions, Mode};
+use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};
 use crate::import::ImportOptions;
 use crate::pipeline::bake_file;
 use plots::Series;
@@ -196,7 +196,9 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         ..base
     };
     let rounds: Vec<FlyoverOptions> = (0..THREADS_ROUNDS).flat_map(|_| [base, threaded]).collect();
-    let pairs = fly_interleaved(h, &rounds, frames)?;
+    // One set of sizing flights for both interleaved calls: `base` is sized once.
+    let mut sizings = Sizings::default();
+    let pairs = fly_interleaved_sharing(h, &rounds, frames, &mut sizings)?;
     let threads_rounds = pairs
         .chunks_exact(2)
         .map(|p| p[0].flight.wall.as_secs_f64() / p[1].flight.wall.as_secs_f64().max(1e-9))
@@ -221,7 +223,7 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         hashed_pair_map: true,
         ..base
     });
-    let mut flown = fly_interleaved(h, &options, SEGMENT)?.into_iter();
+    let mut flown = fly_interleaved_sharing(h, &options, SEGMENT, &mut sizings)?.into_iter();
     let mut next = || flown.next().ok_or("an interleaved flight is missing");
     let per_camera = next()?;
     let fewer = vec![next()?, next()?];

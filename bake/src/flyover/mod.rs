@@ -252,6 +252,11 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
     Ok(finish(h, options, &p, flight))
 }
 
+/// Sizing flights already flown, by the options they were flown for: flights given the same
+/// options share one ([`fly_interleaved_sharing`]).
+#[derive(Default)]
+pub struct Sizings(Vec<(FlyoverOptions, Prepared)>);
+
 /// Flies every one of `options` (per-camera modes only) over `h` interleaved in segments of
 /// `segment` frames ([`fly::fly_interleaved`]), so that flights compared with each other are
 /// measured under the same load. Each is sized by a sizing flight first, as [`fly`] sizes it;
@@ -261,31 +266,42 @@ pub fn fly_interleaved(
     options: &[FlyoverOptions],
     segment: usize,
 ) -> Result<Vec<Flyover>, String> {
+    fly_interleaved_sharing(h, options, segment, &mut Sizings::default())
+}
+
+/// [`fly_interleaved`], with the sizing flights of `sizings` (those of earlier calls) reused
+/// and the new ones added to it.
+pub fn fly_interleaved_sharing(
+    h: &Hierarchy<'_>,
+    options: &[FlyoverOptions],
+    segment: usize,
+    sizings: &mut Sizings,
+) -> Result<Vec<Flyover>, String> {
     if options.iter().any(|o| o.mode == Mode::Shared) {
         return Err("the shared state flies on its own (fly), not interleaved".into());
     }
-    let mut prepared: Vec<Prepared> = Vec::new();
     let mut which = Vec::with_capacity(options.len());
-    for (i, o) in options.iter().enumerate() {
-        match options[..i].iter().position(|earlier| earlier == o) {
-            Some(j) => which.push(which[j]),
+    for o in options {
+        match sizings.0.iter().position(|(earlier, _)| earlier == o) {
+            Some(k) => which.push(k),
             None => {
-                prepared.push(prepare(h, o)?);
-                which.push(prepared.len() - 1);
+                sizings.0.push((*o, prepare(h, o)?));
+                which.push(sizings.0.len() - 1);
             }
         }
     }
+    let prepared: Vec<&Prepared> = sizings.0.iter().map(|(_, p)| p).collect();
     let first_costs: Vec<Option<Vec<f64>>> = which
         .iter()
         .zip(options)
-        .map(|(&k, o)| pin_costs(o, &prepared[k]))
+        .map(|(&k, o)| pin_costs(o, prepared[k]))
         .collect();
     let groups: Vec<fly::Group<'_>> = which
         .iter()
         .zip(options)
         .zip(&first_costs)
         .map(|((&k, o), first)| {
-            let p = &prepared[k];
+            let p = prepared[k];
             fly::Group {
                 views: &p.views,
                 config: p.config,
@@ -303,7 +319,7 @@ pub fn fly_interleaved(
         .iter()
         .zip(flights)
         .zip(options)
-        .map(|((&k, f), o)| finish(h, o, &prepared[k], f))
+        .map(|((&k, f), o)| finish(h, o, prepared[k], f))
         .collect())
 }
 
