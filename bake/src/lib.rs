@@ -1,17 +1,16 @@
 //! # caveclod-bake
 //!
-//! From real meshes to baked caveclod hierarchies: importers ([`import`]), welding, repairs
-//! and surface groups ([`weld`]), attribute-aware quadric simplification into a balanced
-//! hierarchy of half-edge collapses ([`hierarchy`], [`quadric`]), the `.clod` writer
-//! ([`baked`]), and the reports and exports of the `caveclod` command-line tool.
+//! From real meshes to baked caveclod hierarchies, as a library for asset pipelines and build
+//! scripts: importers ([`import`], each format a cargo feature), welding, repairs and surface
+//! groups ([`weld`]), attribute-aware quadric simplification into a balanced hierarchy of
+//! half-edge collapses ([`hierarchy`], [`quadric`]), g-mesh levels ([`gmesh`]), out-of-core
+//! simplification with a multiresolution octree ([`ooc`]), the `.clod` writer ([`baked`]),
+//! and OBJ export ([`export`]). [`pipeline`] runs the whole bake; progress reaches the caller
+//! through the callbacks it passes. The `caveclod` command-line tool is `caveclod-cli`.
 
-pub mod aligned;
 pub mod baked;
-pub mod demo;
 pub mod export;
-pub mod flyover;
 mod fxhash;
-pub mod generate;
 pub mod gmesh;
 pub mod hierarchy;
 pub mod import;

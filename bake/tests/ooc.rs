@@ -7,13 +7,13 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use caveclod_bake::generate;
 use caveclod_bake::import;
 use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 use caveclod_bake::ooc::{
     self, cluster_mesh, cluster_mesh_in, ClusterOptions, Cube, OocError, OocOptions,
 };
 use caveclod_bake::pipeline;
+use caveclod_tests::generate;
 
 fn no_progress(_: ooc::OocStage) {}
 

@@ -343,9 +343,10 @@ fn aligned(bytes: &[u8]) -> Vec<u64> {
 
 #[test]
 fn an_out_of_core_bake_stores_the_octree_and_cameras_cut_it_by_distance() {
-    use caveclod_bake::{generate, pipeline};
+    use caveclod_bake::pipeline;
     use caveclod_core::glam::Vec3;
     use caveclod_core::{Hierarchy, Octree, OctreeCut, View};
+    use caveclod_tests::generate;
 
     let dir = tempfile::tempdir().unwrap();
     let temp = tempfile::tempdir().unwrap();

@@ -16,10 +16,11 @@
 use std::time::{Duration, Instant};
 
 use caveclod_bake::ooc::OocOptions;
-use caveclod_bake::{generate, pipeline};
+use caveclod_bake::pipeline;
 use caveclod_benches::low_pass_view;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, Hierarchy, Octree, OctreeCut, RefineParams, View};
+use caveclod_tests::generate;
 use criterion::{Criterion, Throughput};
 
 const TOLERANCE_PX: f32 = 1.0;

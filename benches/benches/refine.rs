@@ -23,8 +23,8 @@
 use std::cell::Cell;
 use std::time::{Duration, Instant};
 
-use caveclod_bake::aligned::CameraPool;
 use caveclod_benches::low_pass_view;
+use caveclod_cli::aligned::CameraPool;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
     CameraConfig, CameraState, Hierarchy, NodeId, RefineParams, RefineStats, View,

@@ -46,8 +46,8 @@ use caveclod_core::View;
 use caveclod_tests::meshes::{self, Rng};
 use caveclod_tests::to_mesh;
 use caveclod_vulkan::{
-    palette, CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph,
-    MorphInstances, Renderer, RendererDesc, VertexBuffer, Viewport,
+    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph, MorphInstances,
+    Renderer, RendererDesc, VertexBuffer, Viewport,
 };
 use plotters::prelude::*;
 
@@ -457,7 +457,9 @@ fn render_with(
         },
     )
     .map_err(e)?;
-    let colours: Vec<[f32; 4]> = (0..gm.surfaces()).map(palette).collect();
+    let colours: Vec<[f32; 4]> = (0..gm.surfaces())
+        .map(caveclod_cli::snapshot::palette)
+        .collect();
     let mut written = Vec::new();
     let mut outcome = Ok(());
     for &f in frames {

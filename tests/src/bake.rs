@@ -3,7 +3,7 @@
 //! The tests, examples and benchmarks of the runtime use exactly the hierarchies users get
 //! from `caveclod bake`: no second, test-only builder whose behaviour could drift from it.
 
-pub use caveclod_bake::aligned::AlignedBytes;
+pub use crate::aligned::AlignedBytes;
 use caveclod_bake::baked::Baked;
 use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;

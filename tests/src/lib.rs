@@ -1,8 +1,10 @@
 //! Test support for caveclod: generated meshes, baked in memory by `caveclod-bake`, and
 //! checks of a camera's front against a from-scratch derivation.
 
+pub mod aligned;
 pub mod bake;
 pub mod check;
+pub mod generate;
 pub mod meshes;
 
 pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};

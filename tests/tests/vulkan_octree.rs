@@ -8,9 +8,9 @@
 
 mod vulkan_support;
 
-use caveclod_bake::generate;
 use caveclod_bake::ooc::{MultiresOptions, OocOptions};
 use caveclod_core::{Octree, OctreeCut};
+use caveclod_tests::generate;
 use caveclod_vulkan::{IndexSource, VertexBuffer, Viewport};
 use vulkan_support::*;
 

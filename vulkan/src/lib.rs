@@ -17,9 +17,6 @@
 //!   synchronization2, one submission per frame; [`RgbaImage`] read-back and PNG.
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
 //!   CPU); a [`CameraDraw`] with a [`Morph`] draws through the geomorphing vertex stage.
-//! - [`render_snapshot`]: one frame of 1-4 orbiting cameras, read back (the
-//!   `caveclod render` command); [`render_octree_snapshot`] the same for the out-of-core
-//!   bake's multiresolution octree, each camera drawing its own cut.
 //!
 //! Everything is destroyed explicitly (`destroy(self, &Context)`); [`Context::destroy`]
 //! reports resources still alive as [`Error::Leaked`].
@@ -81,7 +78,6 @@ mod instance;
 pub mod mesh;
 pub mod pipeline;
 pub mod readback;
-pub mod snapshot;
 pub mod validation;
 pub mod view;
 
@@ -94,10 +90,6 @@ pub use image::{Image, ImageDesc, COLOUR_FORMAT, DEPTH_FORMAT};
 pub use indices::{CameraIndices, IndexSource};
 pub use mesh::{MorphInstances, VertexBuffer, VERTEX_STRIDE};
 pub use readback::{ImageDiff, RgbaImage};
-pub use snapshot::{
-    orbit, orbit_box, palette, render_octree_snapshot, render_snapshot, Layout, Snapshot,
-    SnapshotDesc,
-};
 pub use validation::{
     messenger_info, validation_layer_present, DebugMessenger, ValidationLog, VALIDATION_LAYER,
 };

@@ -48,7 +48,8 @@ commands:
   test                  setup, then shader check, fmt, clippy, tests, no_std build,
                         clippy without prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
-  demo [ARGS..]         cargo run --release -p caveclod-bake --bin caveclod -- demo ARGS
+  demo [ARGS..]         setup's Vulkan packages, then
+                        cargo run --release -p caveclod-cli --bin caveclod -- demo ARGS
 ";
 
 fn main() -> ExitCode {
@@ -248,6 +249,17 @@ fn is_root() -> bool {
 }
 
 fn setup(with_miri: bool) -> Result<(), String> {
+    install_vulkan_packages()?;
+    run(cmd("rustup", &["target", "add", NO_STD_TARGET]))?;
+    if with_miri {
+        install_miri()?;
+    }
+    Ok(())
+}
+
+/// Finds lavapipe, the loader, the validation layer and spirv-val; installs what is missing
+/// from Debian's packages when run as root, otherwise says which command to run.
+fn install_vulkan_packages() -> Result<(), String> {
     let missing: Vec<&'static str> = requirements()
         .into_iter()
         .filter_map(|r| match r.found {
@@ -293,10 +305,6 @@ fn setup(with_miri: bool) -> Result<(), String> {
                 still.join(", ")
             ));
         }
-    }
-    run(cmd("rustup", &["target", "add", NO_STD_TARGET]))?;
-    if with_miri {
-        install_miri()?;
     }
     Ok(())
 }
@@ -527,13 +535,18 @@ fn check_shaders() -> Result<(), String> {
 // demo
 
 fn demo(args: &[String]) -> Result<(), String> {
+    // The pictures need a Vulkan driver: install it as `setup` does, or say how, and let the
+    // demo keep its CPU figures without it.
+    if let Err(e) = install_vulkan_packages() {
+        eprintln!("xtask demo: no pictures without a Vulkan driver: {e}");
+    }
     let mut c = cmd(
         "cargo",
         &[
             "run",
             "--release",
             "-p",
-            "caveclod-bake",
+            "caveclod-cli",
             "--bin",
             "caveclod",
             "--",

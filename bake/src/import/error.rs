@@ -102,6 +102,17 @@ pub enum ImportError {
         message: String,
     },
 
+    /// The format's importer is not compiled in (its cargo feature is off).
+    #[error("{file}: {format} files need caveclod-bake's `{feature}` feature, which this build leaves out")]
+    FormatDisabled {
+        /// The file being imported.
+        file: String,
+        /// The format, as its extension.
+        format: String,
+        /// The cargo feature that enables it.
+        feature: &'static str,
+    },
+
     /// The file was read but contains no triangle.
     #[error("{file}: no triangles{detail}")]
     Empty {
@@ -133,6 +144,7 @@ impl ImportError {
             | ImportError::Truncated { file, .. }
             | ImportError::Unsupported { file, .. }
             | ImportError::MissingOption { file, .. }
+            | ImportError::FormatDisabled { file, .. }
             | ImportError::Empty { file, .. }
             | ImportError::Internal { file, .. } => file,
         }

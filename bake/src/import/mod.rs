@@ -10,7 +10,9 @@
 //! | `.dem` | USGS ASCII DEM | `import/dem.rs` |
 //! | `.npy` | numpy array of heights (needs [`ImportOptions::spacing`]) | `import/npy.rs` |
 //!
-//! Each of those files documents what it supports and what it rejects.
+//! Each of those files documents what it supports and what it rejects. Each importer is a
+//! cargo feature of the same name (`gltf`, `obj`, `ply`, `dem`, `npy`), all on by default; a
+//! file whose importer is left out gives [`ImportError::FormatDisabled`].
 //!
 //! Every importer validates its input completely: a bad file gives an [`ImportError`] naming
 //! the file and the element at fault, never a panic, and never a mesh with out-of-range
@@ -21,12 +23,18 @@
 //! and PLY `v` is flipped); colours linear RGBA (8- and 16-bit colours are taken as sRGB and
 //! converted); triangles counter-clockwise seen from the front.
 
+#[cfg(feature = "dem")]
 mod dem;
 mod error;
+#[cfg(feature = "gltf")]
 mod gltf;
+#[cfg(any(feature = "dem", feature = "npy"))]
 mod heightfield;
+#[cfg(feature = "npy")]
 mod npy;
+#[cfg(feature = "obj")]
 mod obj;
+#[cfg(feature = "ply")]
 mod ply;
 
 use std::panic::{self, AssertUnwindSafe};
@@ -91,12 +99,29 @@ pub fn import_with_report(
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let disabled = |feature: &'static str| ImportError::FormatDisabled {
+        file: source.name.clone(),
+        format: format!(".{}", extension.as_deref().unwrap_or_default()),
+        feature,
+    };
+    // With every importer compiled in, the `disabled` arms below are never reached.
+    #[allow(unreachable_patterns)]
     let importer: Importer = match extension.as_deref() {
+        #[cfg(feature = "gltf")]
         Some("gltf") | Some("glb") => gltf::import_gltf,
+        #[cfg(feature = "obj")]
         Some("obj") => obj::import_obj,
+        #[cfg(feature = "ply")]
         Some("ply") => ply::import_ply,
+        #[cfg(feature = "dem")]
         Some("dem") => dem::import_dem,
+        #[cfg(feature = "npy")]
         Some("npy") => npy::import_npy,
+        Some("gltf") | Some("glb") => return Err(disabled("gltf")),
+        Some("obj") => return Err(disabled("obj")),
+        Some("ply") => return Err(disabled("ply")),
+        Some("dem") => return Err(disabled("dem")),
+        Some("npy") => return Err(disabled("npy")),
         other => {
             return Err(ImportError::UnknownFormat {
                 file: source.name.clone(),

@@ -17,10 +17,10 @@ use std::time::Instant;
 use caveclod_core::{checksum64, Hierarchy};
 
 use crate::aligned::AlignedBytes;
-use crate::baked::{write_atomically, Baked};
 use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};
-use crate::import::ImportOptions;
-use crate::pipeline::bake_file;
+use caveclod_bake::baked::{write_atomically, Baked};
+use caveclod_bake::import::ImportOptions;
+use caveclod_bake::pipeline::bake_file;
 use plots::Series;
 
 /// What to run.

@@ -3,16 +3,17 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use caveclod_bake::aligned::AlignedBytes;
 use caveclod_bake::baked::write_atomically;
-use caveclod_bake::demo::{self, DemoOptions};
 use caveclod_bake::export::{self, Level};
-use caveclod_bake::flyover::{fly, Flyover, FlyoverOptions, Mode};
 use caveclod_bake::gmesh::GMeshOptions;
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{OocOptions, OocStage};
 use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
-use caveclod_bake::report::{self, BakeInfo};
+use caveclod_bake::report::BakeInfo;
+use caveclod_cli::aligned::AlignedBytes;
+use caveclod_cli::demo::{self, DemoOptions};
+use caveclod_cli::flyover::{fly, Flyover, FlyoverOptions, Mode};
+use caveclod_cli::info as report;
 use caveclod_core::Hierarchy;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -118,7 +119,7 @@ enum Command {
         compact_every: usize,
         /// Frames in flight: index lists per camera, and with --threads how far apart the
         /// camera threads may run (1: a barrier every frame).
-        #[arg(long, default_value_t = caveclod_bake::flyover::gate::FRAMES_IN_FLIGHT as u8,
+        #[arg(long, default_value_t = caveclod_cli::flyover::gate::FRAMES_IN_FLIGHT as u8,
               value_parser = clap::value_parser!(u8).range(1..=8))]
         frames_in_flight: u8,
         /// Emit without the index cache: look every active polygon up every frame, as the
@@ -487,7 +488,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     .map_err(|e| e.to_string())?
                     .progress_chars("=> "),
             );
-            let grid = caveclod_bake::generate::terrain(&output, triangles, &mut |done, total| {
+            let grid = caveclod_tests::generate::terrain(&output, triangles, &mut |done, total| {
                 bar.set_length(total);
                 bar.set_position(done);
             });
@@ -560,9 +561,8 @@ struct RenderArgs {
 
 /// `caveclod render`: one frame of orbiting cameras, read back and written as PNG.
 fn render(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
-    use caveclod_vulkan::{
-        render_octree_snapshot, render_snapshot, Context, HeadlessDesc, Layout, SnapshotDesc,
-    };
+    use caveclod_cli::snapshot::{render_octree_snapshot, render_snapshot, Layout, SnapshotDesc};
+    use caveclod_vulkan::{Context, HeadlessDesc};
     let octree = if a.octree {
         match caveclod_core::Octree::from_hierarchy(h) {
             Ok(Some(o)) => Some(o),

@@ -1,7 +1,7 @@
 //! The fly-over experiment on a small generated terrain: every mode flies, reports the stable
 //! JSON keys, and per-camera state needs fewer operations than one shared state.
 
-use caveclod_bake::flyover::{
+use caveclod_cli::flyover::{
     fly, fly_interleaved, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings,
 };
 use caveclod_tests::{bake, meshes};

@@ -5,11 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::snapshot::palette;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
 use caveclod_vulkan::{
-    palette, CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer,
-    RendererDesc, VertexBuffer, Viewport,
+    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
+    VertexBuffer, Viewport,
 };
 
 use crate::flyover::{clip, eye_at, routes, Ground, FOV_Y_DEG};

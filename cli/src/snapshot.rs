@@ -10,13 +10,13 @@
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
 use glam::Vec3;
 
-use crate::device::Context;
-use crate::error::{Error, Result};
-use crate::frame::{CameraDraw, FrameStats, Renderer, RendererDesc, Viewport};
-use crate::indices::{CameraIndices, IndexSource};
-use crate::mesh::VertexBuffer;
-use crate::readback::RgbaImage;
-use crate::view::LookAt;
+use caveclod_vulkan::device::Context;
+use caveclod_vulkan::error::{Error, Result};
+use caveclod_vulkan::frame::{CameraDraw, FrameStats, Renderer, RendererDesc, Viewport};
+use caveclod_vulkan::indices::{CameraIndices, IndexSource};
+use caveclod_vulkan::mesh::VertexBuffer;
+use caveclod_vulkan::readback::RgbaImage;
+use caveclod_vulkan::view::LookAt;
 
 /// How the cameras share the output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,0 +1,11 @@
+//! # caveclod-cli
+//!
+//! The application around the caveclod libraries: the `caveclod` binary's commands, the demo
+//! ([`demo`]), the CAVECLOD fly-over experiment ([`flyover`]), headless snapshots
+//! ([`snapshot`]), the `info` report ([`info`]) and the huge-page file loader ([`aligned`]).
+
+pub mod aligned;
+pub mod demo;
+pub mod flyover;
+pub mod info;
+pub mod snapshot;
