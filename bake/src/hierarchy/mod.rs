@@ -1,0 +1,164 @@
+//! Building the vertex hierarchy by half-edge collapses.
+//!
+//! References:
+//! - Hugues Hoppe. View-dependent refinement of progressive meshes. 1997 (the collapses,
+//!   their neighbours `fl_clw`/`fr_ccw`, and the residual error bounds)
+//! - Hugues Hoppe. New quadric metric for simplifying meshes with appearance attributes.
+//!   1999 (the costs, [`crate::quadric`])
+//! - Michael Garland, Paul Heckbert. Surface simplification using quadric error metrics.
+//!   1997 (boundary planes)
+//! - Tamal Dey, Herbert Edelsbrunner, Sumanta Guha, Dmitry Nekhayev. Topology preserving
+//!   edge contraction. 1999 (the link condition)
+//! - Christer Ericson. Real-Time Collision Detection. 2005 (the point–triangle distance)
+//!
+//! The build is a sequence of steps ([`build`]):
+//! 1. set up the work (`setup`): positions centred on their bounding box, a wedge per
+//!    surface group at each position with the quadrics of its triangles and boundary
+//!    planes, the triangles with their neighbours, the leaves' bounds;
+//! 2. collapse in passes (`pass`) until one finds nothing to apply: rank every edge
+//!    (`rank`), check the collapses the pass reaches (`legality`), apply them
+//!    (`collapse`), then hand the moved input points to their nearest triangles
+//!    (`bounds`);
+//! 3. hand over the hierarchy.
+//!
+//! - **Half-edge collapses** only: the parent keeps the stationary child's position, so no
+//!   vertex is ever created and the vertex buffer is the full-resolution one.
+//! - **Batches of independent collapses** (as g-mesh builds its levels): each pass sorts the
+//!   legal collapses by cost and applies those whose neighbourhoods do not overlap, so the
+//!   hierarchy is balanced and shallow (depth grows with the logarithm of the size). A pass
+//!   goes only through the cheapest half of its ranked collapses (`PASS_SHARE`): applying
+//!   every independent one lets dear collapses take neighbourhoods that cheaper ones of the
+//!   next pass would have used; the cut costs passes, not depth.
+//! - **Cost**: the attribute-aware quadric of the removed position's wedges (one per surface
+//!   group there) evaluated at the kept position with that group's attributes there
+//!   ([`crate::quadric`]), plus boundary planes that hold mesh borders and surface-group
+//!   boundaries in place, weighted more than a triangle's (sliding borders would be the
+//!   largest errors on terrain). A normal that follows from the geometry
+//!   ([`crate::weld::Attributes::normal_from_geometry`]: computed, or an importer's smooth
+//!   one) gets no weight: it would only make curved regions dearer, which the distance
+//!   term already does, at the expense of geometric accuracy.
+//! - **Legality**: the surface-group rules (a RIGID position never floats; a SHARP one floats
+//!   only along a boundary edge onto a non-FREE position; every group at the removed position
+//!   must have a vertex at the kept one), the link condition, no doubled faces, no face
+//!   flipped or collapsed, and Hoppe's requirement that `fl_clw` (and `fr_ccw` when `f_r`
+//!   exists) are present.
+//! - **Bounds for refinement**: the bounding-sphere radius and normal cone of everything
+//!   below a node, and its error (`uni_error`) from the residuals of the input, as Hoppe's
+//!   view-dependent progressive meshes measure it: every input position belongs to a
+//!   current triangle near it; a collapse hands the positions of the removed node's
+//!   triangles to the nearest of the triangles that replace them, and the node's error is
+//!   the largest of those distances and its children's errors. It measures what a cut
+//!   through the node loses, including borders that slide, where the planes' distances
+//!   alone miss it. The hand-over runs after each pass on all threads (the collapses of a
+//!   pass have disjoint stars).
+//!
+//! A pass is built for speed without changing its outcome: every edge is ranked by the cost
+//! of its cheaper allowed direction (a ranking stands while the edge's ends are the same
+//! nodes, and ranking runs on all threads), and the legality checks run only for the
+//! collapses the pass reaches with both ends free, as they stood at the start of the pass.
+//! The result is the same as checking every edge first and sorting the legal collapses
+//! stably by cost. The threads never change the result: sums are added in a fixed order.
+
+mod bounds;
+mod collapse;
+mod geometry;
+mod legality;
+mod pass;
+mod rank;
+mod setup;
+#[cfg(test)]
+mod tests;
+mod work;
+
+use crate::weld::Welded;
+
+const NONE: u32 = u32::MAX;
+
+/// Weights of the attribute kinds, relative to the mesh's bounding-box diagonal: an
+/// attribute difference of 1 costs as much as a distance of `weight × diagonal`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttributeWeights {
+    /// Unit normals.
+    pub normal: f64,
+    /// Texture coordinates.
+    pub uv: f64,
+    /// Colours (0..1 per channel).
+    pub color: f64,
+}
+
+impl Default for AttributeWeights {
+    fn default() -> Self {
+        Self {
+            normal: 0.01,
+            uv: 0.02,
+            color: 0.01,
+        }
+    }
+}
+
+/// One collapse, as its split will replay it.
+#[derive(Clone, Copy, Debug)]
+pub struct Collapse {
+    /// The stationary child (kept).
+    pub t: u32,
+    /// The floating child (removed).
+    pub u: u32,
+    /// Triangle left of the edge `t→u` (dies).
+    pub fl: u32,
+    /// Triangle right of it, or `NONE` on a border (dies).
+    pub fr: u32,
+    /// `[fl_ccw, fl_clw, fr_clw, fr_ccw]`, triangle ids or `NONE`.
+    pub neighbours: [u32; 4],
+    /// Corner of `fl` holding `t` (the polygon's rotation).
+    pub rot_l: u8,
+    /// Corner of `fr` holding `t`.
+    pub rot_r: u8,
+}
+
+/// The result: nodes `0..positions` are the leaves; collapse `c` creates node
+/// `positions + c`.
+#[derive(Clone, Debug, Default)]
+pub struct Hierarchy {
+    /// Collapses in the order applied.
+    pub collapses: Vec<Collapse>,
+    /// Parent of every node, `NONE` for roots.
+    pub parent: Vec<u32>,
+    /// Position of every node.
+    pub node_position: Vec<u32>,
+    /// Radius of the sphere around the node's position bounding its descendants' triangles.
+    pub radius: Vec<f32>,
+    /// Normal cone `(axis, half angle)` of every node.
+    pub cone: Vec<([f32; 3], f32)>,
+    /// Error bound of every node (world units; zero for leaves).
+    pub error: Vec<f32>,
+    /// Current corners of every triangle at the end (the base mesh's for those alive).
+    pub corners: Vec<[u32; 3]>,
+    /// Which triangles are in the base mesh.
+    pub alive: Vec<bool>,
+    /// Number of batches (passes).
+    pub passes: u32,
+}
+
+/// Progress of a build: `(collapses so far, at most collapsible)`.
+pub type Progress<'a> = &'a mut dyn FnMut(u64, u64);
+
+/// Share of a pass's ranked collapses it may apply: the cheapest half. Applying every
+/// independent collapse lets an expensive one take a neighbourhood that a cheaper one of
+/// the next pass would have used; the cut costs passes, not depth to speak of.
+const PASS_SHARE: f64 = 0.5;
+
+/// Threads evaluating edges.
+const MAX_THREADS: usize = 8;
+
+/// Triangles below which work stays on one thread.
+const PARALLEL_MIN: usize = 4096;
+
+/// Builds the hierarchy of a welded mesh.
+pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> Hierarchy {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(MAX_THREADS);
+    let mut work = setup::work(w, weights, threads);
+    pass::collapse_all(&mut work, threads, progress);
+    work.into_hierarchy()
+}

@@ -1,0 +1,186 @@
+//! The passes: each ranks the live edges, then applies, cheapest first, the legal
+//! collapses whose neighbourhoods no earlier collapse of the pass took, up to its share.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use super::geometry::corner_of;
+use super::legality::Verdict;
+use super::rank::{order_key, rank_all, Candidate, Ranked, Slot};
+use super::work::Work;
+use super::{Progress, NONE, PASS_SHARE};
+
+/// Runs passes until one finds nothing to apply, reporting progress after each.
+pub(super) fn collapse_all(work: &mut Work<'_>, threads: usize, progress: Progress<'_>) {
+    let mut passes = Passes::new(work.tris.len());
+    let most = work.p.len().saturating_sub(1) as u64;
+    // Whether this pass may apply every ranked collapse (after one that applied none of
+    // its cheapest share).
+    let mut full = false;
+    loop {
+        work.h.passes += 1;
+        let pass = work.h.passes;
+        let (applied, cut) = passes.run(work, pass, full, threads);
+        work.settle(threads);
+        progress(work.h.collapses.len() as u64, most);
+        if applied == 0 && !cut {
+            break;
+        }
+        full = applied == 0;
+    }
+}
+
+/// What the passes keep from one to the next.
+struct Passes {
+    /// The live triangles, in order.
+    live: Vec<u32>,
+    /// The ranking of every triangle's three edge slots.
+    slots: Vec<[Slot; 3]>,
+    /// The pass's ranked collapses, in slot order.
+    cands: Vec<Candidate>,
+    ranked: Ranked,
+    /// Other directions of edges whose cheaper one was illegal: `(cost key, slot)`.
+    later: BinaryHeap<Reverse<(u64, usize)>>,
+    /// The rings of the ends of the collapse being checked.
+    rings: [Vec<u32>; 2],
+}
+
+/// The next collapse a pass tries, or why it stops.
+enum Next {
+    /// Nothing left to try.
+    Done,
+    /// The next one is dearer than the pass's share.
+    Cut,
+    /// Moving `u` onto `t`; `from_later` when it is an edge's other direction.
+    Try { t: u32, u: u32, from_later: bool },
+}
+
+impl Passes {
+    fn new(triangles: usize) -> Self {
+        Self {
+            live: (0..triangles as u32).collect(),
+            slots: vec![[Slot::default(); 3]; triangles],
+            cands: Vec::new(),
+            ranked: Ranked::default(),
+            later: BinaryHeap::new(),
+            rings: [Vec::new(), Vec::new()],
+        }
+    }
+
+    /// One pass; returns how many collapses it applied and whether it stopped at its share.
+    ///
+    /// The pass applies, in cost order, each edge's cheapest legal direction unless an
+    /// earlier collapse of the pass took a neighbourhood its ends are in (stamped), or it
+    /// lapsed since the start of the pass. A direction is checked only when reached with
+    /// both ends free; when it was illegal at the start of the pass, the edge's other
+    /// direction queues at its own cost (in the same order as if it had been ranked with
+    /// the others).
+    fn run(&mut self, work: &mut Work<'_>, pass: u32, full: bool, threads: usize) -> (u64, bool) {
+        // Drop the triangles the last pass removed (keeping the order).
+        self.live.retain(|&f| work.alive[f as usize]);
+        // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
+        // slots per triangle, in order).
+        rank_all(work, &self.live, &mut self.slots, &mut self.cands, threads);
+        // The pass stops at the first collapse dearer than its cheapest share.
+        let limit = self
+            .ranked
+            .start(&self.cands, if full { 1.0 } else { PASS_SHARE });
+        let mut applied = 0u64;
+        self.later.clear();
+        loop {
+            let (t, u, from_later) = match self.next(work, pass, limit) {
+                Next::Done => return (applied, false),
+                Next::Cut => return (applied, true),
+                Next::Try { t, u, from_later } => (t, u, from_later),
+            };
+            if stamped(work, pass, t, u) {
+                continue;
+            }
+            match work.verdict(t, u, pass, &mut self.rings) {
+                Verdict::Legal(col) => {
+                    work.apply_in_pass(col, pass, &self.rings);
+                    applied += 1;
+                }
+                Verdict::Lapsed => {}
+                Verdict::Illegal => {
+                    if !from_later {
+                        self.queue_other_direction(work, t, u);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The next collapse to try: the cheaper of the next ranked one and the next queued
+    /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
+    /// than `limit`.
+    fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
+        let next_cand = self.ranked.peek(&work.stamp, pass);
+        let later_first = match (next_cand, self.later.peek()) {
+            (None, None) => return Next::Done,
+            (None, Some(_)) => true,
+            (Some(_), None) => false,
+            (Some((c, t, u)), Some(&Reverse((key, i)))) => {
+                let own = order_key(c);
+                key < own || (key == own && !stamped(work, pass, t, u) && i < slot_of(work, t, u))
+            }
+        };
+        let key = if later_first {
+            self.later.peek().map(|r| r.0 .0)
+        } else {
+            next_cand.map(|c| order_key(c.0))
+        };
+        if key.is_some_and(|k| k > limit) {
+            return Next::Cut;
+        }
+        if later_first {
+            let Some(Reverse((_, i))) = self.later.pop() else {
+                return Next::Done;
+            };
+            let slot = &self.slots[i / 3][i % 3];
+            let [a, b] = slot.ends;
+            let (t, u) = if slot.dir == 1 { (a, b) } else { (b, a) };
+            Next::Try {
+                t,
+                u,
+                from_later: true,
+            }
+        } else {
+            let Some((_, t, u)) = next_cand else {
+                return Next::Done;
+            };
+            self.ranked.advance();
+            Next::Try {
+                t,
+                u,
+                from_later: false,
+            }
+        }
+    }
+
+    /// Queues the other direction of the edge `t`–`u` at its own cost, if allowed.
+    fn queue_other_direction(&mut self, work: &Work<'_>, t: u32, u: u32) {
+        let i = slot_of(work, t, u);
+        let other = self.slots[i / 3][i % 3].other();
+        if other.is_finite() {
+            self.later.push(Reverse((order_key(other), i)));
+        }
+    }
+}
+
+/// Whether an earlier collapse of pass `pass` took a neighbourhood `t` or `u` is in.
+fn stamped(work: &Work<'_>, pass: u32, t: u32, u: u32) -> bool {
+    work.stamp[t as usize] == pass || work.stamp[u as usize] == pass
+}
+
+/// The number of the slot standing for the edge of free ends `t`, `u`.
+fn slot_of(work: &Work<'_>, t: u32, u: u32) -> usize {
+    let (fl, jl) = work.dir_face(t, u).unwrap_or((0, 0));
+    let fr = work.tris[fl as usize].o[jl];
+    let (f, k) = if fr == NONE || t < u {
+        (fl, jl)
+    } else {
+        (fr, corner_of(work.tris[fr as usize].c, u))
+    };
+    3 * f as usize + k
+}

@@ -1,0 +1,255 @@
+//! Ranking a pass's collapses: each edge slot's cheaper allowed direction, and the ranked
+//! collapses handed out by cost through buckets sorted only when reached.
+
+use super::geometry::next;
+use super::work::Work;
+use super::{NONE, PARALLEL_MIN};
+
+/// A collapse as a pass ranks it: `(cost, t, u)`.
+pub(super) type Candidate = (f64, u32, u32);
+
+/// The ranking of one edge slot (3 per triangle) in the current pass.
+#[derive(Clone, Copy)]
+pub(super) struct Slot {
+    /// The edge's ends, first and second corner of the slot, at the start of the pass.
+    pub(super) ends: [u32; 2],
+    /// Quadric costs of the two directions for these ends (direction 1 moves the first end
+    /// onto the second, direction 2 the reverse), infinite where not allowed.
+    pub(super) costs: [f64; 2],
+    /// The cheaper allowed direction (the first on a tie), 0 for none.
+    pub(super) dir: u8,
+}
+
+impl Slot {
+    /// The cheaper allowed direction's cost.
+    pub(super) fn cost(&self) -> f64 {
+        self.costs[self.dir as usize - 1]
+    }
+
+    /// The other direction's cost, infinite where not allowed.
+    pub(super) fn other(&self) -> f64 {
+        self.costs[2 - self.dir as usize]
+    }
+}
+
+impl Default for Slot {
+    fn default() -> Self {
+        Self {
+            ends: [NONE; 2],
+            costs: [f64::INFINITY; 2],
+            dir: 0,
+        }
+    }
+}
+
+/// The bits of `x` as an unsigned number ordered as [`f64::total_cmp`] orders floats.
+#[inline]
+pub(super) fn order_key(x: f64) -> u64 {
+    let bits = x.to_bits();
+    // Negative numbers: all bits flipped; others: the sign bit set.
+    bits ^ (((bits as i64 >> 63) as u64) | (1 << 63))
+}
+
+/// The ranked collapses of a pass, handed out by cost, equal costs in the order they were
+/// ranked. They are bucketed by the top bits of their cost first, and a bucket is sorted
+/// only when reached, after dropping those whose ends are taken by then (which the pass
+/// would skip wherever they stood).
+#[derive(Default)]
+pub(super) struct Ranked {
+    /// The candidates, bucket after bucket, each in ranking order.
+    by_bucket: Vec<Candidate>,
+    /// Where each bucket starts in `by_bucket`, and the end.
+    bounds: Vec<u32>,
+    /// The next bucket.
+    bucket: usize,
+    /// The current bucket's remaining candidates, sorted.
+    chunk: Vec<Candidate>,
+    /// The next one in `chunk`.
+    pos: usize,
+}
+
+/// Bits of [`order_key`] that pick a bucket: sign, exponent and 4 bits of mantissa.
+const BUCKET_BITS: u32 = 16;
+
+/// Candidates below which a pass sorts them all at once.
+const BUCKET_MIN: usize = 4096;
+
+impl Ranked {
+    /// Takes a pass's candidates, of which the pass means to apply the cheapest `share`;
+    /// returns the [`order_key`] of the dearest cost in that share (for many candidates,
+    /// rounded up to the end of its bucket). Only candidates up to it are handed out.
+    pub(super) fn start(&mut self, cands: &[Candidate], share: f64) -> u64 {
+        self.chunk.clear();
+        self.pos = 0;
+        let want = ((cands.len() as f64 * share).ceil() as usize).clamp(1, cands.len().max(1));
+        if cands.len() < BUCKET_MIN {
+            self.chunk.extend_from_slice(cands);
+            self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
+            self.bucket = self.bounds.len().saturating_sub(1);
+            return match self.chunk.get(want - 1) {
+                Some(c) if want < cands.len() => order_key(c.0),
+                _ => u64::MAX,
+            };
+        }
+        let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
+        self.bounds.clear();
+        self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
+        for c in cands {
+            self.bounds[bucket(c) + 1] += 1;
+        }
+        for i in 0..1 << BUCKET_BITS {
+            self.bounds[i + 1] += self.bounds[i];
+        }
+        // The bucket holding the `want`-th cheapest; those after it are left out.
+        let last = self.bounds[1..].partition_point(|&n| (n as usize) < want);
+        let limit = if last + 1 >= 1 << BUCKET_BITS {
+            u64::MAX
+        } else {
+            (((last + 1) as u64) << (64 - BUCKET_BITS)) - 1
+        };
+        let kept = self.bounds[last + 1] as usize;
+        self.bounds.truncate(last + 2);
+        self.by_bucket.clear();
+        self.by_bucket.resize(kept, (0.0, 0, 0));
+        let mut fill = self.bounds.clone();
+        for c in cands {
+            let b = bucket(c);
+            if b <= last {
+                self.by_bucket[fill[b] as usize] = *c;
+                fill[b] += 1;
+            }
+        }
+        self.bucket = 0;
+        limit
+    }
+
+    /// The next candidate whose ends were free when its bucket was reached.
+    pub(super) fn peek(&mut self, stamp: &[u32], pass: u32) -> Option<Candidate> {
+        while self.pos == self.chunk.len() {
+            if self.bucket + 1 >= self.bounds.len() {
+                return None;
+            }
+            let (a, b) = (
+                self.bounds[self.bucket] as usize,
+                self.bounds[self.bucket + 1] as usize,
+            );
+            self.bucket += 1;
+            if a == b {
+                continue;
+            }
+            self.chunk.clear();
+            self.pos = 0;
+            self.chunk.extend(
+                self.by_bucket[a..b]
+                    .iter()
+                    .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
+            );
+            self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        Some(self.chunk[self.pos])
+    }
+
+    pub(super) fn advance(&mut self) {
+        self.pos += 1;
+    }
+}
+
+impl Work<'_> {
+    /// Ranks the edge in slot `k` of triangle `f` if the slot stands for its edge (the
+    /// lower-numbered end first, or a border edge): the quadric costs of the directions
+    /// the surface-group rules allow, the cheaper first (the first on a tie).
+    ///
+    /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
+    /// and positions (a node's never change), the groups of the triangles on the edge, and
+    /// which those are (they change only by a collapse that also changes an end).
+    pub(super) fn rank(&self, f: u32, k: usize, slot: &mut Slot) {
+        let tri = &self.tris[f as usize];
+        let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
+        if slot.ends == [a, b] {
+            return;
+        }
+        *slot = Slot {
+            ends: [a, b],
+            ..Slot::default()
+        };
+        if !(a < b || g == NONE) {
+            return;
+        }
+        // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
+        let cx = if g != NONE && self.groups_ok(b, a, g, f) {
+            self.cost(b, a)
+        } else {
+            f64::INFINITY
+        };
+        let cy = if self.groups_ok(a, b, f, g) {
+            self.cost(a, b)
+        } else {
+            f64::INFINITY
+        };
+        slot.costs = [cx, cy];
+        let (cost, dir) = if cy < cx { (cy, 2) } else { (cx, 1) };
+        if cost.is_finite() {
+            slot.dir = dir;
+        }
+    }
+}
+
+/// Ranks every slot of the live triangles, split over the threads by ranges of triangles
+/// (each slot's ranking depends on the mesh alone, so the split does not change it), and
+/// lists each edge's cheaper allowed direction in `cands`, in slot order.
+pub(super) fn rank_all(
+    work: &Work<'_>,
+    live: &[u32],
+    slots: &mut [[Slot; 3]],
+    cands: &mut Vec<Candidate>,
+    threads: usize,
+) {
+    // `slots` from triangle `first` on.
+    let run = |live: &[u32], first: usize, slots: &mut [[Slot; 3]], cands: &mut Vec<Candidate>| {
+        for &f in live {
+            for (k, slot) in slots[f as usize - first].iter_mut().enumerate() {
+                work.rank(f, k, slot);
+                let [a, b] = slot.ends;
+                match slot.dir {
+                    1 => cands.push((slot.cost(), b, a)),
+                    2 => cands.push((slot.cost(), a, b)),
+                    _ => {}
+                }
+            }
+        }
+    };
+    cands.clear();
+    if threads <= 1 || live.len() < PARALLEL_MIN {
+        run(live, 0, slots, cands);
+        return;
+    }
+    let per = live.len().div_ceil(threads);
+    let parts: Vec<Vec<Candidate>> = std::thread::scope(|scope| {
+        let mut rest = slots;
+        let mut first = 0;
+        let mut handles = Vec::new();
+        for (i, part) in live.chunks(per).enumerate() {
+            // This thread's triangles run up to the next part's first.
+            let end = live
+                .get((i + 1) * per)
+                .map_or(first + rest.len(), |&f| f as usize);
+            let (mine, others) = rest.split_at_mut(end - first);
+            rest = others;
+            let run = &run;
+            let start = first;
+            handles.push(scope.spawn(move || {
+                let mut found = Vec::with_capacity(part.len() * 3 / 2);
+                run(part, start, mine, &mut found);
+                found
+            }));
+            first = end;
+        }
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    });
+    for part in parts {
+        cands.extend_from_slice(&part);
+    }
+}

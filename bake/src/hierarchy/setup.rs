@@ -1,0 +1,395 @@
+//! Setting up the work: the centred points, the wedges and their quadrics (triangles' and
+//! boundary planes'), the triangles with their neighbours, and the leaves' bounds.
+
+use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
+use super::work::{NodeOut, PosInfo, Tri, Wedge, Work};
+use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
+use crate::quadric::{Quadric, M};
+use crate::weld::Welded;
+
+/// Weight of a boundary plane per squared length of its edge. Heavier than a triangle's
+/// plane (weighted by its area) so that borders slide little: on a terrain tile the border
+/// is where the error would otherwise be largest.
+const BOUNDARY_WEIGHT: f64 = 10.0;
+
+/// Triangle quadrics computed at a time (a block's take about 5 MB).
+const QUADRIC_BLOCK: usize = 16384;
+
+/// What the set-up steps share.
+struct Setup<'a> {
+    w: &'a Welded,
+    weights: &'a AttributeWeights,
+    threads: usize,
+    /// The bounding box's diagonal, which scales the attributes.
+    diagonal: f64,
+    /// Every position relative to the bounding box's centre, in f64.
+    p: Vec<V3>,
+    /// Positions split into ranges, one per thread, for adding to their wedges in order.
+    ranges: Vec<(usize, usize)>,
+}
+
+/// The work for a welded mesh, with the quadrics of every wedge, the triangles around every
+/// position, and the leaves' rings, cones and radii.
+pub(super) fn work<'w>(w: &'w Welded, weights: &AttributeWeights, threads: usize) -> Work<'w> {
+    let np = w.positions.len();
+    let nt = w.triangles.len();
+    let s = Setup::new(w, weights, threads);
+    let (mut wedges, wedge_start) = s.wedges();
+    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); np];
+    s.add_triangle_quadrics(&mut faces_of, &mut wedges, &wedge_start);
+    let tris = s.triangles(&faces_of);
+    s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
+    let info = position_info(w);
+    let p = s.p;
+    let pos = p.clone();
+    let mut work = Work {
+        w,
+        p,
+        info,
+        tris,
+        alive: vec![true; nt],
+        pos,
+        faces_of,
+        valence: Vec::new(),
+        node_pos: (0..np as u32).collect(),
+        wedges,
+        wedge_start,
+        h: Hierarchy::default(),
+        nodes: Vec::new(),
+        stamp: vec![0; np],
+        shrunk: vec![0; np],
+        start_valence: vec![0; np],
+        pts_of: Vec::new(),
+        moved: Vec::new(),
+        from_kept: Vec::new(),
+    };
+    work.place_points();
+    work.add_leaves(threads);
+    work
+}
+
+impl<'a> Setup<'a> {
+    /// Centres the positions on their bounding box and splits them over the threads.
+    fn new(w: &'a Welded, weights: &'a AttributeWeights, threads: usize) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in &w.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k] as f64);
+                hi[k] = hi[k].max(p[k] as f64);
+            }
+        }
+        let centre = [
+            (lo[0] + hi[0]) / 2.0,
+            (lo[1] + hi[1]) / 2.0,
+            (lo[2] + hi[2]) / 2.0,
+        ];
+        let diagonal = len(sub(hi, lo)).max(f64::MIN_POSITIVE);
+        let p: Vec<V3> = w
+            .positions
+            .iter()
+            .map(|q| sub(q.map(f64::from), centre))
+            .collect();
+        let np = w.positions.len();
+        let per = if threads <= 1 || np < PARALLEL_MIN {
+            np.max(1)
+        } else {
+            np.div_ceil(threads)
+        };
+        let ranges = (0..np)
+            .step_by(per)
+            .map(|lo| (lo, (lo + per).min(np)))
+            .collect();
+        Self {
+            w,
+            weights,
+            threads,
+            diagonal,
+            p,
+            ranges,
+        }
+    }
+
+    /// One wedge per surface group at each position, with its scaled attributes and an
+    /// empty quadric; and where each position's wedges start.
+    fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
+        let np = self.w.positions.len();
+        let mut wedge_start = Vec::with_capacity(np + 1);
+        let mut wedges = Vec::with_capacity(np);
+        wedge_start.push(0u32);
+        for vs in &self.w.vertices {
+            wedges.extend(vs.iter().map(|&(group, a)| Wedge {
+                group,
+                attrs: scaled_attributes(self.w, a, self.weights, self.diagonal),
+                q: Quadric::default(),
+            }));
+            wedge_start.push(wedges.len() as u32);
+        }
+        (wedges, wedge_start)
+    }
+
+    /// Each triangle's quadric, added to the wedge of its group at its corners, and the
+    /// triangle to its corners' lists. The quadrics are computed in blocks on all threads
+    /// and added in triangle order, so the sums do not depend on the threads.
+    fn add_triangle_quadrics(
+        &self,
+        faces_of: &mut [Vec<u32>],
+        wedges: &mut [Wedge],
+        wedge_start: &[u32],
+    ) {
+        let (w, p) = (self.w, &self.p);
+        let nt = w.triangles.len();
+        for first in (0..nt).step_by(QUADRIC_BLOCK) {
+            let n = (nt - first).min(QUADRIC_BLOCK);
+            let block = par_map(n, self.threads, |i| {
+                let t = &w.triangles[first + i];
+                let s =
+                    t.a.map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
+                Quadric::triangle(t.p.map(|x| p[x as usize]), s)
+            });
+            by_positions(
+                &self.ranges,
+                faces_of,
+                wedges,
+                wedge_start,
+                |lo, hi, faces_of, wedges| {
+                    for (i, q) in block.iter().enumerate() {
+                        let t = &w.triangles[first + i];
+                        for &x in &t.p {
+                            let x = x as usize;
+                            if (lo..hi).contains(&x) {
+                                faces_of[x - lo].push((first + i) as u32);
+                                add_to_wedge(wedges, wedge_start, lo, x, t.group, q);
+                            }
+                        }
+                    }
+                },
+            );
+        }
+    }
+
+    /// The triangles with their normals and, across each edge, the triangle with the
+    /// reverse edge.
+    fn triangles(&self, faces_of: &[Vec<u32>]) -> Vec<Tri> {
+        let (w, p) = (self.w, &self.p);
+        let opp = par_map(w.triangles.len(), self.threads, |f| {
+            let c = w.triangles[f].p;
+            [0, 1, 2].map(|k| {
+                let (a, b) = (c[k], c[next(k)]);
+                faces_of[b as usize]
+                    .iter()
+                    .copied()
+                    .find(|&g| {
+                        let d = w.triangles[g as usize].p;
+                        d[next(corner_of(d, b))] == a
+                    })
+                    .unwrap_or(NONE)
+            })
+        });
+        w.triangles
+            .iter()
+            .zip(&opp)
+            .map(|(t, &o)| {
+                let [a, b, d] = t.p.map(|x| p[x as usize]);
+                let n = cross(sub(b, a), sub(d, a));
+                Tri {
+                    c: t.p,
+                    o,
+                    group: t.group,
+                    n,
+                    len: len(n),
+                }
+            })
+            .collect()
+    }
+
+    /// Boundary planes: through each border or group-boundary edge, perpendicular to its
+    /// triangle, weighted by the edge's squared length, added to the wedges of the
+    /// triangle's group at the edge's ends.
+    fn add_boundary_planes(
+        &self,
+        tris: &[Tri],
+        faces_of: &mut [Vec<u32>],
+        wedges: &mut [Wedge],
+        wedge_start: &[u32],
+    ) {
+        let (w, p) = (self.w, &self.p);
+        let mut planes = Vec::new();
+        for (f, t) in w.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t.p[k], t.p[next(k)]);
+                let twin = tris[f].o[k];
+                if twin != NONE && w.triangles[twin as usize].group == t.group {
+                    continue;
+                }
+                let (pa, pb, pc) = (p[a as usize], p[b as usize], p[t.p[prev(k)] as usize]);
+                let e = sub(pb, pa);
+                let n = norm(cross(e, cross(sub(pc, pa), e)));
+                let weight = BOUNDARY_WEIGHT * dot(e, e);
+                planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), weight)));
+            }
+        }
+        by_positions(
+            &self.ranges,
+            faces_of,
+            wedges,
+            wedge_start,
+            |lo, hi, _, wedges| {
+                for (ends, group, q) in &planes {
+                    for &x in ends {
+                        let x = x as usize;
+                        if (lo..hi).contains(&x) {
+                            add_to_wedge(wedges, wedge_start, lo, x, *group, q);
+                        }
+                    }
+                }
+            },
+        );
+    }
+}
+
+/// What the surface-group rules read of every position.
+fn position_info(w: &Welded) -> Vec<PosInfo> {
+    w.classes
+        .iter()
+        .zip(&w.vertices)
+        .map(|(&class, vs)| PosInfo {
+            class,
+            group: match vs.as_slice() {
+                [(g, _)] => *g,
+                _ => NONE,
+            },
+        })
+        .collect()
+}
+
+impl Work<'_> {
+    /// The leaves' valences, normal cones and bounding radii (to their ring), on all
+    /// threads.
+    fn add_leaves(&mut self, threads: usize) {
+        let np = self.p.len();
+        let leaves = par_map(np, threads, |v| self.leaf(v as u32));
+        self.valence.reserve(2 * np);
+        self.nodes.reserve(2 * np);
+        for (valence, cone, radius) in leaves {
+            self.valence.push(valence);
+            self.nodes.push(NodeOut {
+                parent: NONE,
+                error: 0.0,
+                radius,
+                cone,
+            });
+        }
+    }
+
+    /// A leaf's number of neighbours, normal cone and bounding radius.
+    fn leaf(&self, v: u32) -> (u32, ([f32; 3], f32), f32) {
+        let mut ring = Vec::new();
+        self.find_ring(v, &mut ring);
+        let normals = self.faces_of[v as usize]
+            .iter()
+            .map(|&f| norm(self.tris[f as usize].n));
+        let axis = norm(
+            normals
+                .clone()
+                .fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]),
+        );
+        let angle = normals
+            .map(|n| dot(axis, n).clamp(-1.0, 1.0).acos())
+            .fold(0.0f64, f64::max);
+        let cone = if axis == [0.0; 3] {
+            ([0.0; 3], std::f32::consts::PI)
+        } else {
+            (axis.map(|x| x as f32), angle as f32)
+        };
+        let pv = self.pos[v as usize];
+        let radius = ring
+            .iter()
+            .map(|&o| len(sub(self.pos[o as usize], pv)))
+            .fold(0.0, f64::max) as f32;
+        (ring.len() as u32, cone, radius)
+    }
+}
+
+fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f64) -> [f64; M] {
+    let a = &w.attributes[attr as usize];
+    let normal = if a.normal_from_geometry {
+        0.0
+    } else {
+        weights.normal
+    };
+    let (wn, wu, wc) = (normal * scale, weights.uv * scale, weights.color * scale);
+    [
+        a.normal[0] as f64 * wn,
+        a.normal[1] as f64 * wn,
+        a.normal[2] as f64 * wn,
+        a.uv[0] as f64 * wu,
+        a.uv[1] as f64 * wu,
+        a.color[0] as f64 * wc,
+        a.color[1] as f64 * wc,
+        a.color[2] as f64 * wc,
+    ]
+}
+
+/// `f(i)` for `i` in `0..n`, in order, computed on up to `threads` threads.
+pub(super) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    if threads <= 1 || n < PARALLEL_MIN {
+        return (0..n).map(f).collect();
+    }
+    let per = n.div_ceil(threads);
+    std::thread::scope(|scope| {
+        let parts: Vec<_> = (0..n)
+            .step_by(per)
+            .map(|lo| {
+                let f = &f;
+                scope.spawn(move || (lo..(lo + per).min(n)).map(f).collect::<Vec<T>>())
+            })
+            .collect();
+        parts
+            .into_iter()
+            .flat_map(|part| part.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, on a thread
+/// each, with the triangle lists and the wedges of those positions.
+pub(super) fn by_positions(
+    ranges: &[(usize, usize)],
+    faces_of: &mut [Vec<u32>],
+    wedges: &mut [Wedge],
+    wedge_start: &[u32],
+    f: impl Fn(usize, usize, &mut [Vec<u32>], &mut [Wedge]) + Sync,
+) {
+    if ranges.len() <= 1 {
+        f(0, faces_of.len(), faces_of, wedges);
+        return;
+    }
+    std::thread::scope(|scope| {
+        let (mut faces_of, mut wedges) = (faces_of, wedges);
+        for &(lo, hi) in ranges {
+            let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
+            let count = (wedge_start[hi] - wedge_start[lo]) as usize;
+            let (these_wedges, other_wedges) = wedges.split_at_mut(count);
+            (faces_of, wedges) = (other_faces, other_wedges);
+            let f = &f;
+            scope.spawn(move || f(lo, hi, these_faces, these_wedges));
+        }
+    });
+}
+
+/// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from
+/// `lo` on.
+pub(super) fn add_to_wedge(
+    wedges: &mut [Wedge],
+    wedge_start: &[u32],
+    lo: usize,
+    x: usize,
+    group: u32,
+    q: &Quadric,
+) {
+    let base = wedge_start[lo] as usize;
+    let range = wedge_start[x] as usize - base..wedge_start[x + 1] as usize - base;
+    if let Some(wd) = wedges[range].iter_mut().find(|wd| wd.group == group) {
+        wd.q.add(q);
+    }
+}

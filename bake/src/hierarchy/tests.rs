@@ -1,0 +1,94 @@
+use super::geometry::{point_triangle_d2, V3};
+use super::*;
+use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+
+#[test]
+fn point_triangle_distance_in_every_region() {
+    let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]);
+    let d = |x: V3| point_triangle_d2(x, a, b, c).sqrt();
+    let close = |x: f64, y: f64| (x - y).abs() < 1e-12;
+    assert!(close(d([0.5, 0.5, 3.0]), 3.0)); // inside, above
+    assert!(close(d([-1.0, -1.0, 0.0]), 2f64.sqrt())); // corner a
+    assert!(close(d([3.0, 0.0, 0.0]), 1.0)); // corner b
+    assert!(close(d([0.0, 3.0, 4.0]), 17f64.sqrt())); // corner c
+    assert!(close(d([1.0, -2.0, 0.0]), 2.0)); // edge ab
+    assert!(close(d([-2.0, 1.0, 0.0]), 2.0)); // edge ac
+    assert!(close(d([2.0, 2.0, 0.0]), 2f64.sqrt())); // edge bc
+                                                     // Degenerate (a segment): the nearest corner at worst.
+    assert!(point_triangle_d2([1.0, 1.0, 0.0], a, b, b) <= 2.0 + 1e-12);
+}
+
+/// A bumpy height field of `n × n` posts with a border.
+fn terrain(n: u32) -> Mesh {
+    let mut m = Mesh {
+        surfaces: vec![Surface::default()],
+        ..Mesh::default()
+    };
+    for row in 0..n {
+        for col in 0..n {
+            let (x, z) = (col as f32, row as f32);
+            let h = (x * 0.7).sin() * (z * 0.4).cos() * 2.0 + ((x * z) * 0.37).sin() * 0.3;
+            m.positions.push([x, h, z]);
+        }
+    }
+    for row in 0..n - 1 {
+        for col in 0..n - 1 {
+            let i = row * n + col;
+            for position in [[i, i + n, i + n + 1], [i, i + n + 1, i + 1]] {
+                m.triangles.push(Triangle {
+                    position,
+                    normal: [NO_ATTRIBUTE; 3],
+                    uv: [NO_ATTRIBUTE; 3],
+                    color: [NO_ATTRIBUTE; 3],
+                    surface: 0,
+                });
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
+    let w = crate::weld::weld(&terrain(24)).expect("weld");
+    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {});
+    let point = |node: u32| w.positions[h.node_position[node as usize] as usize].map(f64::from);
+    let base: Vec<[V3; 3]> = h
+        .corners
+        .iter()
+        .zip(&h.alive)
+        .filter(|(_, &alive)| alive)
+        .map(|(c, _)| c.map(point))
+        .collect();
+    assert!(
+        base.len() < w.triangles.len() / 10,
+        "{} base triangles",
+        base.len()
+    );
+    let root_error = h
+        .parent
+        .iter()
+        .zip(&h.error)
+        .filter(|(&p, _)| p == NONE)
+        .map(|(_, &e)| e as f64)
+        .fold(0.0, f64::max);
+    let worst = w
+        .positions
+        .iter()
+        .map(|p| {
+            let x = p.map(f64::from);
+            base.iter()
+                .map(|&[a, b, c]| point_triangle_d2(x, a, b, c))
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(worst > 0.1, "the base mesh should not be exact: {worst}");
+    assert!(worst <= root_error * (1.0 + 1e-5), "{worst} > {root_error}");
+    // A parent's error is at least its children's.
+    for (v, &p) in h.parent.iter().enumerate() {
+        if p != NONE {
+            assert!(h.error[p as usize] >= h.error[v]);
+        }
+    }
+}

@@ -1,0 +1,165 @@
+//! The mesh being simplified: triangles with their neighbours, the triangles around every
+//! node, the wedges' quadrics, and the bounds recorded per node.
+
+use caveclod_core::PositionClass;
+
+use super::geometry::{corner_of, cross, next, prev, sub, P3, V3};
+use super::{Hierarchy, NONE};
+use crate::quadric::{Quadric, M};
+use crate::weld::Welded;
+
+/// The quadric of one surface group at a position, with that group's scaled attributes
+/// there.
+pub(super) struct Wedge {
+    pub(super) group: u32,
+    pub(super) attrs: [f64; M],
+    pub(super) q: Quadric,
+}
+
+/// A triangle of the mesh being simplified, in one cache line.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(super) struct Tri {
+    /// Current corners (nodes), counter-clockwise.
+    pub(super) c: [u32; 3],
+    /// `o[k]`: the triangle across the edge `c[k] → c[k + 1]`, or `NONE`. The mesh stays
+    /// an oriented manifold, so that triangle holds the edge the other way round.
+    pub(super) o: [u32; 3],
+    /// Surface group.
+    pub(super) group: u32,
+    /// Unnormalised normal at the current corners.
+    pub(super) n: V3,
+    /// Its length.
+    pub(super) len: f64,
+}
+
+/// What the hierarchy records of a node.
+#[derive(Clone, Copy)]
+pub(super) struct NodeOut {
+    pub(super) parent: u32,
+    pub(super) error: f32,
+    pub(super) radius: f32,
+    pub(super) cone: ([f32; 3], f32),
+}
+
+/// What the surface-group rules read of a position.
+#[derive(Clone, Copy)]
+pub(super) struct PosInfo {
+    pub(super) class: PositionClass,
+    /// The position's one surface group, or `NONE` when it has several.
+    pub(super) group: u32,
+}
+
+/// The mesh being simplified, with per node its triangles.
+pub(super) struct Work<'w> {
+    pub(super) w: &'w Welded,
+    /// Point of every position.
+    pub(super) p: Vec<V3>,
+    pub(super) info: Vec<PosInfo>,
+    pub(super) tris: Vec<Tri>,
+    pub(super) alive: Vec<bool>,
+    /// Point of every node (its position's).
+    pub(super) pos: Vec<V3>,
+    /// Triangles around every node.
+    pub(super) faces_of: Vec<Vec<u32>>,
+    /// Number of distinct neighbours of every live node.
+    pub(super) valence: Vec<u32>,
+    pub(super) node_pos: Vec<u32>,
+    /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
+    pub(super) wedges: Vec<Wedge>,
+    pub(super) wedge_start: Vec<u32>,
+    pub(super) h: Hierarchy,
+    /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
+    pub(super) nodes: Vec<NodeOut>,
+    /// Pass in which a node's neighbourhood was last taken by a collapse.
+    pub(super) stamp: Vec<u32>,
+    /// Pass in which a node last lost a neighbour.
+    pub(super) shrunk: Vec<u32>,
+    /// A node's number of neighbours at the start of the pass it last lost one in.
+    pub(super) start_valence: Vec<u32>,
+    /// The input's positions each triangle stands for (nearest to it when it last
+    /// changed), which the error bounds measure; relative to the centre.
+    pub(super) pts_of: Vec<Vec<P3>>,
+    /// Points the pass's collapses moved, waiting for [`Work::settle`], each with the new
+    /// node whose triangles it goes to (those of one node in a row).
+    pub(super) moved: Vec<(P3, u32)>,
+    /// Per collapse of the pass, in order: how many of its new node's triangles came from
+    /// the kept child (they are listed first; the removed child's follow).
+    pub(super) from_kept: Vec<u32>,
+}
+
+impl Work<'_> {
+    #[inline]
+    pub(super) fn wedges_at(&self, pos: usize) -> &[Wedge] {
+        &self.wedges[self.wedge_start[pos] as usize..self.wedge_start[pos + 1] as usize]
+    }
+
+    /// The triangle with the directed edge `a → b` and the corner of `a` in it.
+    #[inline]
+    pub(super) fn dir_face(&self, a: u32, b: u32) -> Option<(u32, usize)> {
+        for &f in &self.faces_of[a as usize] {
+            let c = self.tris[f as usize].c;
+            let j = corner_of(c, a);
+            if c[next(j)] == b {
+                return Some((f, j));
+            }
+        }
+        None
+    }
+
+    /// The distinct neighbours of `v` into `out`; returns whether `v` is on a border.
+    ///
+    /// Every neighbour `x` is reached once: through the triangle with the edge `v → x`, or,
+    /// when there is none, through the border triangle with `x → v`.
+    pub(super) fn find_ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
+        out.clear();
+        let mut border = false;
+        for &f in &self.faces_of[v as usize] {
+            let t = &self.tris[f as usize];
+            let j = corner_of(t.c, v);
+            out.push(t.c[next(j)]);
+            if t.o[prev(j)] == NONE {
+                out.push(t.c[prev(j)]);
+                border = true;
+            }
+            border |= t.o[j] == NONE;
+        }
+        border
+    }
+
+    #[inline]
+    pub(super) fn triangle_normal(&self, c: [u32; 3]) -> V3 {
+        let (a, b, d) = (
+            self.pos[c[0] as usize],
+            self.pos[c[1] as usize],
+            self.pos[c[2] as usize],
+        );
+        cross(sub(b, a), sub(d, a))
+    }
+
+    /// The corner of triangle `f` after `v` (for a triangle on the edge `u → v`, its third
+    /// corner), or `NONE` for no triangle.
+    #[inline]
+    pub(super) fn third(&self, f: u32, v: u32) -> u32 {
+        if f == NONE {
+            return NONE;
+        }
+        let c = self.tris[f as usize].c;
+        c[next(corner_of(c, v))]
+    }
+}
+
+impl Work<'_> {
+    /// The hierarchy, with the bounds gathered per node and the triangles as they end.
+    pub(super) fn into_hierarchy(self) -> Hierarchy {
+        let mut h = self.h;
+        h.parent = self.nodes.iter().map(|n| n.parent).collect();
+        h.error = self.nodes.iter().map(|n| n.error).collect();
+        h.radius = self.nodes.iter().map(|n| n.radius).collect();
+        h.cone = self.nodes.iter().map(|n| n.cone).collect();
+        h.node_position = self.node_pos;
+        h.corners = self.tris.iter().map(|t| t.c).collect();
+        h.alive = self.alive;
+        h
+    }
+}

@@ -1,0 +1,96 @@
+//! Streaming readers: PLY (ascii and binary, either endianness) and OBJ to a triangle soup,
+//! never holding the whole file.
+//!
+//! Indexed formats name vertices by number, so a triangle can only be written once its
+//! corners are known. The readers first copy the vertex data into fixed-size records in a
+//! temporary file (and take the bounding box on the way, which the spatial keys need), then
+//! read the faces and look their corners up through a [`BlockCache`]: a direct-mapped cache
+//! of blocks of that file whose size the memory budget sets. Real meshes (scanner output,
+//! exported models, the generator's terrain) name nearby vertices in nearby faces, so the
+//! cache hits almost always; a file whose faces jump around still works, only slower. This
+//! is cheaper than dereferencing by external sorts (Lindstrom's OoCS) while bounded the same
+//! way.
+//!
+//! PLY: element `vertex` with `x y z`, optional `nx ny nz`, `red green blue [alpha]` (integer
+//! colours divided by their maximum and taken as sRGB, as the in-core importer does), `u v`
+//! (or `s t`, `texture_u texture_v`, `texture_s texture_t`); element `face` with a
+//! `vertex_indices` (or `vertex_index`) list, polygons triangulated as fans; other elements and
+//! properties are read past. The vertex element must come before the face element. A
+//! `comment TextureFile NAME` line names the surface's texture.
+//!
+//! OBJ: two passes over the file: `v` (with optional `r g b`), `vt`, `vn` records first, then
+//! `f` statements (any of `v`, `v/t`, `v//n`, `v/t/n`, negative indices), with `usemtl`
+//! starting a surface per material name (the MTL file is not read). `v` flips to `1 - v` in
+//! both formats.
+//!
+//! Errors name the file and the element (`face 123`, `line 45`, `vertex 17`); a file that ends
+//! early says where.
+
+mod cache;
+mod obj;
+mod ply;
+mod ply_format;
+
+use std::fs::File;
+use std::path::Path;
+
+pub use cache::BlockCache;
+
+use super::soup::{Cube, SoupTriangle};
+use super::temp::TempSpace;
+use super::OocError;
+use crate::mesh::Surface;
+
+/// Receives the soup as a reader produces it.
+pub trait SoupSink {
+    /// Called once, before the first triangle: the input's bounding cube and its triangle
+    /// count as far as the header tells (0 when unknown).
+    fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError>;
+    /// Room for one more triangle, which the caller fills in completely (its key too):
+    /// readers build triangles in place, with no copy of the record on the way.
+    fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
+    /// One triangle (its key already set).
+    fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
+        *self.slot()? = *t;
+        Ok(())
+    }
+}
+
+/// What a reader found besides the triangles.
+#[derive(Clone, Debug, Default)]
+pub struct StreamReport {
+    /// Surfaces, indexed by [`SoupTriangle::surface`].
+    pub surfaces: Vec<Surface>,
+    /// Triangles produced.
+    pub triangles: u64,
+    /// Vertices read.
+    pub vertices: u64,
+    /// Faces with fewer than three corners, skipped.
+    pub skipped_faces: u64,
+}
+
+/// Streams `path` (chosen by extension: `.ply`, `.obj`) into `sink`, using at most about
+/// `cache_bytes` for the vertex look-up.
+pub fn stream_file(
+    path: &Path,
+    temp: &TempSpace,
+    cache_bytes: usize,
+    sink: &mut dyn SoupSink,
+) -> Result<StreamReport, OocError> {
+    let name = path.display().to_string();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let open = || File::open(path).map_err(|source| OocError::io(&name, "cannot read", source));
+    match ext.as_str() {
+        "ply" => ply::ply(&name, open()?, temp, cache_bytes, sink),
+        "obj" => obj::obj(&name, open, temp, cache_bytes, sink),
+        _ => Err(OocError::Unsupported {
+            file: name,
+            message: format!(
+                "out-of-core baking reads .ply and .obj files, not '.{ext}' (bake it in core)"
+            ),
+        }),
+    }
+}

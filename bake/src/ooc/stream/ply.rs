@@ -1,0 +1,491 @@
+//! The PLY reader: the header, the vertices to fixed records in a temporary file, then the
+//! faces, their corners looked up through a [`BlockCache`].
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Write};
+use std::path::PathBuf;
+
+use super::ply_format::{slot, with_bytes, Element, Field, Format, ItemReader, Property, Scalar};
+use super::{BlockCache, SoupSink, StreamReport};
+use crate::mesh::Surface;
+use crate::ooc::soup::{encode_normal, Corner, Cube, HAS_COLOR, HAS_NORMAL, HAS_UV};
+use crate::ooc::temp::TempSpace;
+use crate::ooc::OocError;
+
+/// Streams the PLY file `file` (named `name` in errors) into `sink`.
+pub(super) fn ply(
+    name: &str,
+    file: File,
+    temp: &TempSpace,
+    cache_bytes: usize,
+    sink: &mut dyn SoupSink,
+) -> Result<StreamReport, OocError> {
+    let mut r = BufReader::with_capacity(1 << 20, file);
+    let header = Header::read(&mut r, name)?;
+    let layout = Layout::of(&header, name)?;
+    let mut ply = Reader {
+        name,
+        r,
+        items: ItemReader {
+            format: header.format,
+            bytes: Vec::new(),
+            line: String::new(),
+            list: Vec::new(),
+        },
+        record: Vec::new(),
+        header,
+        layout,
+    };
+    let (vi, fi) = (ply.layout.vi, ply.layout.fi);
+    ply.skip(0..vi)?;
+    let vcount = ply.header.elements[vi].count;
+    let (vpath, cube) = ply.write_vertices(temp)?;
+    if vcount == 0 {
+        return Err(OocError::Empty {
+            file: name.to_string(),
+        });
+    }
+    sink.start(&cube, ply.header.elements[fi].count)?;
+    let vf = File::open(&vpath).map_err(|e| OocError::temp("reading the vertex file", e))?;
+    let mut cache = BlockCache::<Corner>::new(vf, vcount, cache_bytes);
+    ply.skip(vi + 1..fi)?;
+    let mut report = StreamReport {
+        surfaces: vec![Surface {
+            name: "default".into(),
+            base_color: [1.0; 4],
+            texture: ply.header.texture.take(),
+        }],
+        vertices: vcount,
+        ..Default::default()
+    };
+    ply.read_faces(&cube, &mut cache, sink, &mut report)?;
+    drop(cache);
+    let _ = std::fs::remove_file(&vpath);
+    Ok(report)
+}
+
+/// An error in the file `name` at `at`.
+fn bad(name: &str, at: &str, message: String) -> OocError {
+    OocError::Input {
+        file: name.to_string(),
+        at: at.to_string(),
+        message,
+    }
+}
+
+/// The header: the format, the elements and a texture named in a comment.
+struct Header {
+    format: Format,
+    elements: Vec<Element>,
+    texture: Option<String>,
+}
+
+impl Header {
+    /// Reads the header, up to and with its `end_header` line.
+    fn read(r: &mut BufReader<File>, name: &str) -> Result<Self, OocError> {
+        let bad = |at: &str, message: String| bad(name, at, message);
+        let mut line = Vec::new();
+        let mut lines = 0;
+        let mut format = None;
+        let mut elements: Vec<Element> = Vec::new();
+        let mut texture = None;
+        loop {
+            line.clear();
+            let n = r
+                .read_until(b'\n', &mut line)
+                .map_err(|e| OocError::io(name, "cannot read", e))?;
+            lines += 1;
+            if n == 0 {
+                return Err(bad("header", "the file ends before 'end_header'".into()));
+            }
+            let text = String::from_utf8_lossy(&line);
+            let words: Vec<&str> = text.split_ascii_whitespace().collect();
+            let at = || format!("header line {lines}");
+            match words.as_slice() {
+                ["ply"] if lines == 1 => {}
+                _ if lines == 1 => {
+                    return Err(bad("header", "not a PLY file (no 'ply' line)".into()))
+                }
+                ["format", f, _] => {
+                    format = Some(match *f {
+                        "ascii" => Format::Ascii,
+                        "binary_little_endian" => Format::Binary { big: false },
+                        "binary_big_endian" => Format::Binary { big: true },
+                        _ => return Err(bad(&at(), format!("unknown format '{f}'"))),
+                    })
+                }
+                ["comment", "TextureFile", t, ..] => texture = Some(t.to_string()),
+                ["comment", ..] | ["obj_info", ..] | [] => {}
+                ["element", n, c] => elements.push(Element {
+                    name: n.to_string(),
+                    count: c
+                        .parse()
+                        .map_err(|_| bad(&at(), format!("bad element count '{c}'")))?,
+                    properties: Vec::new(),
+                }),
+                ["property", "list", ct, ty, n] => {
+                    let el = elements
+                        .last_mut()
+                        .ok_or_else(|| bad(&at(), "property before any element".into()))?;
+                    let (Some(ct), Some(ty)) = (Scalar::parse(ct), Scalar::parse(ty)) else {
+                        return Err(bad(&at(), format!("unknown type in '{}'", text.trim())));
+                    };
+                    el.properties.push(Property {
+                        name: n.to_string(),
+                        list: Some(ct),
+                        ty,
+                    });
+                }
+                ["property", ty, n] => {
+                    let el = elements
+                        .last_mut()
+                        .ok_or_else(|| bad(&at(), "property before any element".into()))?;
+                    let ty = Scalar::parse(ty)
+                        .ok_or_else(|| bad(&at(), format!("unknown type '{ty}'")))?;
+                    el.properties.push(Property {
+                        name: n.to_string(),
+                        list: None,
+                        ty,
+                    });
+                }
+                ["end_header"] => break,
+                _ => return Err(bad(&at(), format!("cannot read '{}'", text.trim()))),
+            }
+        }
+        let format = format.ok_or_else(|| bad("header", "no 'format' line".into()))?;
+        Ok(Self {
+            format,
+            elements,
+            texture,
+        })
+    }
+}
+
+/// Where the header puts what the reader needs.
+struct Layout {
+    /// The vertex element.
+    vi: usize,
+    /// The face element (after the vertex element).
+    fi: usize,
+    /// The vertex slot of each vertex property (`None` for lists and unknown names).
+    vslots: Vec<Option<usize>>,
+    /// What the triangles carry: `HAS_NORMAL`, `HAS_UV`, `HAS_COLOR`.
+    flags: u16,
+    /// What each vertex property's colour values are divided by.
+    color_scale: Vec<f64>,
+    /// The face property with the vertex indices.
+    face_list: usize,
+}
+
+impl Layout {
+    fn of(header: &Header, name: &str) -> Result<Self, OocError> {
+        let bad = |at: &str, message: String| bad(name, at, message);
+        let elements = &header.elements;
+        let vi = elements
+            .iter()
+            .position(|e| e.name == "vertex")
+            .ok_or_else(|| bad("header", "no vertex element".into()))?;
+        let fi = elements
+            .iter()
+            .position(|e| e.name == "face")
+            .ok_or_else(|| bad("header", "no face element".into()))?;
+        if fi < vi {
+            return Err(OocError::Unsupported {
+                file: name.to_string(),
+                message: "faces before vertices cannot be streamed".into(),
+            });
+        }
+        let vslots: Vec<Option<usize>> = elements[vi]
+            .properties
+            .iter()
+            .map(|p| {
+                if p.list.is_some() {
+                    None
+                } else {
+                    slot(&p.name)
+                }
+            })
+            .collect();
+        let has = |s: usize| vslots.contains(&Some(s));
+        if !(has(0) && has(1) && has(2)) {
+            return Err(bad("header", "the vertex element lacks x, y or z".into()));
+        }
+        let mut flags = 0;
+        if has(3) && has(4) && has(5) {
+            flags |= HAS_NORMAL;
+        }
+        if has(6) && has(7) {
+            flags |= HAS_UV;
+        }
+        if has(8) && has(9) && has(10) {
+            flags |= HAS_COLOR;
+        }
+        let color_scale: Vec<f64> = elements[vi]
+            .properties
+            .iter()
+            .map(|p| p.ty.color_scale())
+            .collect();
+        let face_list = elements[fi]
+            .properties
+            .iter()
+            .position(|p| {
+                p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index")
+            })
+            .ok_or_else(|| {
+                bad(
+                    "header",
+                    "the face element has no vertex_indices list".into(),
+                )
+            })?;
+        Ok(Self {
+            vi,
+            fi,
+            vslots,
+            flags,
+            color_scale,
+            face_list,
+        })
+    }
+}
+
+/// The reader past the header.
+struct Reader<'a> {
+    name: &'a str,
+    r: BufReader<File>,
+    items: ItemReader,
+    /// Scratch space for byte runs that straddle a refill of `r`.
+    record: Vec<u8>,
+    header: Header,
+    layout: Layout,
+}
+
+impl Reader<'_> {
+    fn bad(&self, at: &str, message: String) -> OocError {
+        bad(self.name, at, message)
+    }
+
+    /// Reads past the items of the elements `range`.
+    fn skip(&mut self, range: std::ops::Range<usize>) -> Result<(), OocError> {
+        for el in &self.header.elements[range] {
+            for i in 0..el.count {
+                self.items
+                    .read(&mut self.r, el, &mut |_, _, _| {})
+                    .map_err(|m| bad(self.name, &format!("{} {i}", el.name), m))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Binary vertices without lists have a fixed stride: one read, decodes at offsets.
+    fn fixed_vertex(&self) -> Option<(usize, Vec<Field>)> {
+        let vertex = &self.header.elements[self.layout.vi];
+        match self.header.format {
+            Format::Binary { .. } if vertex.properties.iter().all(|p| p.list.is_none()) => {
+                let mut offset = 0;
+                let mut fields = Vec::new();
+                for (k, p) in vertex.properties.iter().enumerate() {
+                    if let Some(s) = self.layout.vslots[k] {
+                        fields.push((offset, p.ty, s, self.layout.color_scale[k]));
+                    }
+                    offset += p.ty.size();
+                }
+                Some((offset, fields))
+            }
+            _ => None,
+        }
+    }
+
+    /// The vertices to fixed records in a temporary file; returns its path and the
+    /// vertices' bounding cube.
+    fn write_vertices(&mut self, temp: &TempSpace) -> Result<(PathBuf, Cube), OocError> {
+        let vi = self.layout.vi;
+        let vcount = self.header.elements[vi].count;
+        let mut vfile = temp
+            .create("vertices", 1 << 16)
+            .map_err(|e| OocError::temp("creating the vertex file", e))?;
+        let verr = |e| OocError::temp("writing the vertex file", e);
+        // Records go to the file a block at a time (one write call, one quota check).
+        let mut block: Vec<Corner> = Vec::with_capacity(1 << 14);
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        let fixed = self.fixed_vertex();
+        let big = self.header.format == Format::Binary { big: true };
+        let Layout {
+            vslots,
+            color_scale,
+            ..
+        } = &self.layout;
+        for i in 0..vcount {
+            let mut v = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+            match &fixed {
+                Some((stride, fields)) => {
+                    with_bytes(&mut self.r, &mut self.record, *stride, |b| {
+                        for &(offset, ty, s, scale) in fields {
+                            let x = ty.decode(&b[offset..], big);
+                            v[s] = if s >= 8 { x / scale } else { x };
+                        }
+                    })
+                    .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?;
+                }
+                None => self
+                    .items
+                    .read(&mut self.r, &self.header.elements[vi], &mut |p, x, _| {
+                        if let Some(s) = vslots[p] {
+                            v[s] = if s >= 8 { x / color_scale[p] } else { x };
+                        }
+                    })
+                    .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?,
+            }
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(self.bad(&format!("vertex {i}"), "a number is not finite".into()));
+            }
+            let p = [v[0] as f32, v[1] as f32, v[2] as f32];
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            block.push(corner(p, &v));
+            if block.len() == block.capacity() {
+                vfile
+                    .write_all(bytemuck::cast_slice(&block))
+                    .map_err(verr)?;
+                block.clear();
+            }
+        }
+        vfile
+            .write_all(bytemuck::cast_slice(&block))
+            .map_err(verr)?;
+        drop(block);
+        let vpath = vfile.finish().map_err(verr)?;
+        Ok((vpath, Cube::around(lo, hi)))
+    }
+
+    /// The faces, each a fan of triangles whose corners come from `cache`, into `sink`.
+    fn read_faces(
+        &mut self,
+        cube: &Cube,
+        cache: &mut BlockCache<Corner>,
+        sink: &mut dyn SoupSink,
+        report: &mut StreamReport,
+    ) -> Result<(), OocError> {
+        let keyer = cube.keyer();
+        let fi = self.layout.fi;
+        let vcount = report.vertices;
+        let int_list = self.int_list();
+        let mut raw: Vec<i64> = Vec::new();
+        let mut idx: Vec<u64> = Vec::new();
+        for f in 0..self.header.elements[fi].count {
+            let at = || format!("face {f}");
+            self.face_indices(f, int_list, &mut raw)?;
+            if raw.len() < 3 {
+                report.skipped_faces += 1;
+                continue;
+            }
+            idx.clear();
+            for &i in &raw {
+                if i < 0 || i as u64 >= vcount {
+                    return Err(self.bad(
+                        &at(),
+                        format!("vertex index {i} out of range ({vcount} vertices)"),
+                    ));
+                }
+                idx.push(i as u64);
+            }
+            let terr = |e| OocError::temp("reading the vertex file", e);
+            for k in 1..idx.len() - 1 {
+                let t = sink.slot()?;
+                t.surface = 0;
+                t.flags = self.layout.flags;
+                t.corners[0] = *cache.get_ref(idx[0]).map_err(terr)?;
+                t.corners[1] = *cache.get_ref(idx[k]).map_err(terr)?;
+                t.corners[2] = *cache.get_ref(idx[k + 1]).map_err(terr)?;
+                t.key = keyer.key(&t.corners.map(|c| c.position));
+                report.triangles += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Binary faces whose only property is an integer index list (the usual layout): their
+    /// counts and indices are decoded as integers straight from the read buffer.
+    fn int_list(&self) -> Option<(bool, Scalar, Scalar)> {
+        match (
+            self.header.format,
+            self.header.elements[self.layout.fi].properties.as_slice(),
+        ) {
+            (
+                Format::Binary { big },
+                [Property {
+                    list: Some(ct), ty, ..
+                }],
+            ) if ct.is_int() && ty.is_int() => Some((big, *ct, *ty)),
+            _ => None,
+        }
+    }
+
+    /// The vertex indices of face `f` into `raw`, as they are in the file.
+    fn face_indices(
+        &mut self,
+        f: u64,
+        int_list: Option<(bool, Scalar, Scalar)>,
+        raw: &mut Vec<i64>,
+    ) -> Result<(), OocError> {
+        let name = self.name;
+        let at = || format!("face {f}");
+        let fi = self.layout.fi;
+        raw.clear();
+        match int_list {
+            Some((big, ct, ty)) => {
+                let n = with_bytes(&mut self.r, &mut self.record, ct.size(), |b| {
+                    ct.decode_int(b, big)
+                })
+                .map_err(|m| bad(name, &at(), m))?;
+                if !(0..=1_000_000).contains(&n) {
+                    let list = &self.header.elements[fi].properties[0].name;
+                    return Err(bad(name, &at(), format!("list '{list}' has {n} entries")));
+                }
+                let s = ty.size();
+                with_bytes(&mut self.r, &mut self.record, n as usize * s, |b| {
+                    raw.extend(b.chunks_exact(s).map(|c| ty.decode_int(c, big)));
+                })
+                .map_err(|m| bad(name, &at(), m))?;
+            }
+            None => {
+                let mut fraction = None;
+                let face_list = self.layout.face_list;
+                self.items
+                    .read(&mut self.r, &self.header.elements[fi], &mut |p, _, list| {
+                        if p == face_list {
+                            for &i in list {
+                                if i.fract() != 0.0 || !i.is_finite() {
+                                    fraction = Some(i);
+                                }
+                                raw.push(i as i64);
+                            }
+                        }
+                    })
+                    .map_err(|m| bad(name, &at(), m))?;
+                if let (Some(i), 3..) = (fraction, raw.len()) {
+                    let vcount = self.header.elements[self.layout.vi].count;
+                    return Err(bad(
+                        name,
+                        &at(),
+                        format!("vertex index {i} out of range ({vcount} vertices)"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The record of a vertex from its slots `v` (x y z nx ny nz u v r g b a), `p` its
+/// position; `v` flips to `1 - v`.
+fn corner(p: [f32; 3], v: &[f64; 12]) -> Corner {
+    let c8 = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    Corner {
+        position: p,
+        uv: [v[6] as f32, 1.0 - v[7] as f32],
+        normal: encode_normal([v[3] as f32, v[4] as f32, v[5] as f32]),
+        color: [c8(v[8]), c8(v[9]), c8(v[10]), c8(v[11])],
+    }
+}

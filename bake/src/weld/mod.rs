@@ -1,0 +1,215 @@
+//! From an imported [`Mesh`] to a clean, manifold, welded mesh with surface groups.
+//!
+//! Steps, each counted in [`Repairs`]:
+//! 1. positions with identical coordinates are welded into one node position;
+//! 2. degenerate triangles (a repeated position or zero area) and duplicate triangles (the
+//!    same three positions, either orientation) are dropped;
+//! 3. an edge used by more than two triangles, or twice in one direction, is cut: the later
+//!    triangle gets its own copies of the edge's two positions;
+//! 4. a position whose triangles form several fans (a non-manifold vertex) is split, one
+//!    copy per extra fan;
+//! 5. surface groups grow over edges where the surface and the attributes at both ends match,
+//!    never taking a triangle that would give the group a second attribute set at one
+//!    position (a UV seam that closes on itself, as on a cylinder, is cut open instead);
+//! 6. positions are classified FREE / SHARP / RIGID by the boundary edges through them (mesh
+//!    borders and surface-group changes), and groups that share no position share an id
+//!    (greedy colouring, largest groups first).
+//!
+//! Missing normals are computed (area-weighted, per position), missing UVs are zero and
+//! missing colours white. Each attribute set records whether its normal follows from the
+//! geometry (computed here, or within [`GEOMETRIC_NORMAL_DEGREES`] of the computed one),
+//! which simplification then ignores.
+//!
+//! [`weld`] runs these steps in order, one module each: `repair` (1–4), `groups` (5–6),
+//! and between them `attributes` (the corners' attributes, deduplicated).
+
+mod attributes;
+mod groups;
+mod repair;
+#[cfg(test)]
+mod tests;
+
+use caveclod_core::PositionClass;
+
+use crate::mesh::Mesh;
+use groups::Groups;
+use repair::FacesOf;
+
+/// No triangle.
+const NONE: u32 = u32::MAX;
+
+/// Directed edge `a → b` as a map key.
+#[inline]
+fn ek(a: u32, b: u32) -> u64 {
+    (a as u64) << 32 | b as u64
+}
+
+/// Counts of what welding repaired.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Repairs {
+    /// Input positions merged into an identical one.
+    pub welded_positions: u64,
+    /// Triangles dropped for a repeated position or zero area.
+    pub degenerate_triangles: u64,
+    /// Triangles dropped as duplicates.
+    pub duplicate_triangles: u64,
+    /// Edges cut because more than two triangles (or two in one direction) shared them.
+    pub non_manifold_edges: u64,
+    /// Positions split because their triangles formed several fans.
+    pub non_manifold_vertices: u64,
+    /// Corners without a normal that got a computed one.
+    pub computed_normals: u64,
+}
+
+impl Repairs {
+    /// `(name, count)` pairs, for reports.
+    pub fn entries(&self) -> [(&'static str, u64); 6] {
+        [
+            ("welded_positions", self.welded_positions),
+            ("degenerate_triangles", self.degenerate_triangles),
+            ("duplicate_triangles", self.duplicate_triangles),
+            ("non_manifold_edges", self.non_manifold_edges),
+            ("non_manifold_vertices", self.non_manifold_vertices),
+            ("computed_normals", self.computed_normals),
+        ]
+    }
+}
+
+/// Largest angle between a source's normal and the area-weighted normal at its position for
+/// which the normal still counts as following from the geometry. Heightfield normals (central
+/// differences) are within 10° of it at 99.98% of St. Helens' corners, within 2° at 88%.
+pub const GEOMETRIC_NORMAL_DEGREES: f64 = 10.0;
+
+/// The attributes of one vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attributes {
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Texture coordinates.
+    pub uv: [f32; 2],
+    /// Linear RGBA.
+    pub color: [f32; 4],
+    /// Whether the normal follows from the geometry at every corner that has it: computed
+    /// here (area-weighted at its position), or given by the source within
+    /// [`GEOMETRIC_NORMAL_DEGREES`] of that (heightfield importers compute their normals
+    /// from the grid, and a mesh cannot say which of its normals were authored). Such a
+    /// normal says nothing the positions do not, so simplification gives it no weight. Not
+    /// part of the attributes' identity.
+    pub normal_from_geometry: bool,
+}
+
+impl Attributes {
+    fn key(&self) -> [u32; 9] {
+        let n = self.normal.map(|x| (x + 0.0).to_bits());
+        let u = self.uv.map(|x| (x + 0.0).to_bits());
+        let c = self.color.map(|x| (x + 0.0).to_bits());
+        [n[0], n[1], n[2], u[0], u[1], c[0], c[1], c[2], c[3]]
+    }
+}
+
+/// One welded triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WeldedTri {
+    /// Position ids, counter-clockwise.
+    pub p: [u32; 3],
+    /// Per-corner attribute ids into [`Welded::attributes`].
+    pub a: [u32; 3],
+    /// Surface.
+    pub surface: u16,
+    /// Surface group (before colouring).
+    pub group: u32,
+}
+
+/// A manifold mesh with surface groups, classes and the vertex table's contents.
+#[derive(Clone, Debug, Default)]
+pub struct Welded {
+    /// Node positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Their classes.
+    pub classes: Vec<PositionClass>,
+    /// Distinct attribute sets.
+    pub attributes: Vec<Attributes>,
+    /// Triangles.
+    pub triangles: Vec<WeldedTri>,
+    /// Number of surface groups.
+    pub group_count: u32,
+    /// Surface-group id of each group (the colouring).
+    pub group_ids: Vec<u16>,
+    /// Number of surface-group ids.
+    pub group_id_count: u32,
+    /// Number of surfaces.
+    pub surface_count: u32,
+    /// Per position: `(group, attribute id)` of each group with a vertex there, by group.
+    pub vertices: Vec<Vec<(u32, u32)>>,
+    /// What was repaired.
+    pub repairs: Repairs,
+}
+
+/// Why welding failed.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum WeldError {
+    /// Nothing left after dropping degenerate and duplicate triangles.
+    #[error("no triangle left after dropping {degenerate} degenerate and {duplicate} duplicate triangles")]
+    Empty {
+        /// Degenerate triangles dropped.
+        degenerate: u64,
+        /// Duplicates dropped.
+        duplicate: u64,
+    },
+    /// More surface-group ids than the format's 16 bits.
+    #[error("{0} surface-group ids needed, at most 65535 supported")]
+    TooManyGroups(u32),
+    /// More surfaces than the format's 16 bits.
+    #[error("{0} surfaces, at most 65535 supported")]
+    TooManySurfaces(usize),
+}
+
+/// Welds, repairs and groups `mesh`.
+pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
+    if mesh.surfaces.len() > u16::MAX as usize {
+        return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
+    }
+    let mut repairs = Repairs::default();
+    let (mut positions, remap) = repair::weld_positions(mesh, &mut repairs);
+    let mut kept = repair::drop_degenerate_and_duplicates(mesh, &remap, &positions, &mut repairs)?;
+    repair::cut_non_manifold_edges(&mut kept, &mut positions, &mut repairs);
+    // Now every directed edge has one triangle and every edge at most two: the triangle
+    // across each edge, `NONE` on a border. Splitting vertices keeps these pairs (the two
+    // triangles on an edge through a vertex are always in the same fan).
+    let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
+    let opp = repair::opposites(&kept, &faces_of);
+    repair::split_non_manifold_vertices(&faces_of, &opp, &mut kept, &mut positions, &mut repairs);
+    let (attributes, tri_attrs) =
+        attributes::corner_attributes(mesh, &kept, &positions, &mut repairs);
+    let groups = groups::grow_groups(mesh, &kept, &tri_attrs, &opp, positions.len());
+    let classes = groups::classify(&kept, &opp, &groups.group, positions.len());
+    let vertices = groups::vertices_per_position(&groups.vertex_of, positions.len());
+    let (colour, colour_count) = groups::colour_groups(&vertices, &groups);
+    if colour_count > u16::MAX as u32 {
+        return Err(WeldError::TooManyGroups(colour_count));
+    }
+    let Groups { group, count, .. } = groups;
+    let triangles = kept
+        .iter()
+        .zip(&tri_attrs)
+        .enumerate()
+        .map(|(f, (&(p, i), &a))| WeldedTri {
+            p,
+            a,
+            surface: mesh.triangles[i].surface,
+            group: group[f],
+        })
+        .collect();
+    Ok(Welded {
+        positions,
+        classes,
+        attributes,
+        triangles,
+        group_count: count,
+        group_ids: colour.iter().map(|&c| c as u16).collect(),
+        group_id_count: colour_count,
+        surface_count: mesh.surfaces.len().max(1) as u32,
+        vertices,
+        repairs,
+    })
+}

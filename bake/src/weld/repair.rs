@@ -1,0 +1,260 @@
+//! Steps 1–4: welding identical positions, dropping degenerate and duplicate triangles,
+//! cutting non-manifold edges and splitting non-manifold vertices.
+
+use super::attributes::{cross, sub};
+use super::{ek, Repairs, WeldError, NONE};
+use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
+use crate::mesh::Mesh;
+
+/// A kept triangle: its positions and the source triangle (for its attributes).
+pub(super) type Kept = ([u32; 3], usize);
+
+/// Step 1: welds positions with identical coordinates; returns the welded positions and the
+/// welded position of every input position.
+pub(super) fn weld_positions(mesh: &Mesh, repairs: &mut Repairs) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut by_bits: FxHashMap<[u32; 3], u32> = map_with_capacity(mesh.positions.len());
+    let mut positions: Vec<[f32; 3]> = Vec::with_capacity(mesh.positions.len());
+    let remap: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let key = p.map(|x| (x + 0.0).to_bits());
+            *by_bits.entry(key).or_insert_with(|| {
+                positions.push(*p);
+                positions.len() as u32 - 1
+            })
+        })
+        .collect();
+    repairs.welded_positions = (mesh.positions.len() - positions.len()) as u64;
+    (positions, remap)
+}
+
+/// Step 2: drops degenerate triangles (a repeated or missing position, or zero area) and
+/// duplicates (the same three positions, either orientation); an error when none is left.
+pub(super) fn drop_degenerate_and_duplicates(
+    mesh: &Mesh,
+    remap: &[u32],
+    positions: &[[f32; 3]],
+    repairs: &mut Repairs,
+) -> Result<Vec<Kept>, WeldError> {
+    let mut kept: Vec<Kept> = Vec::with_capacity(mesh.triangles.len());
+    let mut seen = set_with_capacity::<[u32; 3]>(mesh.triangles.len());
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        let p = t
+            .position
+            .map(|x| remap.get(x as usize).copied().unwrap_or(u32::MAX));
+        if p.contains(&u32::MAX) || p[0] == p[1] || p[1] == p[2] || p[0] == p[2] {
+            repairs.degenerate_triangles += 1;
+            continue;
+        }
+        let [a, b, c] = p.map(|x| positions[x as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        if n == [0.0; 3] {
+            repairs.degenerate_triangles += 1;
+            continue;
+        }
+        let mut key = p;
+        key.sort_unstable();
+        if !seen.insert(key) {
+            repairs.duplicate_triangles += 1;
+            continue;
+        }
+        kept.push((p, i));
+    }
+    if kept.is_empty() {
+        return Err(WeldError::Empty {
+            degenerate: repairs.degenerate_triangles,
+            duplicate: repairs.duplicate_triangles,
+        });
+    }
+    Ok(kept)
+}
+
+/// Step 3: cuts the edges used by more than two triangles or twice in one direction: the later
+/// triangle gets its own copies of the edge's two positions. Afterwards every directed edge
+/// has one triangle and every edge at most two.
+pub(super) fn cut_non_manifold_edges(
+    kept: &mut [Kept],
+    positions: &mut Vec<[f32; 3]>,
+    repairs: &mut Repairs,
+) {
+    let mut directed: FxHashMap<u64, u32> = map_with_capacity(3 * kept.len());
+    for f in 0..kept.len() {
+        let p = kept[f].0;
+        let conflict: Vec<usize> = (0..3)
+            .filter(|&k| {
+                let (a, b) = (p[k], p[(k + 1) % 3]);
+                directed.contains_key(&ek(a, b))
+                    || (directed.contains_key(&ek(b, a)) && edge_faces(&directed, a, b) >= 2)
+            })
+            .collect();
+        let mut q = p;
+        if !conflict.is_empty() {
+            repairs.non_manifold_edges += conflict.len() as u64;
+            // Each of the triangle's positions on a cut edge gets one copy.
+            let mut fresh = [u32::MAX; 3];
+            for &k in &conflict {
+                for j in [k, (k + 1) % 3] {
+                    if fresh[j] == u32::MAX {
+                        positions.push(positions[p[j] as usize]);
+                        fresh[j] = positions.len() as u32 - 1;
+                    }
+                    q[j] = fresh[j];
+                }
+            }
+            kept[f].0 = q;
+        }
+        for k in 0..3 {
+            directed.insert(ek(q[k], q[(k + 1) % 3]), f as u32);
+        }
+    }
+}
+
+/// The triangle across each edge of every kept triangle, `NONE` on a border.
+pub(super) fn opposites(kept: &[Kept], faces_of: &FacesOf) -> Vec<[u32; 3]> {
+    kept.iter()
+        .map(|&(p, _)| [0, 1, 2].map(|k| faces_of.with_edge(p[(k + 1) % 3], p[k])))
+        .collect()
+}
+
+/// Step 4: splits every position whose triangles form several fans: one copy per extra fan.
+pub(super) fn split_non_manifold_vertices(
+    faces_of: &FacesOf,
+    opp: &[[u32; 3]],
+    kept: &mut [Kept],
+    positions: &mut Vec<[f32; 3]>,
+    repairs: &mut Repairs,
+) {
+    let mut fans = Fans::default();
+    for v in 0..faces_of.len() as u32 {
+        fans.find(v, faces_of.get(v), kept, opp);
+        for fan in 1..fans.count() {
+            repairs.non_manifold_vertices += 1;
+            let copy = positions.len() as u32;
+            positions.push(positions[v as usize]);
+            for &f in fans.fan(fan) {
+                let p = &mut kept[f as usize].0;
+                let k = p.iter().position(|&x| x == v).unwrap_or(0);
+                p[k] = copy;
+            }
+        }
+    }
+}
+
+/// Triangles on the undirected edge `a`–`b` so far.
+fn edge_faces(directed: &FxHashMap<u64, u32>, a: u32, b: u32) -> usize {
+    usize::from(directed.contains_key(&ek(a, b))) + usize::from(directed.contains_key(&ek(b, a)))
+}
+
+/// The triangles around every position, in triangle order, in one array.
+pub(super) struct FacesOf {
+    start: Vec<u32>,
+    faces: Vec<u32>,
+    /// For each entry of `faces`, the corner after the position in that triangle.
+    next: Vec<u32>,
+}
+
+impl FacesOf {
+    pub(super) fn new(
+        positions: usize,
+        tris: impl Iterator<Item = [u32; 3]> + Clone,
+        n: usize,
+    ) -> Self {
+        let mut start = vec![0u32; positions + 1];
+        for p in tris.clone() {
+            for v in p {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..positions {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut faces = vec![0u32; 3 * n];
+        let mut next = vec![0u32; 3 * n];
+        for (f, p) in tris.enumerate() {
+            for k in 0..3 {
+                let i = &mut fill[p[k] as usize];
+                faces[*i as usize] = f as u32;
+                next[*i as usize] = p[(k + 1) % 3];
+                *i += 1;
+            }
+        }
+        Self { start, faces, next }
+    }
+
+    /// The triangle with the directed edge `a → b`, or `NONE`.
+    pub(super) fn with_edge(&self, a: u32, b: u32) -> u32 {
+        let range = self.start[a as usize] as usize..self.start[a as usize + 1] as usize;
+        self.next[range.clone()]
+            .iter()
+            .position(|&x| x == b)
+            .map_or(NONE, |i| self.faces[range.start + i])
+    }
+
+    pub(super) fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    pub(super) fn get(&self, v: u32) -> &[u32] {
+        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// The fans of triangles around a position: triangles joined across edges through it.
+#[derive(Default)]
+struct Fans {
+    /// Triangles, fan after fan.
+    order: Vec<u32>,
+    /// Where each fan starts in `order`, and its end.
+    bounds: Vec<usize>,
+    /// Per triangle of the position (by index in its list): taken by a fan.
+    done: Vec<bool>,
+}
+
+impl Fans {
+    /// Finds the fans around `v`, each grown breadth-first from the first triangle (in
+    /// `faces` order) that no earlier fan took.
+    fn find(&mut self, v: u32, faces: &[u32], kept: &[([u32; 3], usize)], opp: &[[u32; 3]]) {
+        self.order.clear();
+        self.bounds.clear();
+        self.done.clear();
+        self.done.resize(faces.len(), false);
+        for start in 0..faces.len() {
+            if self.done[start] {
+                continue;
+            }
+            self.done[start] = true;
+            self.bounds.push(self.order.len());
+            self.order.push(faces[start]);
+            let mut i = *self.bounds.last().unwrap_or(&0);
+            while i < self.order.len() {
+                let p = kept[self.order[i] as usize].0;
+                let k = p.iter().position(|&x| x == v).unwrap_or(0);
+                let f = self.order[i] as usize;
+                for o in [opp[f][k], opp[f][(k + 2) % 3]] {
+                    if o != NONE {
+                        if let Some(j) = faces.iter().position(|&g| g == o) {
+                            if !self.done[j] {
+                                self.done[j] = true;
+                                self.order.push(o);
+                            }
+                        }
+                    }
+                }
+                i += 1;
+            }
+        }
+        self.bounds.push(self.order.len());
+    }
+
+    /// Number of fans found.
+    fn count(&self) -> usize {
+        self.bounds.len() - 1
+    }
+
+    /// The triangles of fan `i`.
+    fn fan(&self, i: usize) -> &[u32] {
+        &self.order[self.bounds[i]..self.bounds[i + 1]]
+    }
+}
