@@ -259,7 +259,7 @@ pub struct Sizings(Vec<(FlyoverOptions, Prepared)>);
 
 /// Flies every one of `options` (per-camera modes only) over `h` interleaved in segments of
 /// `segment` frames ([`fly::fly_interleaved`]), so that flights compared with each other are
-/// measured under the same load. Each is sized by a sizing flight first, as [`fly`] sizes it;
+/// measured under the same load. Each is sized by a sizing flight first, as [`fly()`] sizes it;
 /// options given more than once (flown again, with fresh states) share theirs.
 pub fn fly_interleaved(
     h: &Hierarchy<'_>,

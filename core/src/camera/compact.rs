@@ -209,7 +209,7 @@ impl CameraState<'_> {
     }
 
     /// Re-orders the active list by node id and the polygon pairs by split, for locality
-    /// (see the [module docs](self)). The front is unchanged; only the emission order of
+    /// (see the `camera::compact` module docs). The front is unchanged; only the emission order of
     /// polygons changes. Costs O(n_a log n_a + p_a log p_a); never called by
     /// [`refine`](Self::refine).
     pub fn compact(&mut self, h: &Hierarchy<'_>) {

@@ -8,7 +8,7 @@
 //! ```
 //!
 //! All integers are little-endian; the records are the `#[repr(C)]` types of
-//! [`records`](crate::records), so on a little-endian machine a section is a slice of records
+//! the records, so on a little-endian machine a section is a slice of records
 //! cast in place ([`Hierarchy::from_bytes`](crate::Hierarchy::from_bytes) never copies).
 //! Sections are found by tag; a reader skips tags it does not know, so later versions can add
 //! sections (g-mesh levels, out-of-core octrees, materials) without breaking older readers.
