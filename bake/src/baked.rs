@@ -67,197 +67,21 @@ pub enum BakeWriteError {
 }
 
 impl Baked {
-    /// Assembles the arrays.
+    /// Assembles the arrays: nodes and polygons renumbered into their file order, then each
+    /// array built from the collapses in that order.
     pub fn new(w: &Welded, h: &Collapses) -> Self {
-        let np = w.positions.len();
-        let nt = w.triangles.len();
-        let created = h.collapses.len();
-        let mut split_new = vec![NONE; created];
-        let mut by_new = Vec::with_capacity(created);
-        let mut stack: Vec<u32> = (np as u32..(np + created) as u32)
-            .filter(|&o| h.parent[o as usize] == NONE)
-            .collect();
-        stack.sort_unstable_by_key(|&o| std::cmp::Reverse(h.node_position[o as usize]));
-        while let Some(o) = stack.pop() {
-            let c = o as usize - np;
-            split_new[c] = by_new.len() as u32;
-            by_new.push(c);
-            for child in [h.collapses[c].u, h.collapses[c].t] {
-                if child as usize >= np {
-                    stack.push(child);
-                }
-            }
-        }
-        let new_id = |old: u32| -> u32 {
-            if (old as usize) < np {
-                (created + old as usize) as u32
-            } else {
-                split_new[old as usize - np]
-            }
-        };
-        let total = np + created;
-        let mut nodes = vec![
-            Node {
-                parent: NodeId::NONE,
-                position: PositionId(0)
-            };
-            total
-        ];
-        for old in 0..total as u32 {
-            let p = h.parent[old as usize];
-            nodes[new_id(old) as usize] = Node {
-                parent: if p == NONE {
-                    NodeId::NONE
-                } else {
-                    NodeId(new_id(p))
-                },
-                position: PositionId(h.node_position[old as usize]),
-            };
-        }
-        let mut poly_new = vec![NONE; nt];
-        let mut order: Vec<(u32, u8)> = Vec::with_capacity(nt);
-        for f in 0..nt {
-            if h.alive[f] {
-                poly_new[f] = order.len() as u32;
-                order.push((f as u32, 0));
-            }
-        }
-        let base_count = order.len();
-        let mut creator = vec![Creator::BASE; nt];
-        for &c in &by_new {
-            let col = h.collapses[c];
-            let s = NodeId(split_new[c]);
-            poly_new[col.fl as usize] = order.len() as u32;
-            order.push((col.fl, col.rot_l));
-            creator[col.fl as usize] = Creator::new(s, false);
-            if col.fr != NONE {
-                poly_new[col.fr as usize] = order.len() as u32;
-                order.push((col.fr, col.rot_r));
-                creator[col.fr as usize] = Creator::new(s, true);
-            }
-        }
-        let polygons_creator: Vec<Creator> =
-            order.iter().map(|&(f, _)| creator[f as usize]).collect();
-        let polygons = order
-            .iter()
-            .map(|&(f, rot)| {
-                let t = &w.triangles[f as usize];
-                let k = rot as usize;
-                Polygon {
-                    nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(new_id(p))),
-                    creator: creator[f as usize],
-                    surface: SurfaceId(t.surface),
-                    group: SurfaceGroupId(w.group_ids[t.group as usize]),
-                }
-            })
-            .collect();
-        let pid = |f: u32| {
-            if f == NONE {
-                PolyId::NONE
-            } else {
-                PolyId(poly_new[f as usize])
-            }
-        };
-        // Splits name their neighbours by key (`PolyKey`): base polygons by id, the others by
-        // creator and side.
-        let base_keys = base_count as u32;
-        let key = |p: PolyId| match p.get() {
-            None => PolyKey::NONE,
-            Some(p) => polygons_creator[p.index()].key(base_keys, p),
-        };
-        let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
-        let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];
-        for (c, col) in h.collapses.iter().enumerate() {
-            let old = np + c;
-            let (axis, angle) = h.cone[old];
-            let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
-                1.0
-            } else {
-                angle.sin() * angle.sin()
-            };
-            splits[split_new[c] as usize] = Split {
-                stationary: NodeId(new_id(col.t)),
-                floating: NodeId(new_id(col.u)),
-                f_l: pid(col.fl),
-                f_r: pid(col.fr),
-                neighbours: col.neighbours.map(|f| key(pid(f))),
-            };
-            bounds[split_new[c] as usize] = SplitBounds::new(
-                w.positions[h.node_position[old] as usize],
-                h.radius[old],
-                if sin2 >= 1.0 { [0.0; 3] } else { axis },
-                sin2,
-                h.error[old],
-                0.0,
-            );
-        }
-        let mut roots: Vec<NodeId> = (0..total as u32)
-            .filter(|&o| h.parent[o as usize] == NONE)
-            .map(|o| NodeId(new_id(o)))
-            .collect();
-        roots.sort_unstable();
-        // Base adjacency from the final corners.
-        let mut directed = std::collections::HashMap::with_capacity(3 * base_count);
-        for &(f, _) in &order[..base_count] {
-            let c = h.corners[f as usize];
-            for k in 0..3 {
-                directed.insert((c[k], c[(k + 1) % 3]), f);
-            }
-        }
-        let base = order[..base_count]
-            .iter()
-            .map(|&(f, _)| {
-                let c = h.corners[f as usize];
-                BaseFace {
-                    corners: c.map(|x| NodeId(new_id(x))),
-                    neighbours: [0, 1, 2].map(|k| {
-                        let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
-                        directed.get(&(b, a)).map_or(PolyId::NONE, |&g| pid(g))
-                    }),
-                }
-            })
-            .collect();
-        let mut vertex_table_offsets = vec![0u32];
-        let mut vertex_table = Vec::new();
-        let mut vertices = Vec::new();
-        for (p, vs) in w.vertices.iter().enumerate() {
-            let mut keys: Vec<(u16, u32)> = vs
-                .iter()
-                .map(|&(g, a)| (w.group_ids[g as usize], a))
-                .collect();
-            keys.sort_unstable();
-            for (group, a) in keys {
-                let attrs = &w.attributes[a as usize];
-                vertex_table.push(VertexKey {
-                    group: SurfaceGroupId(group),
-                    reserved: 0,
-                    vertex: vertices.len() as u32,
-                });
-                vertices.push(Vertex {
-                    position: w.positions[p],
-                    normal: attrs.normal,
-                    uv: attrs.uv,
-                });
-            }
-            vertex_table_offsets.push(vertex_table.len() as u32);
-        }
-        let positions = w
-            .positions
-            .iter()
-            .zip(&w.classes)
-            .map(|(&xyz, &c)| Position {
-                xyz,
-                class: c as u32,
-            })
-            .collect();
+        let ids = NodeIds::number(w.positions.len(), h);
+        let polys = PolygonOrder::number(w.triangles.len(), h, &ids);
+        let (splits, bounds) = split_records(w, h, &ids, &polys);
+        let (vertex_table_offsets, vertex_table, vertices) = vertex_table(w);
         Self {
-            positions,
-            nodes,
+            positions: positions(w),
+            nodes: ids.nodes(h),
             splits,
             bounds,
-            polygons,
-            roots,
-            base,
+            polygons: polys.polygons(w, &ids),
+            roots: ids.roots(h),
+            base: polys.base_faces(h, &ids),
             vertex_table_offsets,
             vertex_table,
             vertices,
@@ -305,6 +129,278 @@ impl Baked {
         write_atomically(path, &bytes)?;
         Ok(bytes.len() as u64)
     }
+}
+
+/// Node ids in file order: the collapses' nodes (splittable) in depth-first preorder from
+/// the roots in position order, stationary child first; then the leaves (the welded
+/// positions) in position order.
+struct NodeIds {
+    /// Welded positions, the leaves.
+    np: usize,
+    /// The new id of each collapse's node.
+    split_new: Vec<u32>,
+    /// Collapses in new-id (split) order.
+    by_new: Vec<usize>,
+}
+
+impl NodeIds {
+    fn number(np: usize, h: &Collapses) -> Self {
+        let created = h.collapses.len();
+        let mut split_new = vec![NONE; created];
+        let mut by_new = Vec::with_capacity(created);
+        let mut stack: Vec<u32> = (np as u32..(np + created) as u32)
+            .filter(|&o| h.parent[o as usize] == NONE)
+            .collect();
+        stack.sort_unstable_by_key(|&o| std::cmp::Reverse(h.node_position[o as usize]));
+        while let Some(o) = stack.pop() {
+            let c = o as usize - np;
+            split_new[c] = by_new.len() as u32;
+            by_new.push(c);
+            for child in [h.collapses[c].u, h.collapses[c].t] {
+                if child as usize >= np {
+                    stack.push(child);
+                }
+            }
+        }
+        NodeIds {
+            np,
+            split_new,
+            by_new,
+        }
+    }
+
+    /// The new id of old node `old` (positions first, then collapses).
+    fn of(&self, old: u32) -> u32 {
+        if (old as usize) < self.np {
+            (self.split_new.len() + old as usize) as u32
+        } else {
+            self.split_new[old as usize - self.np]
+        }
+    }
+
+    fn total(&self) -> usize {
+        self.np + self.split_new.len()
+    }
+
+    /// Every node with its parent and position, at its new id.
+    fn nodes(&self, h: &Collapses) -> Vec<Node> {
+        let mut nodes = vec![
+            Node {
+                parent: NodeId::NONE,
+                position: PositionId(0)
+            };
+            self.total()
+        ];
+        for old in 0..self.total() as u32 {
+            let p = h.parent[old as usize];
+            nodes[self.of(old) as usize] = Node {
+                parent: if p == NONE {
+                    NodeId::NONE
+                } else {
+                    NodeId(self.of(p))
+                },
+                position: PositionId(h.node_position[old as usize]),
+            };
+        }
+        nodes
+    }
+
+    /// The parentless nodes, ascending.
+    fn roots(&self, h: &Collapses) -> Vec<NodeId> {
+        let mut roots: Vec<NodeId> = (0..self.total() as u32)
+            .filter(|&o| h.parent[o as usize] == NONE)
+            .map(|o| NodeId(self.of(o)))
+            .collect();
+        roots.sort_unstable();
+        roots
+    }
+}
+
+/// Polygon ids in file order: the base (surviving) triangles in triangle order, then each
+/// split's `f_l` and `f_r` in split order, each with the corner rotation it is stored with.
+struct PolygonOrder {
+    /// The new id of each welded triangle.
+    poly_new: Vec<u32>,
+    /// Triangle and rotation of each new id.
+    order: Vec<(u32, u8)>,
+    base_count: usize,
+    /// The split that creates each triangle (`BASE` for base triangles).
+    creator: Vec<Creator>,
+}
+
+impl PolygonOrder {
+    fn number(nt: usize, h: &Collapses, ids: &NodeIds) -> Self {
+        let mut poly_new = vec![NONE; nt];
+        let mut order: Vec<(u32, u8)> = Vec::with_capacity(nt);
+        for f in 0..nt {
+            if h.alive[f] {
+                poly_new[f] = order.len() as u32;
+                order.push((f as u32, 0));
+            }
+        }
+        let base_count = order.len();
+        let mut creator = vec![Creator::BASE; nt];
+        for &c in &ids.by_new {
+            let col = h.collapses[c];
+            let s = NodeId(ids.split_new[c]);
+            poly_new[col.fl as usize] = order.len() as u32;
+            order.push((col.fl, col.rot_l));
+            creator[col.fl as usize] = Creator::new(s, false);
+            if col.fr != NONE {
+                poly_new[col.fr as usize] = order.len() as u32;
+                order.push((col.fr, col.rot_r));
+                creator[col.fr as usize] = Creator::new(s, true);
+            }
+        }
+        PolygonOrder {
+            poly_new,
+            order,
+            base_count,
+            creator,
+        }
+    }
+
+    /// The new id of welded triangle `f` (`NONE`: none).
+    fn pid(&self, f: u32) -> PolyId {
+        if f == NONE {
+            PolyId::NONE
+        } else {
+            PolyId(self.poly_new[f as usize])
+        }
+    }
+
+    /// The polygons in file order, corners rotated as stored.
+    fn polygons(&self, w: &Welded, ids: &NodeIds) -> Vec<Polygon> {
+        self.order
+            .iter()
+            .map(|&(f, rot)| {
+                let t = &w.triangles[f as usize];
+                let k = rot as usize;
+                Polygon {
+                    nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(ids.of(p))),
+                    creator: self.creator[f as usize],
+                    surface: SurfaceId(t.surface),
+                    group: SurfaceGroupId(w.group_ids[t.group as usize]),
+                }
+            })
+            .collect()
+    }
+
+    /// The base mesh with its adjacency, from the final corners.
+    fn base_faces(&self, h: &Collapses, ids: &NodeIds) -> Vec<BaseFace> {
+        let base = &self.order[..self.base_count];
+        let mut directed = std::collections::HashMap::with_capacity(3 * self.base_count);
+        for &(f, _) in base {
+            let c = h.corners[f as usize];
+            for k in 0..3 {
+                directed.insert((c[k], c[(k + 1) % 3]), f);
+            }
+        }
+        base.iter()
+            .map(|&(f, _)| {
+                let c = h.corners[f as usize];
+                BaseFace {
+                    corners: c.map(|x| NodeId(ids.of(x))),
+                    neighbours: [0, 1, 2].map(|k| {
+                        let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
+                        directed.get(&(b, a)).map_or(PolyId::NONE, |&g| self.pid(g))
+                    }),
+                }
+            })
+            .collect()
+    }
+}
+
+/// The split record and refinement bounds of every collapse, at its split id. Splits name
+/// their neighbours by key (`PolyKey`): base polygons by id, the others by creator and side.
+fn split_records(
+    w: &Welded,
+    h: &Collapses,
+    ids: &NodeIds,
+    polys: &PolygonOrder,
+) -> (Vec<Split>, Vec<SplitBounds>) {
+    let created = h.collapses.len();
+    let np = ids.np;
+    let polygons_creator: Vec<Creator> = polys
+        .order
+        .iter()
+        .map(|&(f, _)| polys.creator[f as usize])
+        .collect();
+    let base_keys = polys.base_count as u32;
+    let key = |p: PolyId| match p.get() {
+        None => PolyKey::NONE,
+        Some(p) => polygons_creator[p.index()].key(base_keys, p),
+    };
+    let mut splits = vec![bytemuck::Zeroable::zeroed(); created];
+    let mut bounds = vec![bytemuck::Zeroable::zeroed(); created];
+    for (c, col) in h.collapses.iter().enumerate() {
+        let old = np + c;
+        let (axis, angle) = h.cone[old];
+        let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
+            1.0
+        } else {
+            angle.sin() * angle.sin()
+        };
+        let at = ids.split_new[c] as usize;
+        splits[at] = Split {
+            stationary: NodeId(ids.of(col.t)),
+            floating: NodeId(ids.of(col.u)),
+            f_l: polys.pid(col.fl),
+            f_r: polys.pid(col.fr),
+            neighbours: col.neighbours.map(|f| key(polys.pid(f))),
+        };
+        bounds[at] = SplitBounds::new(
+            w.positions[h.node_position[old] as usize],
+            h.radius[old],
+            if sin2 >= 1.0 { [0.0; 3] } else { axis },
+            sin2,
+            h.error[old],
+            0.0,
+        );
+    }
+    (splits, bounds)
+}
+
+/// The vertex table: per position, its vertices sorted by surface-group id, each a key into
+/// the vertex buffer.
+fn vertex_table(w: &Welded) -> (Vec<u32>, Vec<VertexKey>, Vec<Vertex>) {
+    let mut vertex_table_offsets = vec![0u32];
+    let mut vertex_table = Vec::new();
+    let mut vertices = Vec::new();
+    for (p, vs) in w.vertices.iter().enumerate() {
+        let mut keys: Vec<(u16, u32)> = vs
+            .iter()
+            .map(|&(g, a)| (w.group_ids[g as usize], a))
+            .collect();
+        keys.sort_unstable();
+        for (group, a) in keys {
+            let attrs = &w.attributes[a as usize];
+            vertex_table.push(VertexKey {
+                group: SurfaceGroupId(group),
+                reserved: 0,
+                vertex: vertices.len() as u32,
+            });
+            vertices.push(Vertex {
+                position: w.positions[p],
+                normal: attrs.normal,
+                uv: attrs.uv,
+            });
+        }
+        vertex_table_offsets.push(vertex_table.len() as u32);
+    }
+    (vertex_table_offsets, vertex_table, vertices)
+}
+
+/// Welded positions with their classes.
+fn positions(w: &Welded) -> Vec<Position> {
+    w.positions
+        .iter()
+        .zip(&w.classes)
+        .map(|(&xyz, &c)| Position {
+            xyz,
+            class: c as u32,
+        })
+        .collect()
 }
 
 /// Writes `bytes` to `path` via a temporary sibling and a rename; the temporary file is

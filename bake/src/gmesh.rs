@@ -180,32 +180,17 @@ fn volume(h: &Hierarchy<'_>, polys: &[FrontPoly], axis: usize, base: f32) -> f64
 }
 
 /// Builds the g-mesh levels of a baked hierarchy.
+///
+/// The passes: the front at full detail, then level after level: the front's polygons
+/// written with where each vertex moves, a batch of the cheapest legal collapses applied,
+/// until no collapse is legal or the level budget is spent; then the volume boundaries and
+/// the validation a reader applies.
 pub fn build(h: &Hierarchy<'_>, options: &GMeshOptions) -> Result<GMeshData, GMeshBuildError> {
-    let front_err = |e: caveclod_core::OpError| GMeshBuildError::Front(e.to_string());
     let mut memory = vec![0u32; CameraState::words_needed(h)];
     let mut cam =
         CameraState::new(h, &mut memory).map_err(|e| GMeshBuildError::Front(e.to_string()))?;
-    // Full detail: nodes are numbered parents first, so one pass splits everything.
-    for i in 0..h.splits().len() {
-        let v = NodeId(i as u32);
-        if !cam.is_split(v) {
-            cam.force_split_own_stack(h, v).map_err(front_err)?;
-        }
-    }
-
-    // The volume axis: least extent (up for a terrain; any axis for a closed mesh).
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in h.positions() {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p.xyz[k]);
-            hi[k] = hi[k].max(p.xyz[k]);
-        }
-    }
-    let axis = (0..3)
-        .min_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
-        .unwrap_or(2);
-
+    split_everything(h, &mut cam)?;
+    let (axis, base) = volume_axis(h);
     let mut out = GMeshData::default();
     let surfaces = h.surface_count();
     out.vertex_offsets.push(0);
@@ -216,7 +201,7 @@ pub fn build(h: &Hierarchy<'_>, options: &GMeshOptions) -> Result<GMeshData, GMe
         let polys = front_polygons(h, &cam);
         let level = out.level_polygons.len();
         if level == 0 {
-            v0 = volume(h, &polys, axis, lo[axis]);
+            v0 = volume(h, &polys, axis, base);
         }
         let min_polygons = if options.min_polygons == 0 {
             (polys.len() as u32 / 64).max(1)
@@ -224,96 +209,18 @@ pub fn build(h: &Hierarchy<'_>, options: &GMeshOptions) -> Result<GMeshData, GMe
             options.min_polygons
         };
         let last_allowed = level + 1 >= options.max_levels.max(2) as usize;
-
-        // The batch: queued nodes at its start, cheapest first, each collapsed if legal.
-        let mut batch: Vec<NodeId> = Vec::new();
-        if !(polys.len() as u32 <= min_polygons || last_allowed) {
-            let mut queue: Vec<(f32, NodeId)> = cam
-                .active_nodes()
-                .filter_map(|n| h.node(n).map(|node| node.parent))
-                .filter(|&p| p != NodeId::NONE)
-                .filter(|&p| {
-                    h.split(p).is_some_and(|s| {
-                        !cam.is_split(s.stationary)
-                            && !cam.is_split(s.floating)
-                            && cam.is_node_active(h, s.stationary)
-                            && cam.is_node_active(h, s.floating)
-                    })
-                })
-                .filter_map(|p| h.split_bounds(p).map(|b| (b.uni_error, p)))
-                .collect();
-            queue.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1 .0.cmp(&b.1 .0)));
-            queue.dedup_by_key(|e| e.1);
-            // Sweeps until nothing more is legal: a collapse can make a neighbour's legal
-            // (its faces get back the neighbours its split recorded).
-            loop {
-                let before = batch.len();
-                queue.retain(|&(_, p)| {
-                    if cam.can_collapse(h, p) && cam.collapse(h, p).is_ok() {
-                        batch.push(p);
-                        false
-                    } else {
-                        true
-                    }
-                });
-                if batch.len() == before {
-                    break;
-                }
-            }
-        }
+        let batch = if polys.len() as u32 <= min_polygons || last_allowed {
+            Vec::new()
+        } else {
+            collapse_batch(h, &mut cam)
+        };
         // Where each node of this level goes: its parent if the batch collapsed it.
-        for &p in &batch {
-            if let Some(s) = h.split(p) {
-                moved[s.stationary.index()] = p;
-                moved[s.floating.index()] = p;
-            }
-        }
-        let target = |n: NodeId| match moved.get(n.index()) {
-            Some(&m) if m != NodeId::NONE => m,
-            _ => n,
-        };
-
-        // The level: local vertices keyed by their vertex-buffer index, indices by surface.
-        let mut local: FxHashMap<u32, u32> = FxHashMap::default();
-        let mut by_surface: Vec<Vec<u32>> = vec![Vec::new(); surfaces];
-        let vertex_of = |n: NodeId, group: u16| -> Result<u32, GMeshBuildError> {
-            let pos = h.node(n).map(|node| node.position);
-            pos.and_then(|pos| h.vertex_index(caveclod_core::SurfaceGroupId(group), pos))
-                .ok_or(GMeshBuildError::MissingVertex { node: n.0, group })
-        };
-        for p in &polys {
-            for &n in &p.corners {
-                let from = vertex_of(n, p.group)?;
-                let next = local.len() as u32;
-                let idx = match local.get(&from) {
-                    Some(&i) => i,
-                    None => {
-                        let to = vertex_of(target(n), p.group)?;
-                        local.insert(from, next);
-                        out.vertices.push([from, to]);
-                        next
-                    }
-                };
-                if let Some(list) = by_surface.get_mut(usize::from(p.surface)) {
-                    list.push(idx);
-                }
-            }
-        }
-        for list in &by_surface {
-            out.indices.extend_from_slice(list);
-            out.index_offsets.push(out.indices.len() as u32);
-        }
-        out.vertex_offsets.push(out.vertices.len() as u32);
-        out.level_polygons.push(polys.len() as u32);
-        let v = volume(h, &polys, axis, lo[axis]);
+        mark_moved(h, &batch, &mut moved, true);
+        write_level(h, &polys, &moved, &mut out)?;
+        let v = volume(h, &polys, axis, base);
         out.volumes
             .push(if v0 != 0.0 { (v / v0) as f32 } else { 1.0 });
-        for &p in &batch {
-            if let Some(s) = h.split(p) {
-                moved[s.stationary.index()] = NodeId::NONE;
-                moved[s.floating.index()] = NodeId::NONE;
-            }
-        }
+        mark_moved(h, &batch, &mut moved, false);
         if batch.is_empty() {
             break;
         }
@@ -328,4 +235,129 @@ pub fn build(h: &Hierarchy<'_>, options: &GMeshOptions) -> Result<GMeshData, GMe
     GMesh::new(out.parts(), h.vertices().len(), surfaces)
         .map_err(|e| GMeshBuildError::Front(e.to_string()))?;
     Ok(out)
+}
+
+/// Full detail: nodes are numbered parents first, so one pass splits everything.
+fn split_everything(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> Result<(), GMeshBuildError> {
+    for i in 0..h.splits().len() {
+        let v = NodeId(i as u32);
+        if !cam.is_split(v) {
+            cam.force_split_own_stack(h, v)
+                .map_err(|e| GMeshBuildError::Front(e.to_string()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The volume axis: least extent (up for a terrain; any axis for a closed mesh), and the
+/// lowest coordinate along it.
+fn volume_axis(h: &Hierarchy<'_>) -> (usize, f32) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in h.positions() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p.xyz[k]);
+            hi[k] = hi[k].max(p.xyz[k]);
+        }
+    }
+    let axis = (0..3)
+        .min_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+        .unwrap_or(2);
+    (axis, lo[axis])
+}
+
+/// The batch: the splits whose children are both active leaves of the front, cheapest
+/// first, each collapsed if legal; the collapsed ones.
+fn collapse_batch(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> Vec<NodeId> {
+    let mut queue: Vec<(f32, NodeId)> = cam
+        .active_nodes()
+        .filter_map(|n| h.node(n).map(|node| node.parent))
+        .filter(|&p| p != NodeId::NONE)
+        .filter(|&p| {
+            h.split(p).is_some_and(|s| {
+                !cam.is_split(s.stationary)
+                    && !cam.is_split(s.floating)
+                    && cam.is_node_active(h, s.stationary)
+                    && cam.is_node_active(h, s.floating)
+            })
+        })
+        .filter_map(|p| h.split_bounds(p).map(|b| (b.uni_error, p)))
+        .collect();
+    queue.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1 .0.cmp(&b.1 .0)));
+    queue.dedup_by_key(|e| e.1);
+    // Sweeps until nothing more is legal: a collapse can make a neighbour's legal (its faces
+    // get back the neighbours its split recorded).
+    let mut batch: Vec<NodeId> = Vec::new();
+    loop {
+        let before = batch.len();
+        queue.retain(|&(_, p)| {
+            if cam.can_collapse(h, p) && cam.collapse(h, p).is_ok() {
+                batch.push(p);
+                false
+            } else {
+                true
+            }
+        });
+        if batch.len() == before {
+            break;
+        }
+    }
+    batch
+}
+
+/// Records (or, with `set` false, clears) the batch's children as moving to their parent.
+fn mark_moved(h: &Hierarchy<'_>, batch: &[NodeId], moved: &mut [NodeId], set: bool) {
+    for &p in batch {
+        if let Some(s) = h.split(p) {
+            let to = if set { p } else { NodeId::NONE };
+            moved[s.stationary.index()] = to;
+            moved[s.floating.index()] = to;
+        }
+    }
+}
+
+/// One level: local vertices keyed by their vertex-buffer index (each with the vertex it
+/// moves to), indices by surface.
+fn write_level(
+    h: &Hierarchy<'_>,
+    polys: &[FrontPoly],
+    moved: &[NodeId],
+    out: &mut GMeshData,
+) -> Result<(), GMeshBuildError> {
+    let target = |n: NodeId| match moved.get(n.index()) {
+        Some(&m) if m != NodeId::NONE => m,
+        _ => n,
+    };
+    let mut local: FxHashMap<u32, u32> = FxHashMap::default();
+    let mut by_surface: Vec<Vec<u32>> = vec![Vec::new(); h.surface_count()];
+    let vertex_of = |n: NodeId, group: u16| -> Result<u32, GMeshBuildError> {
+        let pos = h.node(n).map(|node| node.position);
+        pos.and_then(|pos| h.vertex_index(caveclod_core::SurfaceGroupId(group), pos))
+            .ok_or(GMeshBuildError::MissingVertex { node: n.0, group })
+    };
+    for p in polys {
+        for &n in &p.corners {
+            let from = vertex_of(n, p.group)?;
+            let next = local.len() as u32;
+            let idx = match local.get(&from) {
+                Some(&i) => i,
+                None => {
+                    let to = vertex_of(target(n), p.group)?;
+                    local.insert(from, next);
+                    out.vertices.push([from, to]);
+                    next
+                }
+            };
+            if let Some(list) = by_surface.get_mut(usize::from(p.surface)) {
+                list.push(idx);
+            }
+        }
+    }
+    for list in &by_surface {
+        out.indices.extend_from_slice(list);
+        out.index_offsets.push(out.indices.len() as u32);
+    }
+    out.vertex_offsets.push(out.vertices.len() as u32);
+    out.level_polygons.push(polys.len() as u32);
+    Ok(())
 }

@@ -81,116 +81,194 @@ fn parse_real(text: &str) -> Option<f64> {
     text.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// The type A record (units, resolution, profile count), then each profile's records in turn.
 fn parse_dem(source: &Source, bytes: &[u8]) -> Result<Dem, ImportError> {
     let data = blocks(source, bytes)?;
-    let a = &data[..BLOCK];
-    let real = |first, last, name: &str| {
-        parse_real(field(a, first, last)).ok_or_else(|| {
-            source.malformed(
-                format!("type A record, bytes {first}-{last} ({name})"),
-                format!("expected a number, found '{}'", field(a, first, last)),
-            )
-        })
-    };
-    let int = |first, last, name: &str| {
-        field(a, first, last).parse::<i64>().map_err(|_| {
-            source.malformed(
-                format!("type A record, bytes {first}-{last} ({name})"),
-                format!("expected an integer, found '{}'", field(a, first, last)),
-            )
-        })
-    };
-    let ground_units = int(529, 534, "ground units")?;
-    let elevation_units = int(535, 540, "elevation units")?;
-    let res_x = real(817, 828, "x resolution")?;
-    let res_y = real(829, 840, "y resolution")?;
-    let res_z = real(841, 852, "z resolution")?;
-    let columns = int(859, 864, "number of profiles")?;
-    if !(0..=3).contains(&ground_units) {
-        return Err(source.malformed(
-            "type A record, bytes 529-534 (ground units)",
-            format!("unknown code {ground_units} (0 to 3)"),
-        ));
-    }
-    let elevation_scale = match elevation_units {
-        1 => FEET,
-        2 => 1.0,
-        other => {
-            return Err(source.malformed(
-                "type A record, bytes 535-540 (elevation units)",
-                format!("unknown code {other} (1 feet, 2 metres)"),
-            ))
-        }
-    };
-    if !(res_x > 0.0 && res_y > 0.0 && res_z > 0.0) {
-        return Err(source.malformed(
-            "type A record, bytes 817-852 (resolution)",
-            format!("x, y and z resolution must be positive, not {res_x}, {res_y}, {res_z}"),
-        ));
-    }
-    let available_blocks = data.len() / BLOCK - 1;
-    let columns = usize::try_from(columns)
-        .ok()
-        .filter(|&c| c >= 1 && c <= available_blocks)
-        .ok_or_else(|| {
-            source.malformed(
-                "type A record, bytes 859-864 (number of profiles)",
-                format!("{columns} profiles, but the file has {available_blocks} records after the header"),
-            )
-        })?;
-
-    let mut profiles = Vec::with_capacity(columns);
+    let header = HeaderA::parse(source, &data)?;
+    let mut profiles = Vec::with_capacity(header.columns);
     let mut voids = 0;
     let mut block = 1;
-    for p in 0..columns {
-        let at = || format!("profile {} (record at byte {})", p + 1, block * BLOCK);
-        let first = data
-            .get(block * BLOCK..(block + 1) * BLOCK)
-            .ok_or_else(|| source.truncated(format!("{} is missing", at())))?;
-        let b_int = |f, l, name: &str| {
-            field(first, f, l).parse::<i64>().map_err(|_| {
+    for p in 0..header.columns {
+        let (profile, blocks_needed) = read_profile(source, &data, &header, p, block, &mut voids)?;
+        profiles.push(profile);
+        block += blocks_needed;
+    }
+    Ok(Dem {
+        ground_units: header.ground_units,
+        resolution: [header.res_x, header.res_y],
+        profiles,
+        voids,
+    })
+}
+
+/// What the type A record says that reading the profiles needs.
+struct HeaderA {
+    ground_units: i64,
+    /// Metres per elevation unit.
+    elevation_scale: f64,
+    res_x: f64,
+    res_y: f64,
+    /// Elevation units per raw post value.
+    res_z: f64,
+    /// Profiles, at least one and no more than the records after the header.
+    columns: usize,
+}
+
+impl HeaderA {
+    fn parse(source: &Source, data: &[u8]) -> Result<Self, ImportError> {
+        let a = &data[..BLOCK];
+        let real = |first, last, name: &str| {
+            parse_real(field(a, first, last)).ok_or_else(|| {
                 source.malformed(
-                    at(),
-                    format!(
-                        "bytes {f}-{l} ({name}): expected an integer, found '{}'",
-                        field(first, f, l)
-                    ),
+                    format!("type A record, bytes {first}-{last} ({name})"),
+                    format!("expected a number, found '{}'", field(a, first, last)),
                 )
             })
         };
-        let b_real = |f, l, name: &str| {
-            parse_real(field(first, f, l)).ok_or_else(|| {
+        let int = |first, last, name: &str| {
+            field(a, first, last).parse::<i64>().map_err(|_| {
                 source.malformed(
-                    at(),
-                    format!(
-                        "bytes {f}-{l} ({name}): expected a number, found '{}'",
-                        field(first, f, l)
-                    ),
+                    format!("type A record, bytes {first}-{last} ({name})"),
+                    format!("expected an integer, found '{}'", field(a, first, last)),
                 )
             })
         };
-        let m = b_int(13, 18, "number of posts")?;
-        let n = b_int(19, 24, "number of columns")?;
-        if n != 1 {
-            return Err(source.malformed(at(), format!("{n} columns in a profile (1 expected)")));
+        let ground_units = int(529, 534, "ground units")?;
+        let elevation_units = int(535, 540, "elevation units")?;
+        let res_x = real(817, 828, "x resolution")?;
+        let res_y = real(829, 840, "y resolution")?;
+        let res_z = real(841, 852, "z resolution")?;
+        let columns = int(859, 864, "number of profiles")?;
+        if !(0..=3).contains(&ground_units) {
+            return Err(source.malformed(
+                "type A record, bytes 529-534 (ground units)",
+                format!("unknown code {ground_units} (0 to 3)"),
+            ));
         }
-        let x = b_real(25, 48, "x")?;
-        let y = b_real(49, 72, "y")?;
-        let datum = b_real(73, 96, "datum elevation")?;
-        let m = usize::try_from(m).map_err(|_| source.malformed(at(), format!("{m} posts")))?;
-        let blocks_needed = if m <= 146 {
-            1
-        } else {
-            1 + (m - 146).div_ceil(170)
+        let elevation_scale = match elevation_units {
+            1 => FEET,
+            2 => 1.0,
+            other => {
+                return Err(source.malformed(
+                    "type A record, bytes 535-540 (elevation units)",
+                    format!("unknown code {other} (1 feet, 2 metres)"),
+                ))
+            }
         };
-        if block + blocks_needed > data.len() / BLOCK {
-            return Err(source.truncated(format!(
-                "{} has {m} posts in {blocks_needed} records; the file ends before",
-                at()
-            )));
+        if !(res_x > 0.0 && res_y > 0.0 && res_z > 0.0) {
+            return Err(source.malformed(
+                "type A record, bytes 817-852 (resolution)",
+                format!("x, y and z resolution must be positive, not {res_x}, {res_y}, {res_z}"),
+            ));
         }
-        let mut elevations = Vec::with_capacity(m);
-        for k in 0..m {
+        let available_blocks = data.len() / BLOCK - 1;
+        let columns = usize::try_from(columns)
+            .ok()
+            .filter(|&c| c >= 1 && c <= available_blocks)
+            .ok_or_else(|| {
+                source.malformed(
+                    "type A record, bytes 859-864 (number of profiles)",
+                    format!("{columns} profiles, but the file has {available_blocks} records after the header"),
+                )
+            })?;
+        Ok(HeaderA {
+            ground_units,
+            elevation_scale,
+            res_x,
+            res_y,
+            res_z,
+            columns,
+        })
+    }
+}
+
+/// Profile `p` (0-based), whose type B record starts at `block`: its posts (voids counted)
+/// and how many records it takes.
+fn read_profile(
+    source: &Source,
+    data: &[u8],
+    header: &HeaderA,
+    p: usize,
+    block: usize,
+    voids: &mut usize,
+) -> Result<(Profile, usize), ImportError> {
+    let at = || format!("profile {} (record at byte {})", p + 1, block * BLOCK);
+    let first = data
+        .get(block * BLOCK..(block + 1) * BLOCK)
+        .ok_or_else(|| source.truncated(format!("{} is missing", at())))?;
+    let b_int = |f, l, name: &str| {
+        field(first, f, l).parse::<i64>().map_err(|_| {
+            source.malformed(
+                at(),
+                format!(
+                    "bytes {f}-{l} ({name}): expected an integer, found '{}'",
+                    field(first, f, l)
+                ),
+            )
+        })
+    };
+    let b_real = |f, l, name: &str| {
+        parse_real(field(first, f, l)).ok_or_else(|| {
+            source.malformed(
+                at(),
+                format!(
+                    "bytes {f}-{l} ({name}): expected a number, found '{}'",
+                    field(first, f, l)
+                ),
+            )
+        })
+    };
+    let m = b_int(13, 18, "number of posts")?;
+    let n = b_int(19, 24, "number of columns")?;
+    if n != 1 {
+        return Err(source.malformed(at(), format!("{n} columns in a profile (1 expected)")));
+    }
+    let x = b_real(25, 48, "x")?;
+    let y = b_real(49, 72, "y")?;
+    let datum = b_real(73, 96, "datum elevation")?;
+    let m = usize::try_from(m).map_err(|_| source.malformed(at(), format!("{m} posts")))?;
+    let blocks_needed = if m <= 146 {
+        1
+    } else {
+        1 + (m - 146).div_ceil(170)
+    };
+    if block + blocks_needed > data.len() / BLOCK {
+        return Err(source.truncated(format!(
+            "{} has {m} posts in {blocks_needed} records; the file ends before",
+            at()
+        )));
+    }
+    let posts = Posts {
+        data,
+        block,
+        count: m,
+        datum,
+    };
+    let elevations = posts.read(source, header, &at, voids)?;
+    Ok((Profile { x, y, elevations }, blocks_needed))
+}
+
+/// A profile's posts: 146 in its first record (from byte 145), 170 in each following one.
+struct Posts<'a> {
+    data: &'a [u8],
+    block: usize,
+    count: usize,
+    /// Elevation of the datum the posts are relative to, in elevation units.
+    datum: f64,
+}
+
+impl Posts<'_> {
+    /// Elevations in metres, NaN for voids (counted in `voids`).
+    fn read(
+        &self,
+        source: &Source,
+        header: &HeaderA,
+        at: &dyn Fn() -> String,
+        voids: &mut usize,
+    ) -> Result<Vec<f32>, ImportError> {
+        let (data, block) = (self.data, self.block);
+        let mut elevations = Vec::with_capacity(self.count);
+        for k in 0..self.count {
             let (b, slot) = if k < 146 {
                 (block, 144 + 6 * k)
             } else {
@@ -210,22 +288,15 @@ fn parse_dem(source: &Source, bytes: &[u8]) -> Result<Dem, ImportError> {
                 )
             })?;
             if raw <= VOID {
-                voids += 1;
+                *voids += 1;
                 elevations.push(f32::NAN);
             } else {
-                let metres = (datum + raw as f64 * res_z) * elevation_scale;
+                let metres = (self.datum + raw as f64 * header.res_z) * header.elevation_scale;
                 elevations.push(metres as f32);
             }
         }
-        profiles.push(Profile { x, y, elevations });
-        block += blocks_needed;
+        Ok(elevations)
     }
-    Ok(Dem {
-        ground_units,
-        resolution: [res_x, res_y],
-        profiles,
-        voids,
-    })
 }
 
 /// The records as contiguous 1024-byte blocks: the file itself, or the file without the line

@@ -69,12 +69,46 @@ impl Heightfield {
 
 /// Builds the mesh of `grid` with one surface named `surface_name`; notes missing posts in
 /// `report`.
+///
+/// The passes: the grid checked and described in the report, the surface, the posts some
+/// complete cell uses as vertices, then two triangles per complete cell.
 pub(crate) fn heightfield_to_mesh(
     source: &Source,
     grid: &Heightfield,
     surface_name: &str,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
+    let posts = check_grid(source, grid)?;
+    let missing = grid.heights.iter().filter(|h| h.is_nan()).count();
+    report.heightfield = Some(describe(grid, posts - missing));
+    let mut mesh = Mesh::default();
+    let surface = push_surface(
+        source,
+        &mut mesh,
+        Surface {
+            name: surface_name.to_owned(),
+            base_color: [1.0; 4],
+            texture: None,
+        },
+    )?;
+    if grid.width < 2 || grid.depth < 2 {
+        return Ok(mesh);
+    }
+    let index = push_posts(source, grid, &used_posts(grid), &mut mesh)?;
+    let skipped_cells = push_cells(grid, &index, surface, &mut mesh);
+    if missing > 0 {
+        report.notes.push(format!(
+            "{}: {missing} of {posts} grid posts are missing; the {skipped_cells} cells that \
+             touch them are left out (holes and borders)",
+            source.name
+        ));
+    }
+    Ok(mesh)
+}
+
+/// The post count, which must match the heights; no height infinite (NaN marks a missing
+/// post).
+fn check_grid(source: &Source, grid: &Heightfield) -> Result<usize, ImportError> {
     let posts = grid
         .width
         .checked_mul(grid.depth)
@@ -97,7 +131,11 @@ pub(crate) fn heightfield_to_mesh(
             f64::from(grid.heights[i]),
         ));
     }
-    let missing = grid.heights.iter().filter(|h| h.is_nan()).count();
+    Ok(posts)
+}
+
+/// The grid's size, spacing and height range, with `present` posts.
+fn describe(grid: &Heightfield, present: usize) -> HeightfieldInfo {
     let (low, high) = grid
         .heights
         .iter()
@@ -105,30 +143,18 @@ pub(crate) fn heightfield_to_mesh(
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
             (l.min(v), h.max(v))
         });
-    report.heightfield = Some(HeightfieldInfo {
+    HeightfieldInfo {
         columns: grid.width,
         rows: grid.depth,
-        posts: posts - missing,
+        posts: present,
         spacing: grid.spacing,
         height_range: [low, high],
-    });
-
-    let mut mesh = Mesh::default();
-    let surface = push_surface(
-        source,
-        &mut mesh,
-        Surface {
-            name: surface_name.to_owned(),
-            base_color: [1.0; 4],
-            texture: None,
-        },
-    )?;
-    if grid.width < 2 || grid.depth < 2 {
-        return Ok(mesh);
     }
+}
 
-    // Which posts some complete cell uses.
-    let mut used = vec![false; posts];
+/// Which posts some complete cell uses.
+fn used_posts(grid: &Heightfield) -> Vec<bool> {
+    let mut used = vec![false; grid.width * grid.depth];
     for row in 0..grid.depth - 1 {
         for col in 0..grid.width - 1 {
             if grid.cell_complete(col, row) {
@@ -143,8 +169,18 @@ pub(crate) fn heightfield_to_mesh(
             }
         }
     }
+    used
+}
 
-    let mut index = vec![NO_ATTRIBUTE; posts];
+/// The used posts as vertices (position, normal from the slopes, UV over the grid); each
+/// post's vertex index, `NO_ATTRIBUTE` where unused.
+fn push_posts(
+    source: &Source,
+    grid: &Heightfield,
+    used: &[bool],
+    mesh: &mut Mesh,
+) -> Result<Vec<u32>, ImportError> {
+    let mut index = vec![NO_ATTRIBUTE; used.len()];
     let u_scale = 1.0 / (grid.width - 1) as f32;
     let v_scale = 1.0 / (grid.depth - 1) as f32;
     for row in 0..grid.depth {
@@ -170,7 +206,11 @@ pub(crate) fn heightfield_to_mesh(
             mesh.uvs.push([col as f32 * u_scale, row as f32 * v_scale]);
         }
     }
+    Ok(index)
+}
 
+/// Two triangles per complete cell; the count of cells left out.
+fn push_cells(grid: &Heightfield, index: &[u32], surface: u16, mesh: &mut Mesh) -> usize {
     let mut skipped_cells = 0usize;
     for row in 0..grid.depth - 1 {
         for col in 0..grid.width - 1 {
@@ -194,14 +234,7 @@ pub(crate) fn heightfield_to_mesh(
             }
         }
     }
-    if missing > 0 {
-        report.notes.push(format!(
-            "{}: {missing} of {posts} grid posts are missing; the {skipped_cells} cells that \
-             touch them are left out (holes and borders)",
-            source.name
-        ));
-    }
-    Ok(mesh)
+    skipped_cells
 }
 
 #[cfg(test)]

@@ -64,7 +64,41 @@ struct Header {
     shape: Vec<u64>,
 }
 
+/// The header read and checked, then the data section, which must be exactly the shape's.
 fn parse_npy(source: &Source, bytes: &[u8], spacing: f32) -> Result<Heightfield, ImportError> {
+    let (text, end) = header_text(source, bytes)?;
+    let header = parse_header(&text).map_err(|m| source.malformed("header", m))?;
+    let (little, kind) = parse_descr(&header.descr).ok_or_else(|| {
+        source.unsupported(
+            "header",
+            format!(
+                "dtype '{}' (read: i1 u1 i2 u2 i4 u4 f4 f8, either byte order)",
+                header.descr
+            ),
+        )
+    })?;
+    if header.fortran_order {
+        return Err(source.unsupported(
+            "header",
+            "fortran_order: True (save the array in C order, e.g. np.ascontiguousarray)",
+        ));
+    }
+    let (rows, cols) = grid_shape(source, &header, kind, &bytes[end..])?;
+    let heights: Vec<f32> = bytes[end..]
+        .chunks_exact(kind.size())
+        .map(|b| decode(kind, little, b))
+        .collect();
+    Ok(Heightfield {
+        width: cols,
+        depth: rows,
+        spacing: [spacing, spacing],
+        heights,
+    })
+}
+
+/// The header dictionary's text (latin-1 before version 3, UTF-8 from it) and where the data
+/// starts.
+fn header_text(source: &Source, bytes: &[u8]) -> Result<(String, usize), ImportError> {
     const MAGIC: &[u8] = b"\x93NUMPY";
     if bytes.len() < MAGIC.len() + 2 || &bytes[..MAGIC.len()] != MAGIC {
         return Err(source.malformed("header", "not an .npy file (no \\x93NUMPY magic)"));
@@ -104,23 +138,16 @@ fn parse_npy(source: &Source, bytes: &[u8], spacing: f32) -> Result<Heightfield,
         // Versions 1 and 2 are latin-1.
         bytes[start..end].iter().map(|&b| char::from(b)).collect()
     };
-    let header = parse_header(&text).map_err(|m| source.malformed("header", m))?;
+    Ok((text, end))
+}
 
-    let (little, kind) = parse_descr(&header.descr).ok_or_else(|| {
-        source.unsupported(
-            "header",
-            format!(
-                "dtype '{}' (read: i1 u1 i2 u2 i4 u4 f4 f8, either byte order)",
-                header.descr
-            ),
-        )
-    })?;
-    if header.fortran_order {
-        return Err(source.unsupported(
-            "header",
-            "fortran_order: True (save the array in C order, e.g. np.ascontiguousarray)",
-        ));
-    }
+/// `(rows, columns)` of a 2-D shape whose elements exactly fill `data`.
+fn grid_shape(
+    source: &Source,
+    header: &Header,
+    kind: Kind,
+    data: &[u8],
+) -> Result<(usize, usize), ImportError> {
     let &[rows, cols] = header.shape.as_slice() else {
         return Err(source.unsupported(
             "header",
@@ -135,7 +162,6 @@ fn parse_npy(source: &Source, bytes: &[u8], spacing: f32) -> Result<Heightfield,
     let cols = usize::try_from(cols).map_err(|_| too_big())?;
     let count = rows.checked_mul(cols).ok_or_else(too_big)?;
     let expected = count.checked_mul(kind.size()).ok_or_else(too_big)?;
-    let data = &bytes[end..];
     if data.len() < expected {
         return Err(source.truncated(format!(
             "shape ({rows}, {cols}) of {} needs {expected} data bytes, the file has {}",
@@ -153,17 +179,7 @@ fn parse_npy(source: &Source, bytes: &[u8], spacing: f32) -> Result<Heightfield,
             ),
         ));
     }
-
-    let heights: Vec<f32> = data
-        .chunks_exact(kind.size())
-        .map(|b| decode(kind, little, b))
-        .collect();
-    Ok(Heightfield {
-        width: cols,
-        depth: rows,
-        spacing: [spacing, spacing],
-        heights,
-    })
+    Ok((rows, cols))
 }
 
 /// One element as a height in metres; NaN for a missing cell.

@@ -252,51 +252,22 @@ pub fn simplify_file(
 
 /// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core, with the multiresolution
 /// octree when [`OocOptions::octree`] asks for it.
+///
+/// The passes: the input streamed into sorted runs, the octree over the sorted keys, a first
+/// grid resolution from the occupied-cell counts, the leaves shared out to the threads and
+/// clustered (again on a coarser grid while the output is far above the target), then the
+/// finest level's mesh and the coarser levels.
 pub fn simplify(
     path: &Path,
     options: &OocOptions,
     progress: &mut dyn FnMut(OocStage),
 ) -> Result<Simplified, OocError> {
     let budget = options.memory_budget;
-    let leaf_bytes = options.leaf_triangles * soup::RECORD_BYTES as u64;
-    if leaf_bytes * 8 > budget {
-        return Err(OocError::Budget {
-            budget,
-            what: format!(
-                "an octree leaf of {} triangles (with the sort chunk and caches around it)",
-                options.leaf_triangles
-            ),
-            needed: leaf_bytes * 8,
-            hint: " or lower --leaf-triangles",
-        });
-    }
+    check_leaf_budget(options)?;
     let temp = TempSpace::new(options.temp_dir.as_deref(), options.temp_quota)
         .map_err(|e| OocError::temp("creating the temporary directory", e))?;
     let mut stats = OocStats::default();
-    let t0 = Instant::now();
-    let (report, sorted) = {
-        let mut sort_progress = |merging, d, n| {
-            progress(if merging {
-                OocStage::Merge(d, n)
-            } else {
-                OocStage::Read(d, n)
-            })
-        };
-        let mut runs = sort::RunBuilder::new(&temp, (budget / 2) as usize, &mut sort_progress);
-        let report = stream::stream_file(path, &temp, (budget / 8) as usize, &mut runs)?;
-        stats.seconds[0] = t0.elapsed().as_secs_f64();
-        let sorted = runs.finish((budget / 4) as usize)?;
-        (report, sorted)
-    };
-    stats.seconds[1] = t0.elapsed().as_secs_f64() - stats.seconds[0];
-    if sorted.triangles == 0 {
-        return Err(OocError::Empty {
-            file: path.display().to_string(),
-        });
-    }
-    stats.input_triangles = sorted.triangles;
-    stats.input_vertices = report.vertices;
-    stats.runs = sorted.runs.len() as u64;
+    let (report, sorted) = sort_input(path, &temp, budget, progress, &mut stats)?;
     let file = std::fs::File::open(&sorted.keys)
         .map_err(|e| OocError::temp("reading the sorted keys", e))?;
     let tree = octree::Octree::build(
@@ -312,27 +283,126 @@ pub fn simplify(
         .target_triangles
         .unwrap_or_else(|| target_triangles_for_budget(budget));
     stats.target_triangles = target;
-    let mut resolution = if sorted.triangles <= target {
-        1 << KEY_LEVELS
-    } else {
-        // The finest octree depth whose occupied cells (about half the output triangles)
-        // fit, then a resolution between it and the next depth by the surface's square law.
-        let l = (1..=KEY_LEVELS)
-            .rev()
-            .find(|&l| 2 * sorted.occupied[l as usize] <= target)
-            .unwrap_or(1);
-        let f = (target as f64 / (2 * sorted.occupied[l as usize]).max(1) as f64).sqrt();
-        ((f64::from(1u32 << l) * f.min(2.0)) as u32).max(2)
-    };
+    let mut resolution = first_resolution(&sorted, target);
     let t1 = Instant::now();
-    // Threads take contiguous runs of leaves (spatially coherent: few clusters on the
-    // borders between them), each with its own clusters, merged at the end.
     let threads = options.threads.max(1).min(leaves.len().max(1));
+    let clustering = Clustering {
+        sorted: &sorted,
+        options,
+        parts: share_leaves(&leaves, sorted.triangles, threads),
+        // Merge buffers: a quarter of the budget, shared by the threads.
+        merge_bytes: (budget / 4) as usize / threads,
+    };
+    let c = loop {
+        let c = clustering.cluster(resolution, progress)?;
+        // The occupancy of centroids only estimates the output: go coarser when it came out
+        // far above the target.
+        if c.triangle_count() as u64 > 2 * target && resolution > 2 {
+            resolution = resolution * 7 / 10;
+            continue;
+        }
+        break c;
+    };
+    stats.clusters = c.cluster_count() as u64;
+    let mesh = c.finish(&report.surfaces);
+    let t2 = Instant::now();
+    let octree = options
+        .octree
+        .map(|o| multires::build(c, report.surfaces.len() as u32, &o));
+    if let Some(o) = &octree {
+        stats.lod_levels = o.level_count;
+        stats.lod_nodes = o.nodes.len() as u64;
+        stats.lod_seconds = t2.elapsed().as_secs_f64();
+    }
+    stats.resolution = resolution;
+    stats.output_triangles = mesh.triangles.len() as u64;
+    stats.seconds[2] = t1.elapsed().as_secs_f64();
+    stats.temp_bytes = temp.used();
+    drop(file);
+    drop(temp);
+    Ok(Simplified {
+        mesh,
+        octree,
+        stats,
+    })
+}
+
+/// An octree leaf, with the sort chunk and caches around it, must fit the budget.
+fn check_leaf_budget(options: &OocOptions) -> Result<(), OocError> {
+    let budget = options.memory_budget;
+    let leaf_bytes = options.leaf_triangles * soup::RECORD_BYTES as u64;
+    if leaf_bytes * 8 > budget {
+        return Err(OocError::Budget {
+            budget,
+            what: format!(
+                "an octree leaf of {} triangles (with the sort chunk and caches around it)",
+                options.leaf_triangles
+            ),
+            needed: leaf_bytes * 8,
+            hint: " or lower --leaf-triangles",
+        });
+    }
+    Ok(())
+}
+
+/// The input streamed into sorted runs (the sort chunks: half the budget; the vertex cache:
+/// an eighth) and their keys merged (a quarter); the input counts and stage times in `stats`.
+fn sort_input(
+    path: &Path,
+    temp: &TempSpace,
+    budget: u64,
+    progress: &mut dyn FnMut(OocStage),
+    stats: &mut OocStats,
+) -> Result<(stream::StreamReport, sort::SortedSoup), OocError> {
+    let t0 = Instant::now();
+    let (report, sorted) = {
+        let mut sort_progress = |merging, d, n| {
+            progress(if merging {
+                OocStage::Merge(d, n)
+            } else {
+                OocStage::Read(d, n)
+            })
+        };
+        let mut runs = sort::RunBuilder::new(temp, (budget / 2) as usize, &mut sort_progress);
+        let report = stream::stream_file(path, temp, (budget / 8) as usize, &mut runs)?;
+        stats.seconds[0] = t0.elapsed().as_secs_f64();
+        let sorted = runs.finish((budget / 4) as usize)?;
+        (report, sorted)
+    };
+    stats.seconds[1] = t0.elapsed().as_secs_f64() - stats.seconds[0];
+    if sorted.triangles == 0 {
+        return Err(OocError::Empty {
+            file: path.display().to_string(),
+        });
+    }
+    stats.input_triangles = sorted.triangles;
+    stats.input_vertices = report.vertices;
+    stats.runs = sorted.runs.len() as u64;
+    Ok((report, sorted))
+}
+
+/// The grid resolution to cluster at first: the finest octree depth whose occupied cells
+/// (about half the output triangles) fit the target, then a resolution between it and the
+/// next depth by the surface's square law; the finest grid when the input already fits.
+fn first_resolution(sorted: &sort::SortedSoup, target: u64) -> u32 {
+    if sorted.triangles <= target {
+        return 1 << KEY_LEVELS;
+    }
+    let l = (1..=KEY_LEVELS)
+        .rev()
+        .find(|&l| 2 * sorted.occupied[l as usize] <= target)
+        .unwrap_or(1);
+    let f = (target as f64 / (2 * sorted.occupied[l as usize]).max(1) as f64).sqrt();
+    ((f64::from(1u32 << l) * f.min(2.0)) as u32).max(2)
+}
+
+/// Contiguous runs of leaves with about equal triangle counts, one per thread (spatially
+/// coherent: few clusters on the borders between them).
+fn share_leaves(leaves: &[octree::Node], triangles: u64, threads: usize) -> Vec<&[octree::Node]> {
     let mut parts: Vec<&[octree::Node]> = Vec::new();
-    let mut rest = &leaves[..];
+    let mut rest = leaves;
     for t in 0..threads {
-        let want = (sorted.triangles - rest.first().map_or(sorted.triangles, |l| l.first))
-            / (threads - t) as u64;
+        let want = (triangles - rest.first().map_or(triangles, |l| l.first)) / (threads - t) as u64;
         let mut n = 0;
         let mut sum = 0;
         while n < rest.len() && (sum < want || n == 0) {
@@ -343,46 +413,77 @@ pub fn simplify(
         parts.push(a);
         rest = b;
     }
-    // Merge buffers: a quarter of the budget, shared by the threads.
-    let merge_bytes = (budget / 4) as usize / threads;
-    let cluster_options = |resolution| ClusterOptions {
-        weights: options.weights,
-        ..ClusterOptions::at_resolution(resolution)
-    };
-    let run = |part: &[octree::Node],
-               c: &mut Clusterer,
-               report: &mut dyn FnMut(u64)|
-     -> Result<(), OocError> {
-        // The part's triangles merged from the sorted runs, in sorted order.
+    parts
+}
+
+/// One clustering pass over the sorted soup: each thread clusters its part of the leaves
+/// with its own clusters, merged at the end.
+struct Clustering<'a> {
+    sorted: &'a sort::SortedSoup,
+    options: &'a OocOptions,
+    /// The leaves of each thread, the first part on the calling thread.
+    parts: Vec<&'a [octree::Node]>,
+    /// Merge buffer bytes per thread.
+    merge_bytes: usize,
+}
+
+impl Clustering<'_> {
+    fn new_clusterer(&self, resolution: u32) -> Clusterer {
+        Clusterer::new(
+            self.sorted.cube,
+            ClusterOptions {
+                weights: self.options.weights,
+                ..ClusterOptions::at_resolution(resolution)
+            },
+        )
+    }
+
+    /// A part's triangles merged from the sorted runs, in sorted order, into `c`; `report`
+    /// hears each leaf's triangle count.
+    fn run(
+        &self,
+        part: &[octree::Node],
+        c: &mut Clusterer,
+        report: &mut dyn FnMut(u64),
+    ) -> Result<(), OocError> {
         let Some(first) = part.first() else {
             return Ok(());
         };
-        let mut merge = sorted.merge_from(first.first, merge_bytes)?;
+        let mut merge = self.sorted.merge_from(first.first, self.merge_bytes)?;
         for leaf in part {
             merge.take(leaf.count, &mut |t| c.add(t))?;
             report(leaf.count);
         }
         Ok(())
-    };
-    let (mesh, octree) = loop {
-        let mut c = Clusterer::new(sorted.cube, cluster_options(resolution));
+    }
+
+    /// Every part clustered at `resolution` and merged; progress from the calling thread's
+    /// part, scaled by the thread count.
+    fn cluster(
+        &self,
+        resolution: u32,
+        progress: &mut dyn FnMut(OocStage),
+    ) -> Result<Clusterer, OocError> {
+        let threads = self.parts.len();
+        let triangles = self.sorted.triangles;
+        let mut c = self.new_clusterer(resolution);
         let others = std::thread::scope(|scope| {
-            let handles: Vec<_> = parts[1..]
+            let handles: Vec<_> = self.parts[1..]
                 .iter()
                 .map(|part| {
                     scope.spawn(move || {
-                        let mut c = Clusterer::new(sorted.cube, cluster_options(resolution));
-                        run(part, &mut c, &mut |_| {}).map(|()| c)
+                        let mut c = self.new_clusterer(resolution);
+                        self.run(part, &mut c, &mut |_| {}).map(|()| c)
                     })
                 })
                 .collect();
             let mut done = 0;
-            let first = run(parts[0], &mut c, &mut |n| {
+            let first = self.run(self.parts[0], &mut c, &mut |n| {
                 done += n * threads as u64;
                 progress(OocStage::Cluster(
                     resolution,
-                    done.min(sorted.triangles),
-                    sorted.triangles,
+                    done.min(triangles),
+                    triangles,
                 ));
             });
             let others: Vec<Result<Clusterer, OocError>> = handles
@@ -401,36 +502,8 @@ pub fn simplify(
         for o in others {
             c.merge(&o?);
         }
-        // The occupancy of centroids only estimates the output: go coarser when it came out
-        // far above the target.
-        if c.triangle_count() as u64 > 2 * target && resolution > 2 {
-            resolution = resolution * 7 / 10;
-            continue;
-        }
-        stats.clusters = c.cluster_count() as u64;
-        let mesh = c.finish(&report.surfaces);
-        let t2 = Instant::now();
-        let octree = options
-            .octree
-            .map(|o| multires::build(c, report.surfaces.len() as u32, &o));
-        if let Some(o) = &octree {
-            stats.lod_levels = o.level_count;
-            stats.lod_nodes = o.nodes.len() as u64;
-            stats.lod_seconds = t2.elapsed().as_secs_f64();
-        }
-        break (mesh, octree);
-    };
-    stats.resolution = resolution;
-    stats.output_triangles = mesh.triangles.len() as u64;
-    stats.seconds[2] = t1.elapsed().as_secs_f64();
-    stats.temp_bytes = temp.used();
-    drop(file);
-    drop(temp);
-    Ok(Simplified {
-        mesh,
-        octree,
-        stats,
-    })
+        Ok(c)
+    }
 }
 
 /// The bounding cube of a mesh's positions.

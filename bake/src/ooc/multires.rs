@@ -47,10 +47,10 @@
 //! diagonal (the triangles that collapse there are no longer drawn). A node's error is the
 //! largest error of the clusters its cells and its triangles use, raised to its children's so
 //! that it never grows down the tree. The tests check it against the distances of the input's
-//! vertices to each level's triangles; on the tests' bumpy field, at the finest level, the
-//! median node inside the field has a quarter of the error of the nodes on its border (about
-//! half a cell against two). Neighbouring nodes drawn at different
-//! levels do not share vertices: what the overlap leaves of a gap between them is bounded by
+//! vertices to each level's triangles. Nodes inside the surface get much smaller errors than
+//! nodes on its border, which carry the half cell diagonal, so the run-time selection refines
+//! the interior no further than its shape needs. Neighbouring nodes drawn at different levels
+//! do not share vertices: what the overlap leaves of a gap between them is bounded by
 //! the coarser node's error, which the run-time selection keeps under its pixel tolerance.
 //!
 //! Memory: one level's clusters at a time (the finest is the largest) and the outputs (a
@@ -233,6 +233,29 @@ fn level_out(
 ) -> LevelOut {
     let size = f64::from(1u32 << shift.min(31));
     let world = |x: [f64; 3]| [0, 1, 2].map(|a| (origin[a] + x[a] * unit) as f32);
+    let cell_pos = cell_positions(level, size);
+    let (mut vertices, boxes) = cluster_vertices(level, &cell_pos, weights, &world);
+    fill_missing_normals(level, &mut vertices);
+    let border_cell = border_cells(level);
+    let errors = cluster_errors(level, &cell_pos, &vertices, &border_cell, size, unit);
+    let mut blocks = level_blocks(level, k, &vertices, &errors, &boxes);
+    if let Some(finer) = finer {
+        for (fb, child) in &finer.blocks {
+            if let Some(b) = blocks.get_mut(&fb.map(|v| v >> 1)) {
+                b.error = b.error.max(child.error);
+                b.include(child.min, child.max);
+            }
+        }
+    }
+    LevelOut {
+        vertices,
+        blocks,
+        triangles: level.triangles.len() as u64,
+    }
+}
+
+/// Each cell's representative position, in grid units.
+fn cell_positions(level: &Level, size: f64) -> Vec<[f64; 3]> {
     let mut cell_pos = Vec::with_capacity(level.cell_first.len());
     for (ci, &first) in level.cell_first.iter().enumerate() {
         let lo = level.cell_coords[ci].map(|v| f64::from(v) * size);
@@ -242,8 +265,21 @@ fn level_out(
             size,
         ));
     }
+    cell_pos
+}
+
+/// The lowest and highest corner of a box, in world units.
+type WorldBox = ([f32; 3], [f32; 3]);
+
+/// One vertex per cluster (attributes the input lacks are zero) and the world box of the
+/// input corners it stands for.
+fn cluster_vertices(
+    level: &Level,
+    cell_pos: &[[f64; 3]],
+    weights: &super::Weights,
+    world: &dyn Fn([f64; 3]) -> [f32; 3],
+) -> (Vec<Vertex>, Vec<WorldBox>) {
     let mut vertices = Vec::with_capacity(level.clusters.len());
-    let mut errors = Vec::with_capacity(level.clusters.len());
     let mut boxes = Vec::with_capacity(level.clusters.len());
     for c in &level.clusters {
         let p = cell_pos[c.cell as usize];
@@ -259,7 +295,11 @@ fn level_out(
             uv: if c.flags & HAS_UV != 0 { uv } else { [0.0; 2] },
         });
     }
-    // Normals from the level's geometry where the input had none.
+    (vertices, boxes)
+}
+
+/// Normals from the level's geometry (area-weighted face normals) where the input had none.
+fn fill_missing_normals(level: &Level, vertices: &mut [Vertex]) {
     let mut face_sums = vec![[0.0f64; 3]; level.clusters.len()];
     for (ids, _) in &level.triangles {
         let p = ids.map(|i| vertices[i as usize].position.map(f64::from));
@@ -286,7 +326,10 @@ fn level_out(
             };
         }
     }
-    // Border clusters: on an edge (between cells) that one triangle of the level uses.
+}
+
+/// Border cells: on an edge (between cells) that one triangle of the level uses.
+fn border_cells(level: &Level) -> Vec<bool> {
     let mut edges: FxHashMap<(u32, u32), u32> = FxHashMap::default();
     for (ids, _) in &level.triangles {
         let cells = ids.map(|i| level.clusters[i as usize].cell);
@@ -302,11 +345,23 @@ fn level_out(
             border_cell[b as usize] = true;
         }
     }
-    // Errors. Inside the surface, moving a corner along the surface does not move the
-    // surface: the error is how far the cluster's input corners can lie from the plane through
-    // the representative with the vertex normal (the corner box's extent along the normal).
-    // On a border it does: the farthest corner of the box, plus half the cell's diagonal for
-    // the triangles that collapse there and are no longer drawn.
+    border_cell
+}
+
+/// Each cluster's error, in world units. Inside the surface, moving a corner along the
+/// surface does not move the surface: the error is how far the cluster's input corners can
+/// lie from the plane through the representative with the vertex normal (the corner box's
+/// extent along the normal). On a border it does: the farthest corner of the box, plus half
+/// the cell's diagonal for the triangles that collapse there and are no longer drawn.
+fn cluster_errors(
+    level: &Level,
+    cell_pos: &[[f64; 3]],
+    vertices: &[Vertex],
+    border_cell: &[bool],
+    size: f64,
+    unit: f64,
+) -> Vec<f32> {
+    let mut errors = Vec::with_capacity(level.clusters.len());
     for (i, c) in level.clusters.iter().enumerate() {
         let p = cell_pos[c.cell as usize];
         let far = |a: usize| (c.lo[a] - p[a]).abs().max((c.hi[a] - p[a]).abs());
@@ -318,6 +373,18 @@ fn level_out(
         };
         errors.push((e * unit) as f32);
     }
+    errors
+}
+
+/// The level cut into blocks of `2^k` cells a side: each with its clusters' boxes and errors
+/// and the triangles with a corner in it.
+fn level_blocks(
+    level: &Level,
+    k: u32,
+    vertices: &[Vertex],
+    errors: &[f32],
+    boxes: &[WorldBox],
+) -> FxHashMap<[u32; 3], Block> {
     let block_of = |cell: [u32; 3]| cell.map(|v| v >> k);
     let mut blocks: FxHashMap<[u32; 3], Block> = FxHashMap::default();
     for (i, c) in level.clusters.iter().enumerate() {
@@ -347,19 +414,7 @@ fn level_out(
             }
         }
     }
-    if let Some(finer) = finer {
-        for (fb, child) in &finer.blocks {
-            if let Some(b) = blocks.get_mut(&fb.map(|v| v >> 1)) {
-                b.error = b.error.max(child.error);
-                b.include(child.min, child.max);
-            }
-        }
-    }
-    LevelOut {
-        vertices,
-        blocks,
-        triangles: level.triangles.len() as u64,
-    }
+    blocks
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

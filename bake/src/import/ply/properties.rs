@@ -1,0 +1,177 @@
+//! The parser's element records: vertices (named slots), faces and strips (index lists and
+//! per-corner UVs), and elements read past.
+
+use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult};
+
+/// Slots of a vertex, in the order of [`VERTEX_NAMES`].
+pub(super) const X: usize = 0;
+pub(super) const NX: usize = 3;
+pub(super) const U: usize = 6;
+pub(super) const R: usize = 8;
+pub(super) const A: usize = 11;
+pub(super) const SLOTS: usize = 12;
+
+/// What each slot holds, as errors name it.
+pub(super) const VERTEX_NAMES: [&str; SLOTS] = [
+    "coordinate x",
+    "coordinate y",
+    "coordinate z",
+    "normal x",
+    "normal y",
+    "normal z",
+    "texture coordinate u",
+    "texture coordinate v",
+    "red",
+    "green",
+    "blue",
+    "alpha",
+];
+
+/// One vertex as the parser fills it.
+pub(super) struct Vertex {
+    pub(super) values: [f32; SLOTS],
+}
+
+pub(super) fn vertex_slot(name: &str) -> Option<usize> {
+    Some(match name {
+        "x" => X,
+        "y" => X + 1,
+        "z" => X + 2,
+        "nx" => NX,
+        "ny" => NX + 1,
+        "nz" => NX + 2,
+        "u" | "s" | "texture_u" | "texture_s" => U,
+        "v" | "t" | "texture_v" | "texture_t" => U + 1,
+        "red" | "diffuse_red" => R,
+        "green" | "diffuse_green" => R + 1,
+        "blue" | "diffuse_blue" => R + 2,
+        "alpha" | "diffuse_alpha" => A,
+        _ => return None,
+    })
+}
+
+impl Vertex {
+    /// Stores `value`; colours are normalised by `color_scale` (1/255 for bytes, ...).
+    fn set(&mut self, name: &str, value: f64, color_scale: f64) -> PropertyAccessResult {
+        match vertex_slot(name) {
+            Some(slot) if slot >= R => {
+                self.values[slot] = (value * color_scale) as f32;
+                PropertyAccessResult::Set
+            }
+            Some(slot) => {
+                self.values[slot] = value as f32;
+                PropertyAccessResult::Set
+            }
+            None => PropertyAccessResult::Ignored,
+        }
+    }
+}
+
+const BYTE_COLOR: f64 = 1.0 / 255.0;
+
+impl PropertyAccess for Vertex {
+    fn new() -> Self {
+        let mut values = [0.0; SLOTS];
+        values[A] = 1.0;
+        Vertex { values }
+    }
+    fn set_char(&mut self, name: &str, value: i8) -> PropertyAccessResult {
+        self.set(name, f64::from(value), BYTE_COLOR)
+    }
+    fn set_uchar(&mut self, name: &str, value: u8) -> PropertyAccessResult {
+        self.set(name, f64::from(value), BYTE_COLOR)
+    }
+    fn set_short(&mut self, name: &str, value: i16) -> PropertyAccessResult {
+        self.set(name, f64::from(value), BYTE_COLOR)
+    }
+    fn set_ushort(&mut self, name: &str, value: u16) -> PropertyAccessResult {
+        self.set(name, f64::from(value), 1.0 / 65535.0)
+    }
+    fn set_int(&mut self, name: &str, value: i32) -> PropertyAccessResult {
+        self.set(name, f64::from(value), BYTE_COLOR)
+    }
+    fn set_uint(&mut self, name: &str, value: u32) -> PropertyAccessResult {
+        self.set(name, f64::from(value), BYTE_COLOR)
+    }
+    fn set_float(&mut self, name: &str, value: f32) -> PropertyAccessResult {
+        self.set(name, f64::from(value), 1.0)
+    }
+    fn set_double(&mut self, name: &str, value: f64) -> PropertyAccessResult {
+        self.set(name, value, 1.0)
+    }
+}
+
+/// One `face` or `tristrips` element: its index list and optional per-corner UVs.
+#[derive(Default)]
+pub(super) struct Face {
+    pub(super) indices: Vec<i64>,
+    pub(super) texcoord: Vec<f32>,
+}
+
+pub(super) fn is_index_list(name: &str) -> bool {
+    name == "vertex_indices" || name == "vertex_index"
+}
+
+impl Face {
+    fn set_indices<T: Into<i64>>(&mut self, name: &str, values: Vec<T>) -> PropertyAccessResult {
+        if is_index_list(name) {
+            self.indices = values.into_iter().map(Into::into).collect();
+            PropertyAccessResult::Set
+        } else {
+            PropertyAccessResult::Ignored
+        }
+    }
+}
+
+impl PropertyAccess for Face {
+    fn new() -> Self {
+        Face::default()
+    }
+    fn set_list_char(&mut self, name: &str, value: Vec<i8>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_uchar(&mut self, name: &str, value: Vec<u8>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_short(&mut self, name: &str, value: Vec<i16>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_ushort(&mut self, name: &str, value: Vec<u16>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_int(&mut self, name: &str, value: Vec<i32>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_uint(&mut self, name: &str, value: Vec<u32>) -> PropertyAccessResult {
+        self.set_indices(name, value)
+    }
+    fn set_list_float(&mut self, name: &str, value: Vec<f32>) -> PropertyAccessResult {
+        if name == "texcoord" {
+            self.texcoord = value;
+            PropertyAccessResult::Set
+        } else if is_index_list(name) {
+            PropertyAccessResult::UnsupportedType
+        } else {
+            PropertyAccessResult::Ignored
+        }
+    }
+    fn set_list_double(&mut self, name: &str, value: Vec<f64>) -> PropertyAccessResult {
+        if name == "texcoord" {
+            self.texcoord = value.into_iter().map(|v| v as f32).collect();
+            PropertyAccessResult::Set
+        } else if is_index_list(name) {
+            PropertyAccessResult::UnsupportedType
+        } else {
+            PropertyAccessResult::Ignored
+        }
+    }
+}
+
+/// An element the importer does not use: read past.
+pub(super) struct Skip;
+
+impl PropertyAccess for Skip {
+    fn new() -> Self {
+        Skip
+    }
+}

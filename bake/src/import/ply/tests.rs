@@ -1,0 +1,308 @@
+use super::*;
+
+fn src() -> Source {
+    Source {
+        name: "t.ply".to_owned(),
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Format {
+    Ascii,
+    Le,
+    Be,
+}
+
+/// Position, normal, RGBA bytes, UV.
+type SampleVertex = ([f32; 3], [f32; 3], [u8; 4], [f32; 2]);
+
+/// A quad and a triangle over five vertices with normals, byte colours and UVs.
+fn sample(format: Format) -> Vec<u8> {
+    let verts: [SampleVertex; 5] = [
+        (
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [255, 0, 0, 255],
+            [0.0, 0.0],
+        ),
+        (
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0, 255, 0, 128],
+            [1.0, 0.0],
+        ),
+        (
+            [1.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0, 0, 255, 255],
+            [1.0, 1.0],
+        ),
+        (
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [10, 20, 30, 255],
+            [0.0, 1.0],
+        ),
+        (
+            [0.5, 2.0, 0.25],
+            [0.0, 0.6, 0.8],
+            [200, 100, 50, 0],
+            [0.5, 1.5],
+        ),
+    ];
+    let faces: [&[i32]; 2] = [&[0, 1, 2, 3], &[3, 2, 4]];
+    let name = match format {
+        Format::Ascii => "ascii",
+        Format::Le => "binary_little_endian",
+        Format::Be => "binary_big_endian",
+    };
+    let mut out = format!(
+        "ply\nformat {name} 1.0\ncomment TextureFile skin.png\nelement vertex 5\n\
+         property float x\nproperty float y\nproperty float z\nproperty float nx\n\
+         property float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n\
+         property uchar blue\nproperty uchar alpha\nproperty float u\nproperty float v\n\
+         element face 2\nproperty list uchar int vertex_indices\nproperty uchar flags\n\
+         end_header\n"
+    )
+    .into_bytes();
+    let f = |out: &mut Vec<u8>, v: f32| match format {
+        Format::Le => out.extend_from_slice(&v.to_le_bytes()),
+        Format::Be => out.extend_from_slice(&v.to_be_bytes()),
+        Format::Ascii => out.extend_from_slice(format!("{v} ").as_bytes()),
+    };
+    for (p, n, c, uv) in verts {
+        for v in p.into_iter().chain(n) {
+            f(&mut out, v);
+        }
+        for b in c {
+            match format {
+                Format::Ascii => out.extend_from_slice(format!("{b} ").as_bytes()),
+                _ => out.push(b),
+            }
+        }
+        for v in uv {
+            f(&mut out, v);
+        }
+        if let Format::Ascii = format {
+            out.push(b'\n');
+        }
+    }
+    for face in faces {
+        match format {
+            Format::Ascii => {
+                let list: Vec<String> = face.iter().map(|i| i.to_string()).collect();
+                out.extend_from_slice(format!("{} {} 7\n", face.len(), list.join(" ")).as_bytes());
+            }
+            Format::Le | Format::Be => {
+                out.push(face.len() as u8);
+                for &i in face {
+                    match format {
+                        Format::Le => out.extend_from_slice(&i.to_le_bytes()),
+                        _ => out.extend_from_slice(&i.to_be_bytes()),
+                    }
+                }
+                out.push(7);
+            }
+        }
+    }
+    out
+}
+
+fn parse(bytes: &[u8]) -> Result<Mesh, ImportError> {
+    parse_ply(&src(), bytes, &mut ImportReport::default())
+}
+
+#[test]
+fn ascii_and_both_binaries_give_the_same_mesh() {
+    let ascii = parse(&sample(Format::Ascii)).unwrap();
+    let le = parse(&sample(Format::Le)).unwrap();
+    let be = parse(&sample(Format::Be)).unwrap();
+    assert_eq!(ascii, le);
+    assert_eq!(ascii, be);
+    ascii.validate().unwrap();
+    assert_eq!(ascii.positions.len(), 5);
+    assert_eq!(ascii.normals.len(), 5);
+    assert_eq!(ascii.uvs.len(), 5);
+    assert_eq!(ascii.colors.len(), 5);
+    // The quad becomes a fan of two triangles, then the triangle.
+    let tris: Vec<[u32; 3]> = ascii.triangles.iter().map(|t| t.position).collect();
+    assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3], [3, 2, 4]]);
+    assert!(ascii
+        .triangles
+        .iter()
+        .all(|t| t.uv == t.position && t.normal == t.position));
+    assert_eq!(ascii.uvs[4], [0.5, -0.5]);
+    assert_eq!(ascii.colors[0], [1.0, 0.0, 0.0, 1.0]);
+    assert!((ascii.colors[1][3] - 128.0 / 255.0).abs() < 1e-6);
+    assert!((ascii.colors[3][0] - srgb_to_linear(10.0 / 255.0)).abs() < 1e-7);
+    assert_eq!(ascii.surfaces[0].texture.as_deref(), Some("skin.png"));
+}
+
+#[test]
+fn truncated_binary_files_are_errors_at_every_cut() {
+    for format in [Format::Le, Format::Be] {
+        let full = sample(format);
+        assert!(parse(&full).is_ok());
+        let header_end = full.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        let cuts = [
+            0,
+            3,
+            header_end - 5,
+            header_end,
+            header_end + 1,
+            header_end + 44,
+            header_end + 150,
+            full.len() - 13,
+            full.len() - 1,
+        ];
+        for cut in cuts {
+            let err = parse(&full[..cut]).expect_err("a cut file must not import");
+            assert!(
+                matches!(err, ImportError::Truncated { .. }),
+                "cut at {cut}: {err}"
+            );
+        }
+    }
+}
+
+#[test]
+fn truncated_ascii_is_an_error() {
+    let full = sample(Format::Ascii);
+    for cut in [full.len() - 4, full.len() - 30, full.len() / 2] {
+        let err = parse(&full[..cut]).expect_err("a cut file must not import");
+        assert!(
+            matches!(
+                err,
+                ImportError::Truncated { .. } | ImportError::Malformed { .. }
+            ),
+            "{err}"
+        );
+    }
+}
+
+/// A binary little-endian triangle whose vertex 1 has coordinate y = `y`.
+fn triangle_with_y(y: f32) -> Vec<u8> {
+    let mut out = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n\
+                    property float x\nproperty float y\nproperty float z\nelement face 1\n\
+                    property list uchar uint vertex_indices\nend_header\n"
+        .to_vec();
+    for v in [0.0, 0.0, 0.0, 1.0, y, 0.0, 0.0, 1.0, 0.0f32] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.push(3);
+    for i in 0..3u32 {
+        out.extend_from_slice(&i.to_le_bytes());
+    }
+    out
+}
+
+#[test]
+fn non_finite_coordinates_are_named() {
+    assert!(parse(&triangle_with_y(0.0)).is_ok());
+    let err = parse(&triangle_with_y(f32::NAN)).unwrap_err().to_string();
+    assert_eq!(err, "t.ply: vertex 1: coordinate y is NaN");
+    let err = parse(&triangle_with_y(f32::NEG_INFINITY))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "t.ply: vertex 1: coordinate y is -inf");
+    // ply-rs-bw's ascii grammar has no NaN: the line is rejected as malformed.
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+                end_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n";
+    let err = parse(text.as_bytes()).unwrap_err().to_string();
+    assert!(err.starts_with("t.ply: element 'vertex': Line 11"), "{err}");
+}
+
+#[test]
+fn index_out_of_range_is_named() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+                end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 7\n";
+    let err = parse(text.as_bytes()).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "t.ply: face 1: vertex index 7 out of range (3 vertices)"
+    );
+    let neg = text.replace("3 0 1 7", "3 0 -1 2");
+    let err = parse(neg.as_bytes()).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "t.ply: face 1: vertex index -1 out of range (3 vertices)"
+    );
+}
+
+#[test]
+fn tristrips_are_decoded_with_restarts() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n\
+                property float z\nelement tristrips 1\nproperty list int int vertex_indices\n\
+                end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 0 0\n2 1 0\n\
+                9 0 1 2 3 -1 1 4 3 5\n";
+    let mut report = ImportReport::default();
+    let mesh = parse_ply(&src(), text.as_bytes(), &mut report).unwrap();
+    let tris: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.position).collect();
+    assert_eq!(tris, vec![[0, 1, 2], [2, 1, 3], [1, 4, 3], [3, 4, 5]]);
+    // Every triangle faces +z (counter-clockwise seen from above).
+    for [a, b, c] in tris {
+        let (a, b, c) = (
+            mesh.positions[a as usize],
+            mesh.positions[b as usize],
+            mesh.positions[c as usize],
+        );
+        let z = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert!(z > 0.0);
+    }
+    // A joint (repeated index) is dropped and noted.
+    let joint = text.replace("9 0 1 2 3 -1 1 4 3 5", "6 0 1 2 2 3 4");
+    let mesh = parse_ply(&src(), joint.as_bytes(), &mut report).unwrap();
+    assert_eq!(mesh.triangles.len(), 2);
+    assert!(
+        report.notes.iter().any(|n| n.contains("2 degenerate")),
+        "{:?}",
+        report.notes
+    );
+}
+
+#[test]
+fn per_corner_texcoords_make_seams() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+                property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n\
+                3 0 1 2 6 0 0 1 0 0 1\n3 2 1 3 6 0.5 0.5 0.25 0.25 1 1\n";
+    let mesh = parse(text.as_bytes()).unwrap();
+    assert_eq!(mesh.uvs.len(), 6);
+    assert_eq!(mesh.triangles[1].uv, [3, 4, 5]);
+    assert_eq!(mesh.uvs[3], [0.5, 0.5]);
+    let bad = text.replace("6 0.5 0.5 0.25 0.25 1 1", "4 0.5 0.5 0.25 0.25");
+    let err = parse(bad.as_bytes()).unwrap_err().to_string();
+    assert!(
+        err.contains("face 1: 4 texcoord values for 3 vertices"),
+        "{err}"
+    );
+}
+
+#[test]
+fn malformed_headers_are_errors() {
+    let err = |t: &str| parse(t.as_bytes()).unwrap_err().to_string();
+    assert!(err("ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n")
+        .contains("no 'vertex' element"));
+    assert!(err("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n")
+        .contains("no 'z' property"));
+    assert!(err("ply\nformat binary_little_endian 1.0\nelement vertex 1\nelement junk 4000000000000\nend_header\n")
+        .contains("no properties"));
+    assert!(
+        err("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n").contains("truncated")
+    );
+    assert!(err("not a ply").contains("header"));
+    assert!(err("ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nproperty float y\nproperty float z\nend_header\n1 0 0 0\n")
+        .contains("property 'x' is a list"));
+    assert!(err("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+        .contains("element 'face'"));
+    // A huge count in a small binary file is caught before parsing.
+    let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\n\
+                property float x\nproperty float y\nproperty float z\nend_header\n";
+    let e = err(huge);
+    assert!(
+        e.contains("truncated") && e.contains("4000000000000 x 'vertex'"),
+        "{e}"
+    );
+}
