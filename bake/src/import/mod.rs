@@ -4,9 +4,9 @@
 //!
 //! | extension | format | source file |
 //! |---|---|---|
-//! | `.gltf`, `.glb` | glTF 2.0, JSON or binary | `import/gltf.rs` |
-//! | `.obj` | Wavefront OBJ (+ MTL) | `import/obj.rs` |
-//! | `.ply` | Stanford PLY, ascii and binary (either endianness) | `import/ply.rs` |
+//! | `.gltf`, `.glb` | glTF 2.0, JSON or binary | `import/gltf/` |
+//! | `.obj` | Wavefront OBJ (+ MTL) | `import/obj/` |
+//! | `.ply` | Stanford PLY, ascii and binary (either endianness) | `import/ply/` |
 //! | `.dem` | USGS ASCII DEM | `import/dem.rs` |
 //! | `.npy` | numpy array of heights (needs [`ImportOptions::spacing`]) | `import/npy.rs` |
 //!
