@@ -40,7 +40,7 @@
 //! The result is the same as checking every edge first and sorting the legal collapses
 //! stably by cost.
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;

@@ -20,7 +20,7 @@
 //! geometry (computed here, or within [`GEOMETRIC_NORMAL_DEGREES`] of the computed one),
 //! which simplification then ignores.
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
