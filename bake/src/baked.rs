@@ -10,11 +10,11 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use caveclod_core::format::{serialized_len, write_into, ExtraSection, WriteError};
-use caveclod_core::{
-    BaseFace, Creator, Hierarchy, HierarchyParts, Node, NodeId, PolyId, PolyKey, Polygon, Position,
-    PositionId, Split, SplitBounds, SurfaceGroupId, SurfaceId, Vertex, VertexKey,
+use caveclod_core::format::{
+    serialized_len, write_into, BaseFace, Creator, ExtraSection, HierarchyParts, Node, Polygon,
+    Position, Split, SplitBounds, Vertex, VertexKey, WriteError,
 };
+use caveclod_core::{Hierarchy, NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
 use crate::hierarchy::Hierarchy as Collapses;
 use crate::weld::Welded;

@@ -22,7 +22,7 @@
 //! substitute the paper's Section 5.3 needs for open meshes. `V_i = V(c_i) / V(c_0)`.
 
 use caveclod_core::format::ExtraSection;
-use caveclod_core::gmesh::{gmesh_tags, volume_boundaries, GMesh, GMeshParts, GmeshError};
+use caveclod_core::gmesh::{gmesh_tags, volume_boundaries, GMesh, GMeshError, GMeshParts};
 use caveclod_core::{CameraState, Hierarchy, NodeId, PolyId};
 
 use crate::fxhash::FxHashMap;
@@ -70,7 +70,7 @@ pub enum GMeshBuildError {
     SingleLevel,
     /// The partitions could not be made.
     #[error("g-mesh partitions: {0}")]
-    Partitions(GmeshError),
+    Partitions(GMeshError),
 }
 
 /// The g-mesh arrays, owned.

@@ -345,7 +345,7 @@ fn aligned(bytes: &[u8]) -> Vec<u64> {
 fn an_out_of_core_bake_stores_the_octree_and_cameras_cut_it_by_distance() {
     use caveclod_bake::pipeline;
     use caveclod_core::glam::Vec3;
-    use caveclod_core::{Hierarchy, Octree, OctreeCut, View};
+    use caveclod_core::{Hierarchy, LookAt, Octree, OctreeCut};
     use caveclod_tests::generate;
 
     let dir = tempfile::tempdir().unwrap();
@@ -380,7 +380,15 @@ fn an_out_of_core_bake_stores_the_octree_and_cameras_cut_it_by_distance() {
     let size = generate::TERRAIN_SIZE;
     let centre = Vec3::new(size * 0.5, 0.0, size * 0.5);
     let view = |eye: Vec3, target: Vec3| {
-        View::perspective(eye, target, Vec3::Y, 1.0, 1.0, 0.1, 1e8, 1000.0)
+        LookAt {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 1e8,
+        }
+        .view(1000, 1000)
     };
     let far = view(centre + Vec3::new(0.0, 1000.0 * size, 0.1), centre);
     let near = view(Vec3::new(-0.05 * size, 0.03 * size, -0.05 * size), centre);

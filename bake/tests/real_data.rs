@@ -22,7 +22,8 @@ use caveclod_bake::import::{self, ImportOptions};
 use caveclod_bake::pipeline::bake_file;
 use caveclod_bake::report::BakeInfo;
 use caveclod_bake::weld::{self, Welded};
-use caveclod_core::{CameraState, Hierarchy, NodeId, PositionClass};
+use caveclod_core::format::PositionClass;
+use caveclod_core::{CameraState, Hierarchy, NodeId};
 use caveclod_tests::check::{check_front, split_all};
 use caveclod_tests::AlignedBytes;
 

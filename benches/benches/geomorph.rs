@@ -23,9 +23,9 @@
 use std::time::Duration;
 
 use caveclod_bake::gmesh::{build, GMeshOptions};
+use caveclod_core::format::Vertex;
 use caveclod_core::gmesh::GMesh;
 use caveclod_core::gpu::{morph_vertex, MorphInstance};
-use caveclod_core::Vertex;
 use caveclod_tests::{bake, meshes};
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Context, Geomorph, HeadlessDesc, IndexSource, LookAt, Morph,
@@ -173,7 +173,7 @@ fn main() {
                     &mut [CameraDraw {
                         target: 0,
                         viewport,
-                        view_proj: look.view_proj(viewport),
+                        view_proj: look.view_projection(viewport.aspect()),
                         vertices: &coarse,
                         indices: &mut indices,
                         source: IndexSource::Lists(&list_refs),

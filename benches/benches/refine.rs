@@ -27,7 +27,7 @@ use caveclod_benches::low_pass_view;
 use caveclod_cli::aligned::CameraPool;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    CameraConfig, CameraState, Hierarchy, NodeId, RefineParams, RefineStats, View,
+    CameraConfig, CameraState, Hierarchy, LookAt, NodeId, RefineParams, RefineStats, View,
 };
 use caveclod_tests::{bake, meshes};
 use criterion::{Criterion, Throughput};
@@ -72,16 +72,15 @@ fn view_at(u: f32, size: f32, ground: &Ground) -> View {
 fn far_view(size: f32) -> View {
     let c = 0.5 * size;
     let eye = Vec3::new(c, 40.0 * size, c + 1.0);
-    View::perspective(
+    let look = LookAt {
         eye,
-        Vec3::new(c, 0.0, c),
-        Vec3::Y,
-        FOV_Y_DEG.to_radians(),
-        ASPECT,
-        1.0,
-        100.0 * size,
-        HEIGHT,
-    )
+        target: Vec3::new(c, 0.0, c),
+        up: Vec3::Y,
+        fov_y: FOV_Y_DEG.to_radians(),
+        near: 1.0,
+        far: 100.0 * size,
+    };
+    look.view((HEIGHT * ASPECT) as u32, HEIGHT as u32)
 }
 
 /// Frames of the moving path between two compactions in the `compact/` benches: the demo

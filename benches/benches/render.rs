@@ -80,7 +80,11 @@ fn refined<'m>(
         .map(|(i, m)| {
             let mut cam = or_exit(CameraState::with_config(h, m, &config), "camera");
             or_exit(
-                cam.refine(h, &look(i, size).view(viewports[i]), &params),
+                cam.refine(
+                    h,
+                    &look(i, size).view(viewports[i].width, viewports[i].height),
+                    &params,
+                ),
                 "refine",
             );
             cam
@@ -139,7 +143,7 @@ impl<'s, 'c> Setup<'s, 'c> {
             .map(|(i, ind)| CameraDraw {
                 target: 0,
                 viewport: self.viewports[i],
-                view_proj: look(i, scene.size).view_proj(self.viewports[i]),
+                view_proj: look(i, scene.size).view_projection(self.viewports[i].aspect()),
                 vertices: scene.vertices,
                 indices: ind,
                 source: IndexSource::Camera {
@@ -220,7 +224,7 @@ fn bench_frames(
                 .map(|(i, ind)| CameraDraw {
                     target: 0,
                     viewport: viewports[i],
-                    view_proj: look(i, size).view_proj(viewports[i]),
+                    view_proj: look(i, size).view_projection(viewports[i].aspect()),
                     vertices,
                     indices: ind,
                     source: IndexSource::Camera {

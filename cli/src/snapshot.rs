@@ -16,7 +16,7 @@ use caveclod_vulkan::frame::{CameraDraw, FrameStats, Renderer, RendererDesc, Vie
 use caveclod_vulkan::indices::{CameraIndices, IndexSource};
 use caveclod_vulkan::mesh::VertexBuffer;
 use caveclod_vulkan::readback::RgbaImage;
-use caveclod_vulkan::view::LookAt;
+use caveclod_core::LookAt;
 
 /// How the cameras share the output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,8 +153,12 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
     for (i, m) in memories.iter_mut().enumerate() {
         let mut cam = CameraState::with_config(h, m, &config)
             .map_err(|e| Error::InvalidArgument(format!("camera {i}: {e}")))?;
-        cam.refine(h, &looks[i].view(viewports[i].1), &params)
-            .map_err(|e| Error::InvalidArgument(format!("camera {i}: refinement: {e}")))?;
+        cam.refine(
+            h,
+            &looks[i].view(viewports[i].1.width, viewports[i].1.height),
+            &params,
+        )
+        .map_err(|e| Error::InvalidArgument(format!("camera {i}: refinement: {e}")))?;
         cams.push(cam);
     }
     let vertices = VertexBuffer::from_hierarchy(ctx, "snapshot mesh", h)?;
@@ -197,7 +201,11 @@ pub fn render_octree_snapshot(
         let mut cut = OctreeCut::new(octree, &mut memory)
             .map_err(|e| Error::InvalidArgument(format!("camera {i}: {e}")))?;
         let stats = cut
-            .select(octree, &look.view(viewports[i].1), desc.tolerance_px)
+            .select(
+                octree,
+                &look.view(viewports[i].1.width, viewports[i].1.height),
+                desc.tolerance_px,
+            )
             .map_err(|e| Error::InvalidArgument(format!("camera {i}: selection: {e}")))?;
         let mut camera_lists: Vec<Vec<u32>> = (0..surfaces)
             .map(|s| vec![0u32; cut.index_count(s)])
@@ -266,7 +274,7 @@ fn draw(
             .map(|(i, (ind, source))| CameraDraw {
                 target: viewports[i].0,
                 viewport: viewports[i].1,
-                view_proj: looks[i].view_proj(viewports[i].1),
+                view_proj: looks[i].view_projection(viewports[i].1.aspect()),
                 vertices: &vertices,
                 indices: ind,
                 source,

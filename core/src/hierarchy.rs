@@ -6,10 +6,10 @@
 //! [`CameraState`](crate::CameraState).
 
 use crate::format::{self, FormatError, HierarchyParts, Tag};
-use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId};
-use crate::records::{
+use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
+use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId};
 
 /// A validated view-dependent hierarchy of vertex splits over a full-resolution mesh.
 #[derive(Clone, Copy, Debug)]
@@ -25,8 +25,8 @@ impl<'a> Hierarchy<'a> {
     /// invariant. `bytes` must be 4-byte aligned (any `Vec<u32>`-backed or allocator-provided
     /// buffer is); a misaligned buffer is an error, never a copy. Aligning it to 64 bytes is
     /// worth it: sections start on multiples of 64, so then no 32-byte record a refinement
-    /// pass reads straddles two cache lines (refinement misses about a fifth fewer last-level
-    /// lines in the demo's flights than from an 8-byte aligned buffer).
+    /// pass reads straddles two cache lines (`HierarchyBuf`, with the `alloc` feature, keeps its bytes
+    /// so aligned).
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let parsed = format::validate::parse(bytes)?;
         let meta = format::validate::validate(&parsed.parts, Some(&parsed.meta))?;
@@ -34,6 +34,25 @@ impl<'a> Hierarchy<'a> {
             parts: parsed.parts,
             meta,
             checksum: parsed.checksum,
+            file: bytes,
+        })
+    }
+
+    /// The hierarchy of `bytes` that [`from_bytes`](Self::from_bytes) validated before, with
+    /// the meta and checksum it found: the sections are found again (the header and the
+    /// section table checked), but neither the checksum nor the invariants are computed
+    /// again. Only for bytes that cannot have changed since.
+    #[cfg(feature = "alloc")]
+    pub(crate) fn from_validated(
+        bytes: &'a [u8],
+        meta: Meta,
+        checksum: u64,
+    ) -> Result<Self, FormatError> {
+        let parsed = format::validate::parse_checked(bytes, false)?;
+        Ok(Self {
+            parts: parsed.parts,
+            meta,
+            checksum,
             file: bytes,
         })
     }

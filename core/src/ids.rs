@@ -70,7 +70,7 @@ macro_rules! id_type {
 
 id_type!(
     /// A node of the vertex hierarchy: a full-resolution vertex (leaf) or the result of a
-    /// collapse (internal node, which owns a [`Split`](crate::Split) record).
+    /// collapse (internal node, which owns a [`Split`](crate::format::Split) record).
     NodeId,
     u32
 );
@@ -100,7 +100,7 @@ id_type!(
     /// A polygon named by where it comes from rather than by its place in the polygon array:
     /// a base polygon's [`PolyId`], or `base_polygons + 2 · node + side` for a polygon that
     /// `node`'s split creates (side 1 for `f_r`), the slot the polygon would take in a camera
-    /// whose pairs were numbered by node. [`Split::neighbours`](crate::Split) names polygons
+    /// whose pairs were numbered by node. [`Split::neighbours`](crate::format::Split) names polygons
     /// so: a camera finds a neighbour's slot from the key and its own map from split to pair,
     /// without reading the neighbour's polygon record (a dependent cache miss per neighbour
     /// in a split's or collapse's legality check).

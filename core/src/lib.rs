@@ -5,8 +5,8 @@
 //! Kram & Shaw's CAVECLOD), with one static [`Hierarchy`] shared by any number of cameras,
 //! each keeping its own [`CameraState`] for temporal coherence.
 //!
-//! - `#![no_std]`, no `alloc`: every array is borrowed — the hierarchy from the baked file's
-//!   bytes, each camera from a `&mut [u32]` the caller sizes with
+//! - `#![no_std]`, no `alloc` by default: every array is borrowed — the hierarchy from the
+//!   baked file's bytes, each camera from a `&mut [u32]` the caller sizes with
 //!   [`CameraState::words_needed`].
 //! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
 //!   operations that meet contradictions return errors.
@@ -18,20 +18,30 @@
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
-//! use caveclod_core::{CameraState, Hierarchy, RefineParams, View};
+//! use caveclod_core::glam::Vec3;
+//! use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
 //! let h = Hierarchy::from_bytes(bytes)?;
 //! let mut memory = vec![0u32; CameraState::words_needed(&h)];
 //! let mut cam = CameraState::new(&h, &mut memory)?;
-//! let view = View::perspective(
-//!     glam::Vec3::new(0.0, 50.0, 200.0), glam::Vec3::ZERO, glam::Vec3::Y,
-//!     1.0, 16.0 / 9.0, 0.1, 1e4, 1080.0,
-//! );
+//! let look = LookAt {
+//!     eye: Vec3::new(0.0, 50.0, 200.0),
+//!     target: Vec3::ZERO,
+//!     up: Vec3::Y,
+//!     fov_y: 1.0,
+//!     near: 0.1,
+//!     far: 1e4,
+//! };
+//! let view = look.view(1920, 1080);
 //! let stats = cam.refine(&h, &view, &RefineParams::default())?;
-//! let mut indices = vec![0u32; (0..h.surface_count()).map(|s| cam.index_count(s)).sum()];
+//! let mut indices = vec![0u32; cam.total_index_count()];
 //! let mut offsets = vec![0u32; h.surface_count() + 1];
 //! cam.emit_indices_packed(&h, &mut indices, &mut offsets)?;
+//! // Draw `indices` with `look.view_projection(1920.0 / 1080.0)`.
 //! # let _ = stats; Ok(()) }
 //! ```
+//!
+//! With the `alloc` feature (off by default), `HierarchyBuf` and `OwnedCamera` own their
+//! memory, so an asset can keep its hierarchy and cameras without borrowing them.
 #![no_std]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -39,7 +49,10 @@
 #![cfg_attr(feature = "prefetch", deny(unsafe_code))]
 #![cfg_attr(not(feature = "prefetch"), forbid(unsafe_code))]
 
-pub mod camera;
+#[cfg(feature = "alloc")]
+extern crate alloc;
+
+mod camera;
 mod checksum;
 pub mod format;
 pub mod gmesh;
@@ -49,22 +62,21 @@ mod ids;
 mod memory;
 pub mod octree;
 mod outputs;
+#[cfg(feature = "alloc")]
+mod owned;
 mod prefetch;
-mod records;
 mod view;
 
 pub use camera::{
     CameraConfig, CameraError, CameraState, EmitError, OpError, RefineParams, RefineStats,
 };
-pub use checksum::checksum64;
-pub use format::{FormatError, HierarchyParts, WriteError};
+pub use format::error::FormatError;
 pub use glam;
 pub use hierarchy::Hierarchy;
 pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
-pub use octree::{CutError, Octree, OctreeCut, OctreeFormatError, SelectStats};
-pub use records::{
-    octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
-    PositionClass, Split, SplitBounds, Vertex, VertexKey,
-};
-pub use view::View;
+pub use octree::model::{Octree, OctreeFormatError};
+pub use octree::select::{CutError, OctreeCut, SelectStats};
+#[cfg(feature = "alloc")]
+pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
+pub use view::{LookAt, View};

@@ -2,6 +2,8 @@
 //! cuts) make before writing per-surface index lists: one place, so they refuse the same
 //! buffers the same way; each maps the shortfall to its own error type.
 
+use crate::ids::SurfaceId;
+
 /// What is wrong with the buffers given for `surfaces` per-surface lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Shortfall {
@@ -9,14 +11,15 @@ pub(crate) enum Shortfall {
     TooFewOutputs { needed: usize, given: usize },
     /// Surface `surface`'s list is shorter than its index count.
     TooSmall {
-        surface: usize,
+        surface: SurfaceId,
         needed: usize,
         given: usize,
     },
 }
 
 /// Checks `out` (one list per surface) and `written` (one count per surface) against
-/// `needed(surface)` indices for each of `surfaces`.
+/// `needed(surface)` indices for each of `surfaces` (at most 65535, as validated for
+/// hierarchies and octrees, so every surface has a [`SurfaceId`]).
 pub(crate) fn check_lists(
     out: &[&mut [u32]],
     written: &[u32],
@@ -33,7 +36,7 @@ pub(crate) fn check_lists(
         let n = needed(s);
         if list.len() < n {
             return Err(Shortfall::TooSmall {
-                surface: s,
+                surface: SurfaceId(s as u16),
                 needed: n,
                 given: list.len(),
             });

@@ -14,16 +14,13 @@
 //!   core overlaps it with the visits in flight, but the read must complete before it retires,
 //!   so it hides less.
 //!
-//! Measured on the St. Helens demo (2-core VM, 4 runs alternating, refinement time of four
-//! cameras together over one alone): 4.44-5.01x with the read, 4.20-4.40x with the
-//! instruction. Since certificates answer most visits without a read, a visit takes a few
-//! nanoseconds and 8 records ahead no longer gave the lines time to arrive: on the same
-//! flights (a probe timing each camera alone and four together, 16 runs of each variant
-//! alternating), four cameras took 1.227x the time of one camera alone per camera with
-//! 8 records, 1.171x when the pass also asks for the pair-map entry a refusal check will
-//! read, 1.121-1.178x looking 16 records ahead (32: 1.127x); without any prefetch, 1.38x.
+//! The instruction hides more of the wait than the read, because it retires at once. How far
+//! ahead to ask is set by the visit's cost: certificates answer most visits without reading
+//! the bounds, so a visit takes only a few nanoseconds, and the lines need several visits'
+//! time to arrive; the pass therefore asks `PREFETCH_AHEAD` records ahead, enough to cover a
+//! last-level-cache miss, and also asks for the pair-map entry a refusal check will read.
 
-use crate::records::SplitBounds;
+use crate::format::SplitBounds;
 
 /// Asks for `b`'s cache line ahead of its use.
 #[inline(always)]

@@ -1,7 +1,62 @@
 //! What a camera sees: eye point, frustum planes and the pixel scale of the screen-space
 //! error criterion.
 
+use glam::camera::rh::{proj, view::look_at_mat4};
 use glam::{Mat4, Vec3, Vec4};
+
+/// A perspective camera looking from `eye` at `target`: what the GPU needs (a
+/// view-projection matrix) and what refinement needs (a [`View`] with the same frustum and
+/// the viewport's pixel scale) from one description, so the two never disagree.
+///
+/// ```
+/// use caveclod_core::glam::Vec3;
+/// use caveclod_core::LookAt;
+/// let look = LookAt {
+///     eye: Vec3::new(0.0, 2.0, 10.0),
+///     target: Vec3::ZERO,
+///     up: Vec3::Y,
+///     fov_y: 1.0,
+///     near: 0.1,
+///     far: 100.0,
+/// };
+/// let view = look.view(1280, 720);
+/// assert!(view.sphere_visible(Vec3::ZERO, 0.0));
+/// assert!(!view.sphere_visible(Vec3::new(0.0, 2.0, 20.0), 1.0)); // behind the eye
+/// let _draw = look.view_projection(1280.0 / 720.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LookAt {
+    /// Eye point.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+    /// Near clip distance.
+    pub near: f32,
+    /// Far clip distance.
+    pub far: f32,
+}
+
+impl LookAt {
+    /// The view-projection matrix for a viewport of `aspect = width / height`: right-handed
+    /// y-up view space, Vulkan clip space (y down, depth 0..1).
+    pub fn view_projection(&self, aspect: f32) -> Mat4 {
+        proj::vulkan::perspective(self.fov_y, aspect, self.near, self.far)
+            * look_at_mat4(self.eye, self.target, self.up)
+    }
+
+    /// The refinement view: the frustum of [`view_projection`](Self::view_projection) and
+    /// the pixels per radian of a viewport `viewport_width` × `viewport_height` pixels
+    /// (`height / (2 tan(fov_y / 2))`).
+    pub fn view(&self, viewport_width: u32, viewport_height: u32) -> View {
+        let aspect = viewport_width as f32 / viewport_height.max(1) as f32;
+        let pixels_per_radian = viewport_height as f32 / (2.0 * libm::tanf(self.fov_y * 0.5));
+        View::from_view_projection(self.view_projection(aspect), self.eye, pixels_per_radian)
+    }
+}
 
 /// A camera's view for refinement.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,45 +73,6 @@ pub struct View {
 }
 
 impl View {
-    /// A perspective camera at `eye` looking at `target`, with vertical field of view `fov_y`
-    /// (radians), `aspect = width / height`, clip distances `near`/`far` and a viewport
-    /// `viewport_height` pixels tall.
-    #[allow(clippy::too_many_arguments)]
-    pub fn perspective(
-        eye: Vec3,
-        target: Vec3,
-        up: Vec3,
-        fov_y: f32,
-        aspect: f32,
-        near: f32,
-        far: f32,
-        viewport_height: f32,
-    ) -> Self {
-        let f = (target - eye).normalize_or_zero();
-        let r = f.cross(up).normalize_or_zero();
-        let u = r.cross(f);
-        let ty = libm::tanf(fov_y * 0.5);
-        let tx = ty * aspect;
-        let plane = |n: Vec3, through: Vec3| {
-            let n = n.normalize_or_zero();
-            n.extend(-n.dot(through))
-        };
-        let planes = [
-            plane(r + f * tx, eye),
-            plane(-r + f * tx, eye),
-            plane(u + f * ty, eye),
-            plane(-u + f * ty, eye),
-            plane(f, eye + f * near),
-            plane(-f, eye + f * far),
-        ];
-        Self {
-            eye,
-            planes,
-            plane_count: 6,
-            pixels_per_radian: viewport_height / (2.0 * ty),
-        }
-    }
-
     /// From a view-projection matrix with Vulkan's clip space (depth 0..1), as
     /// `glam::camera::rh::proj::vulkan::perspective(..) * view` builds it; planes by Gribb & Hartmann.
     pub fn from_view_projection(view_projection: Mat4, eye: Vec3, pixels_per_radian: f32) -> Self {
@@ -111,22 +127,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn perspective_planes_agree_with_the_matrix() {
-        let eye = Vec3::new(1.0, 2.0, 3.0);
-        let target = Vec3::new(4.0, 1.0, -2.0);
-        let a = View::perspective(eye, target, Vec3::Y, 1.0, 1.5, 0.1, 100.0, 600.0);
-        let vp = glam::camera::rh::proj::vulkan::perspective(1.0, 1.5, 0.1, 100.0)
-            * glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y);
-        let b = View::from_view_projection(vp, eye, a.pixels_per_radian);
+    fn look_at_frustum_matches_its_matrix() {
+        let look = LookAt {
+            eye: Vec3::new(1.0, 2.0, 3.0),
+            target: Vec3::new(4.0, 1.0, -2.0),
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 100.0,
+        };
+        let view = look.view(900, 600);
+        assert!((view.pixels_per_radian - 600.0 / (2.0 * libm::tanf(0.5))).abs() < 1e-3);
+        let m = look.view_projection(1.5);
+        // A point is inside the planes exactly when its clip coordinates are inside the
+        // Vulkan clip volume (away from the boundary, where rounding could differ).
         for x in [-20.0f32, -3.0, 0.0, 2.5, 9.0] {
             for y in [-7.0f32, 0.0, 1.0, 4.0] {
                 for z in [-30.0f32, -5.0, 0.0, 3.0] {
                     let p = Vec3::new(x, y, z);
-                    assert_eq!(a.sphere_visible(p, 0.0), b.sphere_visible(p, 0.0), "{p}");
+                    let c = m * p.extend(1.0);
+                    let inside = c.w > 0.0
+                        && c.x.abs() <= c.w
+                        && c.y.abs() <= c.w
+                        && c.z >= 0.0
+                        && c.z <= c.w;
+                    assert_eq!(view.sphere_visible(p, 0.0), inside, "{p}");
                 }
             }
         }
-        assert!(a.sphere_visible(target, 0.0));
-        assert!(!a.sphere_visible(eye - (target - eye), 0.5));
+        assert!(view.sphere_visible(look.target, 0.0));
+        assert!(!view.sphere_visible(look.eye - (look.target - look.eye), 0.5));
     }
 }

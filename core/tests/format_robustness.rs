@@ -9,8 +9,8 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use caveclod_core::format::{tags, FileHeader, SectionEntry, Tag};
-use caveclod_core::{FormatError, Hierarchy, Node, PolyKey, Position, Split};
+use caveclod_core::format::{tags, FileHeader, Node, Position, SectionEntry, Split, Tag};
+use caveclod_core::{FormatError, Hierarchy, PolyKey};
 use common::{exercise, fix_checksum, golden, header, set_header, Aligned, Rng};
 
 const HEADER_LEN: usize = size_of::<FileHeader>();

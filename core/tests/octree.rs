@@ -9,13 +9,12 @@ mod counting;
 
 use std::hint::black_box;
 
-use caveclod_core::format::{serialized_len, write_into, ExtraSection, HierarchyParts};
+use caveclod_core::format::{serialized_len, write_into, ExtraSection, HierarchyParts, Vertex};
 use caveclod_core::glam::Vec3;
-use caveclod_core::octree::{
-    octree_tags, CutError, Octree, OctreeCut, OctreeFormatError, OctreeMeta, OctreeNode,
-    OctreeParts, OctreeRange, SelectStats,
+use caveclod_core::octree::{octree_tags, OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
+use caveclod_core::{
+    CutError, Hierarchy, LookAt, Octree, OctreeCut, OctreeFormatError, SelectStats, SurfaceId, View,
 };
-use caveclod_core::{Hierarchy, Vertex, View};
 use common::{golden, Aligned};
 use counting::allocations;
 
@@ -120,7 +119,15 @@ impl Strip {
 
 /// A perspective view with a 100-pixel viewport (about 91.5 pixels per radian).
 fn look(eye: Vec3, target: Vec3) -> View {
-    View::perspective(eye, target, Vec3::Y, 1.0, 1.0, 0.1, 1e6, 100.0)
+    let look = LookAt {
+        eye,
+        target,
+        up: Vec3::Y,
+        fov_y: 1.0,
+        near: 0.1,
+        far: 1e6,
+    };
+    look.view(100, 100)
 }
 
 fn far() -> View {
@@ -779,7 +786,7 @@ fn small_buffers_and_wrong_octrees_are_errors() {
     assert_eq!(
         cut.emit_indices(&o, &mut [&mut l0[..], &mut l1[..]], &mut written),
         Err(CutError::OutputTooSmall {
-            surface: Some(1),
+            surface: Some(SurfaceId(1)),
             needed: 18,
             given: 15
         })

@@ -8,6 +8,7 @@ use std::collections::HashMap;
 
 use caveclod_core::{
     CameraError, CameraState, EmitError, Hierarchy, NodeId, OpError, PolyId, RefineParams,
+    SurfaceId,
 };
 use common::{collapse_all, golden, params, views};
 
@@ -300,7 +301,7 @@ fn too_small_emit_outputs_are_refused() {
     assert_eq!(
         cam.emit_indices_packed(&h, &mut out, &mut offsets),
         Err(EmitError::OutputTooSmall {
-            surface: u16::MAX,
+            surface: None,
             needed: total,
             given: total - 1
         })
@@ -327,7 +328,7 @@ fn too_small_emit_outputs_are_refused() {
         assert_eq!(
             cam.emit_indices(&h, &mut slices, &mut written),
             Err(EmitError::OutputTooSmall {
-                surface: last as u16,
+                surface: Some(SurfaceId(last as u16)),
                 needed,
                 given: needed - 1
             })

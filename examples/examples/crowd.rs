@@ -42,7 +42,6 @@ use caveclod_core::gmesh::{
     Partitions,
 };
 use caveclod_core::gpu::MorphInstance;
-use caveclod_core::View;
 use caveclod_tests::meshes::{self, Rng};
 use caveclod_tests::to_mesh;
 use caveclod_vulkan::{
@@ -214,7 +213,15 @@ fn run_path(
     };
     for f in 0..args.frames {
         let (eye, target, up) = path.at(f as f32 / args.frames as f32);
-        let view = View::perspective(eye, target, up, 1.0, 16.0 / 9.0, 0.5, 1000.0, 720.0);
+        let look = LookAt {
+            eye,
+            target,
+            up,
+            fov_y: 1.0,
+            near: 0.5,
+            far: 1000.0,
+        };
+        let view = look.view(1280, 720);
         let mut visible = 0;
         for (inst, &p) in instances.iter_mut().zip(places) {
             inst.t = t_from_distance(eye.distance(p), D_NEAR, D_FAR);
@@ -430,7 +437,7 @@ fn render_with(
     let mut levels = Vec::new();
     for i in 0..gm.levels() {
         let level = gm.level(i).ok_or("missing level")?;
-        let gather = |side: usize| -> Vec<caveclod_core::Vertex> {
+        let gather = |side: usize| -> Vec<caveclod_core::format::Vertex> {
             level
                 .vertices
                 .iter()
@@ -473,7 +480,7 @@ fn render_with(
             far: 1000.0,
         };
         let viewport = Viewport::full(w, hgt);
-        let view = look.view(viewport);
+        let view = look.view(viewport.width, viewport.height);
         let bias = run.bias.get(f).copied().unwrap_or(0.0);
         let mut per_level: Vec<Vec<MorphInstance>> = vec![Vec::new(); levels.len()];
         for &p in places {
@@ -518,7 +525,7 @@ fn render_with(
                 .map(|(((i, inst), ind), lists)| CameraDraw {
                     target: 0,
                     viewport,
-                    view_proj: look.view_proj(viewport),
+                    view_proj: look.view_projection(viewport.aspect()),
                     vertices: &levels[*i].a,
                     indices: ind,
                     source: IndexSource::Lists(lists),

@@ -9,11 +9,11 @@
 //! camera's counts (after an `Inconsistent` error the camera is reset, as documented).
 #![no_main]
 
-use caveclod_core::format::FileHeader;
+use caveclod_core::format::{checksum64, FileHeader};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    checksum64, CameraConfig, CameraState, FormatError, Hierarchy, NodeId, Octree, OctreeCut,
-    OpError, RefineParams, View,
+    CameraConfig, CameraState, FormatError, Hierarchy, LookAt, NodeId, Octree, OctreeCut, OpError,
+    RefineParams, View,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -36,8 +36,17 @@ fn views(h: &Hierarchy<'_>) -> [View; 4] {
     let hi = Vec3::from_array(m.bounds_max);
     let centre = (lo + hi) * 0.5;
     let r = ((hi - lo).length() * 0.5).max(1e-3);
-    let persp =
-        |eye: Vec3| View::perspective(eye, centre, Vec3::Y, 0.9, 1.5, r * 1e-3, r * 100.0, 720.0);
+    let persp = |eye: Vec3| {
+        LookAt {
+            eye,
+            target: centre,
+            up: Vec3::Y,
+            fov_y: 0.9,
+            near: r * 1e-3,
+            far: r * 100.0,
+        }
+        .view(1080, 720)
+    };
     [
         persp(centre + Vec3::new(0.3, 0.8, 2.0) * r),
         persp(centre + Vec3::new(-0.1, 0.05, 0.2) * r),
@@ -134,7 +143,9 @@ fn exercise_octree(h: &Hierarchy<'_>) {
     let mut cut = OctreeCut::new(&t, &mut memory).expect("words_needed words are enough");
     for (i, view) in views(h).iter().enumerate() {
         let tolerance = [1.0, 0.1, 1e9, f32::NAN][i % 4];
-        let stats = cut.select(&t, view, tolerance).expect("a cut of its own octree");
+        let stats = cut
+            .select(&t, view, tolerance)
+            .expect("a cut of its own octree");
         let total = cut.total_index_count();
         assert_eq!(total, 3 * stats.triangles as usize);
         let mut out = vec![u32::MAX; total];

@@ -1,6 +1,6 @@
 //! Quick refine timing on a large terrain (scratch; see benches/ for the real benchmarks).
 use caveclod_core::glam::Vec3;
-use caveclod_core::{CameraState, RefineParams, View};
+use caveclod_core::{CameraState, LookAt, RefineParams};
 fn main() {
     let n: u32 = std::env::args()
         .nth(1)
@@ -26,7 +26,15 @@ fn main() {
             0.0,
             s * 0.5 + s * 0.3 * (t + 0.2).sin(),
         );
-        View::perspective(eye, look, Vec3::Y, 1.047, 16.0 / 9.0, 0.1, s * 2.0, 720.0)
+        LookAt {
+            eye,
+            target: look,
+            up: Vec3::Y,
+            fov_y: 1.047,
+            near: 0.1,
+            far: s * 2.0,
+        }
+        .view(1280, 720)
     };
     let p = RefineParams {
         tolerance_px: tol,

@@ -3,7 +3,8 @@
 
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    CameraConfig, CameraError, CameraState, Hierarchy, OpError, RefineParams, RefineStats, View,
+    CameraConfig, CameraError, CameraState, Hierarchy, LookAt, OpError, RefineParams, RefineStats,
+    View,
 };
 use caveclod_tests::check::check_front;
 use caveclod_tests::{bake, meshes};
@@ -11,16 +12,15 @@ use caveclod_tests::{bake, meshes};
 fn view(t: f32, k: usize) -> View {
     let a = t + k as f32 * 1.7;
     let eye = Vec3::new(20.0 + 18.0 * a.cos(), 6.0 + k as f32, 20.0 + 18.0 * a.sin());
-    View::perspective(
+    LookAt {
         eye,
-        Vec3::new(20.0, 0.0, 20.0),
-        Vec3::Y,
-        1.0,
-        1.6,
-        0.1,
-        500.0,
-        720.0,
-    )
+        target: Vec3::new(20.0, 0.0, 20.0),
+        up: Vec3::Y,
+        fov_y: 1.0,
+        near: 0.1,
+        far: 500.0,
+    }
+    .view(1152, 720)
 }
 
 /// Refines `frames` frames of camera `k` alone and returns its final corners.
@@ -89,16 +89,15 @@ fn a_budgeted_camera_refuses_splits_instead_of_failing() {
     let mut mem = vec![0u32; CameraState::words_needed_for(&h, &config)];
     assert!(mem.len() < CameraState::words_needed(&h));
     let mut cam = CameraState::with_config(&h, &mut mem, &config).expect("sized");
-    let close = View::perspective(
-        Vec3::new(20.0, 3.0, 20.0),
-        Vec3::new(30.0, 0.0, 30.0),
-        Vec3::Y,
-        1.2,
-        1.6,
-        0.01,
-        500.0,
-        2000.0,
-    );
+    let close = LookAt {
+        eye: Vec3::new(20.0, 3.0, 20.0),
+        target: Vec3::new(30.0, 0.0, 30.0),
+        up: Vec3::Y,
+        fov_y: 1.2,
+        near: 0.01,
+        far: 500.0,
+    }
+    .view(3200, 2000);
     let st = cam
         .refine(
             &h,
@@ -171,7 +170,15 @@ fn remembered_collapse_refusals_change_nothing() {
         let r = 8.0 + 30.0 * (0.5 + 0.5 * (t * 0.7).cos());
         let eye = Vec3::new(32.0 + r * t.cos(), 3.0 + 0.2 * r, 32.0 + r * t.sin());
         let target = Vec3::new(32.0 + 10.0 * (t * 1.3).sin(), 0.0, 32.0);
-        let v = View::perspective(eye, target, Vec3::Y, 1.0, 1.6, 0.1, 500.0, 720.0);
+        let v = LookAt {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 500.0,
+        }
+        .view(1152, 720);
         if f % 50 == 25 {
             a.compact(&h);
             b.compact(&h);
@@ -223,7 +230,15 @@ fn certificates_change_nothing() {
             eye += Vec3::new(25.0, 10.0, -5.0); // a jump there and back
         }
         let target = Vec3::new(32.0 + 12.0 * (t * 1.3).sin(), 0.0, 32.0 + 6.0 * t.cos());
-        let v = View::perspective(eye, target, Vec3::Y, 1.0, 1.6, 0.1, 500.0, 720.0);
+        let v = LookAt {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 500.0,
+        }
+        .view(1152, 720);
         let params = RefineParams {
             tolerance_px: if (200..240).contains(&f) { 1.5 } else { 0.5 },
             frustum_culling: !(250..270).contains(&f),
@@ -249,16 +264,15 @@ fn certificates_change_nothing() {
     );
     // Settled: a pass that repeats the last view reads no bounds at all, whatever the
     // answers (too fine, outside the frustum, facing away, a collapse refused).
-    let v = View::perspective(
-        Vec3::new(20.0, 3.0, 50.0),
-        Vec3::new(40.0, 0.0, 20.0),
-        Vec3::Y,
-        1.0,
-        1.6,
-        0.1,
-        500.0,
-        720.0,
-    );
+    let v = LookAt {
+        eye: Vec3::new(20.0, 3.0, 50.0),
+        target: Vec3::new(40.0, 0.0, 20.0),
+        up: Vec3::Y,
+        fov_y: 1.0,
+        near: 0.1,
+        far: 500.0,
+    }
+    .view(1152, 720);
     let params = RefineParams {
         tolerance_px: 0.5,
         ..RefineParams::default()
@@ -328,16 +342,15 @@ fn wide_and_narrow_pair_maps_refine_alike() {
             4.0 + 2.0 * f as f32,
             129.0 + 60.0 * t.sin(),
         );
-        let v = View::perspective(
+        let v = LookAt {
             eye,
-            Vec3::new(129.0, 0.0, 129.0),
-            Vec3::Y,
-            1.0,
-            1.6,
-            0.1,
-            900.0,
-            720.0,
-        );
+            target: Vec3::new(129.0, 0.0, 129.0),
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 900.0,
+        }
+        .view(1152, 720);
         let sw = w.refine(&h, &v, &params).expect("refine wide");
         let sn = n.refine(&h, &v, &params).expect("refine narrow");
         assert_eq!(sw, sn, "frame {f}");

@@ -10,7 +10,7 @@
 use std::sync::OnceLock;
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::{CameraConfig, CameraState, NodeId, RefineParams, View};
+use caveclod_core::{CameraConfig, CameraState, LookAt, NodeId, RefineParams};
 use caveclod_tests::check::check_front;
 use caveclod_tests::{bake, meshes, BakedMesh};
 use proptest::prelude::*;
@@ -119,7 +119,7 @@ proptest! {
         let mut plain_mem = vec![0u32; CameraState::words_needed_for(&h, &plain_config)];
         let mut plain = CameraState::with_config(&h, &mut plain_mem, &plain_config).expect("sized");
         let mut plain_stack = vec![NodeId::NONE; 1024];
-        let far = View::perspective(Vec3::new(500.0, 300.0, 500.0), Vec3::ZERO, Vec3::Y, 1.0, 1.0, 0.1, 1e4, 512.0);
+        let far = LookAt { eye: Vec3::new(500.0, 300.0, 500.0), target: Vec3::ZERO, up: Vec3::Y, fov_y: 1.0, near: 0.1, far: 1e4 }.view(512, 512);
         other.refine(&h, &far, &RefineParams::default()).expect("refine");
         let other_before = snapshot(&h, &other);
         let mut stack = vec![NodeId::NONE; 1024];
@@ -153,7 +153,7 @@ proptest! {
                     prop_assert_eq!(snapshot_sorted(&h, &cam), before);
                 }
                 Step::Refine { eye, target, tolerance, max_ops } => {
-                    let view = View::perspective(Vec3::from(eye), Vec3::from(target), Vec3::Y, 1.0, 1.3, 0.05, 1e3, 400.0);
+                    let view = LookAt { eye: Vec3::from(eye), target: Vec3::from(target), up: Vec3::Y, fov_y: 1.0, near: 0.05, far: 1e3 }.view(520, 400);
                     let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
                     let st = cam.refine(&h, &view, &params).expect("refine");
                     prop_assert!(st.operations() <= max_ops);
@@ -208,7 +208,7 @@ proptest! {
                     b.compact(&h);
                 }
                 Step::Refine { eye, target, tolerance, max_ops } => {
-                    let view = View::perspective(Vec3::from(eye), Vec3::from(target), Vec3::Y, 1.0, 1.3, 0.05, 1e3, 400.0);
+                    let view = LookAt { eye: Vec3::from(eye), target: Vec3::from(target), up: Vec3::Y, fov_y: 1.0, near: 0.05, far: 1e3 }.view(520, 400);
                     let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
                     prop_assert_eq!(a.refine(&h, &view, &params), b.refine(&h, &view, &params));
                 }

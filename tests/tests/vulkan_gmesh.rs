@@ -7,9 +7,9 @@
 mod vulkan_support;
 
 use caveclod_bake::gmesh::{build, GMeshOptions};
+use caveclod_core::format::Vertex;
 use caveclod_core::gmesh::GMesh;
 use caveclod_core::gpu::{morph_vertex, MorphInstance};
-use caveclod_core::Vertex;
 use caveclod_tests::{bake, meshes};
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Geomorph, IndexSource, LookAt, Morph, MorphInstances, Renderer,
@@ -151,7 +151,7 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
             &mut [CameraDraw {
                 target: 0,
                 viewport,
-                view_proj: look.view_proj(viewport),
+                view_proj: look.view_projection(viewport.aspect()),
                 vertices: &coarse,
                 indices: &mut indices,
                 source: IndexSource::Lists(&list_refs),

@@ -11,7 +11,7 @@ mod vulkan_support;
 use caveclod_bake::ooc::{MultiresOptions, OocOptions};
 use caveclod_core::{Octree, OctreeCut};
 use caveclod_tests::generate;
-use caveclod_vulkan::{IndexSource, VertexBuffer, Viewport};
+use caveclod_vulkan::{IndexSource, VertexBuffer};
 use vulkan_support::*;
 
 const SIZE: u32 = 256;
@@ -54,7 +54,7 @@ fn an_octree_cut_draws_without_holes_at_level_changes() {
     let ctx = context();
     let size = generate::TERRAIN_SIZE;
     let look = terrain_camera(size, 0.7, 0.45, 0.12);
-    let view = look.view(Viewport::full(SIZE, SIZE));
+    let view = look.view(SIZE, SIZE);
     let vertices = ok(
         VertexBuffer::from_vertices(&ctx, "octree", t.vertices()),
         "octree vertices",

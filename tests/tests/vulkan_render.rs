@@ -10,8 +10,9 @@
 
 mod vulkan_support;
 
+use caveclod_core::format::Vertex;
 use caveclod_core::gpu::{morph_vertex, MorphInstance};
-use caveclod_core::{CameraConfig, CameraState, Vertex};
+use caveclod_core::{CameraConfig, CameraState};
 use caveclod_tests::check::split_all;
 use caveclod_tests::meshes::{self, Rng};
 use caveclod_vulkan::{
@@ -153,7 +154,7 @@ fn vertex_buffer_written_once_index_bytes_reported() {
                 &mut [CameraDraw {
                     target: 0,
                     viewport,
-                    view_proj: look.view_proj(viewport),
+                    view_proj: look.view_projection(viewport.aspect()),
                     vertices: &vertices,
                     indices: &mut indices,
                     source: IndexSource::Camera {
@@ -247,7 +248,7 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
         .map(|(i, ind)| CameraDraw {
             target: 0,
             viewport: quadrants[i],
-            view_proj: looks[i].view_proj(quadrants[i]),
+            view_proj: looks[i].view_projection(quadrants[i].aspect()),
             vertices: &vertices,
             indices: ind,
             source: IndexSource::Camera {
@@ -426,7 +427,7 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
             &mut [CameraDraw {
                 target: 0,
                 viewport,
-                view_proj: look.view_proj(viewport),
+                view_proj: look.view_projection(viewport.aspect()),
                 vertices: &coarse_buffer,
                 indices: &mut indices,
                 source: IndexSource::Lists(&list_refs),
@@ -542,7 +543,7 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
             CameraDraw {
                 target: i,
                 viewport,
-                view_proj: looks[i].view_proj(viewport),
+                view_proj: looks[i].view_projection(viewport.aspect()),
                 vertices: &vertices,
                 indices: ind,
                 source: IndexSource::Camera {

@@ -3,8 +3,8 @@
 //! runs, so results can be compared directly.
 
 use ash::vk;
+use caveclod_core::format::Vertex;
 use caveclod_core::gpu::MorphPush;
-use caveclod_core::Vertex;
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;

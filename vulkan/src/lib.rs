@@ -41,13 +41,13 @@
 //!     far: 100.0,
 //! };
 //! let viewport = Viewport::full(256, 256);
-//! cam.refine(&h, &look.view(viewport), &RefineParams::default())
+//! cam.refine(&h, &look.view(viewport.width, viewport.height), &RefineParams::default())
 //!     .map_err(|e| Error::InvalidArgument(e.to_string()))?;
 //! let colours = vec![[0.8, 0.7, 0.6, 1.0]; h.surface_count()];
 //! renderer.render(&ctx, &mut [CameraDraw {
 //!     target: 0,
 //!     viewport,
-//!     view_proj: look.view_proj(viewport),
+//!     view_proj: look.view_projection(viewport.aspect()),
 //!     vertices: &vertices,
 //!     indices: &mut indices,
 //!     source: IndexSource::Camera { hierarchy: &h, camera: &cam },
@@ -79,9 +79,9 @@ pub mod mesh;
 pub mod pipeline;
 pub mod readback;
 pub mod validation;
-pub mod view;
 
 pub use buffer::{Buffer, BufferDesc};
+pub use caveclod_core::LookAt;
 pub use device::{Context, HeadlessDesc, SharedAllocator};
 pub use error::{from_vk, Error, Result, VkResultExt};
 pub use frame::{CameraDraw, FrameStats, Morph, Renderer, RendererDesc, Viewport};
@@ -93,4 +93,3 @@ pub use readback::{ImageDiff, RgbaImage};
 pub use validation::{
     messenger_info, validation_layer_present, DebugMessenger, ValidationLog, VALIDATION_LAYER,
 };
-pub use view::LookAt;

@@ -6,8 +6,9 @@
 //! context ([`Context::vertex_uploads`]) so tests can check that.
 
 use ash::vk;
+use caveclod_core::format::Vertex;
 use caveclod_core::gpu::MorphInstance;
-use caveclod_core::{Hierarchy, Vertex};
+use caveclod_core::Hierarchy;
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;

@@ -4,7 +4,7 @@
 //! The module is embedded with `include_bytes!` and read with `ash::util::read_spv`, which
 //! fixes alignment, so users of this crate never need rust-gpu. Vertex layouts, push-constant
 //! ranges and descriptor bindings here mirror the interface contract: `draw_vs`/`draw_fs`
-//! (binding 0: `caveclod_core::Vertex`, stride 32; 80-byte [`DrawPush`] for vertex and
+//! (binding 0: `caveclod_core::format::Vertex`, stride 32; 80-byte [`DrawPush`] for vertex and
 //! fragment), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
 //! [`MorphInstance`] per instance; same push constants) and `geomorph_cs` (three storage
 //! buffers, 16-byte [`MorphPush`]).

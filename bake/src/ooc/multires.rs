@@ -60,8 +60,8 @@
 use super::cluster::{cell_position, cluster_attributes, Cluster, Clusterer};
 use super::soup::{HAS_NORMAL, HAS_UV};
 use crate::fxhash::{FxHashMap, FxHashSet};
+use caveclod_core::format::Vertex;
 use caveclod_core::octree::{OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
-use caveclod_core::Vertex;
 
 /// How to cut the levels into nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

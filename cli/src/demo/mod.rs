@@ -14,7 +14,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use caveclod_core::{checksum64, Hierarchy};
+use caveclod_core::format::checksum64;
+use caveclod_core::Hierarchy;
 
 use crate::aligned::AlignedBytes;
 use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};

@@ -98,7 +98,11 @@ fn draw(
             })
             .collect();
         for (i, cam) in cams.iter_mut().enumerate() {
-            if let Err(e) = cam.refine(h, &looks[i].view(viewports[i]), &params) {
+            if let Err(e) = cam.refine(
+                h,
+                &looks[i].view(viewports[i].width, viewports[i].height),
+                &params,
+            ) {
                 outcome = Err(format!("camera {i}, frame {f}: {e}"));
             }
         }
@@ -114,7 +118,7 @@ fn draw(
             .map(|(i, ind)| CameraDraw {
                 target: 0,
                 viewport: viewports[i],
-                view_proj: looks[i].view_proj(viewports[i]),
+                view_proj: looks[i].view_projection(viewports[i].aspect()),
                 vertices: &vertices,
                 indices: ind,
                 source: IndexSource::Camera {

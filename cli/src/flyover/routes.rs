@@ -8,7 +8,7 @@
 //! object the routes circle above it.
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::{Hierarchy, View};
+use caveclod_core::{Hierarchy, LookAt, View};
 
 /// Viewport width in pixels (the screen-space tolerance is relative to it).
 pub const WIDTH: f32 = 1280.0;
@@ -223,14 +223,13 @@ pub fn clip(ground: &Ground) -> (f32, f32) {
 pub fn view_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> View {
     let (eye, dir) = eye_at(route, frame, speed, ground);
     let (near, far) = clip(ground);
-    View::perspective(
+    let look = LookAt {
         eye,
-        eye + dir,
-        Vec3::Y,
-        FOV_Y_DEG.to_radians(),
-        WIDTH / HEIGHT,
+        target: eye + dir,
+        up: Vec3::Y,
+        fov_y: FOV_Y_DEG.to_radians(),
         near,
         far,
-        HEIGHT,
-    )
+    };
+    look.view(WIDTH as u32, HEIGHT as u32)
 }

@@ -54,8 +54,8 @@
 use glam::{BVec4A, Vec3, Vec4};
 
 use super::ActiveVertex;
+use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;
-use crate::records::SplitBounds;
 use crate::view::View;
 
 /// Relative margin kept between a distance and the distance at which a test's answer

@@ -11,7 +11,7 @@
 use super::index_cache::BATCH;
 use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
-use crate::ids::PolyId;
+use crate::ids::{PolyId, SurfaceId};
 use crate::outputs::{check_lists, Shortfall};
 
 /// Why indices could not be emitted.
@@ -28,8 +28,8 @@ pub enum EmitError {
     },
     /// An output list is too short.
     OutputTooSmall {
-        /// The surface.
-        surface: u16,
+        /// The surface; `None` for the packed output of all surfaces.
+        surface: Option<SurfaceId>,
         /// Indices needed.
         needed: usize,
         /// Room given.
@@ -48,7 +48,7 @@ pub enum EmitError {
     /// a [`reset`](CameraState::reset). The output is not usable.
     CountMismatch {
         /// The surface.
-        surface: u16,
+        surface: SurfaceId,
         /// Indices counted.
         expected: usize,
         /// Indices found.
@@ -64,15 +64,19 @@ impl core::fmt::Display for EmitError {
                 write!(f, "{given} index outputs given, {needed} needed")
             }
             Self::OutputTooSmall {
-                surface,
+                surface: Some(s),
                 needed,
                 given,
-            } => {
-                write!(
-                    f,
-                    "index list of surface {surface}: room for {given}, {needed} needed"
-                )
-            }
+            } => write!(
+                f,
+                "index list of surface {}: room for {given}, {needed} needed",
+                s.0
+            ),
+            Self::OutputTooSmall {
+                surface: None,
+                needed,
+                given,
+            } => write!(f, "packed index list: room for {given}, {needed} needed"),
             Self::MissingVertex { poly, corner } => {
                 write!(
                     f,
@@ -86,7 +90,8 @@ impl core::fmt::Display for EmitError {
                 found,
             } => write!(
                 f,
-                "surface {surface}: {found} indices emitted, {expected} counted (reset the camera)"
+                "surface {}: {found} indices emitted, {expected} counted (reset the camera)",
+                surface.0
             ),
         }
     }
@@ -95,6 +100,17 @@ impl core::fmt::Display for EmitError {
 impl core::error::Error for EmitError {}
 
 impl CameraState<'_> {
+    /// Indices all surfaces' lists need together: the sum of [`index_count`](Self::index_count)
+    /// over the surfaces, the length [`emit_indices_packed`](Self::emit_indices_packed)
+    /// needs.
+    pub fn total_index_count(&self) -> usize {
+        self.front
+            .surface_polygons
+            .iter()
+            .map(|&n| 3 * n as usize)
+            .sum()
+    }
+
     /// Indices each surface's list needs: `3 ×` its active polygons.
     pub fn index_count(&self, surface: usize) -> usize {
         self.front
@@ -167,7 +183,7 @@ impl CameraState<'_> {
                 needed,
                 given,
             } => EmitError::OutputTooSmall {
-                surface: surface as u16,
+                surface: Some(surface),
                 needed,
                 given,
             },
@@ -186,7 +202,7 @@ impl CameraState<'_> {
             let expected = self.index_count(s);
             if written[s] as usize != expected {
                 return Err(EmitError::CountMismatch {
-                    surface: s as u16,
+                    surface: SurfaceId(s as u16),
                     expected,
                     found: written[s] as usize,
                 });
@@ -214,10 +230,10 @@ impl CameraState<'_> {
                 given: offsets.len(),
             });
         }
-        let total: usize = (0..ns).map(|s| self.index_count(s)).sum();
+        let total = self.total_index_count();
         if out.len() < total {
             return Err(EmitError::OutputTooSmall {
-                surface: u16::MAX,
+                surface: None,
                 needed: total,
                 given: out.len(),
             });
@@ -243,7 +259,7 @@ impl CameraState<'_> {
             end += expected;
             if offsets[s + 1] as usize != end {
                 return Err(EmitError::CountMismatch {
-                    surface: s as u16,
+                    surface: SurfaceId(s as u16),
                     expected,
                     found: (offsets[s + 1] as usize).saturating_sub(end - expected),
                 });

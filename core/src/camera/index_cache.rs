@@ -20,16 +20,15 @@
 //! Without the cache, emission follows the chain itself ([`Front::gather`], then
 //! [`Gathered::entry`] while it hands out the triangles), [`BATCH`] slots at a time, one link
 //! for all of them before the next, so the misses of a link are independent and the core
-//! overlaps them: that took `emit/packed` (a 1M-polygon terrain, 36k polygons) from 683 µs
-//! to 571-583 µs, and the demo's cameras from 0.133-0.153 ms to 0.121-0.127 ms per frame. 32
-//! slots per batch keep the batch's arrays under 1 KB of stack; 64 was 4% faster on the
-//! bench, not worth twice the stack on a small target. A reset fills the base slots' entries
-//! the same way; compaction moves each pair's entries with the pair.
+//! overlaps them instead of waiting for each in turn. 32 slots per batch keep the batch's
+//! arrays under 1 KB of stack, which a small target can afford; a larger batch gains little
+//! for twice the stack. A reset fills the base slots' entries the same way; compaction moves
+//! each pair's entries with the pair.
 
 use super::{Front, SlotTriangle, NONE, NO_POLYGON};
+use crate::format::Polygon;
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};
-use crate::records::Polygon;
 
 /// Slots per batch of [`Front::gather`]: enough independent reads per link to keep the
 /// core's miss queue busy, few enough that a batch's gathered links stay in the first-level

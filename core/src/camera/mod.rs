@@ -1,80 +1,11 @@
-//! Per-camera refinement state in caller-owned memory.
-//!
-//! One [`CameraState`] is the paper's "camera refinement" structure: the active front of one
-//! camera over a shared [`Hierarchy`]. It lives in a `&mut [u32]` the caller provides (sized
-//! by [`CameraState::words_needed`]), so a console-style runtime can place cameras in fixed
-//! pools, and it never allocates.
-//!
-//! # Layout (words)
-//!
-//! | array | length | what |
-//! |---|---|---|
-//! | `pair_of` | splittable nodes (halved with 16-bit entries, when `max_pairs` < 65,535), or 1.5 × (2 × `max_pairs` + 1) hashed where [`CameraConfig::hashed_pair_map`] asks and that is smaller (see `pair_map`) | the face pair a split node's split created, or `NONE` |
-//! | `owner` | `max_pairs` | the node whose split created each live pair |
-//! | `active` | 4 × (roots + `max_pairs`) | the active node list: active-vertex records (node, coarsening parent, two certificates) with a free list |
-//! | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
-//! | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
-//! | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
-//! | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
-//! | `stack` | `stack_len` | the explicit stack of forced splits |
-//!
-//! Design decisions:
-//! - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
-//!   it has been created (its parent is split) and not split; a polygon is active iff its
-//!   creator is split. `pair_of` answers both in O(1) and doubles as the map from a split to
-//!   the slots of the two polygons it created, so there is no per-polygon or per-leaf array at
-//!   all. The map is an array by node, which keeps nearby nodes' entries together; a
-//!   runtime short of memory may keep only the split nodes, hashed.
-//! - **Polygons live in slot pairs**, base polygons first, then two slots per live split,
-//!   kept dense (a collapse moves the last pair into the hole and patches the at most six
-//!   neighbour links that point at it), so emission is one linear scan.
-//! - **Corners point at active-vertex records**, not at nodes, as in Hoppe's `SrAVertex`:
-//!   a split hands the record of `vs` to its stationary child, so only the polygons that move
-//!   to the floating child are touched. Records freed by collapses are reused through a free
-//!   list; the record array is the active node list that refinement walks.
-//! - **A record carries its node's coarsening parent**: the parent when the node is the
-//!   parent's stationary child (it shares the parent's position), `NONE` otherwise. It is
-//!   set when the record is written (by a split, a collapse or a reset, which read the node
-//!   records anyway), so a refinement pass decides whether a node may trigger a collapse
-//!   from its own record, without reading the node records of the node and its parent on
-//!   every visit: those reads were a fifth of a pass's cache misses, and four cameras' worth
-//!   of them no longer fit the caches one camera's fit.
-//! - **A refused collapse is remembered until something it depends on changes.** Most
-//!   collapses that refinement wants are illegal (a neighbour is still finer than the split
-//!   left it, or the floating child is split), and asking again costs a chain of dependent
-//!   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
-//!   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks
-//!   per collapse applied, every frame. Legality depends only on the pair's two slots (their
-//!   links and corners) and on the children being unsplit, so one bit per pair, set on a
-//!   refusal, is cleared by every write to either slot and by the collapse of either child;
-//!   a set bit answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every
-//!   bit.
-//! - **Settled answers are certified, not asked again.** A visit asks whether the node's
-//!   split is wanted and, for a stationary child, whether its parent's still is; the answer
-//!   rarely changes, yet each question reads a bounds record from wherever the hierarchy
-//!   keeps it. The record keeps, per question, the answer and the odometer reading up to
-//!   which it provably stands (the eye's path length, or that plus the frustum planes'
-//!   sweep), and a visit before then reads nothing but its record (see `certificate`): on
-//!   the St. Helens flyover about five questions in six of a moving pass are answered so,
-//!   and all but a handful of a settled pass. 8 bytes per record.
-//! - **Emission copies; operations keep the copy exact.** A polygon's vertex indices change
-//!   only when a corner moves to another active-vertex record: a record keeps its position
-//!   for life (a split hands it to the stationary child, which shares the position). So the
-//!   index cache keeps each slot's three indices with its surface and group, and an
-//!   operation rewrites just the corners it moves (one vertex-table row for all of them:
-//!   every moved corner lands on the same position) and the pair it creates; a
-//!   pair filling a hole brings its entries. Emission then copies the cache in slot order.
-//!   Without it, every frame followed five dependent reads per polygon across the hierarchy,
-//!   which four cameras' emissions pushed out of each other's caches. 16 bytes per slot;
-//!   [`CameraConfig::index_cache`] turns it off for a runtime short of memory.
-//! - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
-//!   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
-//!   memory gets a hard polygon budget for free.
+//! Per-camera refinement state in caller-owned memory: [`CameraState`] and its operations;
+//! the layout and the design decisions are in its docs.
 
 mod certificate;
 mod compact;
 mod emit;
 mod index_cache;
+mod layout;
 mod ops;
 mod pair_map;
 mod refine;
@@ -88,6 +19,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PolyKey};
 use certificate::{Odometer, UNKNOWN};
+pub(crate) use layout::{Layout, Scalars};
 use pair_map::PairMap;
 
 /// Absent link / empty entry.
@@ -176,15 +108,15 @@ pub struct CameraConfig {
     pub stack_len: u32,
     /// Keep each active polygon's vertex indices between frames, so emission copies them
     /// instead of looking every polygon up in the hierarchy (16 bytes per polygon slot; see
-    /// the [module docs](self)). On in [`full`](Self::full) and
+    /// the [`CameraState`] docs). On in [`full`](Self::full) and
     /// [`with_polygon_budget`](Self::with_polygon_budget).
     pub index_cache: bool,
     /// Keep only the split nodes in the map from split to pair, hashed, where that is smaller
     /// than an array over every splittable node (a budget of fewer than about a sixth of the
     /// hierarchy's splits; see `pair_map`). Off in [`full`](Self::full) and
-    /// [`with_polygon_budget`](Self::with_polygon_budget): on the St. Helens demo it takes a
-    /// budgeted camera from 1.23 to 1.04 MB, and refinement about 7% longer, because the
-    /// array keeps the entries of nearby nodes together and the table scatters them.
+    /// [`with_polygon_budget`](Self::with_polygon_budget): it saves memory on a budgeted camera
+    /// but makes refinement slower, because the array keeps the entries of nearby nodes
+    /// together and the table scatters them.
     pub hashed_pair_map: bool,
 }
 
@@ -261,7 +193,78 @@ impl core::fmt::Display for CameraError {
 
 impl core::error::Error for CameraError {}
 
-/// The active front of one camera over a shared hierarchy. See the [module docs](self).
+/// The active front of one camera over a shared hierarchy, in caller-owned memory.
+///
+/// One [`CameraState`] is the paper's "camera refinement" structure: the active front of one
+/// camera over a shared [`Hierarchy`]. It lives in a `&mut [u32]` the caller provides (sized
+/// by [`CameraState::words_needed`]), so a console-style runtime can place cameras in fixed
+/// pools, and it never allocates.
+///
+/// # Layout (words)
+///
+/// | array | length | what |
+/// |---|---|---|
+/// | `pair_of` | splittable nodes (halved with 16-bit entries, when `max_pairs` < 65,535), or 1.5 × (2 × `max_pairs` + 1) hashed where [`CameraConfig::hashed_pair_map`] asks and that is smaller (see `pair_map`) | the face pair a split node's split created, or `NONE` |
+/// | `owner` | `max_pairs` | the node whose split created each live pair |
+/// | `active` | 4 × (roots + `max_pairs`) | the active node list: active-vertex records (node, coarsening parent, two certificates) with a free list |
+/// | `slots` | 6 × (base polygons + 2 × `max_pairs`) | per active polygon its three corners and three neighbours |
+/// | `surface_polygons` | surfaces | active polygons per surface (sizes the index lists) |
+/// | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
+/// | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
+/// | `stack` | `stack_len` | the explicit stack of forced splits |
+///
+/// Design decisions:
+/// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
+///   it has been created (its parent is split) and not split; a polygon is active iff its
+///   creator is split. `pair_of` answers both in O(1) and doubles as the map from a split to
+///   the slots of the two polygons it created, so there is no per-polygon or per-leaf array at
+///   all. The map is an array by node, which keeps nearby nodes' entries together; a
+///   runtime short of memory may keep only the split nodes, hashed.
+/// - **Polygons live in slot pairs**, base polygons first, then two slots per live split,
+///   kept dense (a collapse moves the last pair into the hole and patches the at most six
+///   neighbour links that point at it), so emission is one linear scan.
+/// - **Corners point at active-vertex records**, not at nodes, as in Hoppe's `SrAVertex`:
+///   a split hands the record of `vs` to its stationary child, so only the polygons that move
+///   to the floating child are touched. Records freed by collapses are reused through a free
+///   list; the record array is the active node list that refinement walks.
+/// - **A record carries its node's coarsening parent**: the parent when the node is the
+///   parent's stationary child (it shares the parent's position), `NONE` otherwise. It is
+///   set when the record is written (by a split, a collapse or a reset, which read the node
+///   records anyway), so a refinement pass decides whether a node may trigger a collapse
+///   from its own record, without reading the node records of the node and its parent on
+///   every visit: those reads were a fifth of a pass's cache misses, and four cameras' worth
+///   of them no longer fit the caches one camera's fit.
+/// - **A refused collapse is remembered until something it depends on changes.** Most
+///   collapses that refinement wants are illegal (a neighbour is still finer than the split
+///   left it, or the floating child is split), and asking again costs a chain of dependent
+///   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
+///   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks
+///   per collapse applied, every frame. Legality depends only on the pair's two slots (their
+///   links and corners) and on the children being unsplit, so one bit per pair, set on a
+///   refusal, is cleared by every write to either slot and by the collapse of either child;
+///   a set bit answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every
+///   bit.
+/// - **Settled answers are certified, not asked again.** A visit asks whether the node's
+///   split is wanted and, for a stationary child, whether its parent's still is; the answer
+///   rarely changes, yet each question reads a bounds record from wherever the hierarchy
+///   keeps it. The record keeps, per question, the answer and the odometer reading up to
+///   which it provably stands (the eye's path length, or that plus the frustum planes'
+///   sweep), and a visit before then reads nothing but its record (see `certificate`): on
+///   the St. Helens flyover about five questions in six of a moving pass are answered so,
+///   and all but a handful of a settled pass. 8 bytes per record.
+/// - **Emission copies; operations keep the copy exact.** A polygon's vertex indices change
+///   only when a corner moves to another active-vertex record: a record keeps its position
+///   for life (a split hands it to the stationary child, which shares the position). So the
+///   index cache keeps each slot's three indices with its surface and group, and an
+///   operation rewrites just the corners it moves (one vertex-table row for all of them:
+///   every moved corner lands on the same position) and the pair it creates; a
+///   pair filling a hole brings its entries. Emission then copies the cache in slot order.
+///   Without it, every frame followed five dependent reads per polygon across the hierarchy,
+///   which four cameras' emissions pushed out of each other's caches. 16 bytes per slot;
+///   [`CameraConfig::index_cache`] turns it off for a runtime short of memory.
+/// - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
+///   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
+///   memory gets a hard polygon budget for free.
 #[derive(Debug)]
 pub struct CameraState<'m> {
     pub(crate) front: Front<'m>,
@@ -295,57 +298,15 @@ pub(crate) struct Front<'m> {
     pub odometer: Odometer,
 }
 
-/// Polygon slots of a camera with room for `max_pairs` splits.
-fn slot_count(h: &Hierarchy<'_>, max_pairs: usize) -> usize {
-    h.base_polygon_count()
-        .saturating_add(max_pairs.saturating_mul(2))
-}
-
-/// Words of the index cache for `slots` slots, if kept.
-fn cache_words(slots: usize, kept: bool) -> usize {
-    if kept {
-        slots.saturating_mul(TRIANGLE_WORDS)
-    } else {
-        0
-    }
-}
-
-fn words(h: &Hierarchy<'_>, c: &CameraConfig) -> usize {
-    let ns = h.splits().len();
-    let mp = c.max_pairs as usize;
-    let slots = slot_count(h, mp);
-    let triangles = cache_words(slots, c.index_cache);
-    [
-        PairMap::words(ns, mp, c.hashed_pair_map),
-        mp,
-        h.roots()
-            .len()
-            .saturating_add(mp)
-            .saturating_mul(ACTIVE_WORDS),
-        slots.saturating_mul(SLOT_WORDS),
-        h.surface_count(),
-        refused_words(mp),
-        triangles,
-        c.stack_len as usize,
-    ]
-    .iter()
-    .fold(0usize, |a, &b| a.saturating_add(b))
-}
-
-/// Words of the refused-collapse bits for `max_pairs` pairs.
-fn refused_words(max_pairs: usize) -> usize {
-    max_pairs.div_ceil(32)
-}
-
 impl<'m> CameraState<'m> {
     /// Words of memory a camera needs for full resolution anywhere ([`CameraConfig::full`]).
     pub fn words_needed(h: &Hierarchy<'_>) -> usize {
-        words(h, &CameraConfig::full(h))
+        Layout::of(h, &CameraConfig::full(h)).words()
     }
 
     /// Words of memory a camera with `config` needs.
     pub fn words_needed_for(h: &Hierarchy<'_>, config: &CameraConfig) -> usize {
-        words(h, config)
+        Layout::of(h, config).words()
     }
 
     /// A camera at the base mesh, able to reach full resolution, in `memory`
@@ -360,6 +321,24 @@ impl<'m> CameraState<'m> {
         memory: &'m mut [u32],
         config: &CameraConfig,
     ) -> Result<Self, CameraError> {
+        let layout = Self::checked_layout(h, config)?;
+        let needed = layout.words();
+        if memory.len() < needed {
+            return Err(CameraError::Capacity {
+                needed,
+                given: memory.len(),
+            });
+        }
+        let mut cam = Self::carve(memory, &layout, Scalars::initial(h));
+        cam.reset(h);
+        Ok(cam)
+    }
+
+    /// The layout of a camera with `config` over `h`, if the hierarchy has the splits.
+    pub(crate) fn checked_layout(
+        h: &Hierarchy<'_>,
+        config: &CameraConfig,
+    ) -> Result<Layout, CameraError> {
         let ns = h.splits().len();
         if config.max_pairs as usize > ns {
             return Err(CameraError::TooManyPairs {
@@ -367,46 +346,7 @@ impl<'m> CameraState<'m> {
                 split_count: ns as u32,
             });
         }
-        let needed = words(h, config);
-        if memory.len() < needed {
-            return Err(CameraError::Capacity {
-                needed,
-                given: memory.len(),
-            });
-        }
-        let mp = config.max_pairs as usize;
-        let (pair_of, rest) = memory.split_at_mut(PairMap::words(ns, mp, config.hashed_pair_map));
-        let (owner, rest) = rest.split_at_mut(mp);
-        let (active, rest) = rest.split_at_mut(ACTIVE_WORDS * (h.roots().len() + mp));
-        let slot_total = slot_count(h, mp);
-        let (slots, rest) = rest.split_at_mut(SLOT_WORDS * slot_total);
-        let (surface_polygons, rest) = rest.split_at_mut(h.surface_count());
-        let (refused, rest) = rest.split_at_mut(refused_words(mp));
-        let (triangles, rest) = rest.split_at_mut(cache_words(slot_total, config.index_cache));
-        let (stack, _) = rest.split_at_mut(config.stack_len as usize);
-        let mut cam = Self {
-            front: Front {
-                hierarchy: h.checksum(),
-                base: h.base_polygon_count() as u32,
-                pair_of: PairMap::new(pair_of, ns, mp, config.hashed_pair_map),
-                owner: bytemuck::cast_slice_mut(owner),
-                active: bytemuck::cast_slice_mut(active),
-                slots: bytemuck::cast_slice_mut(slots),
-                surface_polygons,
-                refused,
-                triangles: bytemuck::cast_slice_mut(triangles),
-                pairs: 0,
-                active_len: 0,
-                free_head: NONE,
-                active_nodes: 0,
-                active_polygons: 0,
-                churn: 0,
-                odometer: Odometer::new(),
-            },
-            stack: bytemuck::cast_slice_mut(stack),
-        };
-        cam.reset(h);
-        Ok(cam)
+        Ok(Layout::of(h, config))
     }
 
     /// Back to the base mesh.

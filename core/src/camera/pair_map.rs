@@ -15,13 +15,11 @@
 //!   from a multiplicative hash, and deletion by shifting the rest of the run back (no
 //!   tombstones), keep lookups short: at half load, linear probing expects about 1.5 entries
 //!   read for a split node and 2.5 for an unsplit one (Knuth's estimates; not counted here).
-//!   On the St. Helens demo it shrinks the map from 296 to 111 KB per camera, but refinement
-//!   took 1.04-1.16x as long (median 1.07x; the four routes' cameras each alone, ten
-//!   alternating pairs of demo runs; 0.97-1.23x, median 1.07x, in five runs of the
-//!   `budgeted/` bench): node ids are numbered depth-first, so the array keeps the entries a
-//!   pass and its operations read together in a few lines, and the hash scatters them.
-//!   Hashing blocks of eight consecutive nodes together did not measurably help. So the array
-//!   is the default, and the table is for a runtime that counts bytes.
+//!   It shrinks the map for a small budget, but refinement is slower with it: node ids are
+//!   numbered depth-first, so the array keeps the entries a pass and its operations read
+//!   together in a few lines, and the hash scatters them (hashing blocks of consecutive nodes
+//!   together does not win that locality back). So the array is the default, and the table
+//!   is for a runtime that counts bytes.
 
 use super::NONE;
 use bytemuck::{Pod, Zeroable};

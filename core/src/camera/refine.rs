@@ -13,10 +13,10 @@ use glam::{Vec3, Vec4};
 
 use super::certificate::{own_holds, parent_says};
 use super::{CameraState, OpError, FREE, NONE};
+use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 use crate::prefetch;
-use crate::records::SplitBounds;
 use crate::view::View;
 
 /// How many active records ahead a pass asks for the bounds and pair-map entries it will read.
@@ -279,7 +279,7 @@ impl CameraState<'_> {
             // Coarsen: v is a stationary child (it shares its parent's position, which its
             // record says) whose parent no longer wants its split. Only the parent's bounds
             // are read unless a certificate answers; a collapse refused before and not
-            // changed since is not checked again (see the module docs of `camera`).
+            // changed since is not checked again (see the `CameraState` docs).
             let parent = NodeId(a.coarsen);
             let unwanted = match parent_says(a.parent_cert, reading) {
                 Some(wanted) => {
@@ -324,6 +324,7 @@ impl CameraState<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::view::LookAt;
 
     /// The criterion as plainly written: the frustum through [`View::sphere_visible`], then the
     /// screen-space error and the cone, with no early answer.
@@ -378,16 +379,17 @@ mod tests {
         let mut answers = [0u32; 2];
         for case in 0..cases {
             let eye = rng.vec(100.0);
-            let mut view = View::perspective(
+            let look = LookAt {
                 eye,
-                eye + rng.vec(1.0) + Vec3::X * 1e-3,
-                Vec3::Y,
-                rng.range(0.3, 2.0),
-                rng.range(0.5, 2.5),
-                rng.range(0.01, 1.0),
-                rng.range(50.0, 400.0),
-                rng.range(100.0, 2000.0),
-            );
+                target: eye + rng.vec(1.0) + Vec3::X * 1e-3,
+                up: Vec3::Y,
+                fov_y: rng.range(0.3, 2.0),
+                near: rng.range(0.01, 1.0),
+                far: rng.range(50.0, 400.0),
+            };
+            let aspect = rng.range(0.5, 2.5);
+            let height = rng.range(100.0, 2000.0);
+            let mut view = look.view((height * aspect) as u32, height as u32);
             view.plane_count = (rng.next() % 7) as u32;
             let params = RefineParams {
                 frustum_culling: rng.next() % 4 != 0,

@@ -7,9 +7,9 @@
 //! ...        sections, each starting at a multiple of 64, zero padding between them
 //! ```
 //!
-//! All integers are little-endian; the records are the `#[repr(C)]` types of
-//! the records, so on a little-endian machine a section is a slice of records
-//! cast in place ([`Hierarchy::from_bytes`](crate::Hierarchy::from_bytes) never copies).
+//! All integers are little-endian; the records ([`Node`], [`Split`], [`SplitBounds`],
+//! [`Polygon`], [`Position`], [`BaseFace`], [`VertexKey`], [`Vertex`], [`Meta`]) are
+//! `#[repr(C)]`, so on a little-endian machine a section is a slice of records cast in place ([`Hierarchy::from_bytes`](crate::Hierarchy::from_bytes) never copies).
 //! Sections are found by tag; a reader skips tags it does not know, so later versions can add
 //! sections (g-mesh levels, out-of-core octrees, materials) without breaking older readers.
 //! A change to a known section's record size or meaning bumps the major version.
@@ -27,12 +27,20 @@
 //! caller sizes a buffer with `serialized_len`, fills it with `write_into`, and writes it to
 //! disk through a temporary file and a rename.
 
-mod error;
+pub(crate) mod error;
+mod records;
 pub(crate) mod validate;
 mod writer;
 
-pub use error::{FormatError, WriteError};
+pub(crate) use error::FormatError;
+pub use error::WriteError;
+pub use records::{
+    octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
+    PositionClass, Split, SplitBounds, Vertex, VertexKey,
+};
 pub use writer::{serialized_len, write_into, ExtraSection, HierarchyParts};
+
+pub use crate::checksum::checksum64;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -74,27 +82,27 @@ impl core::fmt::Display for Tag {
 /// Tags of the sections this version defines.
 pub mod tags {
     use super::Tag;
-    /// [`Meta`](crate::Meta): counts and bounds.
+    /// [`Meta`](crate::format::Meta): counts and bounds.
     pub const META: Tag = Tag(*b"META");
-    /// [`Position`](crate::Position) per node position.
+    /// [`Position`](crate::format::Position) per node position.
     pub const POSITIONS: Tag = Tag(*b"POSN");
-    /// [`Node`](crate::Node) per node.
+    /// [`Node`](crate::format::Node) per node.
     pub const NODES: Tag = Tag(*b"NODE");
-    /// [`Split`](crate::Split) per node that can be split.
+    /// [`Split`](crate::format::Split) per node that can be split.
     pub const SPLITS: Tag = Tag(*b"SPLT");
-    /// [`SplitBounds`](crate::SplitBounds) per node that can be split.
+    /// [`SplitBounds`](crate::format::SplitBounds) per node that can be split.
     pub const BOUNDS: Tag = Tag(*b"BNDS");
-    /// [`Polygon`](crate::Polygon) per full-resolution polygon.
+    /// [`Polygon`](crate::format::Polygon) per full-resolution polygon.
     pub const POLYGONS: Tag = Tag(*b"POLY");
     /// [`NodeId`](crate::NodeId) per root, ascending.
     pub const ROOTS: Tag = Tag(*b"ROOT");
-    /// [`BaseFace`](crate::BaseFace) per base polygon.
+    /// [`BaseFace`](crate::format::BaseFace) per base polygon.
     pub const BASE: Tag = Tag(*b"BASE");
     /// `u32` per position plus one: where each position's vertex-table entries start.
     pub const VERTEX_TABLE_OFFSETS: Tag = Tag(*b"VTOF");
-    /// [`VertexKey`](crate::VertexKey) per vertex-table entry.
+    /// [`VertexKey`](crate::format::VertexKey) per vertex-table entry.
     pub const VERTEX_TABLE: Tag = Tag(*b"VTAB");
-    /// [`Vertex`](crate::Vertex) per vertex.
+    /// [`Vertex`](crate::format::Vertex) per vertex.
     pub const VERTICES: Tag = Tag(*b"VERT");
 }
 
@@ -116,7 +124,7 @@ pub struct FileHeader {
     pub section_count: u32,
     /// Zero.
     pub flags: u32,
-    /// [`checksum64`](crate::checksum64) of bytes `header_len..file_len`.
+    /// [`checksum64`] of bytes `header_len..file_len`.
     pub checksum: u64,
     /// Zero.
     pub reserved: [u32; 6],

@@ -7,10 +7,10 @@ use super::{
     VERSION_MINOR,
 };
 use crate::checksum::checksum64;
-use crate::ids::NodeId;
-use crate::records::{
+use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
+use crate::ids::NodeId;
 
 /// The arrays of a hierarchy, borrowed: what a builder produces and what
 /// [`Hierarchy`](crate::Hierarchy) views.

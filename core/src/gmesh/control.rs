@@ -23,7 +23,7 @@
 //! The per-frame cap on `|T_change|` (0.01 or 0.1 in the paper) limits popping while the viewer
 //! is still; callers lift it (`f32::INFINITY`) while the viewer moves (§5.4).
 
-use super::partition::{GmeshError, LevelMorph, Partitions};
+use super::partition::{GMeshError, LevelMorph, Partitions};
 
 /// One g-mesh as the controller sees it: its partitions and the polygons of each level.
 #[derive(Clone, Copy, Debug)]
@@ -34,9 +34,9 @@ pub struct LodModel<'a> {
 
 impl<'a> LodModel<'a> {
     /// `level_polygons[i] = |c_i|`, one per level of `partitions`.
-    pub fn new(partitions: Partitions<'a>, level_polygons: &'a [u32]) -> Result<Self, GmeshError> {
+    pub fn new(partitions: Partitions<'a>, level_polygons: &'a [u32]) -> Result<Self, GMeshError> {
         if level_polygons.len() != partitions.levels() {
-            return Err(GmeshError::LengthMismatch {
+            return Err(GMeshError::LengthMismatch {
                 what: "level_polygons",
                 expected: partitions.levels(),
                 got: level_polygons.len(),
@@ -139,7 +139,7 @@ pub fn scene_polygons(
     models: &[LodModel<'_>],
     instances: &[LodInstance],
     bias: f32,
-) -> Result<u64, GmeshError> {
+) -> Result<u64, GMeshError> {
     let mut q = 0u64;
     for (j, inst) in instances.iter().enumerate() {
         if !inst.visible {
@@ -155,10 +155,10 @@ fn model_of<'m, 'a>(
     models: &'m [LodModel<'a>],
     j: usize,
     inst: &LodInstance,
-) -> Result<&'m LodModel<'a>, GmeshError> {
+) -> Result<&'m LodModel<'a>, GMeshError> {
     models
         .get(inst.model as usize)
-        .ok_or(GmeshError::UnknownModel {
+        .ok_or(GMeshError::UnknownModel {
             instance: j,
             model: inst.model,
         })
@@ -172,21 +172,21 @@ pub fn control(
     bias: f32,
     params: &ControlParams,
     scratch: &mut [ControlEntry],
-) -> Result<ControlOutcome, GmeshError> {
+) -> Result<ControlOutcome, GMeshError> {
     if !bias.is_finite() {
-        return Err(GmeshError::NotFinite {
+        return Err(GMeshError::NotFinite {
             what: "bias",
             index: 0,
         });
     }
     if let Some(index) = instances.iter().position(|i| !i.t.is_finite()) {
-        return Err(GmeshError::NotFinite {
+        return Err(GMeshError::NotFinite {
             what: "instance t",
             index,
         });
     }
     if scratch.len() < instances.len() {
-        return Err(GmeshError::ScratchTooSmall {
+        return Err(GMeshError::ScratchTooSmall {
             needed: instances.len(),
             got: scratch.len(),
         });
@@ -511,7 +511,7 @@ mod tests {
         let two = [inst(0.0), inst(0.0)];
         assert!(matches!(
             control(&models, &two, 0.0, &p, &mut scratch),
-            Err(GmeshError::ScratchTooSmall { needed: 2, got: 1 })
+            Err(GMeshError::ScratchTooSmall { needed: 2, got: 1 })
         ));
         let bad = [LodInstance {
             model: 3,
@@ -520,14 +520,14 @@ mod tests {
         }];
         assert!(matches!(
             control(&models, &bad, 0.0, &p, &mut scratch),
-            Err(GmeshError::UnknownModel {
+            Err(GMeshError::UnknownModel {
                 instance: 0,
                 model: 3
             })
         ));
         assert!(matches!(
             control(&models, &[inst(f32::NAN)], 0.0, &p, &mut scratch),
-            Err(GmeshError::NotFinite { .. })
+            Err(GMeshError::NotFinite { .. })
         ));
     }
 }

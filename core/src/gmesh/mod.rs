@@ -18,5 +18,5 @@ pub use control::{
 };
 pub use model::{gmesh_tags, GMesh, GMeshFormatError, GMeshLevel, GMeshParts};
 pub use partition::{
-    even_boundaries, t_from_distance, volume_boundaries, GmeshError, LevelMorph, Partitions,
+    even_boundaries, t_from_distance, volume_boundaries, GMeshError, LevelMorph, Partitions,
 };

@@ -28,7 +28,7 @@
 //!
 //! At the coarsest level `from == to`. Everything is validated once in [`GMesh::new`].
 
-use super::partition::{GmeshError, Partitions};
+use super::partition::{GMeshError, Partitions};
 use super::LodModel;
 use crate::format::Tag;
 use crate::Hierarchy;
@@ -89,7 +89,7 @@ pub enum GMeshFormatError {
     /// A section's size is not a whole number of records, or it is not 4-byte aligned.
     BadSection(Tag),
     /// The partitions or counts are inconsistent.
-    Levels(GmeshError),
+    Levels(GMeshError),
     /// An offset table does not start at 0, decreases, or does not end at its array's length.
     BadOffsets {
         /// The offset table.
@@ -258,7 +258,7 @@ impl<'a> GMesh<'a> {
             if got == expected {
                 Ok(())
             } else {
-                Err(GMeshFormatError::Levels(GmeshError::LengthMismatch {
+                Err(GMeshFormatError::Levels(GMeshError::LengthMismatch {
                     what,
                     expected,
                     got,
@@ -274,7 +274,7 @@ impl<'a> GMesh<'a> {
             levels * surfaces + 1,
         )?;
         if let Some(index) = parts.volumes.iter().position(|v| !v.is_finite()) {
-            return Err(GMeshFormatError::Levels(GmeshError::NotFinite {
+            return Err(GMeshFormatError::Levels(GMeshError::NotFinite {
                 what: "volumes",
                 index,
             }));

@@ -17,7 +17,7 @@
 
 /// Why partitions or controller inputs were refused.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum GmeshError {
+pub enum GMeshError {
     /// A g-mesh needs at least two levels (one morph range).
     TooFewLevels {
         /// Levels given.
@@ -60,7 +60,7 @@ pub enum GmeshError {
     },
 }
 
-impl core::fmt::Display for GmeshError {
+impl core::fmt::Display for GMeshError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
             Self::TooFewLevels { levels } => {
@@ -93,7 +93,7 @@ impl core::fmt::Display for GmeshError {
     }
 }
 
-impl core::error::Error for GmeshError {}
+impl core::error::Error for GMeshError {}
 
 /// The level an instance draws and how far it has morphed towards the next one.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,10 +121,10 @@ pub fn t_from_distance(d: f32, d_near: f32, d_far: f32) -> f32 {
 }
 
 /// Writes the boundaries of even partitions (`r_i = 1 / n`) for `out.len() - 1` ranges.
-pub fn even_boundaries(out: &mut [f32]) -> Result<(), GmeshError> {
+pub fn even_boundaries(out: &mut [f32]) -> Result<(), GMeshError> {
     let levels = out.len();
     if levels < 2 {
-        return Err(GmeshError::TooFewLevels { levels });
+        return Err(GMeshError::TooFewLevels { levels });
     }
     let n = (levels - 1) as f32;
     for (i, r) in out.iter_mut().enumerate() {
@@ -146,20 +146,20 @@ pub fn volume_boundaries(
     volumes: &[f32],
     min_share: f32,
     out: &mut [f32],
-) -> Result<(), GmeshError> {
+) -> Result<(), GMeshError> {
     let levels = volumes.len();
     if levels < 2 {
-        return Err(GmeshError::TooFewLevels { levels });
+        return Err(GMeshError::TooFewLevels { levels });
     }
     if out.len() != levels {
-        return Err(GmeshError::LengthMismatch {
+        return Err(GMeshError::LengthMismatch {
             what: "boundaries",
             expected: levels,
             got: out.len(),
         });
     }
     if let Some(index) = volumes.iter().position(|v| !v.is_finite()) {
-        return Err(GmeshError::NotFinite {
+        return Err(GMeshError::NotFinite {
             what: "volumes",
             index,
         });
@@ -190,7 +190,7 @@ pub fn volume_boundaries(
     // Strictly increasing: a zero-width range (floor 0, no decrease) would be unreachable.
     for i in 1..levels {
         if out[i] <= out[i - 1] {
-            return Err(GmeshError::BadBoundary { index: i });
+            return Err(GMeshError::BadBoundary { index: i });
         }
     }
     Ok(())
@@ -205,25 +205,25 @@ pub struct Partitions<'a> {
 
 impl<'a> Partitions<'a> {
     /// Checks `boundaries` (at least 2; finite; first 0, last 1; strictly increasing).
-    pub fn new(boundaries: &'a [f32]) -> Result<Self, GmeshError> {
+    pub fn new(boundaries: &'a [f32]) -> Result<Self, GMeshError> {
         let levels = boundaries.len();
         if levels < 2 {
-            return Err(GmeshError::TooFewLevels { levels });
+            return Err(GMeshError::TooFewLevels { levels });
         }
         if let Some(index) = boundaries.iter().position(|v| !v.is_finite()) {
-            return Err(GmeshError::NotFinite {
+            return Err(GMeshError::NotFinite {
                 what: "boundaries",
                 index,
             });
         }
         if boundaries[0] != 0.0 {
-            return Err(GmeshError::BadBoundary { index: 0 });
+            return Err(GMeshError::BadBoundary { index: 0 });
         }
         if boundaries[levels - 1] != 1.0 {
-            return Err(GmeshError::BadBoundary { index: levels - 1 });
+            return Err(GMeshError::BadBoundary { index: levels - 1 });
         }
         if let Some(i) = (1..levels).find(|&i| boundaries[i] <= boundaries[i - 1]) {
-            return Err(GmeshError::BadBoundary { index: i });
+            return Err(GMeshError::BadBoundary { index: i });
         }
         Ok(Self { boundaries })
     }
@@ -328,19 +328,19 @@ mod tests {
     fn bad_boundaries_are_refused() {
         assert!(matches!(
             Partitions::new(&[0.0]),
-            Err(GmeshError::TooFewLevels { levels: 1 })
+            Err(GMeshError::TooFewLevels { levels: 1 })
         ));
         assert!(matches!(
             Partitions::new(&[0.0, 0.5, 0.5, 1.0]),
-            Err(GmeshError::BadBoundary { index: 2 })
+            Err(GMeshError::BadBoundary { index: 2 })
         ));
         assert!(matches!(
             Partitions::new(&[0.1, 1.0]),
-            Err(GmeshError::BadBoundary { index: 0 })
+            Err(GMeshError::BadBoundary { index: 0 })
         ));
         assert!(matches!(
             Partitions::new(&[0.0, f32::NAN, 1.0]),
-            Err(GmeshError::NotFinite { index: 1, .. })
+            Err(GMeshError::NotFinite { index: 1, .. })
         ));
     }
 

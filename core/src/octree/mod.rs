@@ -42,8 +42,7 @@
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
-//! use caveclod_core::octree::{Octree, OctreeCut};
-//! use caveclod_core::{Hierarchy, View};
+//! use caveclod_core::{Hierarchy, Octree, OctreeCut, View};
 //! let h = Hierarchy::from_bytes(bytes)?;
 //! let Some(octree) = Octree::from_hierarchy(&h)? else { return Ok(()) };
 //! let mut memory = vec![0u32; OctreeCut::words_needed(&octree)];
@@ -56,11 +55,13 @@
 //! # let _ = stats; Ok(()) }
 //! ```
 
-mod model;
-mod select;
+mod error;
+pub(crate) mod model;
+pub(crate) mod select;
 
-pub use model::{
-    octree_tags, Octree, OctreeFormatError, OctreeMeta, OctreeNode, OctreeParts, OctreeRange,
-    MAX_OCTREE_LEVELS,
-};
-pub use select::{CutError, Difference, OctreeCut, SelectStats};
+pub use model::{octree_tags, OctreeMeta, OctreeNode, OctreeParts, OctreeRange, MAX_OCTREE_LEVELS};
+pub use select::Difference;
+
+// At the crate root (what an engine calls every frame); named here for the module's links.
+#[cfg(doc)]
+use crate::{Octree, OctreeCut};

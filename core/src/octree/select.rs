@@ -13,6 +13,7 @@
 use glam::Vec3;
 
 use super::model::{Octree, OctreeNode};
+use crate::ids::SurfaceId;
 use crate::outputs::{check_lists, Shortfall};
 use crate::view::View;
 
@@ -38,7 +39,7 @@ pub enum CutError {
     /// An output list is too short.
     OutputTooSmall {
         /// The surface; `None` for the packed output of all surfaces.
-        surface: Option<u32>,
+        surface: Option<SurfaceId>,
         /// Indices needed.
         needed: usize,
         /// Room given.
@@ -62,7 +63,8 @@ impl core::fmt::Display for CutError {
                 given,
             } => write!(
                 f,
-                "index list of surface {s}: room for {given}, {needed} needed"
+                "index list of surface {}: room for {given}, {needed} needed",
+                s.0
             ),
             Self::OutputTooSmall {
                 surface: None,
@@ -316,7 +318,7 @@ impl<'m> OctreeCut<'m> {
                 needed,
                 given,
             } => CutError::OutputTooSmall {
-                surface: Some(surface as u32),
+                surface: Some(surface),
                 needed,
                 given,
             },

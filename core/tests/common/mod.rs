@@ -7,10 +7,10 @@
 
 #![allow(dead_code)] // each test binary uses a part of this module
 
-use caveclod_core::format::FileHeader;
+use caveclod_core::format::{checksum64, FileHeader};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
-    checksum64, CameraConfig, CameraState, Hierarchy, NodeId, OpError, RefineParams, View,
+    CameraConfig, CameraState, Hierarchy, LookAt, NodeId, OpError, RefineParams, View,
 };
 
 /// The golden file's bytes as `include_bytes!` gives them (alignment 1).
@@ -126,16 +126,15 @@ pub fn views(h: &Hierarchy<'_>, count: usize) -> Vec<View> {
         if i % 7 == 6 {
             out.push(View::without_frustum(eye, 500.0 + 100.0 * i as f32));
         } else {
-            out.push(View::perspective(
+            let look = LookAt {
                 eye,
                 target,
-                Vec3::Y,
-                0.9,
-                16.0 / 9.0,
-                radius * 1e-3,
-                radius * 100.0,
-                720.0,
-            ));
+                up: Vec3::Y,
+                fov_y: 0.9,
+                near: radius * 1e-3,
+                far: radius * 100.0,
+            };
+            out.push(look.view(1280, 720));
         }
     }
     out

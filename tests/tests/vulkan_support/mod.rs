@@ -2,7 +2,8 @@
 //! generated meshes, cameras, and the "no validation messages" check.
 #![allow(dead_code)]
 
-use caveclod_core::{CameraState, Hierarchy, RefineParams, Vertex};
+use caveclod_core::format::Vertex;
+use caveclod_core::{CameraState, Hierarchy, RefineParams};
 use caveclod_tests::meshes::TestMesh;
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
@@ -103,7 +104,10 @@ pub fn refine(
         tolerance_px,
         ..RefineParams::default()
     };
-    ok(cam.refine(h, &look.view(viewport), &params), "refine");
+    ok(
+        cam.refine(h, &look.view(viewport.width, viewport.height), &params),
+        "refine",
+    );
 }
 
 /// Renders one camera's indices from `source` alone into a fresh `w` × `h` renderer and
@@ -125,7 +129,7 @@ pub fn render_alone(
             &mut [CameraDraw {
                 target: 0,
                 viewport,
-                view_proj: look.view_proj(viewport),
+                view_proj: look.view_projection(viewport.aspect()),
                 vertices,
                 indices: &mut indices,
                 source,

@@ -1,0 +1,161 @@
+//! Positions, the vertex table and the vertices.
+
+use super::{count, finite, invalid, keys};
+use crate::format::{tags, FormatError, HierarchyParts, PositionClass};
+use crate::ids::PositionId;
+
+/// Every position finite and of a known class; returns the bounds of the positions (zero
+/// for none).
+pub(super) fn positions(parts: &HierarchyParts<'_>) -> Result<[[f32; 3]; 2], FormatError> {
+    let mut bounds_min = [f32::INFINITY; 3];
+    let mut bounds_max = [f32::NEG_INFINITY; 3];
+    for (i, p) in parts.positions.iter().enumerate() {
+        if let Some(x) = p.xyz.iter().find(|x| !x.is_finite()) {
+            return Err(invalid(
+                tags::POSITIONS,
+                i,
+                "xyz",
+                "not a finite number",
+                x.to_bits().into(),
+            ));
+        }
+        if PositionClass::from_u32(p.class).is_none() {
+            return Err(invalid(
+                tags::POSITIONS,
+                i,
+                "class",
+                "not FREE (0), SHARP (1) or RIGID (2)",
+                p.class.into(),
+            ));
+        }
+        for k in 0..3 {
+            bounds_min[k] = bounds_min[k].min(p.xyz[k]);
+            bounds_max[k] = bounds_max[k].max(p.xyz[k]);
+        }
+    }
+    if parts.positions.is_empty() {
+        return Ok([[0.0; 3]; 2]);
+    }
+    Ok([bounds_min, bounds_max])
+}
+
+/// The vertex table: offsets, finite vertices, then each position's entries.
+pub(super) fn vertex_table(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
+    offsets(parts)?;
+    for (i, v) in parts.vertices.iter().enumerate() {
+        if !finite(&v.position) || !finite(&v.normal) || !finite(&v.uv) {
+            return Err(invalid(
+                tags::VERTICES,
+                i,
+                "attributes",
+                "not a finite number",
+                0,
+            ));
+        }
+    }
+    for pi in 0..parts.positions.len() {
+        position_entries(parts, pi)?;
+    }
+    Ok(())
+}
+
+/// One offset per position plus one, from 0, ascending, ending at the table's length.
+fn offsets(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
+    let ne = parts.positions.len();
+    let offsets = parts.vertex_table_offsets;
+    count(tags::VERTEX_TABLE_OFFSETS, ne + 1, offsets.len())?;
+    if offsets[0] != 0 {
+        return Err(invalid(
+            tags::VERTEX_TABLE_OFFSETS,
+            0,
+            "offset",
+            "the first offset is not 0",
+            offsets[0].into(),
+        ));
+    }
+    for i in 0..ne {
+        if offsets[i + 1] < offsets[i] {
+            return Err(invalid(
+                tags::VERTEX_TABLE_OFFSETS,
+                i + 1,
+                "offset",
+                "offsets decrease",
+                offsets[i + 1].into(),
+            ));
+        }
+    }
+    if offsets[ne] as usize != parts.vertex_table.len() {
+        return Err(invalid(
+            tags::VERTEX_TABLE_OFFSETS,
+            ne,
+            "offset",
+            "the last offset is not the table length",
+            offsets[ne].into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Position `pi`'s entries: groups in range and strictly ascending, zero reserved words,
+/// vertices in range that lie at the position; and a FREE position in one group only.
+fn position_entries(parts: &HierarchyParts<'_>, pi: usize) -> Result<(), FormatError> {
+    let ks = keys(parts, PositionId(pi as u32));
+    let at = parts.vertex_table_offsets[pi] as usize;
+    for (j, k) in ks.iter().enumerate() {
+        if k.group.0 as u32 >= parts.surface_group_count {
+            return Err(invalid(
+                tags::VERTEX_TABLE,
+                at + j,
+                "group",
+                "surface-group id out of range",
+                k.group.0.into(),
+            ));
+        }
+        if j > 0 && ks[j - 1].group >= k.group {
+            return Err(invalid(
+                tags::VERTEX_TABLE,
+                at + j,
+                "group",
+                "groups of a position not strictly ascending",
+                k.group.0.into(),
+            ));
+        }
+        if k.reserved != 0 {
+            return Err(invalid(
+                tags::VERTEX_TABLE,
+                at + j,
+                "reserved",
+                "not zero",
+                k.reserved.into(),
+            ));
+        }
+        let Some(v) = parts.vertices.get(k.vertex as usize) else {
+            return Err(invalid(
+                tags::VERTEX_TABLE,
+                at + j,
+                "vertex",
+                "vertex index out of range",
+                k.vertex.into(),
+            ));
+        };
+        if v.position.map(f32::to_bits) != parts.positions[pi].xyz.map(f32::to_bits) {
+            return Err(invalid(
+                tags::VERTEX_TABLE,
+                at + j,
+                "vertex",
+                "the vertex does not lie at the position it is keyed by",
+                k.vertex.into(),
+            ));
+        }
+    }
+    if ks.len() >= 2 && parts.positions[pi].class == PositionClass::Free as u32 {
+        return Err(invalid(
+            tags::POSITIONS,
+            pi,
+            "class",
+            "FREE but on a surface-group boundary (several groups)",
+            ks.len() as u64,
+        ));
+    }
+    Ok(())
+}
