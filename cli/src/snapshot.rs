@@ -10,13 +10,13 @@
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
 use glam::Vec3;
 
+use caveclod_core::LookAt;
 use caveclod_vulkan::device::Context;
 use caveclod_vulkan::error::{Error, Result};
 use caveclod_vulkan::frame::{CameraDraw, FrameStats, Renderer, RendererDesc, Viewport};
 use caveclod_vulkan::indices::{CameraIndices, IndexSource};
 use caveclod_vulkan::mesh::VertexBuffer;
 use caveclod_vulkan::readback::RgbaImage;
-use caveclod_core::LookAt;
 
 /// How the cameras share the output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -24,7 +24,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::format::Vertex;
+use crate::records::Vertex;
 
 /// Push constants of the drawing stages (`draw_vs`, `draw_fs`, `geomorph_vs`): 80 bytes at
 /// offset 0, visible to the vertex and fragment stages.

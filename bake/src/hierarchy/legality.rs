@@ -1,7 +1,7 @@
 //! Whether a collapse is legal: the surface-group rules, the link condition, Hoppe's
 //! neighbours, no triangle flipped or collapsed, and how the checks stand within a pass.
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, dot, len, next, prev, sub};
 use super::work::Work;

@@ -1,7 +1,7 @@
 //! The mesh being simplified: triangles with their neighbours, the triangles around every
 //! node, the wedges' quadrics, and the bounds recorded per node.
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, next, prev, sub, P3, V3};
 use super::{Hierarchy, NONE};

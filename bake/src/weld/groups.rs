@@ -1,7 +1,7 @@
 //! Steps 5–6: surface groups grown over matching edges, position classes from the
 //! boundary edges, each position's vertices, and the colouring of groups into ids.
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use super::repair::Kept;
 use super::{ek, NONE};

@@ -29,7 +29,7 @@ mod repair;
 #[cfg(test)]
 mod tests;
 
-use caveclod_core::PositionClass;
+use caveclod_core::format::PositionClass;
 
 use crate::mesh::Mesh;
 use groups::Groups;

@@ -28,7 +28,7 @@
 //! disk through a temporary file and a rename.
 
 pub(crate) mod error;
-mod records;
+pub(crate) mod records;
 pub(crate) mod validate;
 mod writer;
 

@@ -6,7 +6,7 @@
 //! block so the interface can be read off this file; `vulkan/spirv/INTERFACE.md` is the
 //! contract the Vulkan host follows.
 //!
-//! - `draw_vs` + `draw_fs`: draw a mesh of `caveclod_core::format::Vertex` with a view-projection
+//! - `draw_vs` + `draw_fs`: draw a mesh of `caveclod_core::Vertex` with a view-projection
 //!   matrix and a colour ([`DrawPush`]) through [`shade`].
 //! - `geomorph_vs` (+ `draw_fs`): draw the geomorph of two vertex streams at a per-instance
 //!   `t`, placed by the instance's offset and scale ([`caveclod_core::gpu::MorphInstance`]).
@@ -15,7 +15,7 @@
 #![deny(missing_docs)]
 
 use caveclod_core::gpu::{morph_vertex, shade, DrawPush, MorphPush};
-use caveclod_core::format::Vertex;
+use caveclod_core::Vertex;
 use spirv_std::glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use spirv_std::spirv;
 
