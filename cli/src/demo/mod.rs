@@ -523,30 +523,11 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
-/// The markdown report.
-fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f64) -> String {
+/// The table of the five measures against their targets: the head of `report.md`, and
+/// `results.md`, which `cargo xtask demo` puts into the README.
+pub fn results_table(f: &Flights, r: &Ratios) -> String {
     let mut s = String::new();
     let pc = &f.per_camera;
-    let _ = writeln!(s, "# caveclod demo report\n");
-    let _ = writeln!(
-        s,
-        "Terrain: `{}` ({}); model: `{}` ({}). {} frames per flight, 4 cameras, {} px \
-         tolerance at 1280x720. Whole demo: {seconds:.1} s.\n",
-        shown(&terrain.input),
-        if terrain.baked_now {
-            format!("baked in {:.2} s", terrain.bake_seconds)
-        } else {
-            "from the bake cache".into()
-        },
-        shown(&model.input),
-        if model.baked_now {
-            format!("baked in {:.2} s", model.bake_seconds)
-        } else {
-            "from the bake cache".into()
-        },
-        pc.options.frames,
-        pc.options.tolerance
-    );
     let _ = writeln!(s, "| measure | value | target | |\n|---|---|---|---|");
     let _ = writeln!(
         s,
@@ -584,6 +565,34 @@ fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f6
         pc.memory_budgeted.paper_camera_bytes,
         verdict(r.memory <= 0.5)
     );
+    s
+}
+
+/// The markdown report.
+fn report(terrain: &Loaded, model: &Loaded, f: &Flights, r: &Ratios, seconds: f64) -> String {
+    let mut s = String::new();
+    let pc = &f.per_camera;
+    let _ = writeln!(s, "# caveclod demo report\n");
+    let _ = writeln!(
+        s,
+        "Terrain: `{}` ({}); model: `{}` ({}). {} frames per flight, 4 cameras, {} px \
+         tolerance at 1280x720. Whole demo: {seconds:.1} s.\n",
+        shown(&terrain.input),
+        if terrain.baked_now {
+            format!("baked in {:.2} s", terrain.bake_seconds)
+        } else {
+            "from the bake cache".into()
+        },
+        shown(&model.input),
+        if model.baked_now {
+            format!("baked in {:.2} s", model.bake_seconds)
+        } else {
+            "from the bake cache".into()
+        },
+        pc.options.frames,
+        pc.options.tolerance
+    );
+    s.push_str(&results_table(f, r));
     let _ = writeln!(
         s,
         "\nTimes are wall-clock on this machine, shared with whatever else runs; ratios come \
@@ -777,6 +786,10 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
         start.elapsed().as_secs_f64(),
     );
     text.push_str(&format!("\n## Pictures\n\n{pictures}\n"));
+    let results_path = options.out.join("results.md");
+    write_atomically(&results_path, results_table(&flights, &r).as_bytes())
+        .map_err(|e| e.to_string())?;
+    files.push(results_path);
     let report_path = options.out.join("report.md");
     write_atomically(&report_path, text.as_bytes()).map_err(|e| e.to_string())?;
     files.push(report_path.clone());
