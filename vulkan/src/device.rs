@@ -1,18 +1,5 @@
-//! The [`Context`]: instance, device, queue and allocator, either created here (headless) or
-//! borrowed from a host engine (embedded).
-//!
-//! Design decisions:
-//! - **Embedding never creates an instance.** [`Context::from_raw`] takes the host's handles
-//!   (and optionally its gpu-allocator) and destroys none of them; the host keeps ownership
-//!   and must have enabled what the shaders need: Vulkan 1.3 `dynamicRendering` and
-//!   `synchronization2`, Vulkan 1.2 `vulkanMemoryModel`.
-//! - **Headless** ([`Context::headless`]) creates all of it, prefers lavapipe when asked (the
-//!   tests, the CLI) and enables `VK_LAYER_KHRONOS_validation` when installed.
-//! - **Resources are tracked.** Every buffer and image made through a context is registered
-//!   by name until destroyed; [`Context::destroy`] reports what is still alive as
-//!   [`Error::Leaked`] (gpu-allocator would only log it), then frees the allocator before
-//!   the device, as gpu-allocator requires.
-//! - One queue, used under a mutex, for graphics, compute and transfer.
+//! The [`Context`]: instance, device, queue and allocator, headless or embedded (the
+//! design decisions are on the type).
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -47,7 +34,21 @@ impl Default for HeadlessDesc {
 /// A shared gpu-allocator, as a host engine would hold it.
 pub type SharedAllocator = Arc<Mutex<Allocator>>;
 
-/// Instance, device, queue and allocator. See the [module docs](self).
+/// Instance, device, queue and allocator, either created here (headless) or borrowed from
+/// a host engine (embedded).
+///
+/// Design decisions:
+/// - **Embedding never creates an instance.** [`Context::from_raw`] takes the host's handles
+///   (and optionally its gpu-allocator) and destroys none of them; the host keeps ownership
+///   and must have enabled what the shaders need: Vulkan 1.3 `dynamicRendering` and
+///   `synchronization2`, Vulkan 1.2 `vulkanMemoryModel`.
+/// - **Headless** ([`Context::headless`]) creates all of it, prefers lavapipe when asked (the
+///   tests, the CLI) and enables `VK_LAYER_KHRONOS_validation` when installed.
+/// - **Resources are tracked.** Every buffer and image made through a context is registered
+///   by name until destroyed; [`Context::destroy`] reports what is still alive as
+///   [`Error::Leaked`] (gpu-allocator would only log it), then frees the allocator before
+///   the device, as gpu-allocator requires.
+/// - One queue, used under a mutex, for graphics, compute and transfer.
 pub struct Context {
     /// The instance.
     pub instance: ash::Instance,

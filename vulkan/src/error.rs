@@ -1,12 +1,17 @@
 //! The crate's one error type.
 //!
-//! Every Vulkan call's result goes through [`VkResultExt::vk`], which names the call and
+//! Every Vulkan call's result goes through `VkResultExt::vk`, which names the call and
 //! sorts the results a caller may want to handle apart: a lost device and running out of
 //! memory are their own variants, everything else is [`Error::Vulkan`].
 
 use ash::vk;
 
 /// Everything that can go wrong in caveclod-vulkan.
+///
+/// A failing Vulkan call is named in its variant; a lost device and running out of memory
+/// have variants of their own, every other result is [`Error::Vulkan`]. The core's errors
+/// convert with `From`, so `?` works on `Hierarchy::from_bytes`, `CameraState::new`,
+/// `refine`, index emission, octree cuts and g-mesh checks.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The Vulkan loader library could not be loaded (no Vulkan installed).
@@ -48,43 +53,64 @@ pub enum Error {
     /// The committed SPIR-V module cannot be read.
     #[error("shader module: {0}")]
     Shader(String),
+    /// A hierarchy's bytes were refused ([`caveclod_core::Hierarchy::from_bytes`]).
+    #[error("hierarchy: {0}")]
+    Format(#[from] caveclod_core::FormatError),
+    /// A camera could not be made over its memory ([`caveclod_core::CameraState::new`]).
+    #[error("camera: {0}")]
+    Camera(#[from] caveclod_core::CameraError),
+    /// A camera operation (refine, split, collapse) was refused.
+    #[error("camera operation: {0}")]
+    CameraOp(#[from] caveclod_core::OpError),
     /// Index emission of a camera failed.
-    #[error("camera {camera}: index emission: {source}")]
+    #[error("{}index emission: {source}", camera_prefix(*.camera))]
     Emit {
-        /// The camera's position in the frame.
-        camera: usize,
+        /// The camera's position in the frame, when the renderer emitted.
+        camera: Option<usize>,
         /// Why.
+        #[source]
         source: caveclod_core::EmitError,
     },
+    /// An octree cut was refused ([`caveclod_core::OctreeCut`]).
+    #[error("octree cut: {0}")]
+    Cut(#[from] caveclod_core::CutError),
+    /// An octree's bytes were refused ([`caveclod_core::Octree`]).
+    #[error("octree: {0}")]
+    OctreeFormat(#[from] caveclod_core::OctreeFormatError),
+    /// G-mesh partitions or controller inputs were refused.
+    #[error("g-mesh: {0}")]
+    GMesh(#[from] caveclod_core::gmesh::GMeshError),
+    /// A g-mesh's sections were refused.
+    #[error("g-mesh format: {0}")]
+    GMeshFormat(#[from] caveclod_core::gmesh::GMeshFormatError),
     /// An argument is out of range.
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
     /// Resources of this context were not destroyed before it.
     #[error("{} resource(s) leaked (not destroyed before the context): {}", .0.len(), .0.join(", "))]
     Leaked(Vec<String>),
-    /// Writing an image failed.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// PNG encoding failed.
-    #[error("{path}: PNG encoding: {source}")]
-    Png {
-        /// The file.
-        path: String,
-        /// Why.
-        source: png::EncodingError,
-    },
+}
+
+/// Index emission outside the renderer names no camera.
+impl From<caveclod_core::EmitError> for Error {
+    fn from(source: caveclod_core::EmitError) -> Self {
+        Self::Emit {
+            camera: None,
+            source,
+        }
+    }
+}
+
+/// `"camera {i}: "` for a known camera, else nothing.
+fn camera_prefix(camera: Option<usize>) -> String {
+    camera.map(|c| format!("camera {c}: ")).unwrap_or_default()
 }
 
 /// Results of this crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Maps a Vulkan result to [`Error`], naming the call.
-pub trait VkResultExt<T> {
+pub(crate) trait VkResultExt<T> {
     /// `Err` of a `vk::Result` becomes the matching [`Error`] variant for `call`.
     fn vk(self, call: &'static str) -> Result<T>;
 }
@@ -96,7 +122,7 @@ impl<T> VkResultExt<T> for std::result::Result<T, vk::Result> {
 }
 
 /// The [`Error`] for a failing `result` of `call`.
-pub fn from_vk(call: &'static str, result: vk::Result) -> Error {
+pub(crate) fn from_vk(call: &'static str, result: vk::Result) -> Error {
     match result {
         vk::Result::ERROR_DEVICE_LOST => Error::DeviceLost { call },
         vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => Error::OutOfMemory { call, device: true },
@@ -140,5 +166,31 @@ mod tests {
         assert_eq!(e.to_string(), "vkAllocateMemory: out of device memory");
         let e = from_vk("vkCreateBuffer", vk::Result::ERROR_INITIALIZATION_FAILED);
         assert!(matches!(e, Error::Vulkan { .. }));
+    }
+
+    #[test]
+    fn core_errors_convert_with_question_mark() {
+        fn load(bytes: &[u8]) -> Result<usize> {
+            Ok(caveclod_core::Hierarchy::from_bytes(bytes)?.surface_count())
+        }
+        let e = load(&[]).err();
+        assert!(matches!(e, Some(Error::Format(_))), "{e:?}");
+        assert!(e.is_some_and(|e| std::error::Error::source(&e).is_some()));
+
+        let emit = caveclod_core::EmitError::WrongHierarchy;
+        let e = Error::from(emit);
+        assert!(matches!(e, Error::Emit { camera: None, .. }));
+        assert_eq!(e.to_string(), format!("index emission: {emit}"));
+        let e = Error::Emit {
+            camera: Some(2),
+            source: emit,
+        };
+        assert_eq!(e.to_string(), format!("camera 2: index emission: {emit}"));
+
+        let e: Error = caveclod_core::CutError::WrongOctree.into();
+        assert!(matches!(
+            e,
+            Error::Cut(caveclod_core::CutError::WrongOctree)
+        ));
     }
 }

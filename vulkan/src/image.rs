@@ -14,20 +14,20 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// What an image is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ImageDesc {
+pub(crate) struct ImageDesc {
     /// Width and height in pixels.
-    pub extent: vk::Extent2D,
+    pub(crate) extent: vk::Extent2D,
     /// Pixel format.
-    pub format: vk::Format,
+    pub(crate) format: vk::Format,
     /// Usage flags.
-    pub usage: vk::ImageUsageFlags,
+    pub(crate) usage: vk::ImageUsageFlags,
     /// Aspect of its view.
-    pub aspect: vk::ImageAspectFlags,
+    pub(crate) aspect: vk::ImageAspectFlags,
 }
 
 impl ImageDesc {
     /// An RGBA8 colour target that can be copied out.
-    pub fn colour_target(width: u32, height: u32) -> Self {
+    pub(crate) fn colour_target(width: u32, height: u32) -> Self {
         Self {
             extent: vk::Extent2D { width, height },
             format: COLOUR_FORMAT,
@@ -37,7 +37,7 @@ impl ImageDesc {
     }
 
     /// A 32-bit float depth target.
-    pub fn depth_target(width: u32, height: u32) -> Self {
+    pub(crate) fn depth_target(width: u32, height: u32) -> Self {
         Self {
             extent: vk::Extent2D { width, height },
             format: DEPTH_FORMAT,
@@ -49,20 +49,20 @@ impl ImageDesc {
 
 /// An image, its memory and its view.
 #[derive(Debug)]
-pub struct Image {
+pub(crate) struct Image {
     /// The Vulkan handle.
-    pub raw: vk::Image,
+    pub(crate) raw: vk::Image,
     /// Its one view (whole image).
-    pub view: vk::ImageView,
+    pub(crate) view: vk::ImageView,
     /// Its description.
-    pub desc: ImageDesc,
+    pub(crate) desc: ImageDesc,
     allocation: Allocation,
     id: u64,
 }
 
 impl Image {
     /// Creates a device-local image with a view.
-    pub fn new(ctx: &Context, name: &str, desc: ImageDesc) -> Result<Self> {
+    pub(crate) fn new(ctx: &Context, name: &str, desc: ImageDesc) -> Result<Self> {
         if desc.extent.width == 0 || desc.extent.height == 0 {
             return Err(Error::InvalidArgument(format!(
                 "image {name}: empty extent {}x{}",
@@ -142,7 +142,7 @@ impl Image {
     }
 
     /// The whole image's subresource range for `aspect`.
-    pub fn range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    pub(crate) fn range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {
             aspect_mask: aspect,
             base_mip_level: 0,
@@ -153,7 +153,7 @@ impl Image {
     }
 
     /// Destroys view, image and memory. The GPU must be done with them.
-    pub fn destroy(self, ctx: &Context) -> Result<()> {
+    pub(crate) fn destroy(self, ctx: &Context) -> Result<()> {
         // SAFETY: the caller guarantees no pending GPU work uses the image.
         unsafe {
             ctx.device.destroy_image_view(self.view, None);

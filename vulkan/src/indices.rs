@@ -1,14 +1,4 @@
-//! Index buffers of one camera: one host-visible buffer per surface and per frame in flight.
-//!
-//! Design decisions:
-//! - **Emission writes straight into mapped memory.** caveclod-core's
-//!   [`CameraState::emit_indices`] takes one output slice per surface, so the mapped buffers
-//!   of the frame being recorded are those slices: no intermediate copy.
-//! - **One buffer per frame in flight**, so the CPU fills frame `n + 1`'s lists while the
-//!   GPU still reads frame `n`'s. A slot is written only after its frame's fence signalled.
-//! - **Growth by doubling, only when needed**: a surface's buffer is replaced by one at
-//!   least twice as large when its list no longer fits, so a camera flying towards more
-//!   detail reallocates O(log n) times, never per frame.
+//! Index buffers of one camera (the design decisions are on [`CameraIndices`]).
 
 use ash::vk;
 use caveclod_core::{CameraState, Hierarchy};
@@ -42,7 +32,18 @@ pub enum IndexSource<'a, 'c> {
     Lists(&'a [&'a [u32]]),
 }
 
-/// The index buffers of one camera: `[frame slot][surface]`.
+/// The index buffers of one camera, `[frame slot][surface]`: one host-visible buffer per
+/// surface and per frame in flight.
+///
+/// Design decisions:
+/// - **Emission writes straight into mapped memory.** caveclod-core's
+///   [`CameraState::emit_indices`] takes one output slice per surface, so the mapped buffers
+///   of the frame being recorded are those slices: no intermediate copy.
+/// - **One buffer per frame in flight**, so the CPU fills frame `n + 1`'s lists while the
+///   GPU still reads frame `n`'s. A slot is written only after its frame's fence signalled.
+/// - **Growth by doubling, only when needed**: a surface's buffer is replaced by one at
+///   least twice as large when its list no longer fits, so a camera flying towards more
+///   detail reallocates O(log n) times, never per frame.
 #[derive(Debug)]
 pub struct CameraIndices {
     name: String,
@@ -185,7 +186,10 @@ impl CameraIndices {
                 camera: cam,
             } => {
                 cam.emit_indices(hierarchy, &mut outs, &mut written)
-                    .map_err(|source| Error::Emit { camera, source })?;
+                    .map_err(|source| Error::Emit {
+                        camera: Some(camera),
+                        source,
+                    })?;
             }
             IndexSource::Lists(lists) => {
                 for (s, list) in lists.iter().enumerate() {

@@ -14,7 +14,8 @@
 //!   buffer, grown by doubling, filled by caveclod-core's index emission.
 //! - [`Renderer`]: 1-4 cameras into viewports of one colour + depth target (split screen)
 //!   or separate targets, one indexed draw per (camera, surface), dynamic rendering and
-//!   synchronization2, one submission per frame; [`RgbaImage`] read-back and PNG.
+//!   synchronization2, one submission per frame; [`RgbaImage`] read-back (RGBA8 pixels, for
+//!   the application to compare or encode).
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
 //!   CPU); a [`CameraDraw`] with a [`Morph`] draws through the geomorphing vertex stage.
 //!
@@ -25,13 +26,13 @@
 //! # fn demo(bytes: &[u8]) -> caveclod_vulkan::Result<()> {
 //! use caveclod_core::{CameraState, Hierarchy, RefineParams};
 //! use caveclod_vulkan::*;
-//! let h = Hierarchy::from_bytes(bytes).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! let h = Hierarchy::from_bytes(bytes)?;
 //! let ctx = Context::headless(&HeadlessDesc::default())?;
 //! let vertices = VertexBuffer::from_hierarchy(&ctx, "mesh", &h)?;
 //! let mut renderer = Renderer::new(&ctx, RendererDesc::single(256, 256))?;
 //! let mut indices = CameraIndices::new("camera 0", h.surface_count(), 2);
 //! let mut memory = vec![0u32; CameraState::words_needed(&h)];
-//! let mut cam = CameraState::new(&h, &mut memory).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! let mut cam = CameraState::new(&h, &mut memory)?;
 //! let look = LookAt {
 //!     eye: glam::Vec3::new(0.0, 5.0, 10.0),
 //!     target: glam::Vec3::ZERO,
@@ -41,8 +42,7 @@
 //!     far: 100.0,
 //! };
 //! let viewport = Viewport::full(256, 256);
-//! cam.refine(&h, &look.view(viewport.width, viewport.height), &RefineParams::default())
-//!     .map_err(|e| Error::InvalidArgument(e.to_string()))?;
+//! cam.refine(&h, &look.view(viewport.width, viewport.height), &RefineParams::default())?;
 //! let colours = vec![[0.8, 0.7, 0.6, 1.0]; h.surface_count()];
 //! renderer.render(&ctx, &mut [CameraDraw {
 //!     target: 0,
@@ -54,7 +54,8 @@
 //!     colours: &colours,
 //!     morph: None,
 //! }])?;
-//! renderer.read_target(&ctx, 0)?.write_png("out.png".as_ref())?;
+//! let image = renderer.read_target(&ctx, 0)?;
+//! assert_eq!(image.pixels.len(), 256 * 256 * 4);
 //! renderer.destroy(&ctx)?;
 //! indices.destroy(&ctx)?;
 //! vertices.destroy(&ctx)?;
@@ -67,29 +68,27 @@
 pub use ash;
 pub use gpu_allocator;
 
-pub mod buffer;
-pub mod device;
-pub mod error;
-pub mod frame;
-pub mod geomorph;
-pub mod image;
-pub mod indices;
+mod buffer;
+mod device;
+mod error;
+mod frame;
+mod geomorph;
+mod image;
+mod indices;
 mod instance;
-pub mod mesh;
-pub mod pipeline;
-pub mod readback;
-pub mod validation;
+mod mesh;
+mod pipeline;
+mod readback;
+mod validation;
 
 pub use buffer::{Buffer, BufferDesc};
 pub use caveclod_core::LookAt;
 pub use device::{Context, HeadlessDesc, SharedAllocator};
-pub use error::{from_vk, Error, Result, VkResultExt};
+pub use error::{Error, Result};
 pub use frame::{CameraDraw, FrameStats, Morph, Renderer, RendererDesc, Viewport};
 pub use geomorph::Geomorph;
-pub use image::{Image, ImageDesc, COLOUR_FORMAT, DEPTH_FORMAT};
+pub use image::{COLOUR_FORMAT, DEPTH_FORMAT};
 pub use indices::{CameraIndices, IndexSource};
 pub use mesh::{MorphInstances, VertexBuffer, VERTEX_STRIDE};
 pub use readback::{ImageDiff, RgbaImage};
-pub use validation::{
-    messenger_info, validation_layer_present, DebugMessenger, ValidationLog, VALIDATION_LAYER,
-};
+pub use validation::{DebugMessenger, ValidationLog, VALIDATION_LAYER};

@@ -1,9 +1,4 @@
-//! The persistent vertex buffer of a baked mesh.
-//!
-//! A hierarchy's vertex buffer ([`Hierarchy::vertices`]) holds every vertex any front can
-//! use, so it is uploaded once, through a staging buffer, into device-local memory and
-//! never written again: refinement only changes index lists. Uploads are counted on the
-//! context ([`Context::vertex_uploads`]) so tests can check that.
+//! The persistent vertex buffer of a baked mesh, and geomorph instances.
 
 use ash::vk;
 use caveclod_core::format::Vertex;
@@ -17,7 +12,13 @@ use crate::error::{Error, Result};
 /// Bytes per vertex (position, normal, uv; the shaders' binding stride).
 pub const VERTEX_STRIDE: u32 = std::mem::size_of::<Vertex>() as u32;
 
-/// A device-local vertex buffer, written once at creation.
+/// A device-local vertex buffer, written once at creation: the persistent vertex buffer of
+/// a baked mesh.
+///
+/// A hierarchy's vertex buffer ([`Hierarchy::vertices`]) holds every vertex any front can
+/// use, so it is uploaded once, through a staging buffer, into device-local memory and
+/// never written again: refinement only changes index lists. Uploads are counted on the
+/// context ([`Context::vertex_uploads`]) so tests can check that.
 #[derive(Debug)]
 pub struct VertexBuffer {
     /// The buffer (vertex and storage usage: the geomorph compute stage reads it too).

@@ -28,26 +28,26 @@ use crate::image::{COLOUR_FORMAT, DEPTH_FORMAT};
 use crate::mesh::VERTEX_STRIDE;
 
 /// The committed SPIR-V module.
-pub const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");
+pub(crate) const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");
 
 /// Entry point names (Rust function names of the shader crate).
-pub mod entry {
+pub(crate) mod entry {
     use std::ffi::CStr;
     /// Vertex stage for drawing.
-    pub const DRAW_VS: &CStr = c"draw_vs";
+    pub(crate) const DRAW_VS: &CStr = c"draw_vs";
     /// Fragment stage for drawing.
-    pub const DRAW_FS: &CStr = c"draw_fs";
+    pub(crate) const DRAW_FS: &CStr = c"draw_fs";
     /// Vertex stage for geomorphing two vertex streams by a per-instance `t`.
-    pub const GEOMORPH_VS: &CStr = c"geomorph_vs";
+    pub(crate) const GEOMORPH_VS: &CStr = c"geomorph_vs";
     /// Geomorph compute stage.
-    pub const GEOMORPH_CS: &CStr = c"geomorph_cs";
+    pub(crate) const GEOMORPH_CS: &CStr = c"geomorph_cs";
 }
 
 /// Threads per workgroup of `geomorph_cs`.
-pub const GEOMORPH_LOCAL_SIZE: u32 = 64;
+pub(crate) const GEOMORPH_LOCAL_SIZE: u32 = 64;
 
 /// Creates a shader module from SPIR-V bytes.
-pub fn shader_module(ctx: &Context, spirv: &[u8]) -> Result<vk::ShaderModule> {
+pub(crate) fn shader_module(ctx: &Context, spirv: &[u8]) -> Result<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
         .map_err(|e| Error::Shader(format!("reading SPIR-V: {e}")))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
@@ -57,7 +57,7 @@ pub fn shader_module(ctx: &Context, spirv: &[u8]) -> Result<vk::ShaderModule> {
 
 /// Which vertex stage a [`DrawPipeline`] runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VertexStage {
+pub(crate) enum VertexStage {
     /// `draw_vs`: binding 0, `Vertex` per vertex.
     Draw,
     /// `geomorph_vs`: bindings 0 and 1, `Vertex` per vertex (coarse, fine); binding 2,
@@ -67,16 +67,16 @@ pub enum VertexStage {
 
 /// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout.
 #[derive(Debug)]
-pub struct DrawPipeline {
+pub(crate) struct DrawPipeline {
     /// The pipeline.
-    pub raw: vk::Pipeline,
+    pub(crate) raw: vk::Pipeline,
     /// Its layout (push constants only).
-    pub layout: vk::PipelineLayout,
+    pub(crate) layout: vk::PipelineLayout,
 }
 
 impl DrawPipeline {
     /// Creates the pipeline for RGBA8 colour + D32 depth targets.
-    pub fn new(ctx: &Context, vertex_stage: VertexStage) -> Result<Self> {
+    pub(crate) fn new(ctx: &Context, vertex_stage: VertexStage) -> Result<Self> {
         let d = &ctx.device;
         let module = shader_module(ctx, SPIRV)?;
         let ranges = [vk::PushConstantRange {
@@ -206,7 +206,7 @@ impl DrawPipeline {
     }
 
     /// Destroys pipeline and layout. The GPU must be done with them.
-    pub fn destroy(self, ctx: &Context) {
+    pub(crate) fn destroy(self, ctx: &Context) {
         // SAFETY: the caller guarantees no pending work uses them.
         unsafe {
             ctx.device.destroy_pipeline(self.raw, None);
@@ -217,18 +217,18 @@ impl DrawPipeline {
 
 /// The geomorph compute pipeline (`geomorph_cs`), its descriptor set layout and layout.
 #[derive(Debug)]
-pub struct GeomorphPipeline {
+pub(crate) struct GeomorphPipeline {
     /// The pipeline.
-    pub raw: vk::Pipeline,
+    pub(crate) raw: vk::Pipeline,
     /// Its layout (one set, push constants).
-    pub layout: vk::PipelineLayout,
+    pub(crate) layout: vk::PipelineLayout,
     /// Set 0: bindings 0 (a), 1 (b), 2 (output), storage buffers.
-    pub set_layout: vk::DescriptorSetLayout,
+    pub(crate) set_layout: vk::DescriptorSetLayout,
 }
 
 impl GeomorphPipeline {
     /// Creates the compute pipeline.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    pub(crate) fn new(ctx: &Context) -> Result<Self> {
         let d = &ctx.device;
         let bindings: Vec<_> = (0..3)
             .map(|b| {
@@ -299,7 +299,7 @@ impl GeomorphPipeline {
     }
 
     /// Destroys pipeline and layouts. The GPU must be done with them.
-    pub fn destroy(self, ctx: &Context) {
+    pub(crate) fn destroy(self, ctx: &Context) {
         // SAFETY: the caller guarantees no pending work uses them.
         unsafe {
             ctx.device.destroy_pipeline(self.raw, None);

@@ -1,7 +1,5 @@
-//! Read-back pixels: an RGBA8 image, its PNG file, crops and comparisons.
-
-use std::io::Write as _;
-use std::path::Path;
+//! Read-back pixels: an RGBA8 image, crops and comparisons (encoding it is the
+//! application's business).
 
 use crate::error::{Error, Result};
 use crate::frame::Viewport;
@@ -117,42 +115,6 @@ impl RgbaImage {
             .filter(|p| *p != background.as_slice())
             .count() as u64
     }
-
-    /// Writes the image as an RGBA PNG, through a temporary file renamed into place.
-    pub fn write_png(&self, path: &Path) -> Result<()> {
-        let shown = path.display().to_string();
-        let io = |source| Error::Io {
-            path: shown.clone(),
-            source,
-        };
-        let png_err = |source| Error::Png {
-            path: shown.clone(),
-            source,
-        };
-        let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
-        tmp_name.push(".tmp");
-        let tmp = path.with_file_name(tmp_name);
-        let file = std::fs::File::create(&tmp).map_err(io)?;
-        let result = (|| {
-            let mut w = std::io::BufWriter::new(file);
-            {
-                let mut enc = png::Encoder::new(&mut w, self.width, self.height);
-                enc.set_color(png::ColorType::Rgba);
-                enc.set_depth(png::BitDepth::Eight);
-                let mut writer = enc.write_header().map_err(png_err)?;
-                writer.write_image_data(&self.pixels).map_err(png_err)?;
-                writer.finish().map_err(png_err)?;
-            }
-            w.flush().map_err(io)?;
-            let file = w.into_inner().map_err(|e| io(e.into_error()))?;
-            file.sync_all().map_err(io)?;
-            std::fs::rename(&tmp, path).map_err(io)
-        })();
-        if result.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        result
-    }
 }
 
 #[cfg(test)]
@@ -191,26 +153,5 @@ mod tests {
         assert_eq!((d.pixels, d.equal, d.within_one), (16, 12, 16));
         assert_eq!(d.max_channel_difference, 1);
         assert_eq!(a.covered([0, 0, 0, 255]), 15);
-    }
-
-    #[test]
-    fn png_round_trip_through_a_temp_file() {
-        let a = image(3, 2, |x, y| [x as u8 * 80, y as u8 * 100, 7, 255]);
-        let dir = std::env::temp_dir().join(format!("caveclod-vulkan-png-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
-        let path = dir.join("a.png");
-        a.write_png(&path).unwrap_or_else(|e| panic!("{e}"));
-        let decoder = png::Decoder::new(std::io::BufReader::new(
-            std::fs::File::open(&path).unwrap_or_else(|e| panic!("{e}")),
-        ));
-        let mut reader = decoder.read_info().unwrap_or_else(|e| panic!("{e}"));
-        let mut buf = vec![0; reader.output_buffer_size().unwrap_or(0)];
-        let info = reader
-            .next_frame(&mut buf)
-            .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!((info.width, info.height), (3, 2));
-        assert_eq!(&buf[..info.buffer_size()], &a.pixels[..]);
-        assert!(!dir.join("a.png.tmp").exists());
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -17,6 +17,10 @@ use crate::error::{Result, VkResultExt};
 pub const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// ERROR and WARNING messages of the validation layer (and loader), in arrival order.
+///
+/// The messenger's callback appends to the log and never prints; tests take the log after
+/// each step and assert it is empty, which makes "zero validation errors" a checked
+/// property.
 #[derive(Debug, Default)]
 pub struct ValidationLog {
     messages: Mutex<Vec<String>>,
@@ -93,7 +97,9 @@ unsafe extern "system" fn callback(
 
 /// The create info of a messenger that records into `log` (also usable in the `pNext`
 /// chain of `VkInstanceCreateInfo`, to catch instance creation and destruction).
-pub fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+pub(crate) fn messenger_info(
+    log: &Arc<ValidationLog>,
+) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
         .message_severity(
             vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
@@ -108,7 +114,9 @@ pub fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreate
         .user_data(Arc::as_ptr(log) as *mut c_void)
 }
 
-/// A registered debug messenger and the log it fills.
+/// A registered debug messenger and the log it fills: the entry point for a host that
+/// creates its own instance (with `VK_EXT_debug_utils`) and wants the layer's messages in a
+/// [`ValidationLog`], as a headless [`Context`](crate::Context) records them.
 pub struct DebugMessenger {
     loader: ash::ext::debug_utils::Instance,
     /// The Vulkan handle.
@@ -142,7 +150,7 @@ impl DebugMessenger {
 }
 
 /// `true` if the Khronos validation layer is installed.
-pub fn validation_layer_present(entry: &ash::Entry) -> bool {
+pub(crate) fn validation_layer_present(entry: &ash::Entry) -> bool {
     // SAFETY: plain enumeration call.
     match unsafe { entry.enumerate_instance_layer_properties() } {
         Ok(layers) => layers

@@ -1,26 +1,11 @@
-//! The renderer: targets, frames in flight, and the per-frame recording of every camera.
-//!
-//! One [`Renderer::render`] call is one frame and one queue submission:
-//! 1. wait for the frame slot's fence (its command buffer and index buffers are free);
-//! 2. fill each camera's index buffers for that slot (index emission into mapped memory);
-//! 3. per target: transition colour + depth, begin dynamic rendering (clear), then per
-//!    camera set its viewport and scissor, bind the mesh's persistent vertex buffer, and
-//!    issue one indexed draw per non-empty surface with the surface colour pushed (a
-//!    geomorphing camera binds the `geomorph_vs` pipeline, its two vertex streams and its
-//!    instances instead, and draws every instance);
-//! 4. optionally copy each colour target into the slot's read-back buffer;
-//! 5. submit with synchronization2 and the slot's fence.
-//!
-//! Several cameras share a target through viewports (the paper's split screen) or use
-//! separate targets; either way all of them go into the one submission.
-//!
-//! View-projection matrices are in Vulkan's clip space (y down, depth 0..1; glam's
-//! `camera::rh::proj::vulkan::perspective`, see [`LookAt`](crate::LookAt)), so viewports
-//! are plain rectangles.
+//! The renderer: targets, frames in flight, and the per-frame recording of every camera
+//! (the frame's steps are on [`Renderer`]; recording a target's commands is in `record`, one
+//! function per step).
+
+mod record;
 
 use ash::vk;
-use caveclod_core::gpu::DrawPush;
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;
@@ -179,7 +164,25 @@ struct FrameSlot {
     readback: Vec<Buffer>,
 }
 
-/// Targets, pipeline and frames in flight. See the [module docs](self).
+/// Targets, pipelines and frames in flight; records every camera of a frame.
+///
+/// One [`Renderer::render`] call is one frame and one queue submission:
+/// 1. wait for the frame slot's fence (its command buffer and index buffers are free);
+/// 2. fill each camera's index buffers for that slot (index emission into mapped memory);
+/// 3. per target: transition colour + depth, begin dynamic rendering (clear), then per
+///    camera set its viewport and scissor, bind the mesh's persistent vertex buffer, and
+///    issue one indexed draw per non-empty surface with the surface colour pushed (a
+///    geomorphing camera binds the `geomorph_vs` pipeline, its two vertex streams and its
+///    instances instead, and draws every instance);
+/// 4. optionally copy each colour target into the slot's read-back buffer;
+/// 5. submit with synchronization2 and the slot's fence.
+///
+/// Several cameras share a target through viewports (the paper's split screen) or use
+/// separate targets; either way all of them go into the one submission.
+///
+/// View-projection matrices are in Vulkan's clip space (y down, depth 0..1; glam's
+/// `camera::rh::proj::vulkan::perspective`, see [`LookAt`](crate::LookAt)), so viewports
+/// are plain rectangles.
 pub struct Renderer {
     desc: RendererDesc,
     pipeline: DrawPipeline,
@@ -314,7 +317,8 @@ impl Renderer {
         self.frame
     }
 
-    /// Records and submits one frame of every camera in `cameras` (see the module docs).
+    /// Records and submits one frame of every camera in `cameras` (the steps are on
+    /// [`Renderer`]).
     pub fn render(
         &mut self,
         ctx: &Context,
@@ -435,214 +439,6 @@ impl Renderer {
             }
         }
         Ok(())
-    }
-
-    /// Records target `t`: transitions, rendering of its cameras, optional copy-out.
-    /// Returns the draws recorded.
-    fn record_target(
-        &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        t: usize,
-        slot: usize,
-        cameras: &[CameraDraw<'_, '_>],
-    ) -> u32 {
-        let d = &ctx.device;
-        let target = &self.targets[t];
-        let extent = target.colour.desc.extent;
-        let image_barriers = [
-            vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(
-                    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT
-                        | vk::PipelineStageFlags2::COPY,
-                )
-                .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
-                .dst_access_mask(
-                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE
-                        | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
-                )
-                .old_layout(vk::ImageLayout::UNDEFINED)
-                .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(target.colour.raw)
-                .subresource_range(Image::range(vk::ImageAspectFlags::COLOR)),
-            vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(
-                    vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
-                        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                )
-                .src_access_mask(vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE)
-                .dst_stage_mask(
-                    vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
-                        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                )
-                .dst_access_mask(
-                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
-                        | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
-                )
-                .old_layout(vk::ImageLayout::UNDEFINED)
-                .new_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(target.depth.raw)
-                .subresource_range(Image::range(vk::ImageAspectFlags::DEPTH)),
-        ];
-        let dep = vk::DependencyInfo::default().image_memory_barriers(&image_barriers);
-        // SAFETY: `cmd` is recording; the images are alive.
-        unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
-
-        let colour_attachment = [vk::RenderingAttachmentInfo::default()
-            .image_view(target.colour.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: self.desc.clear_colour,
-                },
-            })];
-        let depth_attachment = vk::RenderingAttachmentInfo::default()
-            .image_view(target.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .clear_value(vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            });
-        let rendering = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D { x: 0, y: 0 },
-                extent,
-            })
-            .layer_count(1)
-            .color_attachments(&colour_attachment)
-            .depth_attachment(&depth_attachment);
-        let mut draws = 0;
-        // SAFETY: `cmd` is recording; attachments are in the layouts named.
-        unsafe { d.cmd_begin_rendering(cmd, &rendering) };
-        for cam in cameras.iter().filter(|c| c.target == t) {
-            let (pipeline, instances) = match (&cam.morph, &self.morph_pipeline) {
-                (Some(m), Some(p)) => (p, m.instances.count),
-                _ => (&self.pipeline, 1),
-            };
-            let v = cam.viewport;
-            let viewport = [vk::Viewport {
-                x: v.x as f32,
-                y: v.y as f32,
-                width: v.width as f32,
-                height: v.height as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            }];
-            let scissor = [vk::Rect2D {
-                offset: vk::Offset2D {
-                    x: v.x as i32,
-                    y: v.y as i32,
-                },
-                extent: vk::Extent2D {
-                    width: v.width,
-                    height: v.height,
-                },
-            }];
-            // SAFETY: `cmd` is recording inside rendering; the vertex buffers are alive.
-            unsafe {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
-                d.cmd_set_viewport(cmd, 0, &viewport);
-                d.cmd_set_scissor(cmd, 0, &scissor);
-                match &cam.morph {
-                    Some(m) => d.cmd_bind_vertex_buffers(
-                        cmd,
-                        0,
-                        &[
-                            cam.vertices.buffer.raw,
-                            m.fine.buffer.raw,
-                            m.instances.buffer.raw,
-                        ],
-                        &[0, 0, 0],
-                    ),
-                    None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
-                }
-            }
-            for s in 0..cam.indices.surface_count() {
-                let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
-                    continue;
-                };
-                let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
-                let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
-                // SAFETY: `cmd` is recording; `buffer` holds `count` valid indices.
-                unsafe {
-                    d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
-                    d.cmd_push_constants(
-                        cmd,
-                        pipeline.layout,
-                        vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                        0,
-                        bytemuck::bytes_of(&push),
-                    );
-                    d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
-                }
-                draws += 1;
-            }
-        }
-        // SAFETY: rendering was begun above.
-        unsafe { d.cmd_end_rendering(cmd) };
-
-        if let Some(buffer) = self.slots[slot].readback.get(t) {
-            let to_src = [vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
-                .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-                .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
-                .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(target.colour.raw)
-                .subresource_range(Image::range(vk::ImageAspectFlags::COLOR))];
-            let dep = vk::DependencyInfo::default().image_memory_barriers(&to_src);
-            let region = [vk::BufferImageCopy {
-                buffer_offset: 0,
-                buffer_row_length: 0,
-                buffer_image_height: 0,
-                image_subresource: vk::ImageSubresourceLayers {
-                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                    mip_level: 0,
-                    base_array_layer: 0,
-                    layer_count: 1,
-                },
-                image_offset: vk::Offset3D::default(),
-                image_extent: extent.into(),
-            }];
-            let to_host = [vk::BufferMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer.raw)
-                .offset(0)
-                .size(vk::WHOLE_SIZE)];
-            let host_dep = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
-            // SAFETY: `cmd` is recording; image and buffer are alive and large enough.
-            unsafe {
-                d.cmd_pipeline_barrier2(cmd, &dep);
-                d.cmd_copy_image_to_buffer(
-                    cmd,
-                    target.colour.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer.raw,
-                    &region,
-                );
-                d.cmd_pipeline_barrier2(cmd, &host_dep);
-            }
-        }
-        draws
     }
 
     /// Waits for every submitted frame.

@@ -1,0 +1,270 @@
+//! Recording one target's commands, in the order they run:
+//! 1. [`to_attachment_layouts`]: colour and depth from `UNDEFINED` (their contents are
+//!    cleared anyway) into attachment layouts, after the previous frame's writes and copy;
+//! 2. [`begin_rendering`]: dynamic rendering over the whole target, clearing both;
+//! 3. per camera of the target, [`Renderer::draw_camera`]: pipeline, viewport and scissor,
+//!    vertex streams, then one indexed draw per non-empty surface;
+//! 4. end of rendering;
+//! 5. with read-back, [`copy_to_readback`]: colour into `TRANSFER_SRC_OPTIMAL`, copied into
+//!    the slot's host-visible buffer, made visible to host reads.
+
+use ash::vk;
+use caveclod_core::gpu::DrawPush;
+use glam::Vec4;
+
+use super::{CameraDraw, Renderer, Target, Viewport};
+use crate::buffer::Buffer;
+use crate::device::Context;
+use crate::image::Image;
+
+impl Renderer {
+    /// Records target `t`: transitions, rendering of its cameras, optional copy-out.
+    /// Returns the draws recorded.
+    pub(super) fn record_target(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        t: usize,
+        slot: usize,
+        cameras: &[CameraDraw<'_, '_>],
+    ) -> u32 {
+        let d = &ctx.device;
+        let target = &self.targets[t];
+        to_attachment_layouts(d, cmd, target);
+        begin_rendering(d, cmd, target, self.desc.clear_colour);
+        let draws = cameras
+            .iter()
+            .filter(|c| c.target == t)
+            .map(|cam| self.draw_camera(d, cmd, slot, cam))
+            .sum();
+        // SAFETY: `cmd` is recording inside the rendering begun above.
+        unsafe { d.cmd_end_rendering(cmd) };
+        if let Some(buffer) = self.slots[slot].readback.get(t) {
+            copy_to_readback(d, cmd, target, buffer);
+        }
+        draws
+    }
+
+    /// Binds `cam`'s pipeline, viewport and vertex streams, then draws each of its
+    /// non-empty surfaces of frame slot `slot` (every instance, for a geomorphing camera).
+    /// Returns the draws recorded.
+    fn draw_camera(
+        &self,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        slot: usize,
+        cam: &CameraDraw<'_, '_>,
+    ) -> u32 {
+        let (pipeline, instances) = match (&cam.morph, &self.morph_pipeline) {
+            (Some(m), Some(p)) => (p, m.instances.count),
+            _ => (&self.pipeline, 1),
+        };
+        let (viewport, scissor) = viewport_and_scissor(cam.viewport);
+        // SAFETY: `cmd` is recording inside rendering; the vertex buffers are alive.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_set_viewport(cmd, 0, &[viewport]);
+            d.cmd_set_scissor(cmd, 0, &[scissor]);
+            match &cam.morph {
+                Some(m) => d.cmd_bind_vertex_buffers(
+                    cmd,
+                    0,
+                    &[
+                        cam.vertices.buffer.raw,
+                        m.fine.buffer.raw,
+                        m.instances.buffer.raw,
+                    ],
+                    &[0, 0, 0],
+                ),
+                None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
+            }
+        }
+        let mut draws = 0;
+        for s in 0..cam.indices.surface_count() {
+            let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
+                continue;
+            };
+            let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
+            let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
+            // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count` indices
+            // below the bound vertex count (checked by `Renderer::check`).
+            unsafe {
+                d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
+                d.cmd_push_constants(
+                    cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
+            }
+            draws += 1;
+        }
+        draws
+    }
+}
+
+/// The Vulkan viewport (depth 0..1) and scissor of the same rectangle.
+fn viewport_and_scissor(v: Viewport) -> (vk::Viewport, vk::Rect2D) {
+    let viewport = vk::Viewport {
+        x: v.x as f32,
+        y: v.y as f32,
+        width: v.width as f32,
+        height: v.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let scissor = vk::Rect2D {
+        offset: vk::Offset2D {
+            x: v.x as i32,
+            y: v.y as i32,
+        },
+        extent: vk::Extent2D {
+            width: v.width,
+            height: v.height,
+        },
+    };
+    (viewport, scissor)
+}
+
+/// Colour and depth into attachment layouts. The colour waits for the previous frame's
+/// attachment writes and its copy to the read-back buffer; the depth for its depth tests.
+fn to_attachment_layouts(d: &ash::Device, cmd: vk::CommandBuffer, target: &Target) {
+    let image_barriers = [
+        vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT | vk::PipelineStageFlags2::COPY,
+            )
+            .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+            .dst_access_mask(
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+            )
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(target.colour.raw)
+            .subresource_range(Image::range(vk::ImageAspectFlags::COLOR)),
+        vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(
+                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                    | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+            )
+            .src_access_mask(vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE)
+            .dst_stage_mask(
+                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                    | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+            )
+            .dst_access_mask(
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            )
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(target.depth.raw)
+            .subresource_range(Image::range(vk::ImageAspectFlags::DEPTH)),
+    ];
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&image_barriers);
+    // SAFETY: `cmd` is recording; the images are alive.
+    unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
+}
+
+/// Begins dynamic rendering over the whole target, clearing colour to `clear_colour` and
+/// depth to 1 (the depth is not stored: nothing reads it after the frame).
+fn begin_rendering(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    target: &Target,
+    clear_colour: [f32; 4],
+) {
+    let colour_attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(target.colour.view)
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue {
+            color: vk::ClearColorValue {
+                float32: clear_colour,
+            },
+        })];
+    let depth_attachment = vk::RenderingAttachmentInfo::default()
+        .image_view(target.depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 1.0,
+                stencil: 0,
+            },
+        });
+    let rendering = vk::RenderingInfo::default()
+        .render_area(vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: target.colour.desc.extent,
+        })
+        .layer_count(1)
+        .color_attachments(&colour_attachment)
+        .depth_attachment(&depth_attachment);
+    // SAFETY: `cmd` is recording; the attachments are in the layouts named
+    // (`to_attachment_layouts` ran before).
+    unsafe { d.cmd_begin_rendering(cmd, &rendering) };
+}
+
+/// Copies the colour target into `buffer` (tightly packed RGBA8 rows) and makes the copy
+/// visible to host reads once the frame's fence signals.
+fn copy_to_readback(d: &ash::Device, cmd: vk::CommandBuffer, target: &Target, buffer: &Buffer) {
+    let to_src = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+        .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+        .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(target.colour.raw)
+        .subresource_range(Image::range(vk::ImageAspectFlags::COLOR))];
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&to_src);
+    let region = [vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: target.colour.desc.extent.into(),
+    }];
+    let to_host = [vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(buffer.raw)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)];
+    let host_dep = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
+    // SAFETY: `cmd` is recording outside rendering; image and buffer are alive and the
+    // buffer holds `width * height * 4` bytes (made so by `Renderer::create_resources`).
+    unsafe {
+        d.cmd_pipeline_barrier2(cmd, &dep);
+        d.cmd_copy_image_to_buffer(
+            cmd,
+            target.colour.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &region,
+        );
+        d.cmd_pipeline_barrier2(cmd, &host_dep);
+    }
+}
