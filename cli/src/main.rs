@@ -561,7 +561,9 @@ struct RenderArgs {
 
 /// `caveclod render`: one frame of orbiting cameras, read back and written as PNG.
 fn render(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
-    use caveclod_cli::snapshot::{render_octree_snapshot, render_snapshot, Layout, SnapshotDesc};
+    use caveclod_cli::snapshot::{
+        render_octree_snapshot, render_snapshot, write_png, Layout, SnapshotDesc,
+    };
     use caveclod_vulkan::{Context, HeadlessDesc};
     let octree = if a.octree {
         match caveclod_core::Octree::from_hierarchy(h) {
@@ -617,7 +619,7 @@ fn render(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
             format!("split{}.png", a.cameras)
         };
         let path = a.out.join(name);
-        image.write_png(&path).map_err(|e| e.to_string())?;
+        write_png(image, &path).map_err(|e| e.to_string())?;
         written.push(path.display().to_string());
     }
     for (i, (polys, bytes)) in snapshot

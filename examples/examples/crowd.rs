@@ -542,7 +542,7 @@ fn render_with(
             match image {
                 Ok(img) => {
                     let file = out.join(format!("crowd-{}-{f:03}.png", path.name()));
-                    match img.write_png(&file) {
+                    match caveclod_cli::snapshot::write_png(&img, &file) {
                         Ok(()) => written.push(file),
                         Err(err) => outcome = Err(err.to_string()),
                     }

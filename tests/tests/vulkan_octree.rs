@@ -121,13 +121,9 @@ fn an_octree_cut_draws_without_holes_at_level_changes() {
         }
     }
     println!("holes: {holes}, silhouette: {silhouette}, of {covered} covered pixels");
-    if let Some(dir) = std::env::var_os("CAVECLOD_TEST_IMAGES") {
-        let dir = std::path::PathBuf::from(dir);
-        ok(std::fs::create_dir_all(&dir), "image directory");
-        ok(fine.write_png(&dir.join("octree_fine.png")), "png");
-        ok(coarse.write_png(&dir.join("octree_coarse.png")), "png");
-        ok(marked.write_png(&dir.join("octree_holes.png")), "png");
-    }
+    save(&fine, "octree_fine.png");
+    save(&coarse, "octree_coarse.png");
+    save(&marked, "octree_holes.png");
     assert!(
         (holes as f64) < 0.001 * covered as f64,
         "{holes} of {covered} pixels open at level changes"

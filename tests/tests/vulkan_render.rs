@@ -23,15 +23,6 @@ use vulkan_support::*;
 
 const SIZE: u32 = 256;
 
-/// Where test images go when `CAVECLOD_TEST_IMAGES` names a directory (for looking at them).
-fn save(image: &caveclod_vulkan::RgbaImage, name: &str) {
-    if let Some(dir) = std::env::var_os("CAVECLOD_TEST_IMAGES") {
-        let dir = std::path::PathBuf::from(dir);
-        ok(std::fs::create_dir_all(&dir), "image directory");
-        ok(image.write_png(&dir.join(name)), "write png");
-    }
-}
-
 #[test]
 fn full_detail_equals_the_input_mesh_and_coarse_differs() {
     let ctx = context();

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::snapshot::palette;
+use crate::snapshot::{palette, write_png};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
 use caveclod_vulkan::{
@@ -135,8 +135,8 @@ fn draw(
         match image {
             Ok(image) => {
                 let path = out.join(format!("frame-{f:03}.png"));
-                if let Err(e) = image.write_png(&path) {
-                    outcome = Err(format!("{}: {e}", path.display()));
+                if let Err(e) = write_png(&image, &path) {
+                    outcome = Err(e.to_string());
                     break;
                 }
                 written.push(path);

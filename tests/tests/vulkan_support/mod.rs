@@ -51,6 +51,24 @@ pub fn ok<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
     }
 }
 
+/// Writes `image` as `name` (a PNG) into the directory `CAVECLOD_TEST_IMAGES` names, if it
+/// names one (for looking at a test's pictures); does nothing otherwise.
+pub fn save(image: &RgbaImage, name: &str) {
+    let Some(dir) = std::env::var_os("CAVECLOD_TEST_IMAGES") else {
+        return;
+    };
+    let dir = std::path::PathBuf::from(dir);
+    ok(std::fs::create_dir_all(&dir), "image directory");
+    let path = dir.join(name);
+    let file = ok(std::fs::File::create(&path), "image file");
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), image.width, image.height);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = ok(enc.write_header(), "png header");
+    ok(writer.write_image_data(&image.pixels), "png data");
+    ok(writer.finish(), "png end");
+}
+
 /// A camera looking at the middle of a `size` × `size` terrain from `angle` (radians around
 /// the y axis) at distance `distance` (in terrain sizes) and height `height`.
 pub fn terrain_camera(size: f32, angle: f32, distance: f32, height: f32) -> LookAt {
