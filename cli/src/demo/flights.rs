@@ -36,23 +36,19 @@ pub const DISPLAY_FPS: f64 = 30.0;
 
 /// Frames per segment of the interleaved flights: long enough that a camera's first frame
 /// after the other flights' turns (its caches taken by them) is one frame in thirty, which
-/// barely moves a per-frame median; short enough that the flights compared run within half a
-/// second of each other.
+/// barely moves a per-frame middle value; short enough that the flights compared run within
+/// a fraction of a second of each other.
 pub const SEGMENT: usize = 30;
 
 /// How many times four cameras fly on one thread and then on a thread each, for the threads'
-/// speed-up, which is a ratio of wall times, not of per-frame medians: the median of the
-/// rounds' ratios.
+/// speed-up, which is a ratio of wall times, not of per-frame figures: the middle value of
+/// the rounds' ratios, so that one round disturbed by other work does not decide it.
 ///
 /// These two fly whole flights in turn, not the segments the other flights take turns in:
 /// every segment of threads ends as a barrier would (the camera threads that finish first
-/// wait for the last, and a core idles meanwhile: on the St. Helens demo the first of four
-/// threads finished 1.4-1.8 ms before the last on average, in segments of 15-18 ms), which a
-/// renderer's threads pay once, not every few frames. Ten pairs of whole flights (`caveclod
-/// flyover` with and without `--threads`) gave 1.71-2.18x (median 1.90); sixteen alternating
-/// pairs of demo runs, whole flights against 30-frame segments, 1.63-1.94x (median 1.81)
-/// against 1.46-1.89x (median 1.76). A whole flight takes 0.14-0.3 s here, so the two
-/// flights of a round still run within half a second of each other.
+/// wait for the last, and a core idles meanwhile), which a renderer's threads pay once, not
+/// every few frames. A whole flight is short, so the two flights of a round still run close
+/// enough together to see the same load.
 pub const THREADS_ROUNDS: usize = 5;
 
 /// Flies every run of the demo: the shared state on its own; four cameras on one thread and
@@ -125,14 +121,15 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     })
 }
 
-/// Refinement time per frame over all cameras, in ms: the sum of each camera's median over
-/// its frames (frame 0 left out). Medians, because a short flight's mean moves with every
-/// burst of other work on the machine.
+/// Refinement time per frame over all cameras, in milliseconds: the sum of each camera's
+/// middle value over its frames (frame 0 left out). Middle values, because a short flight's
+/// mean moves with every burst of other work on the machine.
 pub(super) fn refine_ms_all_cameras(f: &Flyover) -> f64 {
     f.flight.records.iter().map(|r| r.refine_ms_median()).sum()
 }
 
-/// Emission time per frame over all cameras, in ms (the sum of each camera's median).
+/// Emission time per frame over all cameras, in milliseconds (the sum of each camera's
+/// middle value over its frames).
 pub(super) fn emit_ms_all_cameras(f: &Flyover) -> f64 {
     f.flight.records.iter().map(|r| r.emit_ms_median()).sum()
 }
@@ -153,7 +150,7 @@ pub struct Ratios {
     pub memory: f64,
 }
 
-/// The median (0 for none).
+/// The middle value of `v` once sorted (the upper one of an even count; 0 for none).
 fn median(v: &[f64]) -> f64 {
     let mut r = v.to_vec();
     r.sort_by(f64::total_cmp);

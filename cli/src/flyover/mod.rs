@@ -66,8 +66,8 @@ pub struct FlyoverOptions {
     /// Each state compacts ([`CameraState::compact`]) every this many of its frames, inside
     /// the timed refinement (0: never). Compaction sorts a front's records back into node
     /// order; without it a moving camera's front scatters over its memory and four cameras
-    /// together no longer fit the caches one camera alone fits (measured: 4 cameras took
-    /// 7.5-9x one camera's refinement time without it, 4.0x with it every 30 frames).
+    /// together no longer fit the caches one camera alone fits, so their refinement costs
+    /// far more than four times one camera's.
     pub compact_every: usize,
     /// Frames in flight (at least 1): each camera emits into this many index lists in turn,
     /// and with a thread per camera a camera may run this many frames less one ahead of the
