@@ -25,6 +25,8 @@ use caveclod_bake::weld::{self, Welded};
 use caveclod_core::format::PositionClass;
 use caveclod_core::{CameraState, Hierarchy, NodeId};
 use caveclod_tests::check::{check_front, split_all};
+// The tests' generator, so failures reproduce from the seed.
+use caveclod_tests::rng::SplitMix64 as Rng;
 use caveclod_tests::AlignedBytes;
 
 /// Where the shared data lives, or `None` (with a note) when the file is absent.
@@ -37,23 +39,6 @@ fn shared(relative: &str) -> Option<PathBuf> {
     } else {
         eprintln!("note: {relative} not found under ../shared/data; skipping");
         None
-    }
-}
-
-/// A small deterministic generator (SplitMix64), so failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
     }
 }
 
@@ -304,7 +289,7 @@ fn random_collapses(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, rng: &mut Rng,
         .filter(|&v| cam.can_collapse(h, v))
         .collect();
     for v in legal {
-        if ((rng.next() % 1000) as f64) < 1000.0 * fraction && cam.can_collapse(h, v) {
+        if ((rng.next_u64() % 1000) as f64) < 1000.0 * fraction && cam.can_collapse(h, v) {
             cam.collapse(h, v).expect("collapse");
         }
     }

@@ -4,24 +4,18 @@
 //! The format starts every section on a multiple of 64 bytes, so in memory aligned like this
 //! no 32-byte record (the bounds a refinement pass reads for every active node, the split
 //! records) straddles two cache lines; in a buffer aligned only to 8 or 16 bytes half of them
-//! do, and refinement misses 13% more first-level and 20% more last-level lines (callgrind,
-//! the demo's flights at 60 frames, 2 MB last level).
+//! do, and each of those costs refinement a second cache line.
 //!
 //! A buffer of [`HUGE_PAGES_FROM`] bytes or more starts on a 2 MiB boundary, and on Linux it
 //! asks for transparent huge pages (`madvise(MADV_HUGEPAGE)`) before its pages are first
 //! touched; [`CameraPool`] does the same for the flights' camera states. Refinement reads the
-//! hierarchy at addresses spread over the whole file (the St. Helens terrain's is 27 MB,
-//! 6,500 pages of 4 KiB) and several cameras read it in different places, so with 4 KiB
-//! pages those reads likely miss the TLB too (the virtual machine measured on exposes no TLB
-//! counters; the timings are the evidence). Twelve alternating pairs of demo runs, with huge
-//! pages against without (this system grants them on `madvise`): four cameras / one
-//! 4.06-4.34x (median 4.17) against 4.05-4.43x (4.20), lower in 7 pairs; threads
-//! 1.65-1.93x (median 1.72; one run at 1.07, not seen in five more) against 1.54-1.86x
-//! (1.64), higher in 9. Where the system refuses (huge pages `never`, another OS), the
-//! memory is ordinary pages, and memory the allocator hands out again after the process
-//! touched it keeps the pages it has: one demo run that baked the terrain (and so freed
-//! much memory before loading it) got 2 MiB of huge pages for it, another 24 MiB, as the
-//! runs that read the cached file do. The demo's report says which.
+//! hierarchy at addresses spread over the whole file (thousands of 4 KiB pages for a terrain)
+//! and several cameras read it in different places, so with 4 KiB pages those reads also miss
+//! the TLB; a huge page covers what hundreds of small ones would. Where the system refuses
+//! (huge pages `never`, another OS), the memory is ordinary pages, and memory the allocator
+//! hands out again after the process touched it keeps the pages it already has, so how much
+//! of a buffer huge pages back varies from run to run ([`AlignedBytes::huge_page_bytes`]
+//! says; the demo's report prints it).
 
 use std::path::Path;
 

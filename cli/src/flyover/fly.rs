@@ -518,11 +518,12 @@ const SEGMENT_COST_FRAMES: usize = 30;
 /// its own states and index lists, refining and emitting every frame.
 ///
 /// Flights measured one after the other on a shared machine are compared across whatever
-/// else ran meanwhile: one demo saw the ratio of four cameras to one camera move from 3.2x to
-/// 7.4x between runs. Interleaved, the flights compared see the same load within a segment
-/// (a second or less). A group's cameras still run only their own frames in a row within a
-/// segment, so a camera flown alone keeps its caches to itself as it would alone; only the
-/// first frame of a segment starts after the other groups, which per-frame medians leave out.
+/// else ran meanwhile, which can move a ratio of two flights more than the effect measured.
+/// Interleaved, the flights compared see the same load within a segment (a second or less).
+/// A group's cameras still run only their own frames in a row within a segment, so a camera
+/// flown alone keeps its caches to itself as it would alone; only the first frame of a
+/// segment starts after the other groups, and the per-frame figures are middle values, which
+/// one such frame in a segment barely moves.
 pub fn fly_interleaved(
     h: &Hierarchy<'_>,
     groups: &[Group<'_>],

@@ -8,14 +8,11 @@
 //! camera that finished early starts its next frame while another camera finishes this one,
 //! and a frame in which one camera has much to do no longer idles the other core.
 //!
-//! Measured on the St. Helens demo (four camera threads on two cores, eight runs of each
-//! build alternating): one thread's flight time over the threads' was 1.38-1.76x with a
-//! barrier per frame and 1.62-1.98x with two frames in flight. Replaying a flight's per-frame
-//! work on two cores, with the cameras started in random orders, gives 1.80x and 1.91-1.94x
-//! for the two. Once the index cache made emission a copy, a camera's frame took half as
-//! long and waiting for the slowest camera weighed more: with two frames in flight 1.43-1.86x
-//! (two runs of ten under 1.6x), with three 1.74-1.96x (ten runs of each, alternating), so
-//! the fly-over keeps three, as a triple-buffered renderer does.
+//! The shorter a camera's frame (with the index cache, emission is a copy), the more waiting
+//! for the slowest camera weighs against the work itself, and the more slack a camera needs
+//! to absorb a frame in which another has much to do. The fly-over keeps three frames in
+//! flight, as a triple-buffered renderer does: a camera may run two frames ahead of the
+//! slowest before it waits.
 
 use std::sync::{Condvar, Mutex, PoisonError};
 

@@ -13,13 +13,10 @@
 pub mod fly;
 pub mod gate;
 pub mod placement;
+mod report;
 pub mod routes;
 
-use std::fmt::Write as _;
-use std::time::Duration;
-
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, MemoryReport, RefineParams, View};
-use serde_json::{json, Value};
 
 pub use fly::{fly_per_camera, fly_shared, summarise, Flight, Record, Summary};
 pub use routes::{clip, eye_at, routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
@@ -69,8 +66,8 @@ pub struct FlyoverOptions {
     /// Each state compacts ([`CameraState::compact`]) every this many of its frames, inside
     /// the timed refinement (0: never). Compaction sorts a front's records back into node
     /// order; without it a moving camera's front scatters over its memory and four cameras
-    /// together no longer fit the caches one camera alone fits (measured: 4 cameras took
-    /// 7.5-9x one camera's refinement time without it, 4.0x with it every 30 frames).
+    /// together no longer fit the caches one camera alone fits, so their refinement costs
+    /// far more than four times one camera's.
     pub compact_every: usize,
     /// Frames in flight (at least 1): each camera emits into this many index lists in turn,
     /// and with a thread per camera a camera may run this many frames less one ahead of the
@@ -361,221 +358,6 @@ fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: &Prepared, flight: Fli
         memory_budgeted: MemoryReport::new(h, budget_bytes, na, pa),
         budget_polygons,
         vertex_table_fill: h.vertex_table_fill(),
-    }
-}
-
-fn mib(bytes: u64) -> f64 {
-    bytes as f64 / (1024.0 * 1024.0)
-}
-
-fn secs(d: Duration) -> f64 {
-    d.as_secs_f64()
-}
-
-impl Flyover {
-    /// The report as JSON, with the stable keys `cameras`, `frames`, `ops_per_camera_per_frame`
-    /// (mean, max, first frame), `refine_ms_per_frame` (mean, p99), `active_polygons` (mean and
-    /// max per camera), `static_bytes`, `camera_bytes`, `paper_camera_bytes` (for the camera
-    /// actually flown: budgeted when sized, full otherwise), and more.
-    pub fn json(&self) -> Value {
-        let s = &self.summary;
-        let flown = if self.budget.is_some() {
-            &self.memory_budgeted
-        } else {
-            &self.memory_full
-        };
-        let per_camera: Vec<Value> = self
-            .names
-            .iter()
-            .zip(&self.flight.records)
-            .map(|(name, r)| {
-                json!({
-                    "name": name,
-                    "ops_mean": r.ops_mean(),
-                    "ops_max": r.ops_max(),
-                    "first_frame_ops": r.ops.first().copied().unwrap_or(0),
-                    "refine_ms_mean": r.refine_ms_mean(),
-                    "refine_ms_p99": r.refine_ms_p99(),
-                    "emit_ms_mean": r.emit_ms_mean(),
-                    "active_polygons_mean": r.active_mean(),
-                    "active_polygons_max": r.active_max(),
-                    "indices_total": r.indices_total(),
-                })
-            })
-            .collect();
-        json!({
-            "mode": self.options.mode.name(),
-            "cameras": self.options.cameras,
-            "frames": self.options.frames,
-            "tolerance_px": self.options.tolerance,
-            // The shared state emits each camera's turn into one list.
-            "frames_in_flight": (self.options.mode != Mode::Shared)
-                .then_some(self.options.frames_in_flight),
-            "index_cache": self.options.index_cache,
-            "hashed_pair_map": self.options.hashed_pair_map,
-            "pinned": (self.options.mode == Mode::Threads).then_some(self.options.pin_threads),
-            "ops_per_camera_per_frame": {
-                "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
-            },
-            "refine_ms_per_frame": { "mean": s.refine_ms_mean, "p99": s.refine_ms_p99 },
-            "emit_ms_per_frame": s.emit_ms_mean,
-            "active_polygons": { "mean": s.active_mean, "max": s.active_max },
-            "capacity_refusals": s.refusals,
-            "static_bytes": flown.static_bytes,
-            "paper_static_bytes": flown.paper_static_bytes,
-            "camera_bytes": flown.camera_bytes,
-            "paper_camera_bytes": flown.paper_camera_bytes,
-            "camera_ratio": flown.camera_ratio(),
-            "camera_bytes_full": self.memory_full.camera_bytes,
-            "camera_ratio_full": self.memory_full.camera_ratio(),
-            "budget_polygons": self.budget_polygons,
-            "budgeted_flown": self.budget.is_some(),
-            "flight_s": secs(self.flight.wall),
-            "sizing_s": self.sizing.as_ref().map(|f| secs(f.wall)),
-            "per_camera": per_camera,
-        })
-    }
-
-    /// The report for people.
-    pub fn human(&self) -> String {
-        let mut o = String::new();
-        let s = &self.summary;
-        let _ = writeln!(
-            o,
-            "{} camera(s), {} frames, tolerance {} px at {WIDTH}x{HEIGHT}, fov {FOV_Y_DEG} deg; \
-             mode: {}",
-            self.options.cameras,
-            self.options.frames,
-            self.options.tolerance,
-            match self.options.mode {
-                Mode::Shared =>
-                    "one shared state re-refined for each camera in turn (baseline)".to_string(),
-                Mode::Threads => format!(
-                    "a state per camera, one thread per camera{}, {} frame(s) in flight",
-                    if self.options.pin_threads {
-                        " (pinned, cores balanced)"
-                    } else {
-                        ""
-                    },
-                    self.options.frames_in_flight
-                ),
-                Mode::PerCamera => format!(
-                    "a state per camera, one thread, {} frame(s) in flight",
-                    self.options.frames_in_flight
-                ),
-            } + if self.options.index_cache {
-                ""
-            } else {
-                ", no index cache (every polygon looked up every frame)"
-            } + if self.options.hashed_pair_map {
-                ", hashed pair map"
-            } else {
-                ""
-            }
-        );
-        if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
-            let _ = writeln!(
-                o,
-                "sizing flight (full-capacity cameras, refine only, every {SIZING_STRIDE}rd \
-                 frame): {:.2} s -> budget {b} polygons (+{:.0}%)",
-                secs(sz.wall),
-                (BUDGET_HEADROOM - 1.0) * 100.0
-            );
-        }
-        let _ = writeln!(
-            o,
-            "flight: {:.2} s for {} camera-frames (ops = splits + collapses; per-frame figures \
-             leave out frame 0, which refines from the base mesh)",
-            secs(self.flight.wall),
-            self.options.cameras * self.options.frames
-        );
-        let _ = writeln!(
-            o,
-            "  {:<14} {:>9} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8}",
-            "camera",
-            "first-op",
-            "ops/f",
-            "max-ops/f",
-            "refine",
-            "p99",
-            "emit",
-            "active",
-            "max-act",
-            "refused"
-        );
-        for (name, r) in self.names.iter().zip(&self.flight.records) {
-            let _ = writeln!(
-                o,
-                "  {:<14} {:>9} {:>7.1} {:>9} {:>6.3} ms {:>6.3} ms {:>6.3} ms {:>9.0} {:>9} {:>8}",
-                name,
-                r.ops.first().copied().unwrap_or(0),
-                r.ops_mean(),
-                r.ops_max(),
-                r.refine_ms_mean(),
-                r.refine_ms_p99(),
-                r.emit_ms_mean(),
-                r.active_mean(),
-                r.active_max(),
-                r.refusals,
-            );
-        }
-        let _ = writeln!(
-            o,
-            "  all cameras: {:.1} ops/frame/camera (max {}), refine {:.3} ms mean, {:.3} ms p99, \
-             emit {:.3} ms mean, {:.0} active polygons mean, {} capacity refusals",
-            s.ops_mean,
-            s.ops_max,
-            s.refine_ms_mean,
-            s.refine_ms_p99,
-            s.emit_ms_mean,
-            s.active_mean,
-            s.refusals
-        );
-        let (f, b) = (&self.memory_full, &self.memory_budgeted);
-        let _ = writeln!(
-            o,
-            "memory (paper: b = 44n + 12p + 32d + 2se + 12n_a + 36p_a + c(4n + 4p + 16), with \
-             n_a, p_a the largest front of one camera: {} nodes, {} polygons)",
-            s.max_active_nodes, s.active_max
-        );
-        let _ = writeln!(
-            o,
-            "  static:               ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
-             ratio {:.2}  (vertex table {:.1}% filled)",
-            f.static_bytes,
-            mib(f.static_bytes),
-            f.paper_static_bytes,
-            mib(f.paper_static_bytes),
-            f.static_bytes as f64 / f.paper_static_bytes.max(1) as f64,
-            100.0 * self.vertex_table_fill.1 as f64 / self.vertex_table_fill.0.max(1) as f64
-        );
-        let _ = writeln!(
-            o,
-            "  per camera, full:     ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
-             ratio {:.2}",
-            f.camera_bytes,
-            mib(f.camera_bytes),
-            f.paper_camera_bytes,
-            mib(f.paper_camera_bytes),
-            f.camera_ratio()
-        );
-        let _ = writeln!(
-            o,
-            "  per camera, budgeted: ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
-             ratio {:.2}  ({} polygons{})",
-            b.camera_bytes,
-            mib(b.camera_bytes),
-            b.paper_camera_bytes,
-            mib(b.paper_camera_bytes),
-            b.camera_ratio(),
-            self.budget_polygons,
-            if self.budget.is_some() {
-                ", flown"
-            } else {
-                ", computed, not flown"
-            }
-        );
-        o
     }
 }
 

@@ -1,19 +1,15 @@
 //! Where the camera threads run: each pinned to a core, the cameras shared out so that the
 //! cores carry equal work.
 //!
-//! Four camera threads on two cores, left to the operating system, go where it puts them
-//! (not measured where; the spread of the results suggests three on one core at times), and
-//! any placement that puts the two busiest cameras on one core makes every frame wait for
-//! that core. Cameras differ (on the St. Helens demo one camera's
-//! frame costs 0.12 ms and another's 0.17 ms), so threads are pinned, and the cameras are
-//! shared out by the longest-processing-time rule: the busiest camera first, each to the
-//! core with the least work so far, by each camera's cost in the sizing flight, or, in
-//! interleaved segments, over the segment before (equal costs without either). Measured on
-//! the demo, one thread's flight time over the threads': 1.51-1.88x left to the system
-//! against 1.80-1.96x pinned and balanced this way (ten alternating pairs of runs); in probes
-//! of six pairs each, 1.44-1.92x left to the system against 1.77-1.89x pinned with the
-//! cameras paired by hand, and 1.36-1.88x against 1.62-1.76x pinned by camera index alone
-//! (the two busiest cameras together).
+//! More camera threads than cores, left to the operating system, go where it puts them (at
+//! times several on one core), and any placement that puts the two busiest cameras on one
+//! core makes every frame wait for that core. Cameras differ in cost (their routes see
+//! fronts of different sizes), so threads are pinned, and the cameras are shared out by the
+//! longest-processing-time rule: the busiest camera first, each to the core with the least
+//! work so far, by each camera's cost in the sizing flight, or, in interleaved segments, over
+//! the segment before (equal costs without either). Pinning by camera index alone would put
+//! the two busiest cameras together as often as not; balancing by cost keeps the cores'
+//! loads even, which is what a thread per camera gains from.
 
 use core_affinity::CoreId;
 

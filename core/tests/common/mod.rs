@@ -82,28 +82,14 @@ pub fn fix_checksum(bytes: &mut [u8]) {
     set_header(bytes, &h);
 }
 
-/// A small deterministic generator (SplitMix64): the tests need reproducible corruption,
-/// not statistical quality.
-pub struct Rng(u64);
+/// The tests' generator, shared with the `caveclod-tests` package by path: these tests must
+/// not depend on that package (Miri runs them, and it builds the baker).
+#[path = "../../../tests/src/rng.rs"]
+mod rng;
 
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (n > 0).
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
+/// SplitMix64: the tests need reproducible corruption, not statistical quality.
+#[allow(unused_imports)] // as with the rest of this module, not every test binary draws
+pub use rng::SplitMix64 as Rng;
 
 /// Views from all around the hierarchy's bounding box: far, near, inside, grazing, plus
 /// views without frustum planes. Deterministic; `count` of them.

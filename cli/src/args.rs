@@ -1,0 +1,223 @@
+//! The command line: one subcommand per job, each with its options.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+#[derive(Parser)]
+#[command(
+    name = "caveclod",
+    version,
+    about = "View-dependent continuous level of detail: bake, inspect, export"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Bake a mesh (.gltf .glb .obj .ply .dem .npy) into a .clod hierarchy.
+    Bake(BakeArgs),
+    /// The demo: bake St. Helens and Spot, fly 4 cameras, write figures, CSV and out/report.md.
+    Demo(DemoArgs),
+    /// The CAVECLOD paper's experiment: cameras fly scripted routes over a hierarchy.
+    Flyover(FlyoverArgs),
+    /// Counts, sizes and validation status of a .clod file.
+    Info(InfoArgs),
+    /// Generate a procedural terrain (normals, colours, UVs) as binary PLY, streamed to disk.
+    Generate(GenerateArgs),
+    /// Write one level of a .clod file as Wavefront OBJ.
+    Export(ExportArgs),
+    /// Render a .clod file headless (lavapipe unless --gpu) from 1-4 cameras orbiting it, each
+    /// refining its own front, into one split-screen PNG (or one PNG per camera).
+    Render(RenderArgs),
+}
+
+/// Options of `caveclod bake`.
+#[derive(Args)]
+pub struct BakeArgs {
+    /// The input mesh.
+    pub input: PathBuf,
+    /// The .clod file to write (replaced only once complete).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Grid spacing in metres for heightfields (.npy needs it; overrides a .dem's).
+    #[arg(long)]
+    pub spacing: Option<f32>,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Simplify the input (.ply, .obj) out of core first, streaming it from disk, down to a
+    /// size whose hierarchy fits the memory budget.
+    #[arg(long)]
+    pub out_of_core: bool,
+    /// Memory budget for --out-of-core (256M, 1G, ...).
+    #[arg(long, default_value = "256M", value_parser = caveclod_bake::ooc::parse_size)]
+    pub memory_budget: u64,
+    /// Directory for --out-of-core's temporary files (the system's by default).
+    #[arg(long)]
+    pub temp_dir: Option<PathBuf>,
+    /// Output triangles for --out-of-core to aim for (from the budget by default).
+    #[arg(long)]
+    pub target_triangles: Option<u64>,
+    /// Most triangles in an octree leaf for --out-of-core.
+    #[arg(long, default_value_t = 65536)]
+    pub leaf_triangles: u64,
+    /// Also store g-mesh levels (batched collapses, geomorph pairs, volume partitions).
+    #[arg(long)]
+    pub gmesh: bool,
+    /// With --gmesh: stop adding levels below this many polygons (default |c0| / 64).
+    #[arg(long)]
+    pub gmesh_min_polygons: Option<u32>,
+}
+
+/// Options of `caveclod demo`.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Where to write (created if missing).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// Frames per flight.
+    #[arg(long, default_value_t = 300)]
+    pub frames: usize,
+    /// The repository's data directory (St. Helens and Spot).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Bake again even if out/cache has the files.
+    #[arg(long)]
+    pub rebake: bool,
+    /// CPU figures only, no Vulkan pictures.
+    #[arg(long)]
+    pub no_render: bool,
+}
+
+/// Options of `caveclod flyover`.
+#[derive(Args)]
+pub struct FlyoverArgs {
+    /// A .clod file (or use --dem).
+    pub file: Option<PathBuf>,
+    /// Bake this heightfield (.dem, .npy) in memory and fly over it.
+    #[arg(long, conflicts_with = "file")]
+    pub dem: Option<PathBuf>,
+    /// Grid spacing in metres for --dem.
+    #[arg(long)]
+    pub spacing: Option<f32>,
+    /// Cameras, 1 to 4.
+    #[arg(long, default_value_t = 4)]
+    pub cameras: usize,
+    /// Frames per camera.
+    #[arg(long, default_value_t = 300)]
+    pub frames: usize,
+    /// Screen-space tolerance in pixels (1280 x 720, 60 degree field of view).
+    #[arg(long, default_value_t = 1.0)]
+    pub tolerance: f32,
+    /// One shared state re-refined for each camera in turn (the paper's baseline).
+    #[arg(long, conflicts_with = "threads")]
+    pub shared_state: bool,
+    /// One thread per camera.
+    #[arg(long)]
+    pub threads: bool,
+    /// Fly full-capacity cameras instead of sizing them to a first flight.
+    #[arg(long)]
+    pub full_capacity: bool,
+    /// Compact each camera state every N of its frames, inside the timed refinement
+    /// (0: never).
+    #[arg(long, default_value_t = 30)]
+    pub compact_every: usize,
+    /// Frames in flight: index lists per camera, and with --threads how far apart the
+    /// camera threads may run (1: a barrier every frame).
+    #[arg(long, default_value_t = caveclod_cli::flyover::gate::FRAMES_IN_FLIGHT as u8,
+          value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub frames_in_flight: u8,
+    /// Emit without the index cache: look every active polygon up every frame, as the
+    /// paper's cameras did (the library keeps each polygon's indices by default).
+    #[arg(long)]
+    pub no_index_cache: bool,
+    /// With --threads, leave the camera threads to the system instead of pinning each to
+    /// a core with the cameras shared out by cost.
+    #[arg(long)]
+    pub no_pin: bool,
+    /// Keep each budgeted camera's split-to-pair map hashed where that is smaller than an
+    /// array over the hierarchy (less memory, slower refinement).
+    #[arg(long)]
+    pub hashed_pair_map: bool,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Options of `caveclod info`.
+#[derive(Args)]
+pub struct InfoArgs {
+    /// The file.
+    pub file: PathBuf,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Options of `caveclod generate`.
+#[derive(Args)]
+pub struct GenerateArgs {
+    /// At least this many triangles.
+    #[arg(long)]
+    pub triangles: u64,
+    /// The .ply file to write (replaced only once complete).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Options of `caveclod export`.
+#[derive(Args)]
+pub struct ExportArgs {
+    /// The file.
+    pub file: PathBuf,
+    /// Which level.
+    #[arg(long, value_enum, default_value = "full")]
+    pub level: LevelArg,
+    /// The OBJ file to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Options of `caveclod render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The file.
+    pub file: PathBuf,
+    /// Cameras, 1 to 4, evenly spaced around the mesh.
+    #[arg(long, default_value_t = 1)]
+    pub cameras: usize,
+    /// Screen-space tolerance of refinement, in pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub tolerance: f32,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+    /// One PNG per camera (camera0.png, ...) instead of one split-screen image.
+    #[arg(long)]
+    pub separate: bool,
+    /// Prefer a GPU over lavapipe.
+    #[arg(long)]
+    pub gpu: bool,
+    /// Enable the Vulkan validation layer (if installed) and print its messages.
+    #[arg(long)]
+    pub validate: bool,
+    /// Draw the multiresolution octree of an out-of-core bake (each camera its own cut)
+    /// instead of the hierarchy.
+    #[arg(long)]
+    pub octree: bool,
+    /// Directory for the PNG files (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum LevelArg {
+    Full,
+    Base,
+}

@@ -1,0 +1,190 @@
+//! `caveclod bake`: import, bake (in core or streamed out of core), optionally add g-mesh
+//! levels, write the .clod file and print its report.
+
+use caveclod_bake::baked::Baked;
+use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
+use caveclod_bake::import::ImportOptions;
+use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
+use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
+use caveclod_bake::report::BakeInfo;
+use caveclod_cli::info as report;
+use caveclod_core::Hierarchy;
+use indicatif::ProgressBar;
+use serde_json::{json, Map, Value};
+
+use super::{progress_bar, with_hierarchy};
+use crate::args::BakeArgs;
+
+/// What a bake made, in core or out of core.
+struct Made {
+    baked: Baked,
+    info: BakeInfo,
+    /// The out-of-core simplification's figures (out of core only).
+    ooc_stats: Option<OocStats>,
+    /// The multiresolution octree (out of core only, when the options ask for it).
+    octree: Option<MultiresOctree>,
+}
+
+/// Bakes the input, writes the .clod file, reads it back and prints its report.
+pub fn bake(a: &BakeArgs) -> Result<(), String> {
+    let bar = progress_bar("{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})")?;
+    let mut on_stage = |s: Stage| show_stage(&bar, s);
+    let made = if a.out_of_core {
+        bake_streamed(a, &mut on_stage)
+    } else {
+        bake_file(
+            &a.input,
+            &ImportOptions { spacing: a.spacing },
+            &mut on_stage,
+        )
+        .map(|(baked, info)| Made {
+            baked,
+            info,
+            ooc_stats: None,
+            octree: None,
+        })
+        .map_err(|e| e.to_string())
+    };
+    bar.finish_and_clear();
+    let made = made?;
+    let levels = if a.gmesh {
+        bar.set_message("building g-mesh levels");
+        Some(gmesh_levels(&made.baked, a.gmesh_min_polygons)?)
+    } else {
+        None
+    };
+    write(a, &made, levels.as_ref())?;
+    with_hierarchy(&a.output, |h| {
+        let r = bake_report(h, &made, a.memory_budget);
+        if a.json {
+            println!("{}", Value::Object(r));
+        } else {
+            println!(
+                "baked {} -> {}\n{}",
+                a.input.display(),
+                a.output.display(),
+                report::human(&r)
+            );
+        }
+        Ok(())
+    })
+}
+
+/// Shows the in-core bake's stage (and the collapses done) on the bar.
+fn show_stage(bar: &ProgressBar, s: Stage) {
+    match s {
+        Stage::Import => bar.set_message("importing"),
+        Stage::Weld => bar.set_message("welding"),
+        Stage::Collapse(done, most) => {
+            bar.set_message("collapsing");
+            bar.set_length(most);
+            bar.set_position(done);
+        }
+        Stage::Assemble => bar.set_message("assembling"),
+    }
+}
+
+/// Simplifies the input out of core, streaming it from disk with a bar of its own, then bakes
+/// the simplified mesh in core.
+fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, String> {
+    let options = OocOptions {
+        temp_dir: a.temp_dir.clone(),
+        target_triangles: a.target_triangles,
+        leaf_triangles: a.leaf_triangles,
+        ..OocOptions::with_budget(a.memory_budget)
+    };
+    let ooc_bar = progress_bar("{spinner} {msg} [{bar:30}] {pos}/{len} triangles ({elapsed})")?;
+    let mut on_ooc = |s: OocStage| {
+        let (msg, done, total) = match s {
+            OocStage::Read(d, t) => ("reading and sorting".to_string(), d, t),
+            OocStage::Merge(d, t) => ("merging sorted runs".to_string(), d, t),
+            OocStage::Cluster(r, d, t) => (format!("clustering on a {r}^3 grid"), d, t),
+        };
+        ooc_bar.set_message(msg);
+        ooc_bar.set_length(total);
+        ooc_bar.set_position(done);
+    };
+    let r = bake_out_of_core(&a.input, &options, &mut on_ooc, &mut |s| {
+        ooc_bar.finish_and_clear();
+        on_stage(s)
+    });
+    ooc_bar.finish_and_clear();
+    let o = r.map_err(|e| e.to_string())?;
+    Ok(Made {
+        baked: o.baked,
+        info: o.info,
+        ooc_stats: Some(o.stats),
+        octree: o.octree,
+    })
+}
+
+/// The g-mesh levels over the baked hierarchy, down to `min_polygons` (the default if `None`).
+fn gmesh_levels(baked: &Baked, min_polygons: Option<u32>) -> Result<GMeshData, String> {
+    let h = baked.hierarchy().map_err(|e| e.to_string())?;
+    let options = GMeshOptions {
+        min_polygons: min_polygons.unwrap_or(0),
+        ..GMeshOptions::default()
+    };
+    caveclod_bake::gmesh::build(&h, &options).map_err(|e| e.to_string())
+}
+
+/// Writes the hierarchy with its extra sections: the bake's report, the g-mesh levels and the
+/// multiresolution octree, each when there is one.
+fn write(a: &BakeArgs, made: &Made, levels: Option<&GMeshData>) -> Result<(), String> {
+    let json_info = made.info.to_json();
+    let mut sections = vec![BakeInfo::section(&json_info)];
+    if let Some(g) = levels {
+        sections.extend(g.sections());
+    }
+    let octree_parts = made.octree.as_ref().map(|o| o.parts());
+    if let Some(p) = &octree_parts {
+        sections.extend(p.sections());
+    }
+    made.baked
+        .write(&a.output, &sections)
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// The written file's report with the bake's time, the out-of-core figures and peak memory.
+fn bake_report(h: &Hierarchy<'_>, made: &Made, memory_budget: u64) -> Map<String, Value> {
+    let info = &made.info;
+    let mut r = report::report(h, Some(info));
+    r.insert("bake_seconds".into(), json!(info.bake_seconds));
+    if let Some(st) = &made.ooc_stats {
+        r.insert(
+            "input_triangles_per_second".into(),
+            json!(st.input_triangles as f64 / info.bake_seconds),
+        );
+        r.insert("out_of_core".into(), ooc_report(st, memory_budget));
+    }
+    r.insert(
+        "peak_rss_bytes".into(),
+        json!(caveclod_bake::ooc::peak_rss_bytes()),
+    );
+    r
+}
+
+/// The out-of-core simplification's figures as one JSON object.
+fn ooc_report(st: &OocStats, memory_budget: u64) -> Value {
+    json!({
+        "memory_budget": memory_budget,
+        "input_vertices": st.input_vertices,
+        "clustered_triangles": st.output_triangles,
+        "clusters": st.clusters,
+        "resolution": st.resolution,
+        "target_triangles": st.target_triangles,
+        "sort_octree_nodes": st.octree_nodes,
+        "sort_octree_leaves": st.octree_leaves,
+        "lod_levels": st.lod_levels,
+        "lod_nodes": st.lod_nodes,
+        "lod_seconds": st.lod_seconds,
+        "sorted_runs": st.runs,
+        "temp_bytes": st.temp_bytes,
+        "read_seconds": st.seconds[0],
+        "merge_seconds": st.seconds[1],
+        "cluster_seconds": st.seconds[2],
+        "triangles_per_second": st.input_triangles as f64
+            / (st.seconds[0] + st.seconds[1] + st.seconds[2]),
+    })
+}

@@ -1,0 +1,24 @@
+//! `caveclod generate`: a procedural terrain as binary PLY, streamed to disk.
+
+use super::progress_bar;
+use crate::args::GenerateArgs;
+
+/// Writes the terrain with a progress bar and prints its size.
+pub fn generate(a: &GenerateArgs) -> Result<(), String> {
+    let bar = progress_bar("{spinner} writing [{bar:30}] {percent}% ({elapsed})")?;
+    let grid = caveclod_tests::generate::terrain(&a.output, a.triangles, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    });
+    bar.finish_and_clear();
+    let grid = grid.map_err(|e| e.to_string())?;
+    println!(
+        "generated {}: terrain {}x{} quads, {} vertices, {} triangles",
+        a.output.display(),
+        grid.columns,
+        grid.rows,
+        grid.vertices(),
+        grid.triangles()
+    );
+    Ok(())
+}

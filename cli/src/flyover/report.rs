@@ -1,0 +1,245 @@
+//! The fly-over's report: one JSON object for scripts, a table for people.
+
+use std::fmt::Write as _;
+use std::time::Duration;
+
+use serde_json::{json, Value};
+
+use super::{Flyover, Mode, BUDGET_HEADROOM, FOV_Y_DEG, HEIGHT, SIZING_STRIDE, WIDTH};
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1024.0 * 1024.0)
+}
+
+fn secs(d: Duration) -> f64 {
+    d.as_secs_f64()
+}
+
+impl Flyover {
+    /// The report as JSON, with the stable keys `cameras`, `frames`, `ops_per_camera_per_frame`
+    /// (mean, max, first frame), `refine_ms_per_frame` (mean, p99), `active_polygons` (mean and
+    /// max per camera), `static_bytes`, `camera_bytes`, `paper_camera_bytes` (for the camera
+    /// actually flown: budgeted when sized, full otherwise), and more.
+    pub fn json(&self) -> Value {
+        let s = &self.summary;
+        let flown = if self.budget.is_some() {
+            &self.memory_budgeted
+        } else {
+            &self.memory_full
+        };
+        let per_camera: Vec<Value> = self
+            .names
+            .iter()
+            .zip(&self.flight.records)
+            .map(|(name, r)| {
+                json!({
+                    "name": name,
+                    "ops_mean": r.ops_mean(),
+                    "ops_max": r.ops_max(),
+                    "first_frame_ops": r.ops.first().copied().unwrap_or(0),
+                    "refine_ms_mean": r.refine_ms_mean(),
+                    "refine_ms_p99": r.refine_ms_p99(),
+                    "emit_ms_mean": r.emit_ms_mean(),
+                    "active_polygons_mean": r.active_mean(),
+                    "active_polygons_max": r.active_max(),
+                    "indices_total": r.indices_total(),
+                })
+            })
+            .collect();
+        json!({
+            "mode": self.options.mode.name(),
+            "cameras": self.options.cameras,
+            "frames": self.options.frames,
+            "tolerance_px": self.options.tolerance,
+            // The shared state emits each camera's turn into one list.
+            "frames_in_flight": (self.options.mode != Mode::Shared)
+                .then_some(self.options.frames_in_flight),
+            "index_cache": self.options.index_cache,
+            "hashed_pair_map": self.options.hashed_pair_map,
+            "pinned": (self.options.mode == Mode::Threads).then_some(self.options.pin_threads),
+            "ops_per_camera_per_frame": {
+                "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
+            },
+            "refine_ms_per_frame": { "mean": s.refine_ms_mean, "p99": s.refine_ms_p99 },
+            "emit_ms_per_frame": s.emit_ms_mean,
+            "active_polygons": { "mean": s.active_mean, "max": s.active_max },
+            "capacity_refusals": s.refusals,
+            "static_bytes": flown.static_bytes,
+            "paper_static_bytes": flown.paper_static_bytes,
+            "camera_bytes": flown.camera_bytes,
+            "paper_camera_bytes": flown.paper_camera_bytes,
+            "camera_ratio": flown.camera_ratio(),
+            "camera_bytes_full": self.memory_full.camera_bytes,
+            "camera_ratio_full": self.memory_full.camera_ratio(),
+            "budget_polygons": self.budget_polygons,
+            "budgeted_flown": self.budget.is_some(),
+            "flight_s": secs(self.flight.wall),
+            "sizing_s": self.sizing.as_ref().map(|f| secs(f.wall)),
+            "per_camera": per_camera,
+        })
+    }
+
+    /// The report for people: the set-up, the sizing flight, a table of the cameras and the
+    /// memory against the paper's.
+    pub fn human(&self) -> String {
+        let mut o = String::new();
+        self.human_setup(&mut o);
+        self.human_cameras(&mut o);
+        self.human_memory(&mut o);
+        o
+    }
+
+    /// How the cameras fly: their count, the tolerance, the mode and the sizing flight.
+    fn human_setup(&self, o: &mut String) {
+        let _ = writeln!(
+            o,
+            "{} camera(s), {} frames, tolerance {} px at {WIDTH}x{HEIGHT}, fov {FOV_Y_DEG} deg; \
+             mode: {}",
+            self.options.cameras,
+            self.options.frames,
+            self.options.tolerance,
+            self.mode_description()
+        );
+        if let (Some(sz), Some(b)) = (&self.sizing, self.budget) {
+            let _ = writeln!(
+                o,
+                "sizing flight (full-capacity cameras, refine only, every {SIZING_STRIDE}rd \
+                 frame): {:.2} s -> budget {b} polygons (+{:.0}%)",
+                secs(sz.wall),
+                (BUDGET_HEADROOM - 1.0) * 100.0
+            );
+        }
+    }
+
+    /// The mode in words, with the emission and pair-map options that differ from the default.
+    fn mode_description(&self) -> String {
+        let mut mode = match self.options.mode {
+            Mode::Shared => {
+                "one shared state re-refined for each camera in turn (baseline)".to_string()
+            }
+            Mode::Threads => format!(
+                "a state per camera, one thread per camera{}, {} frame(s) in flight",
+                if self.options.pin_threads {
+                    " (pinned, cores balanced)"
+                } else {
+                    ""
+                },
+                self.options.frames_in_flight
+            ),
+            Mode::PerCamera => format!(
+                "a state per camera, one thread, {} frame(s) in flight",
+                self.options.frames_in_flight
+            ),
+        };
+        if !self.options.index_cache {
+            mode += ", no index cache (every polygon looked up every frame)";
+        }
+        if self.options.hashed_pair_map {
+            mode += ", hashed pair map";
+        }
+        mode
+    }
+
+    /// The flight's time and a row per camera (operations, times, fronts), then all cameras'.
+    fn human_cameras(&self, o: &mut String) {
+        let s = &self.summary;
+        let _ = writeln!(
+            o,
+            "flight: {:.2} s for {} camera-frames (ops = splits + collapses; per-frame figures \
+             leave out frame 0, which refines from the base mesh)",
+            secs(self.flight.wall),
+            self.options.cameras * self.options.frames
+        );
+        let _ = writeln!(
+            o,
+            "  {:<14} {:>9} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8}",
+            "camera",
+            "first-op",
+            "ops/f",
+            "max-ops/f",
+            "refine",
+            "p99",
+            "emit",
+            "active",
+            "max-act",
+            "refused"
+        );
+        for (name, r) in self.names.iter().zip(&self.flight.records) {
+            let _ = writeln!(
+                o,
+                "  {:<14} {:>9} {:>7.1} {:>9} {:>6.3} ms {:>6.3} ms {:>6.3} ms {:>9.0} {:>9} {:>8}",
+                name,
+                r.ops.first().copied().unwrap_or(0),
+                r.ops_mean(),
+                r.ops_max(),
+                r.refine_ms_mean(),
+                r.refine_ms_p99(),
+                r.emit_ms_mean(),
+                r.active_mean(),
+                r.active_max(),
+                r.refusals,
+            );
+        }
+        let _ = writeln!(
+            o,
+            "  all cameras: {:.1} ops/frame/camera (max {}), refine {:.3} ms mean, {:.3} ms p99, \
+             emit {:.3} ms mean, {:.0} active polygons mean, {} capacity refusals",
+            s.ops_mean,
+            s.ops_max,
+            s.refine_ms_mean,
+            s.refine_ms_p99,
+            s.emit_ms_mean,
+            s.active_mean,
+            s.refusals
+        );
+    }
+
+    /// Static and per-camera memory, ours against the paper's equation.
+    fn human_memory(&self, o: &mut String) {
+        let s = &self.summary;
+        let (f, b) = (&self.memory_full, &self.memory_budgeted);
+        let _ = writeln!(
+            o,
+            "memory (paper: b = 44n + 12p + 32d + 2se + 12n_a + 36p_a + c(4n + 4p + 16), with \
+             n_a, p_a the largest front of one camera: {} nodes, {} polygons)",
+            s.max_active_nodes, s.active_max
+        );
+        let _ = writeln!(
+            o,
+            "  static:               ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}  (vertex table {:.1}% filled)",
+            f.static_bytes,
+            mib(f.static_bytes),
+            f.paper_static_bytes,
+            mib(f.paper_static_bytes),
+            f.static_bytes as f64 / f.paper_static_bytes.max(1) as f64,
+            100.0 * self.vertex_table_fill.1 as f64 / self.vertex_table_fill.0.max(1) as f64
+        );
+        let _ = writeln!(
+            o,
+            "  per camera, full:     ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}",
+            f.camera_bytes,
+            mib(f.camera_bytes),
+            f.paper_camera_bytes,
+            mib(f.paper_camera_bytes),
+            f.camera_ratio()
+        );
+        let _ = writeln!(
+            o,
+            "  per camera, budgeted: ours {:>10} B ({:6.2} MiB)  paper {:>10} B ({:6.2} MiB)  \
+             ratio {:.2}  ({} polygons{})",
+            b.camera_bytes,
+            mib(b.camera_bytes),
+            b.paper_camera_bytes,
+            mib(b.paper_camera_bytes),
+            b.camera_ratio(),
+            self.budget_polygons,
+            if self.budget.is_some() {
+                ", flown"
+            } else {
+                ", computed, not flown"
+            }
+        );
+    }
+}
