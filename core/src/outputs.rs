@@ -4,6 +4,24 @@
 
 use crate::ids::SurfaceId;
 
+/// The message of an output list that is too small, shared by both paths' errors: surface
+/// `surface`'s list, or the packed list when `None`.
+pub(crate) fn write_too_small(
+    f: &mut core::fmt::Formatter<'_>,
+    surface: Option<SurfaceId>,
+    needed: usize,
+    given: usize,
+) -> core::fmt::Result {
+    match surface {
+        Some(s) => write!(
+            f,
+            "index list of surface {}: room for {given}, {needed} needed",
+            s.0
+        ),
+        None => write!(f, "packed index list: room for {given}, {needed} needed"),
+    }
+}
+
 /// What is wrong with the buffers given for `surfaces` per-surface lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Shortfall {

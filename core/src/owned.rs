@@ -28,7 +28,7 @@ struct Line([u8; 64]);
 /// # fn demo(path: &str) -> Result<(), Box<dyn std::error::Error>> {
 /// use caveclod_core::{CameraState, HierarchyBuf};
 /// let asset = HierarchyBuf::from_vec(std::fs::read(path)?)?;
-/// let h = asset.hierarchy(); // no validation again: the view is cheap
+/// let h = asset.hierarchy()?; // no validation again: the view is cheap
 /// let mut memory = vec![0u32; CameraState::words_needed(&h)];
 /// let cam = CameraState::new(&h, &mut memory)?;
 /// # let _ = cam; Ok(()) }
@@ -71,13 +71,11 @@ impl HierarchyBuf {
     }
 
     /// The validated hierarchy. Finds the sections in the table again (a few comparisons
-    /// per section) but neither checks the checksum nor validates again.
-    pub fn hierarchy(&self) -> Hierarchy<'_> {
-        match Hierarchy::from_validated(self.as_bytes(), self.meta, self.checksum) {
-            Ok(h) => h,
-            // The bytes cannot change after `from_bytes` found these sections in them.
-            Err(_) => unreachable!("a HierarchyBuf's bytes were validated when it was made"),
-        }
+    /// per section) but neither checks the checksum nor validates again. The bytes cannot
+    /// change after [`from_bytes`](Self::from_bytes) validated them, so this succeeds; it
+    /// returns the table check's error rather than panicking, as the crate never does.
+    pub fn hierarchy(&self) -> Result<Hierarchy<'_>, FormatError> {
+        Hierarchy::from_validated(self.as_bytes(), self.meta, self.checksum)
     }
 }
 
@@ -116,7 +114,7 @@ impl TryFrom<Vec<u8>> for HierarchyBuf {
 /// # fn demo(asset: &caveclod_core::HierarchyBuf, views: &[caveclod_core::View])
 /// # -> Result<(), Box<dyn std::error::Error>> {
 /// use caveclod_core::{OwnedCamera, RefineParams};
-/// let h = asset.hierarchy();
+/// let h = asset.hierarchy()?;
 /// let mut owned = OwnedCamera::new(&h)?;
 /// for view in views {
 ///     let mut cam = owned.camera(&h);
@@ -243,14 +241,14 @@ mod tests {
         let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
         assert_eq!(buf.as_bytes(), GOLDEN);
         assert_eq!(buf.as_bytes().as_ptr() as usize % 64, 0);
-        let h = buf.hierarchy();
+        let h = buf.hierarchy().unwrap();
         let direct = Hierarchy::from_bytes(buf.as_bytes()).expect("valid");
         assert_eq!(h.meta(), direct.meta());
         assert_eq!(h.checksum(), direct.checksum());
         assert_eq!(h.nodes(), direct.nodes());
         assert_eq!(h.polygons(), direct.polygons());
         let from_vec = HierarchyBuf::try_from(GOLDEN.to_vec()).expect("valid");
-        assert_eq!(from_vec.hierarchy().checksum(), h.checksum());
+        assert_eq!(from_vec.hierarchy().unwrap().checksum(), h.checksum());
     }
 
     #[test]
@@ -274,7 +272,7 @@ mod tests {
     #[test]
     fn owned_camera_keeps_its_front_across_frames() {
         let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
-        let h = buf.hierarchy();
+        let h = buf.hierarchy().unwrap();
         let mut owned = OwnedCamera::new(&h).expect("camera");
         assert_eq!(owned.words(), CameraState::words_needed(&h));
         let mut memory = vec![0u32; CameraState::words_needed(&h)];
@@ -298,7 +296,7 @@ mod tests {
     #[test]
     fn a_forgotten_guard_restarts_from_the_base_mesh() {
         let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
-        let h = buf.hierarchy();
+        let h = buf.hierarchy().unwrap();
         let mut owned = OwnedCamera::new(&h).expect("camera");
         let [near, ..] = views(&h);
         let mut cam = owned.camera(&h);
@@ -314,7 +312,7 @@ mod tests {
     #[test]
     fn owned_camera_checks_its_config() {
         let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
-        let h = buf.hierarchy();
+        let h = buf.hierarchy().unwrap();
         let config = CameraConfig {
             max_pairs: h.splits().len() as u32 + 1,
             ..CameraConfig::full(&h)

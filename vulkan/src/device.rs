@@ -338,6 +338,23 @@ impl Context {
     }
 
     /// The queue, locked for submission.
+    /// One primary command buffer from `pool`, which must be a live pool of this device.
+    pub(crate) fn allocate_command_buffer(
+        &self,
+        pool: vk::CommandPool,
+    ) -> Result<vk::CommandBuffer> {
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the caller passes a live pool of this device.
+        unsafe { self.device.allocate_command_buffers(&alloc) }
+            .vk("vkAllocateCommandBuffers")?
+            .first()
+            .copied()
+            .ok_or_else(|| Error::InvalidArgument("no command buffer allocated".into()))
+    }
+
     pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
         match self.queue.lock() {
             Ok(g) => g,
@@ -399,16 +416,7 @@ impl Context {
         // SAFETY: valid create info.
         let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
         let result = (|| {
-            let alloc = vk::CommandBufferAllocateInfo::default()
-                .command_pool(pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            // SAFETY: `pool` is alive.
-            let cmd = unsafe { d.allocate_command_buffers(&alloc) }
-                .vk("vkAllocateCommandBuffers")?
-                .first()
-                .copied()
-                .ok_or_else(|| Error::InvalidArgument("no command buffer allocated".into()))?;
+            let cmd = self.allocate_command_buffer(pool)?;
             let begin = vk::CommandBufferBeginInfo::default()
                 .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             // SAFETY: `cmd` is fresh.

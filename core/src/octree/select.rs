@@ -58,19 +58,10 @@ impl core::fmt::Display for CutError {
                 write!(f, "{given} index outputs given, {needed} needed")
             }
             Self::OutputTooSmall {
-                surface: Some(s),
+                surface,
                 needed,
                 given,
-            } => write!(
-                f,
-                "index list of surface {}: room for {given}, {needed} needed",
-                s.0
-            ),
-            Self::OutputTooSmall {
-                surface: None,
-                needed,
-                given,
-            } => write!(f, "packed index list: room for {given}, {needed} needed"),
+            } => crate::outputs::write_too_small(f, surface, needed, given),
         }
     }
 }

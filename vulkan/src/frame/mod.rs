@@ -270,16 +270,7 @@ impl Renderer {
             self.targets.push(Target { colour, depth });
         }
         for s in 0..self.desc.frames_in_flight {
-            let alloc = vk::CommandBufferAllocateInfo::default()
-                .command_pool(self.pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            // SAFETY: the pool is alive.
-            let cmd = unsafe { d.allocate_command_buffers(&alloc) }
-                .vk("vkAllocateCommandBuffers")?
-                .first()
-                .copied()
-                .ok_or_else(|| Error::InvalidArgument("no command buffer allocated".into()))?;
+            let cmd = ctx.allocate_command_buffer(self.pool)?;
             let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
             // SAFETY: valid create info.
             let fence = unsafe { d.create_fence(&fence_info, None) }.vk("vkCreateFence")?;
