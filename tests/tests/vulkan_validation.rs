@@ -4,19 +4,17 @@
 //!   other tests is a check that can fail.
 //! - A host engine creates instance, debug messenger, device and allocator itself, hands
 //!   them to [`Context::from_raw`], renders, and tears everything down in order (ours
-//!   first, then allocator, device, messenger, instance) without validation messages.
+//!   first, then allocator, device, messenger, instance) without validation messages; a
+//!   host device without a required feature is refused, naming it.
 
 mod vulkan_support;
 
-use std::sync::{Arc, Mutex};
-
 use caveclod_tests::meshes;
 use caveclod_vulkan::ash::vk;
-use caveclod_vulkan::gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use caveclod_vulkan::{
-    ash, gpu_allocator, Buffer, BufferDesc, CameraIndices, Context, DebugMessenger, Error,
-    IndexSource, ValidationLog, VertexBuffer, VALIDATION_LAYER,
+    Buffer, BufferDesc, CameraIndices, Context, DeviceFeatures, Error, IndexSource, VertexBuffer,
 };
+use vulkan_support::host::Host;
 use vulkan_support::*;
 
 #[test]
@@ -79,106 +77,10 @@ fn a_leaked_buffer_is_reported_by_destroy() {
     assert!(!log.take().is_empty());
 }
 
-/// What a host engine owns.
-struct Host {
-    _entry: ash::Entry,
-    instance: ash::Instance,
-    messenger: DebugMessenger,
-    device: ash::Device,
-    physical_device: vk::PhysicalDevice,
-    family: u32,
-    queue: vk::Queue,
-}
-
-/// Creates instance (validation + debug utils), messenger, lavapipe device and queue the
-/// way an engine would, independently of caveclod-vulkan's headless path.
-fn host_engine(log: Arc<ValidationLog>) -> Host {
-    // SAFETY: loading the system Vulkan loader.
-    let entry = ok(unsafe { ash::Entry::load() }, "load Vulkan");
-    let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
-    let layers = [VALIDATION_LAYER.as_ptr()];
-    let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
-    let info = vk::InstanceCreateInfo::default()
-        .application_info(&app)
-        .enabled_layer_names(&layers)
-        .enabled_extension_names(&extensions);
-    // SAFETY: valid create info.
-    let instance = ok(unsafe { entry.create_instance(&info, None) }, "instance");
-    let messenger = ok(DebugMessenger::new(&entry, &instance, log), "messenger");
-    // SAFETY: plain enumeration.
-    let devices = ok(unsafe { instance.enumerate_physical_devices() }, "devices");
-    let physical_device = devices
-        .iter()
-        .copied()
-        // SAFETY: enumerated from this instance.
-        .find(|&pd| unsafe { instance.get_physical_device_properties(pd) }.device_type == vk::PhysicalDeviceType::CPU)
-        .unwrap_or_else(|| panic!("no lavapipe device"));
-    // SAFETY: as above.
-    let family = unsafe { instance.get_physical_device_queue_family_properties(physical_device) }
-        .iter()
-        .position(|f| {
-            f.queue_flags
-                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-        })
-        .unwrap_or_else(|| panic!("no graphics queue")) as u32;
-    let priorities = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default()
-        .queue_family_index(family)
-        .queue_priorities(&priorities)];
-    let mut f12 = vk::PhysicalDeviceVulkan12Features::default().vulkan_memory_model(true);
-    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-        .dynamic_rendering(true)
-        .synchronization2(true);
-    let dinfo = vk::DeviceCreateInfo::default()
-        .queue_create_infos(&queues)
-        .push_next(&mut f12)
-        .push_next(&mut f13);
-    // SAFETY: valid create info; features supported by lavapipe.
-    let device = ok(
-        unsafe { instance.create_device(physical_device, &dinfo, None) },
-        "device",
-    );
-    // SAFETY: queue 0 of `family` exists.
-    let queue = unsafe { device.get_device_queue(family, 0) };
-    Host {
-        _entry: entry,
-        instance,
-        messenger,
-        device,
-        physical_device,
-        family,
-        queue,
-    }
-}
-
 #[test]
 fn embedded_in_a_host_engine() {
-    let log = ValidationLog::new();
-    let host = host_engine(log.clone());
-    let allocator = ok(
-        Allocator::new(&AllocatorCreateDesc {
-            instance: host.instance.clone(),
-            device: host.device.clone(),
-            physical_device: host.physical_device,
-            debug_settings: gpu_allocator::AllocatorDebugSettings::default(),
-            buffer_device_address: false,
-            allocation_sizes: gpu_allocator::AllocationSizes::default(),
-        }),
-        "host allocator",
-    );
-    let allocator = Arc::new(Mutex::new(allocator));
-    let ctx = ok(
-        Context::from_raw(
-            host.instance.clone(),
-            host.device.clone(),
-            host.physical_device,
-            host.family,
-            host.queue,
-            Some(allocator.clone()),
-        ),
-        "embed",
-    )
-    .with_validation_log(log.clone());
+    let host = Host::new(DeviceFeatures::REQUIRED);
+    let ctx = host.context(DeviceFeatures::REQUIRED);
 
     let mesh = meshes::terrain(12, 12, 5);
     let baked = caveclod_tests::bake(&mesh);
@@ -212,31 +114,25 @@ fn embedded_in_a_host_engine() {
     ok(unused.destroy(&ctx), "destroy empty indices");
     assert_clean(&ctx, "while embedded");
     ok(ctx.destroy(), "destroy the embedded context");
+    // The host tears down what it owns, in order, checking that its allocator is empty
+    // and that the validation layer said nothing.
+    host.destroy();
+}
 
-    // The host tears down what it owns, in order; the allocator is the host's again.
-    let allocator = match Arc::try_unwrap(allocator) {
-        Ok(a) => a,
-        Err(_) => panic!("the context kept a reference to the host's allocator"),
+#[test]
+fn a_host_device_without_a_required_feature_is_refused_by_name() {
+    let host = Host::new(DeviceFeatures::REQUIRED);
+    let claimed = DeviceFeatures {
+        dynamic_rendering: false,
+        ..DeviceFeatures::REQUIRED
     };
-    let report = match allocator.lock() {
-        Ok(a) => a.generate_report(),
-        Err(_) => panic!("poisoned"),
-    };
-    assert!(
-        report.allocations.is_empty(),
-        "allocations left: {:?}",
-        report.allocations
-    );
-    drop(allocator);
-    // SAFETY: everything made from the device is destroyed (checked above).
-    unsafe { host.device.destroy_device(None) };
-    host.messenger.destroy();
-    // SAFETY: device and messenger are gone.
-    unsafe { host.instance.destroy_instance(None) };
-    let messages = log.take();
-    assert!(
-        messages.is_empty(),
-        "validation messages:\n{}",
-        messages.join("\n")
-    );
+    // SAFETY: the host's live handles; it enabled more than it claims.
+    match unsafe { Context::from_raw(host.device(claimed)) } {
+        Err(Error::Unsupported { missing, .. }) => {
+            assert_eq!(missing, vec!["dynamicRendering (not enabled)".to_string()]);
+        }
+        Err(e) => panic!("expected Unsupported, got {e}"),
+        Ok(_) => panic!("a device without dynamicRendering was accepted"),
+    }
+    host.destroy();
 }

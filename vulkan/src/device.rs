@@ -11,6 +11,7 @@ use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
 
 use crate::error::{Error, Result, VkResultExt};
 use crate::instance::{self, OwnedInstance};
+use crate::requirements::{self, DeviceFeatures};
 use crate::validation::ValidationLog;
 
 /// How to create a headless context.
@@ -31,6 +32,35 @@ impl Default for HeadlessDesc {
     }
 }
 
+/// A host engine's device, handed to [`Context::from_raw`].
+pub struct HostDevice {
+    /// The host's instance.
+    pub instance: ash::Instance,
+    /// The host's logical device.
+    pub device: ash::Device,
+    /// Its physical device.
+    pub physical_device: vk::PhysicalDevice,
+    /// The family of `queue`.
+    pub queue_family: u32,
+    /// A queue this crate may submit to (uploads, headless frames, compute read-backs); the
+    /// record path never submits.
+    pub queue: vk::Queue,
+    /// The host's allocator, or `None` to let the context make its own.
+    pub allocator: Option<SharedAllocator>,
+    /// The features the host enabled on `device` (at least [`DeviceFeatures::REQUIRED`];
+    /// [`DeviceFeatures::enable`] sets them in its create-info chain).
+    pub enabled: DeviceFeatures,
+}
+
+/// A device picked and created by the headless path.
+struct PickedDevice {
+    physical_device: vk::PhysicalDevice,
+    family: u32,
+    device: ash::Device,
+    name: String,
+    enabled: DeviceFeatures,
+}
+
 /// A shared gpu-allocator, as a host engine would hold it.
 pub type SharedAllocator = Arc<Mutex<Allocator>>;
 
@@ -40,8 +70,7 @@ pub type SharedAllocator = Arc<Mutex<Allocator>>;
 /// Design decisions:
 /// - **Embedding never creates an instance.** [`Context::from_raw`] takes the host's handles
 ///   (and optionally its gpu-allocator) and destroys none of them; the host keeps ownership
-///   and must have enabled what the shaders need: Vulkan 1.3 `dynamicRendering` and
-///   `synchronization2`, Vulkan 1.2 `vulkanMemoryModel`.
+///   and must have enabled [`DeviceFeatures::REQUIRED`], which `from_raw` checks.
 /// - **Headless** ([`Context::headless`]) creates all of it, prefers lavapipe when asked (the
 ///   tests, the CLI) and enables `VK_LAYER_KHRONOS_validation` when installed.
 /// - **Resources are tracked.** Every buffer and image made through a context is registered
@@ -64,43 +93,25 @@ pub struct Context {
     log: Arc<ValidationLog>,
     validation: bool,
     device_name: String,
+    features: DeviceFeatures,
     live: Mutex<BTreeMap<u64, String>>,
     next_id: AtomicU64,
     vertex_uploads: AtomicU64,
     destroyed: bool,
 }
 
-/// What the renderer needs of a physical device, or why it does not qualify.
+/// The queue family and device kind of a physical device that has what this crate needs
+/// (the `requirements` module's table), or why it does not qualify.
 fn qualify(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
-) -> std::result::Result<(u32, vk::PhysicalDeviceType, String), String> {
+) -> std::result::Result<(u32, vk::PhysicalDeviceType, String, DeviceFeatures), String> {
     // SAFETY: `pd` was enumerated from `instance`.
     let props = unsafe { instance.get_physical_device_properties(pd) };
-    let name = props
-        .device_name_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|_| "unnamed device".into());
-    if props.api_version < vk::API_VERSION_1_3 {
-        return Err(format!("{name}: Vulkan 1.3 needed"));
-    }
-    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::default()
-        .push_next(&mut f12)
-        .push_next(&mut f13);
-    // SAFETY: the chain holds structures alive for the call.
-    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
-    let mut missing = Vec::new();
-    if f13.dynamic_rendering == vk::FALSE {
-        missing.push("dynamicRendering");
-    }
-    if f13.synchronization2 == vk::FALSE {
-        missing.push("synchronization2");
-    }
-    if f12.vulkan_memory_model == vk::FALSE {
-        missing.push("vulkanMemoryModel");
-    }
+    let name = device_name(&props);
+    // SAFETY: as above.
+    let supported = unsafe { DeviceFeatures::supported(instance, pd) };
+    let missing = requirements::shortfall(props.api_version, supported, DeviceFeatures::REQUIRED);
     if !missing.is_empty() {
         return Err(format!("{name}: lacks {}", missing.join(", ")));
     }
@@ -111,7 +122,19 @@ fn qualify(
         .iter()
         .position(|f| f.queue_flags.contains(want) && f.queue_count > 0)
         .ok_or_else(|| format!("{name}: no graphics + compute queue"))?;
-    Ok((family as u32, props.device_type, name))
+    Ok((
+        family as u32,
+        props.device_type,
+        name,
+        supported.and(DeviceFeatures::ALL),
+    ))
+}
+
+fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
+    props
+        .device_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| "unnamed device".into())
 }
 
 fn rank(kind: vk::PhysicalDeviceType, prefer_lavapipe: bool) -> u32 {
@@ -126,26 +149,27 @@ fn rank(kind: vk::PhysicalDeviceType, prefer_lavapipe: bool) -> u32 {
 
 impl Context {
     /// Creates an instance, picks a device (see [`HeadlessDesc`]) and creates a logical
-    /// device with Vulkan 1.3 `dynamicRendering` + `synchronization2` and Vulkan 1.2
-    /// `vulkanMemoryModel`, and an allocator.
+    /// device with [`DeviceFeatures::REQUIRED`] (plus `fillModeNonSolid` where supported)
+    /// and an allocator.
     pub fn headless(desc: &HeadlessDesc) -> Result<Self> {
         let log = ValidationLog::new();
         let owned = instance::create(desc.validation, &log)?;
         match Self::headless_device(&owned, desc.prefer_lavapipe) {
-            Ok((pd, family, device, name)) => {
+            Ok(picked) => {
+                let device = picked.device.clone();
                 // SAFETY: queue 0 of `family` was requested at device creation.
-                let queue = unsafe { device.get_device_queue(family, 0) };
-                let validation = owned.validation;
-                match Self::assemble(
-                    owned.instance.clone(),
-                    device.clone(),
-                    pd,
-                    family,
+                let queue = unsafe { device.get_device_queue(picked.family, 0) };
+                let host = HostDevice {
+                    instance: owned.instance.clone(),
+                    device: picked.device,
+                    physical_device: picked.physical_device,
+                    queue_family: picked.family,
                     queue,
-                    None,
-                    log,
-                    name,
-                ) {
+                    allocator: None,
+                    enabled: picked.enabled,
+                };
+                let validation = owned.validation;
+                match Self::assemble(host, log, picked.name) {
                     Ok(mut ctx) => {
                         ctx.validation = validation;
                         ctx.owned = Some(owned);
@@ -174,28 +198,25 @@ impl Context {
         }
     }
 
-    fn headless_device(
-        owned: &OwnedInstance,
-        prefer_lavapipe: bool,
-    ) -> Result<(vk::PhysicalDevice, u32, ash::Device, String)> {
+    fn headless_device(owned: &OwnedInstance, prefer_lavapipe: bool) -> Result<PickedDevice> {
         let instance = &owned.instance;
         // SAFETY: plain enumeration.
         let devices =
             unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
         let mut rejected = Vec::new();
-        let mut best: Option<(u32, vk::PhysicalDevice, u32, String)> = None;
+        let mut best: Option<(u32, vk::PhysicalDevice, u32, String, DeviceFeatures)> = None;
         for pd in devices {
             match qualify(instance, pd) {
-                Ok((family, kind, name)) => {
+                Ok((family, kind, name, features)) => {
                     let r = rank(kind, prefer_lavapipe);
                     if best.as_ref().is_none_or(|b| r < b.0) {
-                        best = Some((r, pd, family, name));
+                        best = Some((r, pd, family, name, features));
                     }
                 }
                 Err(why) => rejected.push(why),
             }
         }
-        let Some((_, pd, family, name)) = best else {
+        let Some((_, pd, family, name, enabled)) = best else {
             return Err(Error::NoDevice(if rejected.is_empty() {
                 "no Vulkan physical device found (install Mesa's lavapipe: mesa-vulkan-drivers)"
                     .into()
@@ -207,48 +228,67 @@ impl Context {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
             .queue_priorities(&priorities)];
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default().vulkan_memory_model(true);
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true);
+        let mut f10 = vk::PhysicalDeviceFeatures::default();
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        enabled.enable(&mut f10, &mut f12, &mut f13);
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
+            .enabled_features(&f10)
             .push_next(&mut f12)
             .push_next(&mut f13);
-        // SAFETY: `pd` qualified (the features are supported); pointers are to locals.
+        // SAFETY: `pd` qualified and `enabled` is within what it supports; pointers are to
+        // locals.
         let device = unsafe { instance.create_device(pd, &info, None) }.vk("vkCreateDevice")?;
-        Ok((pd, family, device, name))
+        Ok(PickedDevice {
+            physical_device: pd,
+            family,
+            device,
+            name,
+            enabled,
+        })
     }
 
     /// Wraps a host engine's instance, device and queue (and optionally its allocator). The
     /// host keeps ownership of all of them: [`destroy`](Self::destroy) only releases what
-    /// this crate made. The device must have Vulkan 1.3 `dynamicRendering` and
-    /// `synchronization2` and Vulkan 1.2 `vulkanMemoryModel` enabled; `queue` must support
-    /// graphics and compute. Without an allocator, one is created (and freed on destroy).
-    pub fn from_raw(
-        instance: ash::Instance,
-        device: ash::Device,
-        physical_device: vk::PhysicalDevice,
-        queue_family: u32,
-        queue: vk::Queue,
-        allocator: Option<SharedAllocator>,
-    ) -> Result<Self> {
+    /// this crate made. Without an allocator, one is created (and freed on destroy).
+    ///
+    /// Refuses with [`Error::Unsupported`] a device older than
+    /// [`API_VERSION`](crate::API_VERSION), or whose `host.enabled` lacks one of
+    /// [`DeviceFeatures::REQUIRED`] or claims a feature the physical device does not
+    /// support; each missing item is named.
+    ///
+    /// # Safety
+    /// - `host.device` was created from `host.physical_device`, which was enumerated from
+    ///   `host.instance`; all three outlive the context.
+    /// - `host.enabled` is no more than what the device was created with.
+    /// - `host.queue` is queue of family `host.queue_family` of that device, supporting
+    ///   graphics (and compute, for [`Geomorph`](crate::Geomorph)); the host does not submit
+    ///   to it while a call of this crate that submits ([`Context::submit_and_wait`],
+    ///   [`Renderer::render`](crate::Renderer::render), uploads) runs on another thread.
+    /// - `host.allocator`, if given, was made for that instance and device.
+    pub unsafe fn from_raw(host: HostDevice) -> Result<Self> {
         // SAFETY: `physical_device` belongs to `instance` (the caller's contract).
-        let props = unsafe { instance.get_physical_device_properties(physical_device) };
-        let name = props
-            .device_name_as_c_str()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        Self::assemble(
-            instance,
-            device,
-            physical_device,
-            queue_family,
-            queue,
-            allocator,
-            ValidationLog::new(),
-            name,
-        )
+        let props = unsafe {
+            host.instance
+                .get_physical_device_properties(host.physical_device)
+        };
+        let name = device_name(&props);
+        // SAFETY: as above.
+        let supported = unsafe { DeviceFeatures::supported(&host.instance, host.physical_device) };
+        let missing = requirements::shortfall(props.api_version, supported, host.enabled);
+        if !missing.is_empty() {
+            return Err(Error::Unsupported {
+                device: name,
+                missing,
+            });
+        }
+        Self::assemble(host, ValidationLog::new(), name)
+    }
+
+    /// The device features this context may use (enabled on its device).
+    pub fn features(&self) -> DeviceFeatures {
+        self.features
     }
 
     /// Records validation messages into the host's `log` (the one its debug messenger
@@ -260,17 +300,16 @@ impl Context {
         self
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn assemble(
-        instance: ash::Instance,
-        device: ash::Device,
-        physical_device: vk::PhysicalDevice,
-        queue_family: u32,
-        queue: vk::Queue,
-        allocator: Option<SharedAllocator>,
-        log: Arc<ValidationLog>,
-        device_name: String,
-    ) -> Result<Self> {
+    fn assemble(host: HostDevice, log: Arc<ValidationLog>, device_name: String) -> Result<Self> {
+        let HostDevice {
+            instance,
+            device,
+            physical_device,
+            queue_family,
+            queue,
+            allocator,
+            enabled,
+        } = host;
         let allocator = match allocator {
             Some(a) => a,
             None => {
@@ -297,6 +336,7 @@ impl Context {
             log,
             validation: false,
             device_name,
+            features: enabled,
             live: Mutex::new(BTreeMap::new()),
             next_id: AtomicU64::new(0),
             vertex_uploads: AtomicU64::new(0),
@@ -378,6 +418,12 @@ impl Context {
             Ok(mut l) => l.remove(&id),
             Err(p) => p.into_inner().remove(&id),
         };
+    }
+
+    /// Buffers and images made through this context so far (destroyed ones included): a
+    /// frame loop that allocates nothing leaves it unchanged.
+    pub fn resources_created(&self) -> u64 {
+        self.next_id.load(Ordering::Relaxed)
     }
 
     /// Names of the resources made through this context and not destroyed yet.

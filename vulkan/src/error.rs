@@ -20,6 +20,15 @@ pub enum Error {
     /// No physical device has what the renderer needs.
     #[error("no usable Vulkan device: {0}")]
     NoDevice(String),
+    /// The device lacks what this crate needs (see the `requirements` table on
+    /// [`DeviceFeatures`](crate::DeviceFeatures)), or a target format cannot be used.
+    #[error("{device}: unsupported: {}", .missing.join(", "))]
+    Unsupported {
+        /// The device's name.
+        device: String,
+        /// Each missing version, feature or format capability.
+        missing: Vec<String>,
+    },
     /// The device was lost during `call`.
     #[error("{call}: device lost")]
     DeviceLost {

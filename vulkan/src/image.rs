@@ -1,4 +1,4 @@
-//! 2D images with one view: the colour and depth targets.
+//! 2D images with one view: the headless renderer's colour and depth targets.
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -6,11 +6,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::device::Context;
 use crate::error::{from_allocation, Error, Result, VkResultExt};
-
-/// The colour format of render targets (and of read-back pixels: RGBA8).
-pub const COLOUR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-/// The depth format.
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+use crate::record::TargetFormats;
 
 /// What an image is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,7 +26,7 @@ impl ImageDesc {
     pub(crate) fn colour_target(width: u32, height: u32) -> Self {
         Self {
             extent: vk::Extent2D { width, height },
-            format: COLOUR_FORMAT,
+            format: TargetFormats::HEADLESS.colour,
             usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
             aspect: vk::ImageAspectFlags::COLOR,
         }
@@ -40,7 +36,7 @@ impl ImageDesc {
     pub(crate) fn depth_target(width: u32, height: u32) -> Self {
         Self {
             extent: vk::Extent2D { width, height },
-            format: DEPTH_FORMAT,
+            format: TargetFormats::HEADLESS.depth,
             usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
             aspect: vk::ImageAspectFlags::DEPTH,
         }

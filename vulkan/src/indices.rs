@@ -44,10 +44,19 @@ pub enum IndexSource<'a, 'c> {
 /// - **Growth by doubling, only when needed**: a surface's buffer is replaced by one at
 ///   least twice as large when its list no longer fits, so a camera flying towards more
 ///   detail reallocates O(log n) times, never per frame.
+///
+/// The record path ([`Recorder`](crate::Recorder)) leaves the ring to the caller: it
+/// [`fill`](Self::fill)s slot `s` for the frame it records into slot `s` (after that
+/// frame's previous use of the slot completed on the GPU), then records with the same
+/// slot. Host writes to the mapped memory need no barrier: a queue submission makes every
+/// host write made before it visible to the commands it submits.
 #[derive(Debug)]
 pub struct CameraIndices {
     name: String,
     slots: Vec<Vec<Slot>>,
+    /// Per frame slot: the vertex count the slot's indices may reference (the hierarchy's
+    /// vertex count, or one more than the largest listed index).
+    vertex_bounds: Vec<u32>,
     grows: u64,
 }
 
@@ -60,6 +69,7 @@ impl CameraIndices {
             slots: (0..frames_in_flight.max(1))
                 .map(|_| (0..surfaces).map(|_| Slot::default()).collect())
                 .collect(),
+            vertex_bounds: vec![0; frames_in_flight.max(1)],
             grows: 0,
         }
     }
@@ -88,8 +98,15 @@ impl CameraIndices {
             .map_or(0, |b| b.desc.size / 4)
     }
 
-    /// The buffer and index count of `surface` in `frame` (`None` when empty).
-    pub(crate) fn draw_range(&self, frame: usize, surface: usize) -> Option<(vk::Buffer, u32)> {
+    /// The vertices `frame`'s indices may reference: a vertex buffer with at least this many
+    /// vertices can draw them (0 before the slot is filled).
+    pub fn vertex_bound(&self, frame: usize) -> u32 {
+        self.vertex_bounds.get(frame).copied().unwrap_or(0)
+    }
+
+    /// The buffer and index count (32-bit indices, from offset 0) of `surface` in `frame`,
+    /// as last filled; `None` when empty. For hosts that draw with their own pipelines.
+    pub fn draw_range(&self, frame: usize, surface: usize) -> Option<(vk::Buffer, u32)> {
         let s = self.slots.get(frame)?.get(surface)?;
         match (&s.buffer, s.count) {
             (Some(b), n) if n > 0 => Some((b.raw, n)),
@@ -126,13 +143,24 @@ impl CameraIndices {
         Ok(())
     }
 
-    /// Fills `frame`'s buffers from `source`; returns the bytes written. `camera` names the
-    /// camera in errors. The frame's previous GPU work must be complete.
-    pub(crate) fn fill(
+    /// Fills slot `frame`'s buffers from `source` (writing mapped memory; a buffer too small
+    /// is replaced by one twice as large); returns the index bytes written. The GPU must be
+    /// done with the slot's previous contents (the caller's frame fence for that slot).
+    pub fn fill(
         &mut self,
         ctx: &Context,
         frame: usize,
-        camera: usize,
+        source: IndexSource<'_, '_>,
+    ) -> Result<u64> {
+        self.fill_camera(ctx, frame, None, source)
+    }
+
+    /// [`fill`](Self::fill), naming camera `camera` of a frame in errors.
+    pub(crate) fn fill_camera(
+        &mut self,
+        ctx: &Context,
+        frame: usize,
+        camera: Option<usize>,
         source: IndexSource<'_, '_>,
     ) -> Result<u64> {
         if frame >= self.slots.len() {
@@ -143,21 +171,24 @@ impl CameraIndices {
         }
         let surfaces = self.surface_count();
         let needed: Vec<u64> = match source {
-            IndexSource::Camera { hierarchy, camera } => {
+            IndexSource::Camera {
+                hierarchy,
+                camera: state,
+            } => {
                 if hierarchy.surface_count() != surfaces {
                     return Err(Error::InvalidArgument(format!(
-                        "camera {camera:?}: hierarchy has {} surfaces, index buffers {surfaces}",
+                        "{}: the hierarchy has {} surfaces, the index buffers {surfaces}",
+                        self.name,
                         hierarchy.surface_count()
                     )));
                 }
-                (0..surfaces)
-                    .map(|s| camera.index_count(s) as u64)
-                    .collect()
+                (0..surfaces).map(|s| state.index_count(s) as u64).collect()
             }
             IndexSource::Lists(lists) => {
                 if lists.len() != surfaces {
                     return Err(Error::InvalidArgument(format!(
-                        "{} index lists given for {surfaces} surfaces",
+                        "{}: {} index lists given for {surfaces} surfaces",
+                        self.name,
                         lists.len()
                     )));
                 }
@@ -180,25 +211,29 @@ impl CameraIndices {
             }
         }
         let mut written = vec![0u32; surfaces];
-        match source {
+        let vertex_bound = match source {
             IndexSource::Camera {
                 hierarchy,
                 camera: cam,
             } => {
                 cam.emit_indices(hierarchy, &mut outs, &mut written)
-                    .map_err(|source| Error::Emit {
-                        camera: Some(camera),
-                        source,
-                    })?;
+                    .map_err(|source| Error::Emit { camera, source })?;
+                u32::try_from(hierarchy.vertices().len()).unwrap_or(u32::MAX)
             }
             IndexSource::Lists(lists) => {
+                let mut bound = 0u32;
                 for (s, list) in lists.iter().enumerate() {
                     outs[s][..list.len()].copy_from_slice(list);
                     written[s] = list.len() as u32;
+                    if let Some(&max) = list.iter().max() {
+                        bound = bound.max(max.saturating_add(1));
+                    }
                 }
+                bound
             }
-        }
+        };
         drop(outs);
+        self.vertex_bounds[frame] = vertex_bound;
         let mut bytes = 0u64;
         for (slot, &n) in slots.iter_mut().zip(&written) {
             slot.count = n;

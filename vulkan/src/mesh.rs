@@ -33,16 +33,10 @@ impl VertexBuffer {
         Self::from_vertices(ctx, name, h.vertices())
     }
 
-    /// Uploads `vertices` through a staging buffer into a new device-local buffer.
+    /// Uploads `vertices` through a staging buffer into a new device-local buffer (one
+    /// submission on the context's queue, waited for).
     pub fn from_vertices(ctx: &Context, name: &str, vertices: &[Vertex]) -> Result<Self> {
-        if vertices.is_empty() {
-            return Err(Error::InvalidArgument(format!(
-                "vertex buffer {name}: no vertices"
-            )));
-        }
-        let count = u32::try_from(vertices.len()).map_err(|_| {
-            Error::InvalidArgument(format!("vertex buffer {name}: too many vertices"))
-        })?;
+        let count = vertex_count(name, vertices)?;
         let bytes: &[u8] = bytemuck::cast_slice(vertices);
         let buffer = upload(
             ctx,
@@ -54,9 +48,129 @@ impl VertexBuffer {
         Ok(Self { buffer, count })
     }
 
+    /// Records the upload of `vertices` into a new device-local buffer in the caller's
+    /// command buffer `cmd` (recording, outside rendering), for hosts that submit their own
+    /// work: a copy from a host-visible staging buffer, then a barrier from the copy
+    /// (`COPY`, `TRANSFER_WRITE`) to every later read (`VERTEX_ATTRIBUTE_INPUT` and
+    /// `COMPUTE_SHADER`; `VERTEX_ATTRIBUTE_READ` and `SHADER_STORAGE_READ`), so draws and
+    /// geomorph dispatches recorded after it in submission order see the vertices.
+    ///
+    /// The returned [`Staging`] must stay alive until the GPU has executed `cmd`; then
+    /// destroy it.
+    pub fn record_upload(
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        name: &str,
+        vertices: &[Vertex],
+    ) -> Result<(Self, Staging)> {
+        let count = vertex_count(name, vertices)?;
+        let bytes: &[u8] = bytemuck::cast_slice(vertices);
+        let staging = staging_with(ctx, name, bytes)?;
+        let buffer = match Buffer::new(
+            ctx,
+            name,
+            BufferDesc::gpu_only(
+                bytes.len() as u64,
+                vk::BufferUsageFlags::VERTEX_BUFFER
+                    | vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST,
+            ),
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                staging.destroy(ctx)?;
+                return Err(e);
+            }
+        };
+        record_copy(ctx, cmd, &staging, &buffer, bytes.len() as u64);
+        ctx.count_vertex_upload();
+        Ok((Self { buffer, count }, Staging { buffer: staging }))
+    }
+
     /// Destroys the buffer. The GPU must be done with it.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
         self.buffer.destroy(ctx)
+    }
+}
+
+/// A staging buffer of an upload recorded into the caller's command buffer
+/// ([`VertexBuffer::record_upload`]): keep it until that command buffer has executed, then
+/// [`destroy`](Self::destroy) it.
+#[derive(Debug)]
+#[must_use = "a staging buffer must be destroyed after its upload executed"]
+pub struct Staging {
+    buffer: Buffer,
+}
+
+impl Staging {
+    /// Destroys the staging buffer. The GPU must be done with the upload.
+    pub fn destroy(self, ctx: &Context) -> Result<()> {
+        self.buffer.destroy(ctx)
+    }
+}
+
+/// The vertex count of `vertices` as a `u32`, refusing none and too many.
+fn vertex_count(name: &str, vertices: &[Vertex]) -> Result<u32> {
+    if vertices.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "vertex buffer {name}: no vertices"
+        )));
+    }
+    u32::try_from(vertices.len())
+        .map_err(|_| Error::InvalidArgument(format!("vertex buffer {name}: too many vertices")))
+}
+
+/// A host-visible staging buffer holding `bytes`.
+fn staging_with(ctx: &Context, name: &str, bytes: &[u8]) -> Result<Buffer> {
+    let mut staging = Buffer::new(
+        ctx,
+        &format!("{name} (staging)"),
+        BufferDesc::cpu_to_gpu(bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC),
+    )?;
+    match staging.mapped_mut() {
+        Some(dst) => {
+            dst[..bytes.len()].copy_from_slice(bytes);
+            Ok(staging)
+        }
+        None => {
+            staging.destroy(ctx)?;
+            Err(Error::InvalidArgument(
+                "staging memory is not host-visible".into(),
+            ))
+        }
+    }
+}
+
+/// Records the copy of `size` bytes from `src` to `dst` and the barrier that makes it
+/// visible to vertex input and shader storage reads.
+fn record_copy(ctx: &Context, cmd: vk::CommandBuffer, src: &Buffer, dst: &Buffer, size: u64) {
+    let region = [vk::BufferCopy {
+        src_offset: 0,
+        dst_offset: 0,
+        size,
+    }];
+    let barrier = [vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(
+            vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT
+                | vk::PipelineStageFlags2::VERTEX_SHADER
+                | vk::PipelineStageFlags2::COMPUTE_SHADER,
+        )
+        .dst_access_mask(
+            vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::SHADER_STORAGE_READ,
+        )
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(dst.raw)
+        .offset(0)
+        .size(vk::WHOLE_SIZE)];
+    let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barrier);
+    // SAFETY: `cmd` is recording outside rendering (the caller's contract); both buffers
+    // are alive and hold at least `size` bytes.
+    unsafe {
+        ctx.device.cmd_copy_buffer(cmd, src.raw, dst.raw, &region);
+        ctx.device.cmd_pipeline_barrier2(cmd, &dep);
     }
 }
 
@@ -97,7 +211,8 @@ impl MorphInstances {
 }
 
 /// Creates a device-local buffer with `usage` (plus transfer destination) holding `bytes`,
-/// copied from a staging buffer that is destroyed before returning.
+/// copied from a staging buffer in one submission that is waited for; the staging buffer is
+/// destroyed before returning.
 pub(crate) fn upload(
     ctx: &Context,
     name: &str,
@@ -105,55 +220,21 @@ pub(crate) fn upload(
     usage: vk::BufferUsageFlags,
 ) -> Result<Buffer> {
     let size = bytes.len() as u64;
-    let mut staging = Buffer::new(
+    let staging = staging_with(ctx, name, bytes)?;
+    let result = Buffer::new(
         ctx,
-        &format!("{name} (staging)"),
-        BufferDesc::cpu_to_gpu(size, vk::BufferUsageFlags::TRANSFER_SRC),
-    )?;
-    let result = (|| {
-        let dst = staging
-            .mapped_mut()
-            .ok_or_else(|| Error::InvalidArgument("staging memory is not host-visible".into()))?;
-        dst[..bytes.len()].copy_from_slice(bytes);
-        let buffer = Buffer::new(
-            ctx,
-            name,
-            BufferDesc::gpu_only(size, usage | vk::BufferUsageFlags::TRANSFER_DST),
-        )?;
-        let copied = ctx.submit_and_wait(|cmd| {
-            let region = [vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size,
-            }];
-            // SAFETY: both buffers are alive and at least `size` bytes.
-            unsafe {
-                ctx.device
-                    .cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region)
-            };
-            // Make the copy visible to every later read (vertex input, storage reads).
-            let barrier = [vk::BufferMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .dst_access_mask(vk::AccessFlags2::MEMORY_READ)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer.raw)
-                .offset(0)
-                .size(vk::WHOLE_SIZE)];
-            let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barrier);
-            // SAFETY: `cmd` is recording.
-            unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &dep) };
-        });
-        match copied {
+        name,
+        BufferDesc::gpu_only(size, usage | vk::BufferUsageFlags::TRANSFER_DST),
+    )
+    .and_then(|buffer| {
+        match ctx.submit_and_wait(|cmd| record_copy(ctx, cmd, &staging, &buffer, size)) {
             Ok(()) => Ok(buffer),
             Err(e) => {
                 let _ = buffer.destroy(ctx);
                 Err(e)
             }
         }
-    })();
+    });
     staging.destroy(ctx)?;
     result
 }

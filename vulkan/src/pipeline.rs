@@ -9,9 +9,13 @@
 //! [`MorphInstance`] per instance; same push constants) and `geomorph_cs` (three storage
 //! buffers, 16-byte [`MorphPush`]).
 //!
-//! Drawing uses dynamic rendering (no render pass objects), dynamic viewport and scissor
-//! (one pipeline serves every split-screen viewport), depth test `LESS`, no culling (the
-//! tests compare renders of the same triangles, whatever their winding).
+//! Drawing pipelines are made for the caller's target ([`RecorderDesc`]: colour and depth
+//! formats, sample count, dynamic rendering or a render pass and subpass), with dynamic
+//! viewport and scissor (one pipeline serves every split-screen viewport), depth test
+//! `LESS`, no culling (the tests compare renders of the same triangles, whatever their
+//! winding).
+//!
+//! [`RecorderDesc`]: crate::RecorderDesc
 //!
 //! [`DrawPush`]: caveclod_core::gpu::DrawPush
 //! [`MorphPush`]: caveclod_core::gpu::MorphPush
@@ -24,8 +28,8 @@ use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush};
 
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
-use crate::image::{COLOUR_FORMAT, DEPTH_FORMAT};
 use crate::mesh::VERTEX_STRIDE;
+use crate::record::{Rendering, TargetFormats};
 
 /// The committed SPIR-V module.
 pub(crate) const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");
@@ -65,6 +69,17 @@ pub(crate) enum VertexStage {
     Geomorph,
 }
 
+/// What a [`DrawPipeline`] draws into, and how it fills triangles.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PipelineTarget {
+    /// Formats and sample count of the attachments.
+    pub(crate) formats: TargetFormats,
+    /// Dynamic rendering or a render pass and subpass.
+    pub(crate) rendering: Rendering,
+    /// `FILL`, or `LINE` for wireframe.
+    pub(crate) polygon_mode: vk::PolygonMode,
+}
+
 /// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout.
 #[derive(Debug)]
 pub(crate) struct DrawPipeline {
@@ -75,8 +90,12 @@ pub(crate) struct DrawPipeline {
 }
 
 impl DrawPipeline {
-    /// Creates the pipeline for RGBA8 colour + D32 depth targets.
-    pub(crate) fn new(ctx: &Context, vertex_stage: VertexStage) -> Result<Self> {
+    /// Creates the pipeline for `target`.
+    pub(crate) fn new(
+        ctx: &Context,
+        vertex_stage: VertexStage,
+        target: PipelineTarget,
+    ) -> Result<Self> {
         let d = &ctx.device;
         let module = shader_module(ctx, SPIRV)?;
         let ranges = [vk::PushConstantRange {
@@ -96,7 +115,7 @@ impl DrawPipeline {
                 return Err(e);
             }
         };
-        let raw = Self::create(ctx, module, layout, vertex_stage);
+        let raw = Self::create(ctx, module, layout, vertex_stage, target);
         // SAFETY: the pipeline (if any) no longer needs the module.
         unsafe { d.destroy_shader_module(module, None) };
         match raw {
@@ -114,6 +133,7 @@ impl DrawPipeline {
         module: vk::ShaderModule,
         layout: vk::PipelineLayout,
         vertex_stage: VertexStage,
+        target: PipelineTarget,
     ) -> Result<vk::Pipeline> {
         let vs = match vertex_stage {
             VertexStage::Draw => entry::DRAW_VS,
@@ -160,15 +180,16 @@ impl DrawPipeline {
             .viewport_count(1)
             .scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
+            .polygon_mode(target.polygon_mode)
             .cull_mode(vk::CullModeFlags::NONE)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            .rasterization_samples(target.formats.samples);
+        let has_depth = target.formats.depth != vk::Format::UNDEFINED;
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(true)
+            .depth_test_enable(has_depth)
+            .depth_write_enable(has_depth)
             .depth_compare_op(vk::CompareOp::LESS);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
@@ -176,11 +197,12 @@ impl DrawPipeline {
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let colour_formats = [COLOUR_FORMAT];
+        let colour_formats = [target.formats.colour];
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&colour_formats)
-            .depth_attachment_format(DEPTH_FORMAT);
-        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .depth_attachment_format(target.formats.depth)
+            .stencil_attachment_format(target.formats.stencil_format());
+        let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&assembly)
@@ -190,8 +212,14 @@ impl DrawPipeline {
             .depth_stencil_state(&depth)
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
-            .layout(layout)
-            .push_next(&mut rendering)];
+            .layout(layout);
+        let info = [match target.rendering {
+            Rendering::Dynamic => info.push_next(&mut rendering),
+            Rendering::RenderPass {
+                render_pass,
+                subpass,
+            } => info.render_pass(render_pass).subpass(subpass),
+        }];
         // SAFETY: every pointer in `info` refers to locals alive for the call.
         let pipelines = unsafe {
             ctx.device

@@ -2,7 +2,7 @@
 //! application's business).
 
 use crate::error::{Error, Result};
-use crate::frame::Viewport;
+use crate::record::Viewport;
 
 /// Pixels of a colour target, RGBA8, rows top to bottom.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -2,6 +2,8 @@
 //! generated meshes, cameras, and the "no validation messages" check.
 #![allow(dead_code)]
 
+pub mod host;
+
 use caveclod_core::format::Vertex;
 use caveclod_core::{CameraState, Hierarchy, RefineParams};
 use caveclod_tests::meshes::TestMesh;

@@ -1,6 +1,6 @@
-//! The renderer: targets, frames in flight, and the per-frame recording of every camera
-//! (the frame's steps are on [`Renderer`]; recording a target's commands is in `record`, one
-//! function per step).
+//! The headless renderer: targets, frames in flight, read-back and submission around the
+//! record path (the frame's steps are on [`Renderer`]; recording a target's commands is in
+//! `record`, one function per step).
 
 mod record;
 
@@ -12,72 +12,9 @@ use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::image::{Image, ImageDesc};
 use crate::indices::{CameraIndices, IndexSource};
-use crate::mesh::{MorphInstances, VertexBuffer};
-use crate::pipeline::{DrawPipeline, VertexStage};
+use crate::mesh::VertexBuffer;
 use crate::readback::RgbaImage;
-
-/// A rectangle of a target, in pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Viewport {
-    /// Left edge.
-    pub x: u32,
-    /// Top edge.
-    pub y: u32,
-    /// Width.
-    pub width: u32,
-    /// Height.
-    pub height: u32,
-}
-
-impl Viewport {
-    /// The whole of a `width` × `height` target.
-    pub fn full(width: u32, height: u32) -> Self {
-        Self {
-            x: 0,
-            y: 0,
-            width,
-            height,
-        }
-    }
-
-    /// Split screen for `cameras` (1 to 4): one full view, two side by side, or quadrants
-    /// (top left, top right, bottom left, bottom right) for three and four.
-    pub fn split_screen(width: u32, height: u32, cameras: usize) -> Result<Vec<Self>> {
-        let (hw, hh) = (width / 2, height / 2);
-        let quad = |i: u32| Self {
-            x: (i % 2) * hw,
-            y: (i / 2) * hh,
-            width: hw,
-            height: hh,
-        };
-        match cameras {
-            1 => Ok(vec![Self::full(width, height)]),
-            2 => Ok(vec![
-                Self {
-                    x: 0,
-                    y: 0,
-                    width: hw,
-                    height,
-                },
-                Self {
-                    x: hw,
-                    y: 0,
-                    width: hw,
-                    height,
-                },
-            ]),
-            3 | 4 => Ok((0..cameras as u32).map(quad).collect()),
-            n => Err(Error::InvalidArgument(format!(
-                "split screen for {n} cameras: 1 to 4 supported"
-            ))),
-        }
-    }
-
-    /// Width over height.
-    pub fn aspect(&self) -> f32 {
-        self.width as f32 / self.height.max(1) as f32
-    }
-}
+use crate::record::{Morph, RecordCamera, Recorder, RecorderDesc, TargetFormats, Viewport};
 
 /// How to make a [`Renderer`].
 #[derive(Clone, Debug, PartialEq)]
@@ -127,15 +64,19 @@ pub struct CameraDraw<'a, 'c> {
     pub morph: Option<Morph<'a>>,
 }
 
-/// A geomorphing draw: the camera's indices index both vertex streams alike; `vertices`
-/// (of [`CameraDraw`]) are the coarse ends, `fine` the fine ends, and each instance morphs
-/// and places them by its [`MorphInstance`](caveclod_core::gpu::MorphInstance).
-#[derive(Clone, Copy, Debug)]
-pub struct Morph<'a> {
-    /// Fine ends, as many as the coarse ones.
-    pub fine: &'a VertexBuffer,
-    /// Instances.
-    pub instances: &'a MorphInstances,
+impl CameraDraw<'_, '_> {
+    /// What the recorder draws of this camera.
+    fn record_camera(&self) -> RecordCamera<'_> {
+        RecordCamera {
+            viewport: self.viewport,
+            view_proj: self.view_proj,
+            vertices: self.vertices,
+            indices: self.indices,
+            colours: self.colours,
+            morph: self.morph,
+            wireframe: false,
+        }
+    }
 }
 
 /// What one frame did.
@@ -164,16 +105,15 @@ struct FrameSlot {
     readback: Vec<Buffer>,
 }
 
-/// Targets, pipelines and frames in flight; records every camera of a frame.
+/// A headless convenience over the record path: RGBA8 + D32 targets, a command pool,
+/// frames in flight with fences, read-back, and one queue submission per frame. Engines use
+/// [`Recorder`] in their own frame instead; this is what the tests and the CLI use.
 ///
 /// One [`Renderer::render`] call is one frame and one queue submission:
 /// 1. wait for the frame slot's fence (its command buffer and index buffers are free);
-/// 2. fill each camera's index buffers for that slot (index emission into mapped memory);
-/// 3. per target: transition colour + depth, begin dynamic rendering (clear), then per
-///    camera set its viewport and scissor, bind the mesh's persistent vertex buffer, and
-///    issue one indexed draw per non-empty surface with the surface colour pushed (a
-///    geomorphing camera binds the `geomorph_vs` pipeline, its two vertex streams and its
-///    instances instead, and draws every instance);
+/// 2. fill each camera's index buffers for that slot ([`CameraIndices::fill`]);
+/// 3. per target: transition colour + depth, begin dynamic rendering (clear), then
+///    [`Recorder::record`] of the target's cameras;
 /// 4. optionally copy each colour target into the slot's read-back buffer;
 /// 5. submit with synchronization2 and the slot's fence.
 ///
@@ -185,8 +125,7 @@ struct FrameSlot {
 /// are plain rectangles.
 pub struct Renderer {
     desc: RendererDesc,
-    pipeline: DrawPipeline,
-    morph_pipeline: Option<DrawPipeline>,
+    recorder: Recorder,
     targets: Vec<Target>,
     pool: vk::CommandPool,
     slots: Vec<FrameSlot>,
@@ -208,31 +147,23 @@ impl Renderer {
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         // SAFETY: valid create info.
         let pool = unsafe { d.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
-        let pipeline = match DrawPipeline::new(ctx, VertexStage::Draw) {
-            Ok(p) => p,
+        let recorder = match Recorder::new(
+            ctx,
+            RecorderDesc {
+                geomorph: desc.geomorph,
+                ..RecorderDesc::dynamic(TargetFormats::HEADLESS)
+            },
+        ) {
+            Ok(r) => r,
             Err(e) => {
                 // SAFETY: unused pool.
                 unsafe { d.destroy_command_pool(pool, None) };
                 return Err(e);
             }
         };
-        let morph_pipeline = if desc.geomorph {
-            match DrawPipeline::new(ctx, VertexStage::Geomorph) {
-                Ok(p) => Some(p),
-                Err(e) => {
-                    pipeline.destroy(ctx);
-                    // SAFETY: unused pool.
-                    unsafe { d.destroy_command_pool(pool, None) };
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
         let mut r = Self {
             desc,
-            pipeline,
-            morph_pipeline,
+            recorder,
             targets: Vec::new(),
             pool,
             slots: Vec::new(),
@@ -331,9 +262,18 @@ impl Renderer {
             ..FrameStats::default()
         };
         for (i, cam) in cameras.iter_mut().enumerate() {
-            let bytes = cam.indices.fill(ctx, slot_index, i, cam.source)?;
+            let bytes = cam
+                .indices
+                .fill_camera(ctx, slot_index, Some(i), cam.source)?;
             stats.index_bytes += bytes;
             stats.camera_index_bytes.push(bytes);
+        }
+        let records: Vec<(usize, RecordCamera<'_>)> = cameras
+            .iter()
+            .map(|c| (c.target, c.record_camera()))
+            .collect();
+        for (i, (_, r)) in records.iter().enumerate() {
+            self.recorder.check_camera(i, slot_index, r)?;
         }
 
         // SAFETY: the slot's previous submission completed (fence waited).
@@ -344,7 +284,7 @@ impl Renderer {
         // SAFETY: `cmd` is reset.
         unsafe { d.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
         for t in 0..self.targets.len() {
-            stats.draws += self.record_target(ctx, cmd, t, slot_index, cameras);
+            stats.draws += self.record_target(ctx, cmd, t, slot_index, &records)?;
         }
         // SAFETY: `cmd` is recording.
         unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
@@ -388,45 +328,6 @@ impl Renderer {
                     c.indices.frames_in_flight(),
                     self.slots.len()
                 )));
-            }
-            if c.colours.len() < c.indices.surface_count() {
-                return Err(Error::InvalidArgument(format!(
-                    "camera {i}: {} colours for {} surfaces",
-                    c.colours.len(),
-                    c.indices.surface_count()
-                )));
-            }
-            if let Some(m) = &c.morph {
-                if self.morph_pipeline.is_none() {
-                    return Err(Error::InvalidArgument(format!(
-                        "camera {i}: geomorph draw, but the renderer was made without geomorph"
-                    )));
-                }
-                if m.fine.count != c.vertices.count {
-                    return Err(Error::InvalidArgument(format!(
-                        "camera {i}: {} fine and {} coarse vertices",
-                        m.fine.count, c.vertices.count
-                    )));
-                }
-            }
-            match c.source {
-                IndexSource::Camera { hierarchy, .. } => {
-                    if hierarchy.vertices().len() != c.vertices.count as usize {
-                        return Err(Error::InvalidArgument(format!(
-                            "camera {i}: vertex buffer has {} vertices, its hierarchy {}",
-                            c.vertices.count,
-                            hierarchy.vertices().len()
-                        )));
-                    }
-                }
-                IndexSource::Lists(lists) => {
-                    let count = c.vertices.count;
-                    if let Some(bad) = lists.iter().flat_map(|l| l.iter()).find(|&&x| x >= count) {
-                        return Err(Error::InvalidArgument(format!(
-                            "camera {i}: index {bad} beyond the {count} vertices"
-                        )));
-                    }
-                }
             }
         }
         Ok(())
@@ -491,10 +392,7 @@ impl Renderer {
         }
         // SAFETY: no command buffer of the pool is pending.
         unsafe { d.destroy_command_pool(self.pool, None) };
-        self.pipeline.destroy(ctx);
-        if let Some(p) = self.morph_pipeline {
-            p.destroy(ctx);
-        }
+        self.recorder.destroy(ctx);
         first_err.map_or(Ok(()), Err)
     }
 }

@@ -2,41 +2,42 @@
 //! 1. [`to_attachment_layouts`]: colour and depth from `UNDEFINED` (their contents are
 //!    cleared anyway) into attachment layouts, after the previous frame's writes and copy;
 //! 2. [`begin_rendering`]: dynamic rendering over the whole target, clearing both;
-//! 3. per camera of the target, [`Renderer::draw_camera`]: pipeline, viewport and scissor,
-//!    vertex streams, then one indexed draw per non-empty surface;
+//! 3. the target's cameras through [`Recorder::record`](crate::Recorder::record): pipeline,
+//!    viewport and scissor, vertex streams, then one indexed draw per non-empty surface;
 //! 4. end of rendering;
 //! 5. with read-back, [`copy_to_readback`]: colour into `TRANSFER_SRC_OPTIMAL`, copied into
 //!    the slot's host-visible buffer, made visible to host reads.
 
 use ash::vk;
-use caveclod_core::gpu::DrawPush;
-use glam::Vec4;
 
-use super::{CameraDraw, Renderer, Target, Viewport};
+use super::{Renderer, Target};
 use crate::buffer::Buffer;
 use crate::device::Context;
+use crate::error::Result;
 use crate::image::Image;
+use crate::record::RecordCamera;
 
 impl Renderer {
-    /// Records target `t`: transitions, rendering of its cameras, optional copy-out.
-    /// Returns the draws recorded.
+    /// Records target `t`: transitions, rendering of its cameras through the recorder,
+    /// optional copy-out. Returns the draws recorded.
     pub(super) fn record_target(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         t: usize,
         slot: usize,
-        cameras: &[CameraDraw<'_, '_>],
-    ) -> u32 {
+        cameras: &[(usize, RecordCamera<'_>)],
+    ) -> Result<u32> {
         let d = &ctx.device;
         let target = &self.targets[t];
         to_attachment_layouts(d, cmd, target);
         begin_rendering(d, cmd, target, self.desc.clear_colour);
-        let draws = cameras
+        let of_target: Vec<RecordCamera<'_>> = cameras
             .iter()
-            .filter(|c| c.target == t)
-            .map(|cam| self.draw_camera(d, cmd, slot, cam))
-            .sum();
+            .filter(|(target, _)| *target == t)
+            .map(|(_, c)| *c)
+            .collect();
+        let draws = self.recorder.record(ctx, cmd, slot, &of_target);
         // SAFETY: `cmd` is recording inside the rendering begun above.
         unsafe { d.cmd_end_rendering(cmd) };
         if let Some(buffer) = self.slots[slot].readback.get(t) {
@@ -44,88 +45,6 @@ impl Renderer {
         }
         draws
     }
-
-    /// Binds `cam`'s pipeline, viewport and vertex streams, then draws each of its
-    /// non-empty surfaces of frame slot `slot` (every instance, for a geomorphing camera).
-    /// Returns the draws recorded.
-    fn draw_camera(
-        &self,
-        d: &ash::Device,
-        cmd: vk::CommandBuffer,
-        slot: usize,
-        cam: &CameraDraw<'_, '_>,
-    ) -> u32 {
-        let (pipeline, instances) = match (&cam.morph, &self.morph_pipeline) {
-            (Some(m), Some(p)) => (p, m.instances.count),
-            _ => (&self.pipeline, 1),
-        };
-        let (viewport, scissor) = viewport_and_scissor(cam.viewport);
-        // SAFETY: `cmd` is recording inside rendering; the vertex buffers are alive.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
-            d.cmd_set_viewport(cmd, 0, &[viewport]);
-            d.cmd_set_scissor(cmd, 0, &[scissor]);
-            match &cam.morph {
-                Some(m) => d.cmd_bind_vertex_buffers(
-                    cmd,
-                    0,
-                    &[
-                        cam.vertices.buffer.raw,
-                        m.fine.buffer.raw,
-                        m.instances.buffer.raw,
-                    ],
-                    &[0, 0, 0],
-                ),
-                None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
-            }
-        }
-        let mut draws = 0;
-        for s in 0..cam.indices.surface_count() {
-            let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
-                continue;
-            };
-            let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
-            let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
-            // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count` indices
-            // below the bound vertex count (checked by `Renderer::check`).
-            unsafe {
-                d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
-                d.cmd_push_constants(
-                    cmd,
-                    pipeline.layout,
-                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                    0,
-                    bytemuck::bytes_of(&push),
-                );
-                d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
-            }
-            draws += 1;
-        }
-        draws
-    }
-}
-
-/// The Vulkan viewport (depth 0..1) and scissor of the same rectangle.
-fn viewport_and_scissor(v: Viewport) -> (vk::Viewport, vk::Rect2D) {
-    let viewport = vk::Viewport {
-        x: v.x as f32,
-        y: v.y as f32,
-        width: v.width as f32,
-        height: v.height as f32,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
-    let scissor = vk::Rect2D {
-        offset: vk::Offset2D {
-            x: v.x as i32,
-            y: v.y as i32,
-        },
-        extent: vk::Extent2D {
-            width: v.width,
-            height: v.height,
-        },
-    };
-    (viewport, scissor)
 }
 
 /// Colour and depth into attachment layouts. The colour waits for the previous frame's

@@ -1,0 +1,319 @@
+//! The record path: caveclod's draws recorded into the caller's command buffer, inside the
+//! caller's rendering (the design decisions are on [`Recorder`]).
+
+mod target;
+mod viewport;
+
+pub use target::{RecorderDesc, Rendering, TargetFormats};
+pub use viewport::Viewport;
+
+use ash::vk;
+use caveclod_core::gpu::DrawPush;
+use glam::{Mat4, Vec4};
+
+use crate::device::Context;
+use crate::error::{Error, Result};
+use crate::indices::CameraIndices;
+use crate::mesh::{MorphInstances, VertexBuffer};
+use crate::pipeline::{DrawPipeline, PipelineTarget, VertexStage};
+
+/// One camera's draws in a recorded frame.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordCamera<'a> {
+    /// Where in the caller's target.
+    pub viewport: Viewport,
+    /// View-projection matrix into Vulkan clip space (y down, depth 0..1).
+    pub view_proj: Mat4,
+    /// The mesh's persistent vertex buffer.
+    pub vertices: &'a VertexBuffer,
+    /// This camera's index buffers, filled for the slot being recorded
+    /// ([`CameraIndices::fill`]).
+    pub indices: &'a CameraIndices,
+    /// Colour per surface (linear RGBA); at least one per surface.
+    pub colours: &'a [[f32; 4]],
+    /// Geomorph instead of drawing `vertices` as they are (needs
+    /// [`RecorderDesc::geomorph`]).
+    pub morph: Option<Morph<'a>>,
+    /// Draw edges only (needs [`RecorderDesc::wireframe`]).
+    pub wireframe: bool,
+}
+
+/// A geomorphing draw: the camera's indices index both vertex streams alike; `vertices`
+/// (of the camera) are the coarse ends, `fine` the fine ends, and each instance morphs and
+/// places them by its [`MorphInstance`](caveclod_core::gpu::MorphInstance).
+#[derive(Clone, Copy, Debug)]
+pub struct Morph<'a> {
+    /// Fine ends, as many as the coarse ones.
+    pub fine: &'a VertexBuffer,
+    /// Instances.
+    pub instances: &'a MorphInstances,
+}
+
+/// The pipelines of one [`RecorderDesc`]: fill (always), wireframe (if asked), each with
+/// the plain and, if asked, the geomorphing vertex stage.
+struct Pipelines {
+    draw: DrawPipeline,
+    morph: Option<DrawPipeline>,
+}
+
+/// Records caveclod's draws into a command buffer the caller owns.
+///
+/// Design decisions:
+/// - **The caller owns the frame.** [`record`](Self::record) only binds pipelines and
+///   buffers and issues indexed draws into `cmd`, which must be recording inside the
+///   caller's rendering: `vkCmdBeginRendering` ([`Rendering::Dynamic`]) or the subpass of
+///   the caller's render pass named in [`RecorderDesc`], with attachments of
+///   [`TargetFormats`]. It does not begin or end rendering, record barriers, submit, wait,
+///   or lock the queue, so it fits a render graph, a swapchain frame or a test harness
+///   alike; dynamic state it sets is viewport and scissor (per camera).
+/// - **The caller says which frame slot.** Each camera's [`CameraIndices`] is a ring over
+///   the caller's frames in flight: the caller fills slot `s` after its fence for the
+///   frame that last used slot `s` signalled, then records with `s`. Filling writes mapped
+///   memory; the submission makes those host writes visible, so no barrier is needed.
+///   Index buffers grow by doubling, so once the rings are sized a frame creates no Vulkan
+///   resource ([`Context::resources_created`] counts them).
+/// - **The vertex buffer is uploaded once**, through a staging copy submitted by the
+///   context ([`VertexBuffer::from_hierarchy`]) or recorded into the caller's command
+///   buffer ([`VertexBuffer::record_upload`]), and never written again.
+/// - **One pipeline set per target kind.** Pipelines are made for the formats, sample
+///   count and rendering given at creation; viewport and scissor are dynamic, so one
+///   recorder serves every camera of a split screen.
+///
+/// The headless [`Renderer`](crate::Renderer) is this recorder plus targets, a command
+/// pool, fences and read-back.
+pub struct Recorder {
+    desc: RecorderDesc,
+    fill: Pipelines,
+    wireframe: Option<Pipelines>,
+}
+
+impl Recorder {
+    /// Checks the formats and features, then creates the pipelines.
+    pub fn new(ctx: &Context, desc: RecorderDesc) -> Result<Self> {
+        desc.formats.check(ctx)?;
+        if desc.wireframe && !ctx.features().fill_mode_non_solid {
+            return Err(Error::Unsupported {
+                device: ctx.device_name().to_string(),
+                missing: vec!["fillModeNonSolid (wireframe; not enabled)".into()],
+            });
+        }
+        let fill = Self::pipelines(ctx, &desc, vk::PolygonMode::FILL)?;
+        let wireframe = if desc.wireframe {
+            match Self::pipelines(ctx, &desc, vk::PolygonMode::LINE) {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    destroy_pipelines(ctx, fill);
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Self {
+            desc,
+            fill,
+            wireframe,
+        })
+    }
+
+    fn pipelines(
+        ctx: &Context,
+        desc: &RecorderDesc,
+        polygon_mode: vk::PolygonMode,
+    ) -> Result<Pipelines> {
+        let target = PipelineTarget {
+            formats: desc.formats,
+            rendering: desc.rendering,
+            polygon_mode,
+        };
+        let draw = DrawPipeline::new(ctx, VertexStage::Draw, target)?;
+        let morph = if desc.geomorph {
+            match DrawPipeline::new(ctx, VertexStage::Geomorph, target) {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    draw.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Pipelines { draw, morph })
+    }
+
+    /// The description.
+    pub fn desc(&self) -> &RecorderDesc {
+        &self.desc
+    }
+
+    /// Checks every camera, then records its draws of frame slot `slot` into `cmd` (see
+    /// [`Recorder`]). Returns the indexed draws recorded (one per camera and non-empty
+    /// surface). Nothing is recorded if a camera is refused.
+    ///
+    /// `cmd` must be a command buffer of `ctx`'s device in the recording state, inside
+    /// rendering compatible with this recorder's [`RecorderDesc`]; the buffers named by
+    /// `cameras` must stay alive until the GPU has executed it.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        slot: usize,
+        cameras: &[RecordCamera<'_>],
+    ) -> Result<u32> {
+        for (i, cam) in cameras.iter().enumerate() {
+            self.check_camera(i, slot, cam)?;
+        }
+        Ok(cameras
+            .iter()
+            .map(|cam| self.draw_camera(&ctx.device, cmd, slot, cam))
+            .sum())
+    }
+
+    /// Refuses a camera whose draws would be invalid: an empty viewport, a slot its index
+    /// ring lacks, too few colours, indices beyond its vertex buffer, a geomorph or
+    /// wireframe draw this recorder has no pipeline for.
+    pub(crate) fn check_camera(&self, i: usize, slot: usize, c: &RecordCamera<'_>) -> Result<()> {
+        let refuse = |why: String| Err(Error::InvalidArgument(format!("camera {i}: {why}")));
+        if c.viewport.width == 0 || c.viewport.height == 0 {
+            return refuse(format!("empty viewport {:?}", c.viewport));
+        }
+        if slot >= c.indices.frames_in_flight() {
+            return refuse(format!(
+                "frame slot {slot} of an index ring of {}",
+                c.indices.frames_in_flight()
+            ));
+        }
+        if c.colours.len() < c.indices.surface_count() {
+            return refuse(format!(
+                "{} colours for {} surfaces",
+                c.colours.len(),
+                c.indices.surface_count()
+            ));
+        }
+        if c.indices.vertex_bound(slot) > c.vertices.count {
+            return refuse(format!(
+                "its indices reference {} vertices, the vertex buffer has {}",
+                c.indices.vertex_bound(slot),
+                c.vertices.count
+            ));
+        }
+        if c.wireframe && self.wireframe.is_none() {
+            return refuse("wireframe draw, but the recorder was made without wireframe".into());
+        }
+        if let Some(m) = &c.morph {
+            if self.fill.morph.is_none() {
+                return refuse("geomorph draw, but the recorder was made without geomorph".into());
+            }
+            if m.fine.count != c.vertices.count {
+                return refuse(format!(
+                    "{} fine and {} coarse vertices",
+                    m.fine.count, c.vertices.count
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Binds `cam`'s pipeline, viewport and vertex streams, then draws each of its
+    /// non-empty surfaces of frame slot `slot` (every instance, for a geomorphing camera).
+    /// Returns the draws recorded.
+    fn draw_camera(
+        &self,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        slot: usize,
+        cam: &RecordCamera<'_>,
+    ) -> u32 {
+        let set = match (&self.wireframe, cam.wireframe) {
+            (Some(w), true) => w,
+            _ => &self.fill,
+        };
+        let (pipeline, instances) = match (&cam.morph, &set.morph) {
+            (Some(m), Some(p)) => (p, m.instances.count),
+            _ => (&set.draw, 1),
+        };
+        let (viewport, scissor) = viewport_and_scissor(cam.viewport);
+        // SAFETY: `cmd` is recording inside rendering compatible with the pipeline (the
+        // caller's contract on `record`); the vertex buffers are alive.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_set_viewport(cmd, 0, &[viewport]);
+            d.cmd_set_scissor(cmd, 0, &[scissor]);
+            match &cam.morph {
+                Some(m) => d.cmd_bind_vertex_buffers(
+                    cmd,
+                    0,
+                    &[
+                        cam.vertices.buffer.raw,
+                        m.fine.buffer.raw,
+                        m.instances.buffer.raw,
+                    ],
+                    &[0, 0, 0],
+                ),
+                None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
+            }
+        }
+        let mut draws = 0;
+        for s in 0..cam.indices.surface_count() {
+            let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
+                continue;
+            };
+            let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
+            let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
+            // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count`
+            // indices below the bound vertex count (checked by `Recorder::check_camera`).
+            unsafe {
+                d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
+                d.cmd_push_constants(
+                    cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
+            }
+            draws += 1;
+        }
+        draws
+    }
+
+    /// Destroys the pipelines. The GPU must be done with every command buffer that
+    /// recorded them.
+    pub fn destroy(self, ctx: &Context) {
+        destroy_pipelines(ctx, self.fill);
+        if let Some(w) = self.wireframe {
+            destroy_pipelines(ctx, w);
+        }
+    }
+}
+
+fn destroy_pipelines(ctx: &Context, p: Pipelines) {
+    p.draw.destroy(ctx);
+    if let Some(m) = p.morph {
+        m.destroy(ctx);
+    }
+}
+
+/// The Vulkan viewport (depth 0..1) and scissor of the same rectangle.
+fn viewport_and_scissor(v: Viewport) -> (vk::Viewport, vk::Rect2D) {
+    let viewport = vk::Viewport {
+        x: v.x as f32,
+        y: v.y as f32,
+        width: v.width as f32,
+        height: v.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    let scissor = vk::Rect2D {
+        offset: vk::Offset2D {
+            x: v.x as i32,
+            y: v.y as i32,
+        },
+        extent: vk::Extent2D {
+            width: v.width,
+            height: v.height,
+        },
+    };
+    (viewport, scissor)
+}
