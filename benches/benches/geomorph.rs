@@ -178,6 +178,8 @@ fn main() {
                         indices: &mut indices,
                         source: IndexSource::Lists(&list_refs),
                         colours: &COLOURS,
+                        materials: None,
+
                         morph: Some(Morph {
                             fine: &fine,
                             instances: &inst_buffer,

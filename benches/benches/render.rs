@@ -151,6 +151,8 @@ impl<'s, 'c> Setup<'s, 'c> {
                     camera: &self.cams[i],
                 },
                 colours: &COLOURS,
+                materials: None,
+
                 morph: None,
             })
             .collect();
@@ -232,6 +234,8 @@ fn bench_frames(
                         camera: &cams[i],
                     },
                     colours: &COLOURS,
+                    materials: None,
+
                     morph: None,
                 })
                 .collect();

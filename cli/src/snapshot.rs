@@ -280,6 +280,8 @@ fn draw(
                 indices: ind,
                 source,
                 colours: &colours,
+                materials: None,
+
                 morph: None,
             })
             .collect();

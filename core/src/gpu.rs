@@ -26,23 +26,42 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::records::Vertex;
 
-/// Push constants of the drawing stages (`draw_vs`, `draw_fs`, `geomorph_vs`): 80 bytes at
+/// Push constants of the drawing stages (`draw_vs`, `draw_fs`, `geomorph_vs`): 96 bytes at
 /// offset 0, visible to the vertex and fragment stages.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct DrawPush {
     /// The view-projection matrix, column-major (glam's `Mat4::to_cols_array`).
     pub view_proj: [f32; 16],
-    /// The surface colour, linear RGBA; alpha is written through unchanged.
+    /// The surface colour (a material's base colour factor, or a palette colour), linear
+    /// RGBA; multiplied with the base-colour texel.
     pub colour: [f32; 4],
+    /// `x`: weight of the [`checker`] pattern (0 for materials); `y`: alpha cutoff (a
+    /// fragment whose alpha is below it is discarded; 0 keeps every fragment); `z`, `w`: 0.
+    pub shading: [f32; 4],
 }
 
+/// The checker weight of palette colours: texture coordinates show faintly.
+pub const PALETTE_CHECKER: f32 = 0.15;
+
 impl DrawPush {
-    /// The block for a view-projection matrix and a colour.
+    /// The block for a view-projection matrix and a palette colour (faint checker, no
+    /// cutoff).
     pub fn new(view_proj: Mat4, colour: Vec4) -> Self {
         Self {
             view_proj: view_proj.to_cols_array(),
             colour: colour.to_array(),
+            shading: [PALETTE_CHECKER, 0.0, 0.0, 0.0],
+        }
+    }
+
+    /// The block for a material: its base colour factor and alpha cutoff (0 for opaque or
+    /// blended materials), no checker.
+    pub fn material(view_proj: Mat4, factor: Vec4, alpha_cutoff: f32) -> Self {
+        Self {
+            view_proj: view_proj.to_cols_array(),
+            colour: factor.to_array(),
+            shading: [0.0, alpha_cutoff, 0.0, 0.0],
         }
     }
 }
@@ -78,7 +97,7 @@ pub struct MorphPush {
 /// The sizes the shader interface declares; the shaders and the Vulkan host rely on them.
 const _: () = {
     assert!(core::mem::size_of::<Vertex>() == 32);
-    assert!(core::mem::size_of::<DrawPush>() == 80);
+    assert!(core::mem::size_of::<DrawPush>() == 96);
     assert!(core::mem::size_of::<MorphInstance>() == 32);
     assert!(core::mem::size_of::<MorphPush>() == 16);
 };
@@ -132,137 +151,112 @@ pub fn checker(uv: Vec2) -> f32 {
 /// The direction towards the light (unnormalised; [`shade`] normalises it).
 pub const LIGHT_DIRECTION: [f32; 3] = [0.3, 0.5, 0.8];
 
-/// The colour of a surface point: Lambert lighting from [`LIGHT_DIRECTION`] with an ambient
-/// floor, times a faint [`checker`] pattern so texture coordinates show.
+/// The ambient floor of [`shade`]: the part of the colour a surface facing away from the
+/// light keeps.
+pub const AMBIENT: f32 = 0.25;
+
+/// The colour of a surface point: one directional light from [`LIGHT_DIRECTION`] plus
+/// [`AMBIENT`], lit on both sides (a back face is lit by its reversed normal, so no side is
+/// black), times a [`checker`] pattern of weight `checker_weight` so texture coordinates
+/// show (0 for none).
 ///
-/// `n = normalize(normal)` (zero length gives `(0, 0, 1)`), `l = normalize(LIGHT_DIRECTION)`,
-/// `lambert = max(n · l, 0)`,
-/// `rgb = colour.rgb * (0.25 + 0.75 * lambert) * (0.85 + 0.15 * checker(uv))`,
+/// `n = normalize(normal)` (zero length gives `(0, 0, 1)`), negated when `!front_facing`;
+/// `l = normalize(LIGHT_DIRECTION)`, `lambert = max(n · l, 0)`,
+/// `rgb = colour.rgb * (AMBIENT + (1 - AMBIENT) * lambert)
+///        * (1 - checker_weight + checker_weight * checker(uv))`,
 /// alpha is `colour.a`.
 #[inline]
-pub fn shade(normal: Vec3, uv: Vec2, colour: Vec4) -> Vec4 {
-    let n = normalize_or(normal, Vec3::Z);
+pub fn shade(
+    normal: Vec3,
+    front_facing: bool,
+    uv: Vec2,
+    colour: Vec4,
+    checker_weight: f32,
+) -> Vec4 {
+    let mut n = normalize_or(normal, Vec3::Z);
+    if !front_facing {
+        n = -n;
+    }
     let l = normalize_or(Vec3::from_array(LIGHT_DIRECTION), Vec3::Z);
     let lambert = n.dot(l).max(0.0);
-    let rgb = colour.truncate() * (0.25 + 0.75 * lambert) * (0.85 + 0.15 * checker(uv));
+    let pattern = 1.0 - checker_weight + checker_weight * checker(uv);
+    let rgb = colour.truncate() * (AMBIENT + (1.0 - AMBIENT) * lambert) * pattern;
     rgb.extend(colour.w)
+}
+
+/// The base colour of a fragment: the sampled base-colour `texel` times the push block's
+/// colour, component-wise.
+#[inline]
+pub fn base_colour(texel: Vec4, push: &DrawPush) -> Vec4 {
+    texel * Vec4::from_array(push.colour)
+}
+
+/// Whether a fragment of base colour `base` is discarded: its alpha is below the push
+/// block's cutoff.
+#[inline]
+pub fn cut(base: Vec4, push: &DrawPush) -> bool {
+    base.w < push.shading[1]
+}
+
+/// The colour the drawing stages write for a fragment of base colour `base` (see
+/// [`base_colour`]; [`cut`] decides first whether it is written at all): [`shade`] with
+/// the block's checker weight.
+#[inline]
+pub fn fragment(normal: Vec3, front_facing: bool, uv: Vec2, base: Vec4, push: &DrawPush) -> Vec4 {
+    shade(normal, front_facing, uv, base, push.shading[0])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn vertex(p: [f32; 3], n: [f32; 3], uv: [f32; 2]) -> Vertex {
-        Vertex {
-            position: p,
-            normal: n,
-            uv,
-        }
-    }
-
-    fn close(a: f32, b: f32) -> bool {
-        (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1.0)
-    }
-
     #[test]
-    fn morph_ends_are_the_inputs() {
-        let a = vertex([1.0, 2.0, 3.0], [0.0, 1.0, 0.0], [0.25, 0.5]);
-        let b = vertex([-4.0, 0.5, 9.0], [1.0, 0.0, 0.0], [0.75, -0.5]);
-        assert_eq!(morph_vertex(a, b, 0.0), a);
-        assert_eq!(morph_vertex(a, b, 1.0), b);
-    }
-
-    #[test]
-    fn morph_midpoint_lerps_and_normalises() {
-        let a = vertex([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0]);
-        let b = vertex([2.0, 4.0, -6.0], [1.0, 0.0, 0.0], [1.0, 2.0]);
-        let m = morph_vertex(a, b, 0.5);
-        assert_eq!(m.position, [1.0, 2.0, -3.0]);
-        assert_eq!(m.uv, [0.5, 1.0]);
-        let h = core::f32::consts::FRAC_1_SQRT_2;
-        assert!(close(m.normal[0], h) && close(m.normal[1], h) && m.normal[2] == 0.0);
-    }
-
-    #[test]
-    fn morph_keeps_a_zero_normal() {
-        let a = vertex([0.0; 3], [0.0, 0.0, 1.0], [0.0; 2]);
-        let b = vertex([0.0; 3], [0.0, 0.0, -1.0], [0.0; 2]);
-        assert_eq!(morph_vertex(a, b, 0.5).normal, [0.0, 0.0, 0.0]);
-    }
-
-    #[test]
-    fn morph_extrapolates_linearly() {
-        let a = vertex([1.0, 1.0, 1.0], [0.0, 0.0, 2.0], [0.0, 0.0]);
-        let b = vertex([3.0, 1.0, 1.0], [0.0, 0.0, 2.0], [1.0, 0.0]);
-        let m = morph_vertex(a, b, 2.0);
-        assert_eq!(m.position, [5.0, 1.0, 1.0]);
-        assert_eq!(m.uv, [2.0, 0.0]);
-        assert_eq!(m.normal, [0.0, 0.0, 1.0]);
-    }
-
-    #[test]
-    fn checker_alternates_per_eighth() {
-        assert_eq!(checker(Vec2::new(0.01, 0.01)), 1.0);
-        assert_eq!(checker(Vec2::new(0.13, 0.01)), 0.0);
-        assert_eq!(checker(Vec2::new(0.13, 0.13)), 1.0);
-        assert_eq!(checker(Vec2::new(0.01, 0.26)), 1.0);
-        // floor(-0.8) = -1: odd.
-        assert_eq!(checker(Vec2::new(-0.1, 0.01)), 0.0);
-        assert_eq!(checker(Vec2::new(-0.1, -0.1)), 1.0);
-        // Large even and odd cell sums.
-        assert_eq!(checker(Vec2::new(1000.0, 0.125)), 0.0);
-        assert_eq!(checker(Vec2::new(1000.0, 0.25)), 1.0);
-    }
-
-    #[test]
-    fn shade_facing_the_light_is_full_colour() {
-        let colour = Vec4::new(0.5, 0.25, 1.0, 0.75);
-        let l = Vec3::from_array(LIGHT_DIRECTION);
-        // Checker 1 at uv 0: factor 1.0 * 1.0.
-        let lit = shade(l * 3.0, Vec2::ZERO, colour);
-        for (got, want) in lit.to_array().iter().zip(colour.to_array()) {
-            assert!(close(*got, want), "{got} vs {want}");
-        }
-    }
-
-    #[test]
-    fn shade_facing_away_is_ambient_and_checker_dims() {
-        let colour = Vec4::new(1.0, 1.0, 1.0, 1.0);
-        let l = Vec3::from_array(LIGHT_DIRECTION);
-        let dark_even = shade(-l, Vec2::ZERO, colour);
-        assert!(close(dark_even.x, 0.25) && dark_even.w == 1.0);
-        let dark_odd = shade(-l, Vec2::new(0.13, 0.0), colour);
-        assert!(close(dark_odd.y, 0.25 * 0.85));
-    }
-
-    #[test]
-    fn shade_zero_normal_faces_z() {
-        let colour = Vec4::new(1.0, 0.5, 0.25, 1.0);
+    fn back_faces_are_lit_by_their_reversed_normal() {
         let l = Vec3::from_array(LIGHT_DIRECTION).normalize();
-        let want = 0.25 + 0.75 * l.z;
-        let got = shade(Vec3::ZERO, Vec2::ZERO, colour);
-        assert!(close(got.x, want) && close(got.y, 0.5 * want) && close(got.z, 0.25 * want));
+        let c = Vec4::new(0.8, 0.6, 0.4, 1.0);
+        let front = shade(l, true, Vec2::ZERO, c, 0.0);
+        let back = shade(-l, false, Vec2::ZERO, c, 0.0);
+        assert!((front - back).abs().max_element() < 1e-6);
+        assert!((front.truncate() - c.truncate()).abs().max_element() < 1e-6);
+        // Facing away from the light, either side keeps the ambient floor.
+        let away = shade(-l, true, Vec2::ZERO, c, 0.0);
+        assert!(
+            (away.truncate() - c.truncate() * AMBIENT)
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert_eq!(away.w, 1.0);
     }
 
     #[test]
-    fn blocks_cast_to_the_interface_bytes() {
-        let push = DrawPush::new(Mat4::IDENTITY, Vec4::new(1.0, 2.0, 3.0, 4.0));
-        let bytes = bytemuck::bytes_of(&push);
-        assert_eq!(bytes.len(), 80);
-        assert_eq!(&bytes[64..68], &1.0f32.to_ne_bytes());
-        let morph = MorphPush {
-            t: 0.5,
-            count: 7,
-            src_offset: 3,
-            dst_offset: 9,
-        };
-        let words: [u32; 4] = bytemuck::cast(morph);
-        assert_eq!(words, [0.5f32.to_bits(), 7, 3, 9]);
-        let inst = MorphInstance {
-            offset_scale: [1.0, 2.0, 3.0, 4.0],
-            t: 0.25,
-            _pad: [0.0; 3],
-        };
-        assert_eq!(&bytemuck::bytes_of(&inst)[16..20], &0.25f32.to_ne_bytes());
+    fn the_checker_weight_scales_the_pattern() {
+        let c = Vec4::ONE;
+        let n = Vec3::from_array(LIGHT_DIRECTION);
+        let on = Vec2::new(0.01, 0.01);
+        let off = Vec2::new(0.13, 0.01);
+        assert_eq!(checker(on), 1.0);
+        assert_eq!(checker(off), 0.0);
+        let dark = shade(n, true, off, c, PALETTE_CHECKER);
+        assert!((dark.x - (1.0 - PALETTE_CHECKER)).abs() < 1e-6);
+        assert_eq!(shade(n, true, off, c, 0.0), shade(n, true, on, c, 0.0));
+    }
+
+    #[test]
+    fn fragment_multiplies_texel_and_factor_and_cuts_alpha() {
+        let push = DrawPush::material(Mat4::IDENTITY, Vec4::new(1.0, 0.5, 0.5, 0.8), 0.5);
+        let n = Vec3::from_array(LIGHT_DIRECTION);
+        let texel = Vec4::new(0.5, 1.0, 0.2, 1.0);
+        let base = base_colour(texel, &push);
+        assert_eq!(base, Vec4::new(0.5, 0.5, 0.1, 0.8));
+        assert!(!cut(base, &push));
+        let want = shade(n, true, Vec2::ZERO, base, 0.0);
+        assert_eq!(fragment(n, true, Vec2::ZERO, base, &push), want);
+        // 0.5 * 0.8 = 0.4 is below the cutoff.
+        let faint = base_colour(Vec4::new(1.0, 1.0, 1.0, 0.5), &push);
+        assert!(cut(faint, &push));
+        // Palette blocks never discard.
+        let palette = DrawPush::new(Mat4::IDENTITY, Vec4::ONE);
+        assert!(!cut(base_colour(Vec4::ZERO, &palette), &palette));
     }
 }

@@ -156,6 +156,8 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
                 indices: &mut indices,
                 source: IndexSource::Lists(&list_refs),
                 colours: &COLOURS,
+                materials: None,
+
                 morph: Some(Morph {
                     fine: &fine,
                     instances: &inst_buffer,

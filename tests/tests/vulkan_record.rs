@@ -77,6 +77,8 @@ impl Scene {
             vertices,
             indices,
             colours: &COLOURS,
+            materials: None,
+
             morph: None,
             wireframe: false,
         }
@@ -136,7 +138,7 @@ fn host_frame(
     assert!(draws > 0, "nothing drawn");
     ok(indices.destroy(ctx), "destroy indices");
     ok(vertices.destroy(ctx), "destroy vertices");
-    recorder.destroy(ctx);
+    ok(recorder.destroy(ctx), "destroy recorder");
     target.destroy(host);
     image
 }
@@ -311,7 +313,7 @@ fn frames_create_no_resource_once_the_ring_is_sized() {
     assert!(indices.grow_count() > 0);
     ok(indices.destroy(&ctx), "destroy indices");
     ok(vertices.destroy(&ctx), "destroy vertices");
-    recorder.destroy(&ctx);
+    ok(recorder.destroy(&ctx), "destroy recorder");
     target.destroy(&host);
     assert_clean(&ctx, "the frame loop");
     ok(ctx.destroy(), "destroy context");
@@ -337,7 +339,7 @@ fn unsupported_targets_are_typed_errors() {
             ),
             Err(e) => panic!("expected Unsupported for {formats:?}, got {e}"),
             Ok(r) => {
-                r.destroy(&ctx);
+                ok(r.destroy(&ctx), "destroy recorder");
                 panic!("{formats:?} was accepted")
             }
         }

@@ -153,6 +153,8 @@ fn vertex_buffer_written_once_index_bytes_reported() {
                         camera: &cam,
                     },
                     colours: &COLOURS,
+                    materials: None,
+
                     morph: None,
                 }],
             ),
@@ -247,6 +249,8 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
                 camera: &cams[i],
             },
             colours: &COLOURS,
+            materials: None,
+
             morph: None,
         })
         .collect();
@@ -423,6 +427,8 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
                 indices: &mut indices,
                 source: IndexSource::Lists(&list_refs),
                 colours: &COLOURS,
+                materials: None,
+
                 morph: Some(Morph {
                     fine: &fine_buffer,
                     instances: &instances,
@@ -542,6 +548,8 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
                     camera: &cams[i],
                 },
                 colours: &COLOURS,
+                materials: None,
+
                 morph: None,
             }
         })

@@ -19,6 +19,8 @@ pub(crate) struct ImageDesc {
     pub(crate) usage: vk::ImageUsageFlags,
     /// Aspect of its view.
     pub(crate) aspect: vk::ImageAspectFlags,
+    /// Mip levels (1 for targets).
+    pub(crate) mip_levels: u32,
 }
 
 impl ImageDesc {
@@ -29,6 +31,7 @@ impl ImageDesc {
             format: TargetFormats::HEADLESS.colour,
             usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
             aspect: vk::ImageAspectFlags::COLOR,
+            mip_levels: 1,
         }
     }
 
@@ -39,6 +42,7 @@ impl ImageDesc {
             format: TargetFormats::HEADLESS.depth,
             usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
             aspect: vk::ImageAspectFlags::DEPTH,
+            mip_levels: 1,
         }
     }
 }
@@ -70,7 +74,7 @@ impl Image {
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
             .extent(desc.extent.into())
-            .mip_levels(1)
+            .mip_levels(desc.mip_levels.max(1))
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
@@ -118,7 +122,10 @@ impl Image {
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_2D)
             .format(desc.format)
-            .subresource_range(Self::range(desc.aspect));
+            .subresource_range(vk::ImageSubresourceRange {
+                level_count: desc.mip_levels.max(1),
+                ..Self::range(desc.aspect)
+            });
         // SAFETY: `raw` is bound to memory.
         let view = match unsafe { d.create_image_view(&view_info, None) }.vk("vkCreateImageView") {
             Ok(v) => v,

@@ -99,7 +99,7 @@ impl VertexBuffer {
 #[derive(Debug)]
 #[must_use = "a staging buffer must be destroyed after its upload executed"]
 pub struct Staging {
-    buffer: Buffer,
+    pub(crate) buffer: Buffer,
 }
 
 impl Staging {

@@ -4,8 +4,8 @@
 //! The module is embedded with `include_bytes!` and read with `ash::util::read_spv`, which
 //! fixes alignment, so users of this crate never need rust-gpu. Vertex layouts, push-constant
 //! ranges and descriptor bindings here mirror the interface contract: `draw_vs`/`draw_fs`
-//! (binding 0: `caveclod_core::format::Vertex`, stride 32; 80-byte [`DrawPush`] for vertex and
-//! fragment), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
+//! (binding 0: `caveclod_core::format::Vertex`, stride 32; 96-byte [`DrawPush`] for vertex and
+//! fragment; set 0: the base-colour texture and sampler), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
 //! [`MorphInstance`] per instance; same push constants) and `geomorph_cs` (three storage
 //! buffers, 16-byte [`MorphPush`]).
 //!
@@ -78,14 +78,17 @@ pub(crate) struct PipelineTarget {
     pub(crate) rendering: Rendering,
     /// `FILL`, or `LINE` for wireframe.
     pub(crate) polygon_mode: vk::PolygonMode,
+    /// Set 0 (the material's texture and sampler).
+    pub(crate) set_layout: vk::DescriptorSetLayout,
 }
 
-/// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout.
+/// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout (set 0
+/// and the push constants).
 #[derive(Debug)]
 pub(crate) struct DrawPipeline {
     /// The pipeline.
     pub(crate) raw: vk::Pipeline,
-    /// Its layout (push constants only).
+    /// Its layout (set 0, push constants).
     pub(crate) layout: vk::PipelineLayout,
 }
 
@@ -103,7 +106,10 @@ impl DrawPipeline {
             offset: 0,
             size: std::mem::size_of::<DrawPush>() as u32,
         }];
-        let layout_info = vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges);
+        let set_layouts = [target.set_layout];
+        let layout_info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(&ranges);
         // SAFETY: valid create info.
         let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }
             .vk("vkCreatePipelineLayout")

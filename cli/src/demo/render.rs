@@ -126,6 +126,8 @@ fn draw(
                     camera: &cams[i],
                 },
                 colours: &colours,
+                materials: None,
+
                 morph: None,
             })
             .collect();

@@ -281,6 +281,8 @@ fn draw_levels(
             indices: ind,
             source: IndexSource::Lists(lists),
             colours: scene.colours,
+            materials: None,
+
             morph: Some(Morph {
                 fine: &levels[*i].b,
                 instances: inst,

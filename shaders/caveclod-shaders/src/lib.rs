@@ -7,17 +7,19 @@
 //! contract the Vulkan host follows.
 //!
 //! - `draw_vs` + `draw_fs`: draw a mesh of `caveclod_core::Vertex` with a view-projection
-//!   matrix and a colour ([`DrawPush`]) through [`shade`].
+//!   matrix, a colour and shading parameters ([`DrawPush`]), the base-colour texture of set 0
+//!   sampled and lit through [`fragment`].
 //! - `geomorph_vs` (+ `draw_fs`): draw the geomorph of two vertex streams at a per-instance
 //!   `t`, placed by the instance's offset and scale ([`caveclod_core::gpu::MorphInstance`]).
 //! - `geomorph_cs`: write [`morph_vertex`] of two vertex buffers into a third ([`MorphPush`]).
 #![cfg_attr(target_arch = "spirv", no_std)]
 #![deny(missing_docs)]
 
-use caveclod_core::gpu::{morph_vertex, shade, DrawPush, MorphPush};
+use caveclod_core::gpu::{base_colour, cut, fragment, morph_vertex, DrawPush, MorphPush};
 use caveclod_core::Vertex;
 use spirv_std::glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
-use spirv_std::spirv;
+use spirv_std::image::Image2d;
+use spirv_std::{spirv, Sampler};
 
 /// Floats per vertex in the compute stage's buffers (the 32-byte `Vertex` layout).
 const VERTEX_FLOATS: usize = 8;
@@ -47,15 +49,25 @@ pub fn draw_vs(
     *out_uv = uv;
 }
 
-/// Fragment stage for `draw_vs` and `geomorph_vs`: [`shade`] with the push-constant colour.
+/// Fragment stage for `draw_vs` and `geomorph_vs`: the base-colour texture (set 0, binding
+/// 0, sampled with the sampler of binding 1) at `uv` times the push colour
+/// ([`base_colour`]), discarded below the alpha cutoff ([`cut`]), lit by [`fragment`].
 #[spirv(fragment)]
 pub fn draw_fs(
     #[spirv(location = 0)] normal: Vec3,
     #[spirv(location = 1)] uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(descriptor_set = 0, binding = 0)] texture: &Image2d,
+    #[spirv(descriptor_set = 0, binding = 1)] sampler: &Sampler,
     #[spirv(push_constant)] push: &DrawPush,
     #[spirv(location = 0)] out_colour: &mut Vec4,
 ) {
-    *out_colour = shade(normal, uv, Vec4::from_array(push.colour));
+    let texel: Vec4 = texture.sample(*sampler, uv);
+    let base = base_colour(texel, push);
+    if cut(base, push) {
+        spirv_std::arch::kill();
+    }
+    *out_colour = fragment(normal, front_facing, uv, base, push);
 }
 
 /// Vertex stage for geomorphing: binding 0 holds the coarse vertices `a` (locations 0-2),
@@ -305,8 +317,19 @@ mod tests {
         assert!((n - Vec3::new(h, h, 0.0)).length() < 1e-6);
         assert_eq!(uv, Vec2::splat(0.5));
 
-        let mut colour = Vec4::ZERO;
-        draw_fs(n, uv, &push, &mut colour);
-        assert_eq!(colour, shade(n, uv, Vec4::new(0.5, 0.5, 0.5, 1.0)));
+        // `draw_fs` samples a texture, which only the GPU can; its arithmetic is
+        // `fragment`, tested in caveclod-core.
+        let base = base_colour(Vec4::ONE, &push);
+        assert!(!cut(base, &push));
+        assert_eq!(
+            fragment(n, true, uv, base, &push),
+            caveclod_core::gpu::shade(
+                n,
+                true,
+                uv,
+                Vec4::new(0.5, 0.5, 0.5, 1.0),
+                caveclod_core::gpu::PALETTE_CHECKER
+            )
+        );
     }
 }

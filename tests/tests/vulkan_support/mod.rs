@@ -154,6 +154,8 @@ pub fn render_alone(
                 indices: &mut indices,
                 source,
                 colours: &COLOURS,
+                materials: None,
+
                 morph: None,
             }],
         ),

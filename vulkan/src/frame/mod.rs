@@ -12,6 +12,7 @@ use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::image::{Image, ImageDesc};
 use crate::indices::{CameraIndices, IndexSource};
+use crate::material::MaterialSet;
 use crate::mesh::VertexBuffer;
 use crate::readback::RgbaImage;
 use crate::record::{Morph, RecordCamera, Recorder, RecorderDesc, TargetFormats, Viewport};
@@ -58,8 +59,11 @@ pub struct CameraDraw<'a, 'c> {
     pub indices: &'a mut CameraIndices,
     /// Where this frame's indices come from.
     pub source: IndexSource<'a, 'c>,
-    /// Colour per surface (linear RGBA); at least one per surface.
+    /// Colour per surface (linear RGBA); at least one per surface (used without
+    /// `materials`).
     pub colours: &'a [[f32; 4]],
+    /// The surfaces' materials, made for [`Renderer::recorder`].
+    pub materials: Option<&'a MaterialSet>,
     /// Geomorph instead of drawing `vertices` as they are (needs [`RendererDesc::geomorph`]).
     pub morph: Option<Morph<'a>>,
 }
@@ -73,6 +77,7 @@ impl CameraDraw<'_, '_> {
             vertices: self.vertices,
             indices: self.indices,
             colours: self.colours,
+            materials: self.materials,
             morph: self.morph,
             wireframe: false,
         }
@@ -227,6 +232,11 @@ impl Renderer {
             }
         }
         Ok(())
+    }
+
+    /// The recorder it draws through (for [`MaterialSet::new`]).
+    pub fn recorder(&self) -> &Recorder {
+        &self.recorder
     }
 
     /// The description.
@@ -392,7 +402,9 @@ impl Renderer {
         }
         // SAFETY: no command buffer of the pool is pending.
         unsafe { d.destroy_command_pool(self.pool, None) };
-        self.recorder.destroy(ctx);
+        if let Err(e) = self.recorder.destroy(ctx) {
+            first_err.get_or_insert(e);
+        }
         first_err.map_or(Ok(()), Err)
     }
 }

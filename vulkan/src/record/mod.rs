@@ -14,6 +14,7 @@ use glam::{Mat4, Vec4};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::indices::CameraIndices;
+use crate::material::{Bindings, MaterialSet};
 use crate::mesh::{MorphInstances, VertexBuffer};
 use crate::pipeline::{DrawPipeline, PipelineTarget, VertexStage};
 
@@ -29,8 +30,12 @@ pub struct RecordCamera<'a> {
     /// This camera's index buffers, filled for the slot being recorded
     /// ([`CameraIndices::fill`]).
     pub indices: &'a CameraIndices,
-    /// Colour per surface (linear RGBA); at least one per surface.
+    /// Colour per surface (linear RGBA); at least one per surface. Used when `materials` is
+    /// `None`, with a faint checker so texture coordinates show.
     pub colours: &'a [[f32; 4]],
+    /// The surfaces' materials (base-colour texture × factor, alpha cutoff), made for this
+    /// recorder; at least one per surface.
+    pub materials: Option<&'a MaterialSet>,
     /// Geomorph instead of drawing `vertices` as they are (needs
     /// [`RecorderDesc::geomorph`]).
     pub morph: Option<Morph<'a>>,
@@ -83,12 +88,15 @@ struct Pipelines {
 /// pool, fences and read-back.
 pub struct Recorder {
     desc: RecorderDesc,
+    bindings: Bindings,
     fill: Pipelines,
     wireframe: Option<Pipelines>,
 }
 
 impl Recorder {
-    /// Checks the formats and features, then creates the pipelines.
+    /// Checks the formats and features, then creates the pipelines, the material set
+    /// layout and sampler, and a 1 × 1 white texture for surfaces without one (its upload
+    /// is the one submission a recorder makes, here, waited for; frames never submit).
     pub fn new(ctx: &Context, desc: RecorderDesc) -> Result<Self> {
         desc.formats.check(ctx)?;
         if desc.wireframe && !ctx.features().fill_mode_non_solid {
@@ -97,12 +105,20 @@ impl Recorder {
                 missing: vec!["fillModeNonSolid (wireframe; not enabled)".into()],
             });
         }
-        let fill = Self::pipelines(ctx, &desc, vk::PolygonMode::FILL)?;
+        let bindings = Bindings::new(ctx)?;
+        let fill = match Self::pipelines(ctx, &desc, &bindings, vk::PolygonMode::FILL) {
+            Ok(p) => p,
+            Err(e) => {
+                let _ = bindings.destroy(ctx);
+                return Err(e);
+            }
+        };
         let wireframe = if desc.wireframe {
-            match Self::pipelines(ctx, &desc, vk::PolygonMode::LINE) {
+            match Self::pipelines(ctx, &desc, &bindings, vk::PolygonMode::LINE) {
                 Ok(p) => Some(p),
                 Err(e) => {
                     destroy_pipelines(ctx, fill);
+                    let _ = bindings.destroy(ctx);
                     return Err(e);
                 }
             }
@@ -111,20 +127,28 @@ impl Recorder {
         };
         Ok(Self {
             desc,
+            bindings,
             fill,
             wireframe,
         })
     }
 
+    /// The set layout, sampler and white texture shared with material sets.
+    pub(crate) fn bindings(&self) -> &Bindings {
+        &self.bindings
+    }
+
     fn pipelines(
         ctx: &Context,
         desc: &RecorderDesc,
+        bindings: &Bindings,
         polygon_mode: vk::PolygonMode,
     ) -> Result<Pipelines> {
         let target = PipelineTarget {
             formats: desc.formats,
             rendering: desc.rendering,
             polygon_mode,
+            set_layout: bindings.set_layout,
         };
         let draw = DrawPipeline::new(ctx, VertexStage::Draw, target)?;
         let morph = if desc.geomorph {
@@ -183,12 +207,22 @@ impl Recorder {
                 c.indices.frames_in_flight()
             ));
         }
-        if c.colours.len() < c.indices.surface_count() {
-            return refuse(format!(
-                "{} colours for {} surfaces",
-                c.colours.len(),
-                c.indices.surface_count()
-            ));
+        match c.materials {
+            Some(m) if m.len() < c.indices.surface_count() => {
+                return refuse(format!(
+                    "{} materials for {} surfaces",
+                    m.len(),
+                    c.indices.surface_count()
+                ));
+            }
+            None if c.colours.len() < c.indices.surface_count() => {
+                return refuse(format!(
+                    "{} colours for {} surfaces",
+                    c.colours.len(),
+                    c.indices.surface_count()
+                ));
+            }
+            _ => {}
         }
         if c.indices.vertex_bound(slot) > c.vertices.count {
             return refuse(format!(
@@ -258,11 +292,31 @@ impl Recorder {
             let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
                 continue;
             };
-            let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
-            let push = DrawPush::new(cam.view_proj, Vec4::from_array(colour));
+            let (set, push) = match cam.materials.and_then(|m| m.get(s)) {
+                Some((set, factor, cutoff)) => (
+                    set,
+                    DrawPush::material(cam.view_proj, Vec4::from_array(factor), cutoff),
+                ),
+                None => {
+                    let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
+                    (
+                        self.bindings.white_set,
+                        DrawPush::new(cam.view_proj, Vec4::from_array(colour)),
+                    )
+                }
+            };
             // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count`
-            // indices below the bound vertex count (checked by `Recorder::check_camera`).
+            // indices below the bound vertex count (checked by `Recorder::check_camera`);
+            // the set was written for this recorder's layout and names live images.
             unsafe {
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    pipeline.layout,
+                    0,
+                    &[set],
+                    &[],
+                );
                 d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
                 d.cmd_push_constants(
                     cmd,
@@ -278,13 +332,15 @@ impl Recorder {
         draws
     }
 
-    /// Destroys the pipelines. The GPU must be done with every command buffer that
-    /// recorded them.
-    pub fn destroy(self, ctx: &Context) {
+    /// Destroys the pipelines, the set layout, the sampler and the white texture. The GPU
+    /// must be done with every command buffer that recorded them; destroy the recorder's
+    /// material sets first.
+    pub fn destroy(self, ctx: &Context) -> Result<()> {
         destroy_pipelines(ctx, self.fill);
         if let Some(w) = self.wireframe {
             destroy_pipelines(ctx, w);
         }
+        self.bindings.destroy(ctx)
     }
 }
 

@@ -1,0 +1,153 @@
+//! Materials through the record path: base-colour textures (with mip chains) times factors,
+//! alpha cutoff, and the palette when a camera has no materials.
+//!
+//! - A texture of one texel `T` with factor `F` draws the pixels of no texture with factor
+//!   `T * F`: the texture is sampled and multiplied.
+//! - A texture whose alpha is below the cutoff draws nothing.
+//! - Textures get a full mip chain; uploads recorded into a caller's command buffer work
+//!   like the submitted ones.
+
+mod vulkan_support;
+
+use caveclod_core::CameraState;
+use caveclod_tests::meshes;
+use caveclod_vulkan::{
+    CameraDraw, CameraIndices, Context, IndexSource, MaterialSet, RgbaImage, SurfaceMaterial,
+    Texture, TextureDesc, VertexBuffer, Viewport,
+};
+use vulkan_support::*;
+
+const SIZE: u32 = 128;
+
+/// Renders the refined camera of a small terrain (two surfaces) with `materials` for both.
+fn render_with(ctx: &Context, materials: &[SurfaceMaterial<'_>]) -> RgbaImage {
+    let baked = caveclod_tests::bake(&meshes::terrain(12, 12, 9));
+    let h = baked.hierarchy();
+    let vertices = ok(VertexBuffer::from_hierarchy(ctx, "terrain", &h), "vertices");
+    let mut memory = camera_memory(&h);
+    let mut cam = ok(CameraState::new(&h, &mut memory), "camera");
+    let look = terrain_camera(12.0, 0.5, 0.8, 0.7);
+    let viewport = Viewport::full(SIZE, SIZE);
+    refine(&h, &mut cam, &look, viewport, 1.0);
+    let mut renderer = ok(
+        caveclod_vulkan::Renderer::new(ctx, caveclod_vulkan::RendererDesc::single(SIZE, SIZE)),
+        "renderer",
+    );
+    let set = ok(
+        MaterialSet::new(ctx, renderer.recorder(), materials),
+        "material set",
+    );
+    let mut indices = CameraIndices::new("camera", h.surface_count(), 2);
+    ok(
+        renderer.render(
+            ctx,
+            &mut [CameraDraw {
+                target: 0,
+                viewport,
+                view_proj: look.view_projection(viewport.aspect()),
+                vertices: &vertices,
+                indices: &mut indices,
+                source: IndexSource::Camera {
+                    hierarchy: &h,
+                    camera: &cam,
+                },
+                colours: &COLOURS,
+                materials: Some(&set),
+                morph: None,
+            }],
+        ),
+        "render",
+    );
+    let image = ok(renderer.read_target(ctx, 0), "read back");
+    ok(renderer.wait(ctx), "wait");
+    set.destroy(ctx);
+    ok(indices.destroy(ctx), "destroy indices");
+    ok(renderer.destroy(ctx), "destroy renderer");
+    ok(vertices.destroy(ctx), "destroy vertices");
+    image
+}
+
+fn one_texel(ctx: &Context, rgba: [u8; 4]) -> Texture {
+    let desc = TextureDesc {
+        width: 1,
+        height: 1,
+        srgb: false,
+    };
+    ok(Texture::new(ctx, "texel", desc, &rgba), "texture")
+}
+
+fn plain(factor: [f32; 4]) -> SurfaceMaterial<'static> {
+    SurfaceMaterial {
+        texture: None,
+        factor,
+        alpha_cutoff: 0.0,
+    }
+}
+
+#[test]
+fn a_texel_times_its_factor_equals_the_product_as_factor() {
+    let ctx = context();
+    let texel = one_texel(&ctx, [255, 128, 64, 255]);
+    let factor = [0.5, 1.0, 0.75, 1.0];
+    let t = [1.0, 128.0 / 255.0, 64.0 / 255.0, 1.0];
+    let product = [t[0] * factor[0], t[1] * factor[1], t[2] * factor[2], 1.0];
+    let textured = SurfaceMaterial {
+        texture: Some(&texel),
+        factor,
+        alpha_cutoff: 0.0,
+    };
+    let a = render_with(&ctx, &[textured, textured]);
+    let b = render_with(&ctx, &[plain(product), plain(product)]);
+    let palette = render_with(&ctx, &[plain([0.2, 0.9, 0.2, 1.0]); 2]);
+    save(&a, "materials_textured.png");
+    let diff = ok(a.diff(&b), "diff");
+    assert!(
+        diff.within_one_fraction() >= 0.999,
+        "texel x factor differs from the product: {diff:?}"
+    );
+    assert!(a.covered(BACKGROUND) > u64::from(SIZE * SIZE) / 4);
+    assert!(ok(a.diff(&palette), "diff").equal_fraction() < 0.5);
+    ok(texel.destroy(&ctx), "destroy texture");
+    assert_clean(&ctx, "drawing textured surfaces");
+    ok(ctx.destroy(), "destroy context");
+}
+
+#[test]
+fn fragments_below_the_alpha_cutoff_are_discarded() {
+    let ctx = context();
+    let clear = one_texel(&ctx, [255, 255, 255, 40]);
+    let cut = SurfaceMaterial {
+        texture: Some(&clear),
+        factor: [1.0; 4],
+        alpha_cutoff: 0.5,
+    };
+    let kept = SurfaceMaterial {
+        alpha_cutoff: 0.1,
+        ..cut
+    };
+    assert_eq!(render_with(&ctx, &[cut, cut]).covered(BACKGROUND), 0);
+    assert!(render_with(&ctx, &[kept, kept]).covered(BACKGROUND) > u64::from(SIZE * SIZE) / 4);
+    ok(clear.destroy(&ctx), "destroy texture");
+    assert_clean(&ctx, "alpha cutoff");
+    ok(ctx.destroy(), "destroy context");
+}
+
+#[test]
+fn textures_get_a_full_mip_chain_and_reject_wrong_sizes() {
+    let ctx = context();
+    let (w, h) = (64u32, 16u32);
+    let pixels: Vec<u8> = (0..w * h)
+        .flat_map(|i| [(i % 256) as u8, (i / 4 % 256) as u8, 200, 255])
+        .collect();
+    let desc = TextureDesc {
+        width: w,
+        height: h,
+        srgb: true,
+    };
+    let t = ok(Texture::new(&ctx, "gradient", desc, &pixels), "texture");
+    assert_eq!(t.mip_levels(), 7);
+    ok(t.destroy(&ctx), "destroy texture");
+    assert!(Texture::new(&ctx, "short", desc, &pixels[..100]).is_err());
+    assert_clean(&ctx, "mip chains");
+    ok(ctx.destroy(), "destroy context");
+}
