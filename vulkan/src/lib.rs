@@ -5,19 +5,26 @@
 //! `vulkan/spirv/`.
 //!
 //! - [`Context`]: *embedded* in a host engine ([`Context::from_raw`]: the host's instance,
-//!   device, queue and optionally allocator; no instance is created) or *headless*
+//!   device, queue, optionally allocator, and the features it enabled, checked against
+//!   [`DeviceFeatures::REQUIRED`]; no instance is created) or *headless*
 //!   ([`Context::headless`]: own instance and device, lavapipe preferred, validation layer
 //!   enabled when installed and its messages recorded in a [`ValidationLog`]).
-//! - Per baked mesh one device-local [`VertexBuffer`], uploaded once through a staging
-//!   buffer and never rewritten ([`Context::vertex_uploads`] counts uploads).
-//! - Per camera [`CameraIndices`]: per surface and frame in flight a host-visible index
-//!   buffer, grown by doubling, filled by caveclod-core's index emission.
-//! - [`Renderer`]: 1-4 cameras into viewports of one colour + depth target (split screen)
-//!   or separate targets, one indexed draw per (camera, surface), dynamic rendering and
-//!   synchronization2, one submission per frame; [`RgbaImage`] read-back (RGBA8 pixels, for
-//!   the application to compare or encode).
+//! - Per baked mesh one device-local [`VertexBuffer`], uploaded once (submitted, or recorded
+//!   into the host's command buffer with [`VertexBuffer::record_upload`]) and never
+//!   rewritten ([`Context::vertex_uploads`] counts uploads).
+//! - Per camera [`CameraIndices`]: per surface a host-visible index buffer in each slot of a
+//!   ring over the host's frames in flight, grown by doubling, filled by caveclod-core's
+//!   index emission.
+//! - **The record path**, [`Recorder`]: pipelines for the host's [`TargetFormats`] and
+//!   [`Rendering`] (dynamic rendering or its render pass and subpass); [`Recorder::record`]
+//!   draws 1-4 cameras ([`RecordCamera`], split-screen [`Viewport`]s) into the host's command
+//!   buffer inside its rendering: no submission, no wait, no queue lock.
+//! - Materials: [`Texture`] (RGBA8, mip chain) and [`MaterialSet`] (per surface texture ×
+//!   factor, alpha cutoff); without one, a palette colour per surface.
+//! - [`Renderer`]: the headless convenience over the recorder (RGBA8 + D32 targets, command
+//!   pool, fences, one submission per frame, [`RgbaImage`] read-back) for tests and tools.
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
-//!   CPU); a [`CameraDraw`] with a [`Morph`] draws through the geomorphing vertex stage.
+//!   CPU); a camera with a [`Morph`] draws through the geomorphing vertex stage.
 //!
 //! Everything is destroyed explicitly (`destroy(self, &Context)`); [`Context::destroy`]
 //! reports resources still alive as [`Error::Leaked`].
@@ -52,6 +59,7 @@
 //!     indices: &mut indices,
 //!     source: IndexSource::Camera { hierarchy: &h, camera: &cam },
 //!     colours: &colours,
+//!     materials: None,
 //!     morph: None,
 //! }])?;
 //! let image = renderer.read_target(&ctx, 0)?;
