@@ -335,8 +335,9 @@ pub fn path_climbs_out(path: &str) -> bool {
     false
 }
 
-/// Why a texture path is refused, or `None` for an acceptable one (see the module docs).
-pub(crate) fn path_problem(path: &str) -> Option<&'static str> {
+/// Why the format refuses a texture path, or `None` for an acceptable one (see the
+/// [module docs](self)): a writer checks the paths it makes with it.
+pub fn path_problem(path: &str) -> Option<&'static str> {
     if path.is_empty() {
         return Some("empty path");
     }
