@@ -128,12 +128,12 @@ fn materials_json(h: &Hierarchy<'_>) -> Value {
                 }
             };
             let cutoff = match m.alpha {
-                AlphaMode::Mask { cutoff } => json!(cutoff),
+                AlphaMode::Mask { cutoff } => json!(shortest(cutoff)),
                 _ => Value::Null,
             };
             json!({
                 "name": m.name,
-                "base_colour": m.base_colour,
+                "base_colour": m.base_colour.map(shortest),
                 "texture": texture,
                 "alpha_mode": m.alpha.name(),
                 "alpha_cutoff": cutoff,
@@ -141,6 +141,11 @@ fn materials_json(h: &Hierarchy<'_>) -> Value {
             })
         })
         .collect()
+}
+
+/// `x` as the `f64` its shortest decimal form names (0.2, not 0.20000000298023224).
+fn shortest(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
 }
 
 /// One material of [`materials_json`] on one line.

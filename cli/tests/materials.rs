@@ -22,7 +22,7 @@ fn write_clod(dir: &Path) -> std::path::PathBuf {
             ..Surface::plain("Rock")
         },
         Surface {
-            base_color: [0.25, 0.5, 1.0, 0.5],
+            base_color: [0.2, 0.5, 1.0, 0.5],
             texture: Some(Texture::Embedded {
                 mime: "image/jpeg".into(),
                 bytes: vec![0xff, 0xd8, 0xff, 0xe0, 1, 2, 3],
@@ -70,7 +70,7 @@ fn info_lists_materials() {
             },
             {
                 "name": "Water",
-                "base_colour": [0.25, 0.5, 1.0, 0.5],
+                "base_colour": [0.2, 0.5, 1.0, 0.5],
                 "texture": {"embedded_bytes": 7, "mime": "image/jpeg"},
                 "alpha_mode": "BLEND",
                 "alpha_cutoff": null,
@@ -124,7 +124,7 @@ fn export_writes_the_library_beside_the_obj() {
         "{mtl}"
     );
     assert!(
-        mtl.contains("newmtl Water\nKd 0.25 0.5 1\nd 0.5\nmap_Kd terrain_Water.jpg"),
+        mtl.contains("newmtl Water\nKd 0.2 0.5 1\nd 0.5\nmap_Kd terrain_Water.jpg"),
         "{mtl}"
     );
     assert_eq!(
