@@ -306,6 +306,42 @@ fn obj_materials_and_colours_survive_the_bake() {
 }
 
 #[test]
+fn ply_colours_round_trip_exactly() {
+    // 8-bit sRGB colours are stored as they are read: the same bytes come back.
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(5, 0.0);
+    let byte = |i: usize, k: usize| ((i * 37 + k * 91) % 256) as u8;
+    let mut ply = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        g.positions.len(),
+        g.indices.len() / 3
+    );
+    for (i, p) in g.positions.iter().enumerate() {
+        let [r, gr, b] = [0, 1, 2].map(|k| byte(i, k));
+        ply += &format!("{} {} {} {r} {gr} {b}\n", p[0], p[1], p[2]);
+    }
+    for f in g.indices.chunks(3) {
+        ply += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
+    }
+    let path = dir.path().join("coloured.ply");
+    std::fs::write(&path, ply).unwrap();
+    let file = bake_to(&path, &dir.path().join("coloured.clod"));
+    let h = Hierarchy::from_bytes(&file).unwrap();
+    assert!(h.materials().is_none(), "a PLY scan has no material");
+    let colours = h.vertex_colours().expect("vertex colours");
+    for (v, c) in h.vertices().iter().zip(colours) {
+        let i = g.positions.iter().position(|p| *p == v.position).unwrap();
+        assert_eq!(
+            *c,
+            [byte(i, 0), byte(i, 1), byte(i, 2), 255],
+            "vertex at {i}"
+        );
+    }
+}
+
+#[test]
 fn meshes_without_materials_or_colours_get_no_sections() {
     let dir = tempfile::tempdir().unwrap();
     let g = grid(3, 0.0);
