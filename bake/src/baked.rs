@@ -6,10 +6,14 @@
 //! parent — the records a refinement pass reads together lie together. Leaves follow in
 //! position order. Polygons: the base mesh first, then each split's `f_l` and `f_r` in split
 //! order.
+//!
+//! Materials and vertex colours, when the mesh has them, are written beside the hierarchy
+//! ([`crate::materials`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use caveclod_core::format::materials::vertex_colour_section;
 use caveclod_core::format::{
     serialized_len, write_into, BaseFace, Creator, ExtraSection, HierarchyParts, Node, Polygon,
     Position, Split, SplitBounds, Vertex, VertexKey, WriteError,
@@ -17,6 +21,10 @@ use caveclod_core::format::{
 use caveclod_core::{Hierarchy, NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
 use crate::hierarchy::Hierarchy as Collapses;
+use crate::materials::{
+    encode_colour, has_materials, MaterialSections, TextureError, TexturePaths,
+};
+use crate::mesh::Surface;
 use crate::weld::Welded;
 
 const NONE: u32 = u32::MAX;
@@ -48,6 +56,15 @@ pub struct Baked {
     pub surface_count: u32,
     /// Surface-group ids.
     pub surface_group_count: u32,
+    /// One colour per vertex (RGBA8, sRGB colour, linear alpha); empty when the mesh had
+    /// none, and then the file has no colour section.
+    pub vertex_colours: Vec<[u8; 4]>,
+    /// One material per surface; empty when no surface carries one
+    /// ([`crate::materials::has_materials`]), and then the file has no material sections.
+    pub materials: Vec<Surface>,
+    /// The directory the texture files of [`materials`](Self::materials) are relative to:
+    /// the source file's (empty: the current directory).
+    pub texture_dir: PathBuf,
 }
 
 /// Why writing failed.
@@ -56,6 +73,15 @@ pub enum BakeWriteError {
     /// The arrays do not form a valid hierarchy (a baker bug; nothing was written).
     #[error("internal error, nothing written: {0}")]
     Invalid(#[from] WriteError),
+    /// A texture cannot be referred to from the output file (no relative path to it, or
+    /// one the format refuses).
+    #[error("{path}: {source}")]
+    Texture {
+        /// The file being written.
+        path: PathBuf,
+        /// Why.
+        source: TextureError,
+    },
     /// The file system refused.
     #[error("{path}: {source}")]
     Io {
@@ -73,7 +99,7 @@ impl Baked {
         let ids = NodeIds::number(w.positions.len(), h);
         let polys = PolygonOrder::number(w.triangles.len(), h, &ids);
         let (splits, bounds) = split_records(w, h, &ids, &polys);
-        let (vertex_table_offsets, vertex_table, vertices) = vertex_table(w);
+        let (vertex_table_offsets, vertex_table, vertices, vertex_colours) = vertex_table(w);
         Self {
             positions: positions(w),
             nodes: ids.nodes(h),
@@ -87,7 +113,22 @@ impl Baked {
             vertices,
             surface_count: w.surface_count,
             surface_group_count: w.group_id_count,
+            vertex_colours,
+            materials: Vec::new(),
+            texture_dir: PathBuf::new(),
         }
+    }
+
+    /// Gives the surfaces their materials, when any carries one
+    /// ([`crate::materials::has_materials`]); texture files relative to `texture_dir`.
+    pub fn with_materials(mut self, surfaces: &[Surface], texture_dir: &Path) -> Self {
+        self.materials = if has_materials(surfaces) {
+            surfaces.to_vec()
+        } else {
+            Vec::new()
+        };
+        self.texture_dir = texture_dir.to_path_buf();
+        self
     }
 
     /// Borrowed arrays.
@@ -113,19 +154,62 @@ impl Baked {
         Hierarchy::from_parts(self.parts())
     }
 
-    /// The `.clod` bytes with `extra` sections (validated before writing).
-    pub fn to_bytes(&self, extra: &[ExtraSection<'_>]) -> Result<Vec<u8>, WriteError> {
+    /// The `.clod` bytes with the materials and vertex colours, when there are any, and
+    /// `extra` sections (all validated before writing). Texture paths are kept as the
+    /// source gives them, relative to [`texture_dir`](Self::texture_dir): right for a file
+    /// written into that directory ([`to_bytes_for`](Self::to_bytes_for) for any other).
+    pub fn to_bytes(&self, extra: &[ExtraSection<'_>]) -> Result<Vec<u8>, BakeWriteError> {
+        self.bytes_with(&|p| Ok(p.to_owned()), Path::new(""), extra)
+    }
+
+    /// [`to_bytes`](Self::to_bytes) for a file to be written at `path`: texture paths are
+    /// rewritten relative to its directory ([`TexturePaths`]).
+    pub fn to_bytes_for(
+        &self,
+        path: &Path,
+        extra: &[ExtraSection<'_>],
+    ) -> Result<Vec<u8>, BakeWriteError> {
+        let out_dir = path.parent().unwrap_or(Path::new(""));
+        let paths = TexturePaths::new(&self.texture_dir, out_dir);
+        self.bytes_with(&|p| paths.rewrite(p), path, extra)
+    }
+
+    fn bytes_with(
+        &self,
+        texture_path: &dyn Fn(&str) -> Result<String, String>,
+        path: &Path,
+        extra: &[ExtraSection<'_>],
+    ) -> Result<Vec<u8>, BakeWriteError> {
+        let materials = if self.materials.is_empty() {
+            None
+        } else {
+            let m = MaterialSections::new(&self.materials, texture_path).map_err(|source| {
+                BakeWriteError::Texture {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            })?;
+            Some(m)
+        };
+        let mut sections: Vec<ExtraSection<'_>> = Vec::with_capacity(extra.len() + 3);
+        if let Some(m) = &materials {
+            sections.extend(m.parts().sections());
+        }
+        if !self.vertex_colours.is_empty() {
+            sections.push(vertex_colour_section(&self.vertex_colours));
+        }
+        sections.extend_from_slice(extra);
         let parts = self.parts();
-        let mut out = vec![0u8; serialized_len(&parts, extra)];
-        write_into(&parts, extra, &mut out)?;
+        let mut out = vec![0u8; serialized_len(&parts, &sections)];
+        write_into(&parts, &sections, &mut out)?;
         Ok(out)
     }
 
     /// Writes the file through a temporary file in the same directory and a rename, so a
     /// reader never sees a partial file and an existing file is replaced only by a complete
-    /// one.
+    /// one. Texture paths are stored relative to `path`'s directory.
     pub fn write(&self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
-        let bytes = self.to_bytes(extra)?;
+        let bytes = self.to_bytes_for(path, extra)?;
         write_atomically(path, &bytes)?;
         Ok(bytes.len() as u64)
     }
@@ -362,11 +446,12 @@ fn split_records(
 }
 
 /// The vertex table: per position, its vertices sorted by surface-group id, each a key into
-/// the vertex buffer.
-fn vertex_table(w: &Welded) -> (Vec<u32>, Vec<VertexKey>, Vec<Vertex>) {
+/// the vertex buffer; and the vertices' colours when the mesh has colours.
+fn vertex_table(w: &Welded) -> (Vec<u32>, Vec<VertexKey>, Vec<Vertex>, Vec<[u8; 4]>) {
     let mut vertex_table_offsets = vec![0u32];
     let mut vertex_table = Vec::new();
     let mut vertices = Vec::new();
+    let mut colours = Vec::new();
     for (p, vs) in w.vertices.iter().enumerate() {
         let mut keys: Vec<(u16, u32)> = vs
             .iter()
@@ -385,10 +470,13 @@ fn vertex_table(w: &Welded) -> (Vec<u32>, Vec<VertexKey>, Vec<Vertex>) {
                 normal: attrs.normal,
                 uv: attrs.uv,
             });
+            if w.has_colors {
+                colours.push(encode_colour(attrs.color));
+            }
         }
         vertex_table_offsets.push(vertex_table.len() as u32);
     }
-    (vertex_table_offsets, vertex_table, vertices)
+    (vertex_table_offsets, vertex_table, vertices, colours)
 }
 
 /// Welded positions with their classes.

@@ -4,7 +4,8 @@
 //! scripts: importers ([`import`], each format a cargo feature), welding, repairs and surface
 //! groups ([`weld`]), attribute-aware quadric simplification into a balanced hierarchy of
 //! half-edge collapses ([`hierarchy`], [`quadric`]), g-mesh levels ([`gmesh`]), out-of-core
-//! simplification with a multiresolution octree ([`ooc`]), the `.clod` writer ([`baked`]),
+//! simplification with a multiresolution octree ([`ooc`]), materials and vertex colours
+//! ([`materials`]), the `.clod` writer ([`baked`]),
 //! and OBJ export ([`export`]). [`pipeline`] runs the whole bake; progress reaches the caller
 //! through the callbacks it passes. The `caveclod` command-line tool is `caveclod-cli`.
 
@@ -14,6 +15,7 @@ mod fxhash;
 pub mod gmesh;
 pub mod hierarchy;
 pub mod import;
+pub mod materials;
 pub mod mesh;
 pub mod ooc;
 pub mod pipeline;

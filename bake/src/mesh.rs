@@ -8,6 +8,8 @@
 /// "No attribute" in a corner's attribute index.
 pub const NO_ATTRIBUTE: u32 = u32::MAX;
 
+pub use caveclod_core::format::materials::AlphaMode;
+
 /// A surface: one material, one index list at run time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Surface {
@@ -15,8 +17,57 @@ pub struct Surface {
     pub name: String,
     /// Base colour (linear RGBA).
     pub base_color: [f32; 4],
-    /// Base-colour texture, a path relative to the source file, if any.
-    pub texture: Option<String>,
+    /// Base-colour texture, if any.
+    pub texture: Option<Texture>,
+    /// How the base colour's alpha is used.
+    pub alpha: AlphaMode,
+    /// Back faces are drawn.
+    pub double_sided: bool,
+}
+
+/// A surface's base-colour texture.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Texture {
+    /// An image file: a path relative to the source file's directory, `/` between
+    /// components.
+    File(String),
+    /// An image embedded in the source (a GLB buffer view, a `data:` URI): its encoded bytes
+    /// and MIME type.
+    Embedded {
+        /// E.g. `image/png`.
+        mime: String,
+        /// The encoded image.
+        bytes: Vec<u8>,
+    },
+}
+
+impl Surface {
+    /// A white, untextured, opaque, single-sided surface named `name`: what a source without
+    /// materials gets.
+    pub fn plain(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            base_color: [1.0; 4],
+            texture: None,
+            alpha: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+
+    /// Whether the surface looks like [`Surface::plain`], whatever its name: nothing a
+    /// renderer would draw differently from the default.
+    pub fn is_plain(&self) -> bool {
+        let Surface { name, .. } = self;
+        *self == Self::plain(name.as_str())
+    }
+
+    /// The texture's file, when it is one.
+    pub fn texture_file(&self) -> Option<&str> {
+        match &self.texture {
+            Some(Texture::File(f)) => Some(f),
+            _ => None,
+        }
+    }
 }
 
 /// One triangle: per-corner indices into the attribute streams.

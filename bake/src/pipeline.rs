@@ -45,7 +45,15 @@ pub enum Stage {
     Assemble,
 }
 
-/// Bakes an imported mesh.
+/// The directory a source file's relative paths (its textures) start from.
+fn source_dir(path: &Path) -> std::path::PathBuf {
+    path.parent().unwrap_or(Path::new("")).to_path_buf()
+}
+
+/// Bakes an imported mesh, with its surfaces' materials and its vertex colours when it has
+/// them; texture files are taken as relative to the current directory (set
+/// [`Baked::texture_dir`] where they are relative to another; [`bake_file`] sets the
+/// source's).
 pub fn bake_mesh(
     mesh: &Mesh,
     name: &str,
@@ -61,7 +69,7 @@ pub fn bake_mesh(
         progress(Stage::Collapse(done, most))
     });
     progress(Stage::Assemble);
-    let baked = Baked::new(&w, &h);
+    let baked = Baked::new(&w, &h).with_materials(&mesh.surfaces, Path::new(""));
     baked.hierarchy().map_err(BakeError::Invalid)?;
     let info = BakeInfo {
         input_triangles: mesh.triangles.len() as u64,
@@ -73,7 +81,8 @@ pub fn bake_mesh(
     Ok((baked, info))
 }
 
-/// Imports and bakes a file; `bake_seconds` includes the import.
+/// Imports and bakes a file; `bake_seconds` includes the import. Texture files are relative
+/// to the file's directory.
 pub fn bake_file(
     path: &Path,
     options: &ImportOptions,
@@ -82,7 +91,8 @@ pub fn bake_file(
     let start = Instant::now();
     progress(Stage::Import);
     let mesh = import::import(path, options)?;
-    let (baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
+    let (mut baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
+    baked.texture_dir = source_dir(path);
     info.bake_seconds = start.elapsed().as_secs_f64();
     Ok((baked, info))
 }
@@ -112,7 +122,8 @@ pub fn bake_out_of_core(
 ) -> Result<OutOfCoreBake, BakeError> {
     let start = Instant::now();
     let s = crate::ooc::simplify(path, options, ooc_progress)?;
-    let (baked, mut info) = bake_mesh(&s.mesh, &path.display().to_string(), progress)?;
+    let (mut baked, mut info) = bake_mesh(&s.mesh, &path.display().to_string(), progress)?;
+    baked.texture_dir = source_dir(path);
     drop(s.mesh);
     let mut octree = s.octree;
     if let Some(o) = &mut octree {

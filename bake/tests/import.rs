@@ -95,7 +95,7 @@ fn obj_with_seam_and_two_materials() {
     let names: Vec<&str> = mesh.surfaces.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["wood", "steel"]);
     assert_eq!(mesh.surfaces[0].base_color, [0.6, 0.4, 0.2, 1.0]);
-    assert_eq!(mesh.surfaces[0].texture.as_deref(), Some("wood.png"));
+    assert_eq!(mesh.surfaces[0].texture_file(), Some("wood.png"));
     assert_eq!(mesh.surfaces[1].base_color, [0.5, 0.5, 0.5, 0.25]);
     assert_eq!(mesh.triangles_per_surface(), [2, 2]);
     // The seam: position 2 (0-based) has UV 2 in the first quad and UV 4 in the second.
@@ -426,11 +426,10 @@ fn flight_helmet() {
     assert_eq!(mesh.surfaces.len(), 6, "{:?}", mesh.surfaces);
     assert_eq!(report.skipped_primitives, 0);
     assert!(mesh.surfaces.iter().all(|s| s
-        .texture
-        .as_deref()
+        .texture_file()
         .is_some_and(|t| t.ends_with("_BaseColor.png"))));
     for s in &mesh.surfaces {
-        let texture = path.parent().unwrap().join(s.texture.as_ref().unwrap());
+        let texture = path.parent().unwrap().join(s.texture_file().unwrap());
         assert!(texture.exists(), "{}", texture.display());
     }
     assert!(mesh

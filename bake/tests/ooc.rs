@@ -28,11 +28,7 @@ fn pyramid() -> Mesh {
         [1.0, -1.0, 0.0],
     ];
     let mut m = Mesh {
-        surfaces: vec![Surface {
-            name: "stone".into(),
-            base_color: [1.0; 4],
-            texture: None,
-        }],
+        surfaces: vec![Surface::plain("stone")],
         ..Default::default()
     };
     let corner = |m: &mut Mesh, p: [f32; 3]| {

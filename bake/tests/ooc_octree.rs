@@ -10,18 +10,7 @@ use caveclod_bake::ooc::{cluster_mesh_in, multires, ClusterOptions, Cube, Multir
 /// asked.
 fn field(n: u32, with_uv: bool, two_surfaces: bool) -> Mesh {
     let mut m = Mesh {
-        surfaces: vec![
-            Surface {
-                name: "a".into(),
-                base_color: [1.0; 4],
-                texture: None,
-            },
-            Surface {
-                name: "b".into(),
-                base_color: [1.0; 4],
-                texture: None,
-            },
-        ],
+        surfaces: vec![Surface::plain("a"), Surface::plain("b")],
         ..Default::default()
     };
     let h = |x: f32, y: f32| 0.08 * (7.0 * x).sin() * (5.0 * y).cos() + 0.03 * (19.0 * x * y).sin();

@@ -27,7 +27,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Generate a procedural terrain (normals, colours, UVs) as binary PLY, streamed to disk.
     Generate(GenerateArgs),
-    /// Write one level of a .clod file as Wavefront OBJ.
+    /// Write one level of a .clod file as Wavefront OBJ, with an MTL file and the embedded
+    /// textures beside it when the file has materials.
     Export(ExportArgs),
     /// Render a .clod file headless (lavapipe unless --gpu) from 1-4 cameras orbiting it, each
     /// refining its own front, into one split-screen PNG (or one PNG per camera).
@@ -176,7 +177,9 @@ pub struct ExportArgs {
     /// Which level.
     #[arg(long, value_enum, default_value = "full")]
     pub level: LevelArg,
-    /// The OBJ file to write.
+    /// The OBJ file to write; its MTL file (same name, `.mtl`) and the embedded textures
+    /// (`<name>_<material>.<ext>`) go beside it. Files are replaced only once complete, and
+    /// never one the export reads.
     #[arg(short, long)]
     pub output: PathBuf,
 }

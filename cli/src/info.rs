@@ -1,6 +1,7 @@
 //! The figures `caveclod bake` and `caveclod info` print, with stable JSON keys for scripts.
 
 use caveclod_bake::report::{repairs_json, BakeInfo};
+use caveclod_core::format::materials::{AlphaMode, TextureRef};
 use caveclod_core::gmesh::GMesh;
 use caveclod_core::{CameraState, Hierarchy, MemoryReport, Octree};
 use serde_json::{json, Map, Value};
@@ -51,6 +52,8 @@ pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> 
         "vertex_table_fill".into(),
         json!(filled as f64 / cells.max(1) as f64),
     );
+    o.insert("materials".into(), materials_json(h));
+    o.insert("vertex_colours".into(), json!(h.vertex_colours().is_some()));
     // g-mesh levels, when the file has them (their sections were validated here).
     match GMesh::from_hierarchy(h) {
         Ok(Some(g)) => {
@@ -107,10 +110,85 @@ pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> 
     o
 }
 
-/// The report as aligned `key: value` lines for people.
+/// The surfaces' materials (an empty array for a file without): name, base colour, texture
+/// (`{"path": ..}` or `{"embedded_bytes": .., "mime": ..}`, or null), alpha mode (with its
+/// cutoff for `MASK`), double-sidedness.
+fn materials_json(h: &Hierarchy<'_>) -> Value {
+    let Some(materials) = h.materials() else {
+        return json!([]);
+    };
+    materials
+        .iter()
+        .map(|m| {
+            let texture = match m.texture {
+                None => Value::Null,
+                Some(TextureRef::Path(p)) => json!({ "path": p }),
+                Some(TextureRef::Embedded { mime, bytes }) => {
+                    json!({ "embedded_bytes": bytes.len(), "mime": mime })
+                }
+            };
+            let cutoff = match m.alpha {
+                AlphaMode::Mask { cutoff } => json!(shortest(cutoff)),
+                _ => Value::Null,
+            };
+            json!({
+                "name": m.name,
+                "base_colour": m.base_colour.map(shortest),
+                "texture": texture,
+                "alpha_mode": m.alpha.name(),
+                "alpha_cutoff": cutoff,
+                "double_sided": m.double_sided,
+            })
+        })
+        .collect()
+}
+
+/// `x` as the `f64` its shortest decimal form names (0.2, not 0.20000000298023224).
+fn shortest(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
+/// One material of [`materials_json`] on one line.
+fn material_line(m: &Value) -> String {
+    let texture = match &m["texture"] {
+        Value::Null => "no texture".to_string(),
+        t => match (t["path"].as_str(), t["mime"].as_str()) {
+            (Some(p), _) => format!("texture {p}"),
+            (None, Some(mime)) => format!("embedded {mime}, {} bytes", t["embedded_bytes"]),
+            _ => t.to_string(),
+        },
+    };
+    let alpha = match m["alpha_cutoff"].as_f64() {
+        Some(c) => format!("{} {c}", m["alpha_mode"].as_str().unwrap_or("?")),
+        None => m["alpha_mode"].as_str().unwrap_or("?").to_string(),
+    };
+    format!(
+        "'{}', base colour {}, {texture}, {alpha}{}",
+        m["name"].as_str().unwrap_or(""),
+        m["base_colour"],
+        if m["double_sided"] == json!(true) {
+            ", double-sided"
+        } else {
+            ""
+        }
+    )
+}
+
+/// The report as aligned `key: value` lines for people; a material per line.
 pub fn human(o: &Map<String, Value>) -> String {
     let mut s = String::new();
     for (k, v) in o {
+        if let (true, Value::Array(list)) = (k == "materials", v) {
+            s.push_str(&format!("{k:>20}: {}\n", list.len()));
+            for (i, m) in list.iter().enumerate() {
+                s.push_str(&format!(
+                    "{:>20}: {}\n",
+                    format!("material {i}"),
+                    material_line(m)
+                ));
+            }
+            continue;
+        }
         let v = match v {
             Value::Object(m) => m
                 .iter()

@@ -5,6 +5,7 @@
 //! hierarchy at once. Everything a camera changes lives in its own
 //! [`CameraState`](crate::CameraState).
 
+use crate::format::materials::Materials;
 use crate::format::{self, FormatError, HierarchyParts, Tag};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
@@ -18,6 +19,7 @@ pub struct Hierarchy<'a> {
     meta: Meta,
     checksum: u64,
     file: &'a [u8],
+    appearance: format::validate::Appearance<'a>,
 }
 
 impl<'a> Hierarchy<'a> {
@@ -26,22 +28,29 @@ impl<'a> Hierarchy<'a> {
     /// buffer is); a misaligned buffer is an error, never a copy. Aligning it to 64 bytes is
     /// worth it: sections start on multiples of 64, so then no 32-byte record a refinement
     /// pass reads straddles two cache lines (`HierarchyBuf`, with the `alloc` feature, keeps its bytes
-    /// so aligned).
+    /// so aligned). The optional materials and vertex colours are validated too.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let parsed = format::validate::parse(bytes)?;
         let meta = format::validate::validate(&parsed.parts, Some(&parsed.meta))?;
+        let appearance = format::validate::appearance(
+            &parsed.appearance,
+            parsed.parts.surface_count as usize,
+            parsed.parts.vertices.len(),
+        )?;
         Ok(Self {
             parts: parsed.parts,
             meta,
             checksum: parsed.checksum,
             file: bytes,
+            appearance,
         })
     }
 
     /// The hierarchy of `bytes` that [`from_bytes`](Self::from_bytes) validated before, with
     /// the meta and checksum it found: the sections are found again (the header and the
-    /// section table checked), but neither the checksum nor the invariants are computed
-    /// again. Only for bytes that cannot have changed since.
+    /// section table checked), but neither the checksum nor the hierarchy's invariants are
+    /// computed again (the materials' few references are: their view is made by the check).
+    /// Only for bytes that cannot have changed since.
     #[cfg(feature = "alloc")]
     pub(crate) fn from_validated(
         bytes: &'a [u8],
@@ -49,16 +58,23 @@ impl<'a> Hierarchy<'a> {
         checksum: u64,
     ) -> Result<Self, FormatError> {
         let parsed = format::validate::parse_checked(bytes, false)?;
+        let appearance = format::validate::appearance(
+            &parsed.appearance,
+            parsed.parts.surface_count as usize,
+            parsed.parts.vertices.len(),
+        )?;
         Ok(Self {
             parts: parsed.parts,
             meta,
             checksum,
             file: bytes,
+            appearance,
         })
     }
 
     /// Validates arrays held in memory (for example a builder's) exactly as
-    /// [`from_bytes`](Self::from_bytes) validates a file.
+    /// [`from_bytes`](Self::from_bytes) validates a file. Such a hierarchy has no materials
+    /// and no vertex colours.
     pub fn from_parts(parts: HierarchyParts<'a>) -> Result<Self, FormatError> {
         let meta = format::validate::validate(&parts, None)?;
         // An in-memory hierarchy is identified by its counts: mix them into a checksum so a
@@ -69,6 +85,7 @@ impl<'a> Hierarchy<'a> {
             meta,
             checksum,
             file: &[],
+            appearance: format::validate::Appearance::default(),
         })
     }
 
@@ -98,6 +115,21 @@ impl<'a> Hierarchy<'a> {
         let start = e.offset as usize;
         self.file
             .get(start..start + e.record_size as usize * e.record_count as usize)
+    }
+
+    /// The surfaces' materials, one per surface, when the file has them (see
+    /// [`materials`](crate::format::materials)).
+    #[inline]
+    pub fn materials(&self) -> Option<Materials<'a>> {
+        self.appearance.materials
+    }
+
+    /// One colour per vertex of [`vertices`](Self::vertices), when the file has them: RGBA8,
+    /// red, green and blue sRGB-encoded, alpha linear
+    /// ([`vertex_colour_linear`](crate::format::materials::vertex_colour_linear) decodes one).
+    #[inline]
+    pub fn vertex_colours(&self) -> Option<&'a [[u8; 4]]> {
+        self.appearance.vertex_colours
     }
 
     /// All node positions.

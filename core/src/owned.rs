@@ -71,7 +71,8 @@ impl HierarchyBuf {
     }
 
     /// The validated hierarchy. Finds the sections in the table again (a few comparisons
-    /// per section) but neither checks the checksum nor validates again. The bytes cannot
+    /// per section) but neither checks the checksum nor validates the hierarchy again (only
+    /// the few references of the materials, if any, from which their view is made). The bytes cannot
     /// change after [`from_bytes`](Self::from_bytes) validated them, so this succeeds; it
     /// returns the table check's error rather than panicking, as the crate never does.
     pub fn hierarchy(&self) -> Result<Hierarchy<'_>, FormatError> {

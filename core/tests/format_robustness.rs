@@ -58,6 +58,9 @@ fn kind(e: &FormatError) -> &'static str {
         FormatError::RecordSize { .. } => "RecordSize",
         FormatError::Count { .. } => "Count",
         FormatError::Invalid { .. } => "Invalid",
+        FormatError::BlobRange { .. } => "BlobRange",
+        FormatError::NotUtf8 { .. } => "NotUtf8",
+        FormatError::BadPath { .. } => "BadPath",
     }
 }
 

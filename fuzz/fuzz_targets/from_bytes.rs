@@ -1,5 +1,6 @@
 //! `Hierarchy::from_bytes` on arbitrary bytes, then a camera over whatever loads (and an
-//! octree cut, when the file has valid octree sections).
+//! octree cut, when the file has valid octree sections, and its materials and vertex
+//! colours, when it has them).
 //!
 //! A 64-bit checksum stops nearly every mutation before the validator, so each input is
 //! tried twice: as given (header, length and checksum checks), and, when it fails on its
@@ -9,6 +10,7 @@
 //! camera's counts (after an `Inconsistent` error the camera is reset, as documented).
 #![no_main]
 
+use caveclod_core::format::materials::{path_climbs_out, TextureRef};
 use caveclod_core::format::{checksum64, FileHeader};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
@@ -161,12 +163,32 @@ fn exercise_octree(h: &Hierarchy<'_>) {
     }
 }
 
+/// The materials and vertex colours, when present: validated at load, so every surface has
+/// a material whose strings and image bytes can be read, and every vertex a colour.
+fn exercise_appearance(h: &Hierarchy<'_>) {
+    if let Some(m) = h.materials() {
+        assert_eq!(m.len(), h.surface_count());
+        for s in 0..m.len() {
+            let material = m.get(s).expect("a validated material");
+            if let Some(TextureRef::Path(p)) = material.texture {
+                assert!(!p.is_empty() && !p.starts_with('/'));
+                let _ = path_climbs_out(p);
+            }
+        }
+        assert_eq!(m.iter().count(), m.len());
+    }
+    if let Some(c) = h.vertex_colours() {
+        assert_eq!(c.len(), h.vertices().len());
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let mut words = aligned(data);
     let retry = match Hierarchy::from_bytes(as_bytes(&words, data.len())) {
         Ok(h) => {
             exercise(&h);
             exercise_octree(&h);
+            exercise_appearance(&h);
             false
         }
         Err(FormatError::LengthMismatch { .. } | FormatError::ChecksumMismatch { .. }) => true,
@@ -181,6 +203,7 @@ fuzz_target!(|data: &[u8]| {
         if let Ok(h) = Hierarchy::from_bytes(as_bytes(&words, data.len())) {
             exercise(&h);
             exercise_octree(&h);
+            exercise_appearance(&h);
         }
     }
 });

@@ -35,11 +35,7 @@ pub fn to_mesh(t: &TestMesh) -> Mesh {
         m.triangles.push(out);
     }
     m.surfaces = (0..t.surface_count())
-        .map(|s| Surface {
-            name: format!("s{s}"),
-            base_color: [1.0; 4],
-            texture: None,
-        })
+        .map(|s| Surface::plain(format!("s{s}")))
         .collect();
     m
 }

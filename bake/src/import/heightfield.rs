@@ -82,15 +82,7 @@ pub(crate) fn heightfield_to_mesh(
     let missing = grid.heights.iter().filter(|h| h.is_nan()).count();
     report.heightfield = Some(describe(grid, posts - missing));
     let mut mesh = Mesh::default();
-    let surface = push_surface(
-        source,
-        &mut mesh,
-        Surface {
-            name: surface_name.to_owned(),
-            base_color: [1.0; 4],
-            texture: None,
-        },
-    )?;
+    let surface = push_surface(source, &mut mesh, Surface::plain(surface_name))?;
     if grid.width < 2 || grid.depth < 2 {
         return Ok(mesh);
     }

@@ -139,6 +139,9 @@ pub struct Welded {
     pub group_id_count: u32,
     /// Number of surfaces.
     pub surface_count: u32,
+    /// Whether the mesh has colours: then every vertex keeps its own (white where a corner
+    /// had none) and the `.clod` file gets a colour per vertex.
+    pub has_colors: bool,
     /// Per position: `(group, attribute id)` of each group with a vertex there, by group.
     pub vertices: Vec<Vec<(u32, u32)>>,
     /// What was repaired.
@@ -209,6 +212,11 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         group_ids: colour.iter().map(|&c| c as u16).collect(),
         group_id_count: colour_count,
         surface_count: mesh.surfaces.len().max(1) as u32,
+        has_colors: mesh.triangles.iter().any(|t| {
+            t.color
+                .iter()
+                .any(|&c| c != crate::mesh::NO_ATTRIBUTE && (c as usize) < mesh.colors.len())
+        }),
         vertices,
         repairs,
     })

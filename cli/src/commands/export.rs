@@ -1,19 +1,20 @@
-//! `caveclod export`: one level of a .clod file as Wavefront OBJ.
+//! `caveclod export`: one level of a .clod file as Wavefront OBJ, with its materials as an
+//! MTL file beside it and its embedded textures as image files beside that.
 
-use caveclod_bake::baked::write_atomically;
-use caveclod_bake::export::{self, Level};
+use caveclod_bake::export::{obj_export, Level};
 
 use super::with_hierarchy;
 use crate::args::{ExportArgs, LevelArg};
 
-/// Writes the chosen level as OBJ, replacing the output only once complete.
+/// Writes the chosen level as OBJ (and its MTL and images), each file replaced only once
+/// complete and none over an input.
 pub fn export(a: &ExportArgs) -> Result<(), String> {
     with_hierarchy(&a.file, |h| {
         let level = match a.level {
             LevelArg::Full => Level::Full,
             LevelArg::Base => Level::Base,
         };
-        let text = export::obj(h, level);
-        write_atomically(&a.output, text.as_bytes()).map_err(|e| e.to_string())
+        let files = obj_export(h, level, &a.file, &a.output).map_err(|e| e.to_string())?;
+        files.write().map_err(|e| e.to_string())
     })
 }

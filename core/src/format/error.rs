@@ -100,6 +100,39 @@ pub enum FormatError {
         /// The offending value (an id, a count, or raw float bits).
         value: u64,
     },
+    /// A record's byte range lies outside the blob it points into.
+    BlobRange {
+        /// The section of the record.
+        tag: Tag,
+        /// Index of the record in its section.
+        record: u64,
+        /// The field holding the range.
+        field: &'static str,
+        /// First byte of the range.
+        offset: u32,
+        /// Bytes in the range.
+        len: u32,
+        /// Bytes in the blob.
+        blob_len: u64,
+    },
+    /// A string a record points to is not UTF-8.
+    NotUtf8 {
+        /// The section of the record.
+        tag: Tag,
+        /// Index of the record in its section.
+        record: u64,
+        /// The field naming the string.
+        field: &'static str,
+    },
+    /// A texture path is not a relative path with `/` between its components.
+    BadPath {
+        /// The section of the record.
+        tag: Tag,
+        /// Index of the record in its section.
+        record: u64,
+        /// What is wrong with it.
+        problem: &'static str,
+    },
 }
 
 impl core::fmt::Display for FormatError {
@@ -171,6 +204,34 @@ impl core::fmt::Display for FormatError {
                     f,
                     "section {tag} record {record} field `{field}`: {problem} (value {value})"
                 )
+            }
+            Self::BlobRange {
+                tag,
+                record,
+                field,
+                offset,
+                len,
+                blob_len,
+            } => {
+                write!(
+                    f,
+                    "section {tag} record {record} field `{field}`: bytes {offset}..{} lie \
+                     outside the {blob_len}-byte blob",
+                    u64::from(offset) + u64::from(len)
+                )
+            }
+            Self::NotUtf8 { tag, record, field } => {
+                write!(
+                    f,
+                    "section {tag} record {record} field `{field}`: not UTF-8"
+                )
+            }
+            Self::BadPath {
+                tag,
+                record,
+                problem,
+            } => {
+                write!(f, "section {tag} record {record} texture path: {problem}")
             }
         }
     }

@@ -21,13 +21,20 @@
 //! |--------|------|------------|
 //! | `GMPC`, `GMBD`, `GMVL`, `GMVO`, `GMIO`, `GMVX`, `GMIX` | g-mesh levels | [`gmesh_tags`](crate::gmesh::gmesh_tags) |
 //! | `OCMT`, `OCND`, `OCRG`, `OCVX`, `OCIX` | multiresolution octree (meta, nodes, per-surface ranges, vertices, indices) | [`octree_tags`](crate::octree::octree_tags) |
+//! | `MATL`, `MBLB` | one material per surface (64-byte records) and the bytes they point into: names, texture paths, embedded images | [`materials`] |
+//! | `VCOL` | one RGBA8 colour per vertex (sRGB red, green, blue; linear alpha) | [`materials`] |
 //! | `INFO` | the bake's figures, UTF-8 JSON | `caveclod-bake` (`report.rs`) |
+//!
+//! The appearance sections (`MATL`, `MBLB`, `VCOL`) are optional, and validated with the
+//! hierarchy when present: [`Hierarchy::materials`](crate::Hierarchy::materials) and
+//! [`Hierarchy::vertex_colours`](crate::Hierarchy::vertex_colours) give them.
 //!
 //! The writer side ([`serialized_len`], [`write_into`]) needs no allocation either: a std
 //! caller sizes a buffer with `serialized_len`, fills it with `write_into`, and writes it to
 //! disk through a temporary file and a rename.
 
 pub(crate) mod error;
+pub mod materials;
 pub(crate) mod records;
 pub(crate) mod validate;
 mod writer;

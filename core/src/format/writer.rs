@@ -107,8 +107,9 @@ pub fn serialized_len(parts: &HierarchyParts<'_>, extra: &[ExtraSection<'_>]) ->
     )
 }
 
-/// Validates `parts` (exactly as a reader would), then writes the file into `out`.
-/// Returns the number of bytes written, [`serialized_len`].
+/// Validates `parts` and the appearance sections among `extra` (materials and vertex
+/// colours, [`materials`](crate::format::materials)) exactly as a reader would, then writes
+/// the file into `out`. Returns the number of bytes written, [`serialized_len`].
 pub fn write_into(
     parts: &HierarchyParts<'_>,
     extra: &[ExtraSection<'_>],
@@ -121,6 +122,12 @@ pub fn write_into(
             return Err(WriteError::BadExtraSection { tag: e.tag });
         }
     }
+    let appearance = validate::appearance_extras(extra)?;
+    validate::appearance(
+        &appearance,
+        parts.surface_count as usize,
+        parts.vertices.len(),
+    )?;
     let needed = serialized_len(parts, extra);
     if out.len() < needed {
         return Err(WriteError::BufferTooSmall {

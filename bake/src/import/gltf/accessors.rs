@@ -219,7 +219,11 @@ impl Importer<'_> {
     }
 
     /// A buffer view's bytes (checked against its buffer) and its stride.
-    fn view_bytes(&self, view: usize, at: &str) -> Result<(&[u8], Option<usize>), ImportError> {
+    pub(super) fn view_bytes(
+        &self,
+        view: usize,
+        at: &str,
+    ) -> Result<(&[u8], Option<usize>), ImportError> {
         let source = self.source;
         let json = self
             .root

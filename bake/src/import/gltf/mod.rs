@@ -15,8 +15,10 @@
 //! joint triangles dropped), indexed or not; attributes `POSITION`, `NORMAL`, `TEXCOORD_0`,
 //! `COLOR_0` (`VEC3` or `VEC4`), in any component type the specification allows (normalized
 //! integers converted), sparse accessors included. Each material becomes one surface (name,
-//! `baseColorFactor`, the base-colour texture's URI, relative to the glTF file); primitives
-//! without a material share a surface named `default`. `POINTS` and `LINE*` primitives are
+//! `baseColorFactor`, the base-colour texture's image, `alphaMode` with `alphaCutoff`,
+//! `doubleSided`): an image with a URI is a file relative to the glTF file, one in a buffer
+//! view (GLB) or a `data:` URI is kept as its bytes with its MIME type (neither is decoded);
+//! primitives without a material share a surface named `default`. `POINTS` and `LINE*` primitives are
 //! skipped and counted; morph targets and skins are ignored (the base shape in its bind pose).
 //!
 //! Rejected with an error naming the element: accessors or buffer views out of bounds, index

@@ -126,7 +126,7 @@ fn transforms_materials_and_modes() {
     let names: Vec<&str> = mesh.surfaces.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["Red", "default"]);
     assert_eq!(mesh.surfaces[0].base_color, [1.0, 0.0, 0.0, 0.5]);
-    assert_eq!(mesh.surfaces[0].texture.as_deref(), Some("tex red.png"));
+    assert_eq!(mesh.surfaces[0].texture_file(), Some("tex red.png"));
     assert_eq!(mesh.triangles_per_surface(), [2, 4]);
 
     let corner = |t: usize| {
@@ -163,6 +163,80 @@ fn transforms_materials_and_modes() {
     );
     // The strip has no normals.
     assert_eq!(mesh.triangles[1].normal, [NO_ATTRIBUTE; 3]);
+}
+
+/// The sample with a second material on the strip, its texture's image as `image`, and the
+/// first material masked and double-sided.
+fn two_materials(image: &str) -> String {
+    let json = SAMPLE_JSON
+        .replace(
+            r#"{"attributes": {"POSITION": 5}, "mode": 5}"#,
+            r#"{"attributes": {"POSITION": 5}, "mode": 5, "material": 1}"#,
+        )
+        .replace(
+            r#""materials": [{"name": "Red", "#,
+            r#""materials": [{"name": "Glass", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}}, {"name": "Red", "alphaMode": "MASK", "alphaCutoff": 0.25, "doubleSided": true, "#,
+        )
+        .replace(r#""textures": [{"source": 0}]"#, r#""textures": [{"source": 0}, {"source": 1}]"#)
+        .replace(
+            r#""images": [{"uri": "tex%20red.png"}]"#,
+            &format!(r#""images": [{{"uri": "tex%20red.png"}}, {image}]"#),
+        )
+        .replace(
+            r#"{"buffer": 0, "byteOffset": 116, "byteLength": 48}"#,
+            r#"{"buffer": 0, "byteOffset": 116, "byteLength": 48}, {"buffer": 0, "byteOffset": 8, "byteLength": 4}"#,
+        );
+    // Primitive 0 names material 0, now Glass; give it Red (1) and the strip Glass (0).
+    json.replace(
+        r#""indices": 4, "material": 0}"#,
+        r#""indices": 4, "material": 1}"#,
+    )
+    .replace(
+        r#""mode": 5, "material": 1}"#,
+        r#""mode": 5, "material": 0}"#,
+    )
+}
+
+#[test]
+fn materials_keep_alpha_sides_and_embedded_images() {
+    let bin = sample_bin();
+    let (mesh, _) = run(
+        &two_materials(r#"{"bufferView": 3, "mimeType": "image/jpeg"}"#),
+        &bin,
+    )
+    .unwrap();
+    let names: Vec<&str> = mesh.surfaces.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["Red", "Glass"]);
+    let red = &mesh.surfaces[0];
+    assert_eq!(red.texture_file(), Some("tex red.png"));
+    assert_eq!(red.alpha, crate::mesh::AlphaMode::Mask { cutoff: 0.25 });
+    assert!(red.double_sided);
+    let glass = &mesh.surfaces[1];
+    assert_eq!(glass.alpha, crate::mesh::AlphaMode::Blend);
+    assert!(!glass.double_sided);
+    assert_eq!(
+        glass.texture,
+        Some(crate::mesh::Texture::Embedded {
+            mime: "image/jpeg".into(),
+            bytes: bin[8..12].to_vec(),
+        })
+    );
+    // A data URI: its own MIME type, its decoded bytes.
+    let (mesh, _) = run(
+        &two_materials(r#"{"uri": "data:image/png;base64,AAEC/w=="}"#),
+        &bin,
+    )
+    .unwrap();
+    assert_eq!(
+        mesh.surfaces[1].texture,
+        Some(crate::mesh::Texture::Embedded {
+            mime: "image/png".into(),
+            bytes: vec![0, 1, 2, 255],
+        })
+    );
+    // A buffer-view image needs its MIME type.
+    let e = err(&two_materials(r#"{"bufferView": 3}"#), &bin);
+    assert!(e.contains("mimeType"), "{e}");
 }
 
 #[test]

@@ -15,8 +15,9 @@
 //! are skipped and counted; free-form geometry (`curv`, `surf`, ...) is ignored with a note.
 //!
 //! Surfaces: one per material name, in order of first use by a face; faces before any
-//! `usemtl` use a surface named `default`. Colour is `Kd` with `d` (or `1 - Tr`) as alpha,
-//! the texture `map_Kd` (options dropped, path made relative to the OBJ). A missing MTL file
+//! `usemtl` use a surface named `default`. Colour is `Kd` with `d` (or `1 - Tr`) as alpha
+//! (alpha mode blend when it is below 1), the texture `map_Kd` (options dropped, path made
+//! relative to the OBJ). A missing MTL file
 //! or an undefined material is not an error: the surface keeps its name, gets white, and a
 //! note says so. A malformed MTL is an error naming its line.
 //!

@@ -1,5 +1,6 @@
-//! MTL libraries to surfaces: `Kd` with `d` (or `1 - Tr`) as alpha, `map_Kd` relative to the
-//! OBJ; MTL files parsed with `tobj`.
+//! MTL libraries to surfaces: `Kd` with `d` (or `1 - Tr`) as alpha (blended when below 1),
+//! `map_Kd` relative to the OBJ; MTL files parsed with `tobj`. MTL has no double-sided
+//! materials.
 
 use std::collections::HashMap;
 use std::io::Cursor;
@@ -7,7 +8,7 @@ use std::path::Path;
 
 use super::{Loader, NamedSurface};
 use crate::import::{push_surface, ImportError, ImportReport, Source};
-use crate::mesh::{Mesh, Surface};
+use crate::mesh::{AlphaMode, Mesh, Surface, Texture};
 
 /// The materials the MTL libraries define, and whether the OBJ named any library.
 pub(super) struct MaterialLibraries<'a> {
@@ -35,11 +36,7 @@ pub(super) fn push_surfaces(
                         source.name, named.name
                     ));
                 }
-                Surface {
-                    name: named.name.clone(),
-                    base_color: [1.0; 4],
-                    texture: None,
-                }
+                Surface::plain(named.name.as_str())
             }
         };
         push_surface(source, mesh, surface)?;
@@ -100,11 +97,18 @@ pub(super) fn load_materials(
                     .diffuse_texture
                     .as_deref()
                     .and_then(texture_file)
-                    .map(|t| dir.join(t).to_string_lossy().replace('\\', "/"));
+                    .map(|t| Texture::File(dir.join(t).to_string_lossy().replace('\\', "/")));
+                let alpha = if color[3] < 1.0 {
+                    AlphaMode::Blend
+                } else {
+                    AlphaMode::Opaque
+                };
                 surfaces.entry(m.name.clone()).or_insert(Surface {
                     name: m.name,
                     base_color: color,
                     texture,
+                    alpha,
+                    double_sided: false,
                 });
             }
         }

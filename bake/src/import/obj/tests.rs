@@ -120,8 +120,12 @@ fn materials_become_surfaces_in_order_of_use() {
     assert_eq!(names, ["grey", "red", "ghost"]);
     assert_eq!(mesh.surfaces[0].base_color, [0.5, 0.5, 0.5, 1.0]);
     assert_eq!(mesh.surfaces[1].base_color, [1.0, 0.0, 0.0, 0.5]);
-    assert_eq!(mesh.surfaces[1].texture.as_deref(), Some("lib/tex/red.png"));
+    assert_eq!(mesh.surfaces[1].texture_file(), Some("lib/tex/red.png"));
+    // `d` below 1 blends; opaque otherwise.
+    assert_eq!(mesh.surfaces[1].alpha, crate::mesh::AlphaMode::Blend);
+    assert_eq!(mesh.surfaces[0].alpha, crate::mesh::AlphaMode::Opaque);
     assert_eq!(mesh.surfaces[2].base_color, [1.0; 4]);
+    assert!(mesh.surfaces[2].is_plain());
     let ids: Vec<u16> = mesh.triangles.iter().map(|t| t.surface).collect();
     assert_eq!(ids, [0, 1, 0, 2]);
     assert!(

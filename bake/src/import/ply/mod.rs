@@ -34,7 +34,7 @@ use properties::{A, NX, R, U, VERTEX_NAMES, X};
 
 use super::{next_index, push_surface, read_file, srgb_to_linear, ImportError};
 use super::{ImportOptions, ImportReport, Source};
-use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use crate::mesh::{Mesh, Surface, Texture, Triangle, NO_ATTRIBUTE};
 
 /// The parser's reader over the file's bytes.
 type ByteReader<'a> = Reader<Cursor<&'a [u8]>>;
@@ -300,9 +300,8 @@ fn push_texture_surface(
         source,
         mesh,
         Surface {
-            name: "default".to_owned(),
-            base_color: [1.0; 4],
-            texture,
+            texture: texture.map(Texture::File),
+            ..Surface::plain("default")
         },
     )
 }

@@ -135,7 +135,7 @@ fn ascii_and_both_binaries_give_the_same_mesh() {
     assert_eq!(ascii.colors[0], [1.0, 0.0, 0.0, 1.0]);
     assert!((ascii.colors[1][3] - 128.0 / 255.0).abs() < 1e-6);
     assert!((ascii.colors[3][0] - srgb_to_linear(10.0 / 255.0)).abs() < 1e-7);
-    assert_eq!(ascii.surfaces[0].texture.as_deref(), Some("skin.png"));
+    assert_eq!(ascii.surfaces[0].texture_file(), Some("skin.png"));
 }
 
 #[test]

@@ -232,11 +232,7 @@ impl Faces<'_> {
         let next = self.surfaces.len();
         let surfaces = &mut self.surfaces;
         let id = *self.surface_ids.entry(m.clone()).or_insert_with(|| {
-            surfaces.push(Surface {
-                name: m,
-                base_color: [1.0; 4],
-                texture: None,
-            });
+            surfaces.push(Surface::plain(m));
             next as u16
         });
         if self.surfaces.len() > usize::from(u16::MAX) {
@@ -328,11 +324,7 @@ impl Faces<'_> {
             None => {
                 let surfaces = &mut self.surfaces;
                 let id = *self.surface_ids.entry(String::new()).or_insert_with(|| {
-                    surfaces.push(Surface {
-                        name: "default".into(),
-                        base_color: [1.0; 4],
-                        texture: None,
-                    });
+                    surfaces.push(Surface::plain("default"));
                     (surfaces.len() - 1) as u16
                 });
                 self.surface = Some(id);

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use super::ply_format::{slot, with_bytes, Element, Field, Format, ItemReader, Property, Scalar};
 use super::{BlockCache, SoupSink, StreamReport};
-use crate::mesh::Surface;
+use crate::mesh::{Surface, Texture};
 use crate::ooc::soup::{encode_normal, Corner, Cube, HAS_COLOR, HAS_NORMAL, HAS_UV};
 use crate::ooc::temp::TempSpace;
 use crate::ooc::OocError;
@@ -51,9 +51,8 @@ pub(super) fn ply(
     ply.skip(vi + 1..fi)?;
     let mut report = StreamReport {
         surfaces: vec![Surface {
-            name: "default".into(),
-            base_color: [1.0; 4],
-            texture: ply.header.texture.take(),
+            texture: ply.header.texture.take().map(Texture::File),
+            ..Surface::plain("default")
         }],
         vertices: vcount,
         ..Default::default()

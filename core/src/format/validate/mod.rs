@@ -15,15 +15,20 @@
 //! 3. nodes, splits and their bounds ([`nodes`]);
 //! 4. polygons, roots and the base mesh ([`polygons`]);
 //! 5. the meta record the sections imply, against the file's `META`.
+//!
+//! The optional appearance sections (materials and vertex colours, [`materials`]) are
+//! checked after these, against the surface and vertex counts: [`appearance`].
 
+mod materials;
 mod nodes;
 mod polygons;
 mod table;
 mod vertices;
 
+pub(crate) use materials::{appearance, Appearance};
 #[cfg(feature = "alloc")]
 pub(crate) use table::parse_checked;
-pub(crate) use table::{parse, section_table_checked};
+pub(crate) use table::{appearance_extras, parse, section_table_checked};
 
 use crate::format::{tags, FormatError, HierarchyParts, Meta, Tag, VertexKey};
 use crate::ids::PositionId;
@@ -49,6 +54,7 @@ pub(crate) struct Parsed<'a> {
     pub parts: HierarchyParts<'a>,
     pub meta: Meta,
     pub checksum: u64,
+    pub appearance: materials::AppearanceSections<'a>,
 }
 
 fn finite(v: &[f32]) -> bool {

@@ -2,11 +2,13 @@
 
 use bytemuck::Pod;
 
+use super::materials::AppearanceSections;
 use super::Parsed;
 use crate::checksum::checksum64;
+use crate::format::materials::material_tags;
 use crate::format::{
-    tags, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag, MAGIC, MAX_SECTIONS,
-    SECTION_ALIGN, VERSION_MAJOR,
+    tags, ExtraSection, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag, MAGIC,
+    MAX_SECTIONS, SECTION_ALIGN, VERSION_MAJOR,
 };
 
 /// The section table of `bytes` after its header checks, with the checksum of every byte
@@ -147,11 +149,8 @@ impl SectionTable<'_> {
     }
 }
 
-fn section<'a, T: Pod>(
-    bytes: &'a [u8],
-    table: SectionTable<'_>,
-    tag: Tag,
-) -> Result<&'a [T], FormatError> {
+/// The entry of `tag`, if the table has one; an error if it has two.
+fn find(table: SectionTable<'_>, tag: Tag) -> Result<Option<SectionEntry>, FormatError> {
     let mut found: Option<SectionEntry> = None;
     for e in table.iter() {
         if e.tag == tag {
@@ -161,7 +160,18 @@ fn section<'a, T: Pod>(
             found = Some(e);
         }
     }
-    let e = found.ok_or(FormatError::MissingSection { tag })?;
+    Ok(found)
+}
+
+/// The records of `tag`, if present: of this version's record size and castable in place.
+fn optional_section<'a, T: Pod>(
+    bytes: &'a [u8],
+    table: SectionTable<'_>,
+    tag: Tag,
+) -> Result<Option<&'a [T]>, FormatError> {
+    let Some(e) = find(table, tag)? else {
+        return Ok(None);
+    };
     let expected = core::mem::size_of::<T>() as u32;
     if e.record_size != expected {
         return Err(FormatError::RecordSize {
@@ -173,7 +183,64 @@ fn section<'a, T: Pod>(
     // In range: checked by `section_table_checked`.
     let start = e.offset as usize;
     let end = start + e.record_size as usize * e.record_count as usize;
-    bytemuck::try_cast_slice(&bytes[start..end]).map_err(|_| FormatError::Misaligned { tag })
+    bytemuck::try_cast_slice(&bytes[start..end])
+        .map(Some)
+        .map_err(|_| FormatError::Misaligned { tag })
+}
+
+fn section<'a, T: Pod>(
+    bytes: &'a [u8],
+    table: SectionTable<'_>,
+    tag: Tag,
+) -> Result<&'a [T], FormatError> {
+    optional_section(bytes, table, tag)?.ok_or(FormatError::MissingSection { tag })
+}
+
+/// The appearance sections of a file (found and cast, not validated).
+fn appearance_sections<'a>(
+    bytes: &'a [u8],
+    table: SectionTable<'_>,
+) -> Result<AppearanceSections<'a>, FormatError> {
+    Ok(AppearanceSections {
+        materials: optional_section(bytes, table, material_tags::MATERIALS)?,
+        blob: optional_section(bytes, table, material_tags::BLOB)?,
+        vertex_colours: optional_section(bytes, table, material_tags::VERTEX_COLOURS)?,
+    })
+}
+
+/// The appearance sections among a writer's extra sections, found and cast as a reader
+/// would find them in the written file.
+pub(crate) fn appearance_extras<'a>(
+    extra: &[ExtraSection<'a>],
+) -> Result<AppearanceSections<'a>, FormatError> {
+    fn one<'a, T: Pod>(
+        extra: &[ExtraSection<'a>],
+        tag: Tag,
+    ) -> Result<Option<&'a [T]>, FormatError> {
+        let mut found = extra.iter().filter(|e| e.tag == tag);
+        let Some(e) = found.next() else {
+            return Ok(None);
+        };
+        if found.next().is_some() {
+            return Err(FormatError::DuplicateSection { tag });
+        }
+        let expected = core::mem::size_of::<T>() as u32;
+        if e.record_size != expected {
+            return Err(FormatError::RecordSize {
+                tag,
+                expected,
+                found: e.record_size,
+            });
+        }
+        bytemuck::try_cast_slice(e.bytes)
+            .map(Some)
+            .map_err(|_| FormatError::Misaligned { tag })
+    }
+    Ok(AppearanceSections {
+        materials: one(extra, material_tags::MATERIALS)?,
+        blob: one(extra, material_tags::BLOB)?,
+        vertex_colours: one(extra, material_tags::VERTEX_COLOURS)?,
+    })
 }
 
 /// Finds the known sections of `bytes` (header, table and checksum checked), without
@@ -217,5 +284,6 @@ pub(crate) fn parse_checked(
         parts,
         meta,
         checksum,
+        appearance: appearance_sections(bytes, table)?,
     })
 }
