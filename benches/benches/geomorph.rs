@@ -179,7 +179,6 @@ fn main() {
                         source: IndexSource::Lists(&list_refs),
                         colours: &COLOURS,
                         materials: None,
-
                         morph: Some(Morph {
                             fine: &fine,
                             instances: &inst_buffer,

@@ -152,7 +152,6 @@ impl<'s, 'c> Setup<'s, 'c> {
                 },
                 colours: &COLOURS,
                 materials: None,
-
                 morph: None,
             })
             .collect();
@@ -235,7 +234,6 @@ fn bench_frames(
                     },
                     colours: &COLOURS,
                     materials: None,
-
                     morph: None,
                 })
                 .collect();

@@ -8,4 +8,5 @@ pub mod aligned;
 pub mod demo;
 pub mod flyover;
 pub mod info;
+pub mod materials;
 pub mod snapshot;

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
 use glam::Vec3;
 
+use crate::materials::GpuMaterials;
 use caveclod_core::LookAt;
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Context, Error, FrameStats, IndexSource, Renderer, RendererDesc,
@@ -29,7 +30,7 @@ pub enum Layout {
 }
 
 /// What to render.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SnapshotDesc {
     /// Cameras, 1 to 4.
     pub cameras: usize,
@@ -41,6 +42,9 @@ pub struct SnapshotDesc {
     pub height: u32,
     /// Split screen or one image per camera.
     pub layout: Layout,
+    /// Draw the hierarchy's materials, their texture paths relative to this directory
+    /// (the `.clod` file's); `None`, or a file without materials, draws the palette.
+    pub materials_dir: Option<PathBuf>,
 }
 
 /// What was rendered.
@@ -179,6 +183,7 @@ pub fn render_snapshot(ctx: &Context, h: &Hierarchy<'_>, desc: &SnapshotDesc) ->
         &looks,
         sources,
         active,
+        desc.materials_dir.as_deref().map(|dir| (h, dir)),
     )
 }
 
@@ -232,11 +237,13 @@ pub fn render_octree_snapshot(
         &looks,
         sources,
         active,
+        None,
     )
 }
 
 /// Draws one source per camera in one frame and reads the targets back; destroys the
 /// renderer, the index buffers and `vertices`, also on error.
+#[allow(clippy::too_many_arguments)]
 fn draw(
     ctx: &Context,
     vertices: VertexBuffer,
@@ -245,6 +252,7 @@ fn draw(
     looks: &[LookAt],
     sources: Vec<IndexSource<'_, '_>>,
     active_polygons: Vec<u32>,
+    materials: Option<(&Hierarchy<'_>, &Path)>,
 ) -> Result<Snapshot> {
     let colours: Vec<[f32; 4]> = (0..surfaces).map(palette).collect();
     let renderer = Renderer::new(
@@ -264,6 +272,15 @@ fn draw(
             return Err(e);
         }
     };
+    let gpu = match materials.map(|(h, dir)| GpuMaterials::load(ctx, renderer.recorder(), h, dir)) {
+        Some(Err(e)) => {
+            let _ = renderer.destroy(ctx);
+            vertices.destroy(ctx)?;
+            return Err(e);
+        }
+        Some(Ok(g)) => g,
+        None => None,
+    };
     let mut indices: Vec<CameraIndices> = (0..sources.len())
         .map(|i| CameraIndices::new(&format!("camera {i}"), surfaces, 1))
         .collect();
@@ -280,8 +297,7 @@ fn draw(
                 indices: ind,
                 source,
                 colours: &colours,
-                materials: None,
-
+                materials: gpu.as_ref().map(|g| &g.set),
                 morph: None,
             })
             .collect();
@@ -297,6 +313,7 @@ fn draw(
     })();
     let destroyed = renderer
         .destroy(ctx)
+        .and_then(|()| gpu.map_or(Ok(()), |g| g.destroy(ctx)))
         .and_then(|()| indices.into_iter().try_for_each(|i| i.destroy(ctx)))
         .and_then(|()| vertices.destroy(ctx));
     let snapshot = result?;

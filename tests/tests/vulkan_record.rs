@@ -78,7 +78,6 @@ impl Scene {
             indices,
             colours: &COLOURS,
             materials: None,
-
             morph: None,
             wireframe: false,
         }

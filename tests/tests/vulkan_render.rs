@@ -154,7 +154,6 @@ fn vertex_buffer_written_once_index_bytes_reported() {
                     },
                     colours: &COLOURS,
                     materials: None,
-
                     morph: None,
                 }],
             ),
@@ -250,7 +249,6 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
             },
             colours: &COLOURS,
             materials: None,
-
             morph: None,
         })
         .collect();
@@ -428,7 +426,6 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
                 source: IndexSource::Lists(&list_refs),
                 colours: &COLOURS,
                 materials: None,
-
                 morph: Some(Morph {
                     fine: &fine_buffer,
                     instances: &instances,
@@ -549,7 +546,6 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
                 },
                 colours: &COLOURS,
                 materials: None,
-
                 morph: None,
             }
         })

@@ -75,6 +75,10 @@ fn render_frame(
         } else {
             Layout::SplitScreen
         },
+        materials_dir: Some(a.file.parent().map_or_else(
+            || std::path::PathBuf::from("."),
+            std::path::Path::to_path_buf,
+        )),
     };
     let snapshot = match octree {
         Some(o) => render_octree_snapshot(&ctx, o, &desc),

@@ -127,7 +127,6 @@ fn draw(
                 },
                 colours: &colours,
                 materials: None,
-
                 morph: None,
             })
             .collect();

@@ -282,7 +282,6 @@ fn draw_levels(
             source: IndexSource::Lists(lists),
             colours: scene.colours,
             materials: None,
-
             morph: Some(Morph {
                 fine: &levels[*i].b,
                 instances: inst,

@@ -155,7 +155,6 @@ pub fn render_alone(
                 source,
                 colours: &COLOURS,
                 materials: None,
-
                 morph: None,
             }],
         ),
