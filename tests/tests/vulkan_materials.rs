@@ -4,8 +4,9 @@
 //! - A texture of one texel `T` with factor `F` draws the pixels of no texture with factor
 //!   `T * F`: the texture is sampled and multiplied.
 //! - A texture whose alpha is below the cutoff draws nothing.
-//! - Textures get a full mip chain; uploads recorded into a caller's command buffer work
-//!   like the submitted ones.
+//! - Textures get a full mip chain; wrongly sized pixels are refused.
+//! - Lighting is two-sided: a front face is lit by its normal, a back face by the reversed
+//!   normal (so a triangle facing the light is lit in front and ambient-only behind).
 
 mod vulkan_support;
 
@@ -149,5 +150,63 @@ fn textures_get_a_full_mip_chain_and_reject_wrong_sizes() {
     ok(t.destroy(&ctx), "destroy texture");
     assert!(Texture::new(&ctx, "short", desc, &pixels[..100]).is_err());
     assert_clean(&ctx, "mip chains");
+    ok(ctx.destroy(), "destroy context");
+}
+
+/// One triangle, counter-clockwise seen from +z, its normal +z, seen from `eye_z` on the z
+/// axis: the pixel at the image centre.
+fn triangle_seen_from(ctx: &Context, eye_z: f32) -> [u8; 4] {
+    let normal = [0.0, 0.0, 1.0];
+    let vertex = |x: f32, y: f32| caveclod_core::format::Vertex {
+        position: [x, y, 0.0],
+        normal,
+        uv: [0.01, 0.01],
+    };
+    let vertices = [vertex(-1.0, -1.0), vertex(1.0, -1.0), vertex(0.0, 1.0)];
+    let buffer = ok(
+        VertexBuffer::from_vertices(ctx, "triangle", &vertices),
+        "vertices",
+    );
+    let look = caveclod_vulkan::LookAt {
+        eye: glam::Vec3::new(0.0, 0.0, eye_z),
+        target: glam::Vec3::ZERO,
+        up: glam::Vec3::Y,
+        fov_y: 1.0,
+        near: 0.1,
+        far: 10.0,
+    };
+    let list: [&[u32]; 2] = [&[0, 1, 2], &[]];
+    let image = render_alone(
+        ctx,
+        &buffer,
+        2,
+        &look,
+        (SIZE, SIZE),
+        IndexSource::Lists(&list),
+    );
+    ok(buffer.destroy(ctx), "destroy vertices");
+    image.pixel(SIZE / 2, SIZE / 2).unwrap_or([0; 4])
+}
+
+#[test]
+fn front_faces_are_lit_by_their_normal_and_back_faces_by_its_reverse() {
+    let ctx = context();
+    let light = glam::Vec3::from_array(caveclod_core::gpu::LIGHT_DIRECTION).normalize();
+    let byte = |c: f32, k: f32| (c * k * 255.0).round() as i32;
+    let lit = 0.25 + 0.75 * light.z;
+    let front = triangle_seen_from(&ctx, 3.0);
+    let back = triangle_seen_from(&ctx, -3.0);
+    for (i, &c) in COLOURS[0][..3].iter().enumerate() {
+        // The front faces the light (lambert = l.z); the back faces away (ambient only).
+        assert!(
+            (i32::from(front[i]) - byte(c, lit)).abs() <= 1,
+            "front {front:?}"
+        );
+        assert!(
+            (i32::from(back[i]) - byte(c, 0.25)).abs() <= 1,
+            "back {back:?}"
+        );
+    }
+    assert_clean(&ctx, "front and back faces");
     ok(ctx.destroy(), "destroy context");
 }
