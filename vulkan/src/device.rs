@@ -445,6 +445,14 @@ impl Context {
         self.vertex_uploads.load(Ordering::Relaxed)
     }
 
+    /// Runs `f` with the context's queue, locked against this crate's own submissions for
+    /// the duration (for a tool on a headless context that submits frames it recorded
+    /// itself; an embedding host already has its queue).
+    pub fn with_queue<R>(&self, f: impl FnOnce(vk::Queue) -> R) -> R {
+        let q = self.queue();
+        f(*q)
+    }
+
     /// Waits until the device is idle.
     pub fn wait_idle(&self) -> Result<()> {
         let _q = self.queue();

@@ -16,6 +16,9 @@
 //! criterion runs one benchmark after the other, a change of machine load between them
 //! skews their ratio; a paired measurement after them alternates one waited-for frame of
 //! each, 100 times, and prints the medians and their ratio (`paired frame latency: ...`).
+//! A second paired measurement compares four cameras through the headless `Renderer` with
+//! the same four through the record path as a host drives it (`host.rs`: its own images,
+//! command buffers, fences, barriers and dynamic rendering; `record path / renderer: ...`).
 //! `cargo bench -p caveclod-benches --bench render`; `CAVECLOD_BENCH_RENDER_SIZE=N` changes
 //! the terrain. Without `--bench` (as `cargo test --benches` runs it) each benchmark runs
 //! once on a small terrain.
@@ -30,6 +33,8 @@ use caveclod_vulkan::{
     VertexBuffer, Viewport,
 };
 use criterion::Criterion;
+
+mod host;
 
 const SEED: u64 = 7;
 const WIDTH: u32 = 960;
@@ -171,15 +176,14 @@ impl<'s, 'c> Setup<'s, 'c> {
 /// Frame latency of `b` against `a`, alternating one frame of each for `rounds` rounds so
 /// both see the same machine load; returns the medians.
 fn paired(
-    scene: &Scene<'_>,
-    a: &mut Setup<'_, '_>,
-    b: &mut Setup<'_, '_>,
     rounds: usize,
+    mut a: impl FnMut() -> Duration,
+    mut b: impl FnMut() -> Duration,
 ) -> (f64, f64) {
     let (mut ta, mut tb) = (Vec::new(), Vec::new());
     for _ in 0..rounds {
-        ta.push(a.frame(scene).as_secs_f64());
-        tb.push(b.frame(scene).as_secs_f64());
+        ta.push(a().as_secs_f64());
+        tb.push(b().as_secs_f64());
     }
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
@@ -321,13 +325,23 @@ fn main() {
     let mut a = Setup::new(&ctx, &one, &full);
     let mut b = Setup::new(&ctx, &four, &quadrants);
     let rounds = if benchmarking { 100 } else { 3 };
-    let (ta, tb) = paired(&scene, &mut a, &mut b, rounds);
+    let (ta, tb) = paired(rounds, || a.frame(&scene), || b.frame(&scene));
     println!(
         "paired frame latency over {rounds} alternating rounds (median): 1 camera {:.2} ms, 4 cameras split {:.2} ms; ratio {:.2}",
         ta * 1e3,
         tb * 1e3,
         tb / ta.max(1e-12)
     );
+    // The same four cameras through the record path, driven the way a host does.
+    let mut h4 = host::HostSetup::new(&ctx, &four, &quadrants);
+    let (tr, th) = paired(rounds, || b.frame(&scene), || h4.frame(&scene));
+    println!(
+        "record path / renderer, 4 cameras split, {rounds} alternating rounds (median): renderer {:.2} ms, record path {:.2} ms; ratio {:.2}",
+        tr * 1e3,
+        th * 1e3,
+        th / tr.max(1e-12)
+    );
+    h4.destroy(&ctx);
     a.destroy(&ctx);
     b.destroy(&ctx);
     println!("vertex buffer uploads: {}", ctx.vertex_uploads());
