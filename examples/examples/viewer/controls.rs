@@ -113,7 +113,7 @@ impl CameraControl {
         self.phase += dt;
         let target = self.target();
         self.yaw += 0.35 * dt;
-        self.distance = self.base_distance * (0.75 + 0.35 * (0.6 * self.phase).sin());
+        self.distance = self.base_distance * (0.6 + 0.15 * (0.6 * self.phase).sin());
         self.eye = target - self.forward() * self.distance;
     }
 }

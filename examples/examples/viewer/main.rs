@@ -116,7 +116,6 @@ fn run(args: &Args) -> Result<ExitCode, String> {
     let mut memories = vec![vec![0u32; CameraState::words_needed(&h)]; usize::from(args.cameras)];
     let scene = Scene::new(h, &mut memories, args.tolerance, args.frames.is_some())?;
     let event_loop = EventLoop::new().map_err(|e| format!("event loop: {e}"))?;
-    event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(args, scene);
     let looped = event_loop
         .run_app(&mut app)
@@ -370,6 +369,7 @@ impl ApplicationHandler for App<'_, '_> {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
                 viewer.stale = true;
+                viewer.window.request_redraw();
             }
             WindowEvent::RedrawRequested => self.redraw(event_loop),
             WindowEvent::Focused(false) => self.input.release_all(),
@@ -396,9 +396,19 @@ impl ApplicationHandler for App<'_, '_> {
         }
     }
 
-    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+    /// Draws continuously while there is something to draw into; a window without area
+    /// waits for its next resize.
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         if let Some(v) = &self.viewer {
-            v.window.request_redraw();
+            let drawable = v.res.swapchain.is_some() || v.stale;
+            event_loop.set_control_flow(if drawable {
+                ControlFlow::Poll
+            } else {
+                ControlFlow::Wait
+            });
+            if drawable {
+                v.window.request_redraw();
+            }
         }
     }
 }
