@@ -146,3 +146,55 @@ fn hue(degrees: f32) -> [f32; 4] {
     };
     [0.15 + 0.85 * r, 0.15 + 0.85 * g, 0.15 + 0.85 * b, 1.0]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caveclod_core::RefineParams;
+
+    /// A triangle with its smallest index first, winding kept.
+    fn canonical(t: &[u32]) -> [u32; 3] {
+        let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+    }
+
+    #[test]
+    fn bands_hold_the_emitted_triangles_and_depths_follow_parents() {
+        let baked = caveclod_tests::bake(&caveclod_tests::meshes::terrain(24, 24, 7));
+        let h = baked.hierarchy();
+        let mut memory = vec![0u32; CameraState::words_needed(&h)];
+        let mut cam = CameraState::new(&h, &mut memory).unwrap();
+        let look = caveclod_cli::snapshot::orbit(&h, 1)[0];
+        let params = RefineParams {
+            tolerance_px: 0.5,
+            ..RefineParams::default()
+        };
+        cam.refine(&h, &look.view(256, 256), &params).unwrap();
+        let mut indices = vec![0u32; cam.total_index_count()];
+        let mut offsets = vec![0u32; h.surface_count() + 1];
+        cam.emit_indices_packed(&h, &mut indices, &mut offsets)
+            .unwrap();
+
+        let mut bands = DepthBands::new(&h).unwrap();
+        bands.regroup(&h, &cam).unwrap();
+        let mut emitted: Vec<[u32; 3]> = indices.chunks(3).map(canonical).collect();
+        let mut grouped: Vec<[u32; 3]> = bands
+            .lists()
+            .iter()
+            .flat_map(|l| l.chunks(3))
+            .map(canonical)
+            .collect();
+        emitted.sort_unstable();
+        grouped.sort_unstable();
+        assert!(!emitted.is_empty());
+        assert_eq!(grouped, emitted, "the bands are not the emitted front");
+        let used = bands.lists().iter().filter(|l| !l.is_empty()).count();
+        assert!(used > 1, "a refined front spans several bands, got {used}");
+
+        for (i, n) in h.nodes().iter().enumerate() {
+            let want = n.parent.get().map_or(0, |p| bands.depth[p.index()] + 1);
+            assert_eq!(bands.depth[i], want, "node {i}");
+        }
+        assert_eq!(bands.levels(), h.meta().max_depth + 1);
+    }
+}

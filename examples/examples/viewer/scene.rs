@@ -3,7 +3,7 @@
 //! `CameraState`, steered or animated, refined every frame against its own view unless
 //! frozen) and the display settings.
 
-use std::io::Write as _;
+use std::io::{IsTerminal as _, Write as _};
 use std::path::Path;
 use std::time::Instant;
 
@@ -25,9 +25,9 @@ pub fn load(path: &Path, spacing: Option<f32>) -> Result<AlignedBytes, String> {
         return AlignedBytes::read(path).map_err(|e| format!("{}: {e}", path.display()));
     }
     let start = Instant::now();
-    let mut progress = BakeProgress::default();
+    let mut progress = BakeProgress::new();
     let baked = bake_file(path, &ImportOptions { spacing }, &mut |s| progress.show(s));
-    eprintln!();
+    progress.finish();
     let (baked, info) = baked.map_err(|e| e.to_string())?;
     let bytes = baked
         .to_bytes(&[])
@@ -41,29 +41,60 @@ pub fn load(path: &Path, spacing: Option<f32>) -> Result<AlignedBytes, String> {
     Ok(AlignedBytes::from_slice(&bytes))
 }
 
-/// Prints the bake's stage on one stderr line, the collapses as a percentage.
-#[derive(Default)]
+/// Shows the bake's stage on stderr: on a terminal one line rewritten in place, with the
+/// collapses as a percentage; elsewhere (a log) one line per stage.
 struct BakeProgress {
+    terminal: bool,
     percent: Option<u64>,
+    collapsing: bool,
 }
 
 impl BakeProgress {
+    fn new() -> Self {
+        Self {
+            terminal: std::io::stderr().is_terminal(),
+            percent: None,
+            collapsing: false,
+        }
+    }
+
     fn show(&mut self, s: Stage) {
         let line = match s {
             Stage::Import => "importing".to_string(),
             Stage::Weld => "welding".to_string(),
             Stage::Collapse(done, most) => {
                 let percent = 100 * done / most.max(1);
-                if self.percent == Some(percent) {
+                let shown = if self.terminal {
+                    self.percent == Some(percent)
+                } else {
+                    self.collapsing
+                };
+                if shown {
                     return;
                 }
                 self.percent = Some(percent);
-                format!("collapsing {percent:3}%")
+                self.collapsing = true;
+                if self.terminal {
+                    format!("collapsing {percent:3}%")
+                } else {
+                    "collapsing".to_string()
+                }
             }
             Stage::Assemble => "assembling".to_string(),
         };
-        eprint!("\rbaking: {line:<20}");
-        let _ = std::io::stderr().flush();
+        if self.terminal {
+            eprint!("\rbaking: {line:<20}");
+            let _ = std::io::stderr().flush();
+        } else {
+            eprintln!("baking: {line}");
+        }
+    }
+
+    /// Ends the rewritten line.
+    fn finish(&self) {
+        if self.terminal {
+            eprintln!();
+        }
     }
 }
 

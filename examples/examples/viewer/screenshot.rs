@@ -50,3 +50,31 @@ fn is_background(p: [u8; 4]) -> bool {
         .zip(BACKGROUND_SRGB)
         .all(|(&c, b)| c.abs_diff(b) <= BACKGROUND_SLACK)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coverage_counts_non_background_pixels_outside_the_panel() {
+        let [r, g, b] = BACKGROUND_SRGB;
+        let mut pixels = [r, g, b, 255].repeat(8);
+        // Left viewport: pixel (0, 0) lit (under the panel), (1, 1) lit, (1, 0) within slack.
+        pixels[..4].copy_from_slice(&[255, 0, 0, 255]);
+        pixels[4 * 5..4 * 6].copy_from_slice(&[255, 255, 255, 255]);
+        pixels[4..8].copy_from_slice(&[r + 1, g, b.saturating_sub(2), 255]);
+        let capture = Capture {
+            image: RgbaImage {
+                width: 4,
+                height: 2,
+                pixels,
+            },
+            viewports: Viewport::split_screen(4, 2, 2).unwrap(),
+            panel: Some(egui::Rect::from_min_max(
+                egui::pos2(0.0, 0.0),
+                egui::pos2(1.0, 1.0),
+            )),
+        };
+        assert_eq!(coverage(&capture), vec![1.0 / 3.0, 0.0]);
+    }
+}

@@ -182,3 +182,50 @@ fn project_segment(view_proj: Mat4, a: Vec3, b: Vec3) -> Option<[Vec3; 2]> {
     let ndc = |c: Vec4| c.truncate() / c.w;
     Some([ndc(ca), ndc(cb)])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caveclod_core::LookAt;
+
+    fn look() -> LookAt {
+        LookAt {
+            eye: Vec3::ZERO,
+            target: Vec3::new(0.0, 0.0, -1.0),
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 100.0,
+        }
+    }
+
+    #[test]
+    fn segments_are_clipped_to_the_front_of_the_eye() {
+        let vp = look().view_projection(1.0);
+        let ahead = Vec3::new(0.0, 0.0, -5.0);
+        let behind = Vec3::new(0.0, 0.0, 5.0);
+        let [p, q] = project_segment(vp, ahead, Vec3::new(1.0, 0.0, -5.0)).unwrap();
+        assert!(p.x.abs() < 1e-6 && q.x > 0.0, "{p} {q}");
+        assert!(project_segment(vp, behind, behind + Vec3::X).is_none());
+        let [p, q] = project_segment(vp, ahead + Vec3::X, behind + Vec3::X).unwrap();
+        assert!(p.x > 0.0 && q.x.is_finite() && q.x > p.x, "{p} {q}");
+    }
+
+    #[test]
+    fn a_frustum_has_sixteen_edges_from_the_eye_to_its_target() {
+        let f = Frozen {
+            look: look(),
+            aspect: 2.0,
+        };
+        let edges = frustum_edges(&f);
+        assert_eq!(edges.len(), 16);
+        let far = edges
+            .iter()
+            .map(|(a, b)| a.z.min(b.z))
+            .fold(0.0f32, f32::min);
+        assert!(
+            (far + 1.0).abs() < 1e-5,
+            "far plane at the target's distance: {far}"
+        );
+    }
+}
