@@ -2,10 +2,11 @@
 //!
 //! - `setup [--with-miri]`: checks for, and installs when running as root, what the tests
 //!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
-//!   `spirv-val`), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
+//!   `spirv-val`, and for the viewer's window Xvfb, xauth and the X client libraries), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
 //! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
-//!   no_std build for a microcontroller target, clippy on the core crate without its
+//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (its
+//!   screenshot's coverage and no validation message), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), and the core crate's tests under miri.
 //!   Every step prints a header and its wall time; the run ends with `N passed, M failed`.
 //! - `check-shaders`: the committed SPIR-V (`vulkan/spirv`) is up to date and valid: the
@@ -30,23 +31,35 @@ use std::time::{Duration, Instant};
 const NIGHTLY: &str = "nightly-2026-08-15";
 /// A target without `std`: building the core crate for it proves it is `no_std`.
 const NO_STD_TARGET: &str = "thumbv7em-none-eabihf";
-/// Debian packages that provide the Vulkan pieces `setup` checks for.
+/// Debian packages that provide the Vulkan pieces `setup` checks for, and the X server
+/// and client libraries the viewer's window check runs with.
 const APT_PACKAGES: &[&str] = &[
     "mesa-vulkan-drivers",
     "libvulkan1",
     "vulkan-validationlayers",
     "spirv-tools",
+    "xvfb",
+    "xauth",
+    "libx11-xcb1",
+    "libxcursor1",
+    "libxi6",
+    "libxkbcommon-x11-0",
 ];
+/// The mesh the viewer check opens (baked on the fly, with a material naming its texture)
+/// and the image it writes.
+const VIEWER_MESH: &str = "data/spot/spot_triangulated.obj";
+const VIEWER_TEXTURE: &str = "data/spot/spot_texture.png";
+const VIEWER_SCREENSHOT: &str = "caveclod-viewer-check.png";
 
 const USAGE: &str = "\
 usage: cargo xtask <command>
 
 commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
-                        spirv-val and the thumbv7em-none-eabihf target; --with-miri also
+                        spirv-val, Xvfb and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
   test                  setup, then shader check, fmt, clippy, tests, no_std build,
-                        clippy without prefetch, miri
+                        the viewer under Xvfb, clippy without prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   demo [ARGS..]         setup's Vulkan packages, then
                         cargo run --release -p caveclod-cli --bin caveclod -- demo ARGS
@@ -178,7 +191,29 @@ fn requirements() -> Vec<Requirement> {
             what: "spirv-val",
             found: find_in_path("spirv-val"),
         },
+        Requirement {
+            what: "xvfb-run (a virtual X server for the viewer check)",
+            found: find_in_path("xvfb-run"),
+        },
+        Requirement {
+            what: "xauth",
+            found: find_in_path("xauth"),
+        },
     ]
+    .into_iter()
+    .chain(
+        [
+            "libX11-xcb.so.1",
+            "libXcursor.so.1",
+            "libXi.so.6",
+            "libxkbcommon-x11.so.0",
+        ]
+        .map(|lib| Requirement {
+            what: lib,
+            found: find_library(lib),
+        }),
+    )
+    .collect()
 }
 
 /// The first file in `dir` whose name starts with `prefix` and ends with `suffix`.
@@ -378,6 +413,11 @@ fn test_steps() -> Vec<(String, Step)> {
             "cargo build -p caveclod-core --target thumbv7em-none-eabihf",
             &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
         ),
+        (
+            "viewer under Xvfb (4 cameras, 300 frames, screenshot coverage, no validation messages)"
+                .to_string(),
+            Box::new(viewer_check),
+        ),
         // Without its default `prefetch` feature the core crate forbids `unsafe`.
         step(
             "cargo clippy -p caveclod-core --no-default-features -- -D warnings",
@@ -449,6 +489,75 @@ fn test() -> Result<(), String> {
 
 fn secs(d: Duration) -> String {
     format!("{:.1}s", d.as_secs_f64())
+}
+
+// ---------------------------------------------------------------------------------------
+// viewer
+
+/// Runs the interactive viewer in a virtual X server on lavapipe: 4 cameras, 300 animated
+/// frames, validation on. The viewer itself writes the last frame, checks that every
+/// camera's viewport is at least 10% non-background outside its panel, and exits non-zero
+/// on a validation message (this tool stays std-only, so it cannot decode the PNG).
+fn viewer_check() -> Result<(), String> {
+    let input = textured_spot()?;
+    let input = input.to_string_lossy();
+    let shot = env::temp_dir().join(VIEWER_SCREENSHOT);
+    let shot = shot.to_string_lossy();
+    run(cmd(
+        "xvfb-run",
+        &[
+            "-a",
+            "-s",
+            "-screen 0 1280x720x24",
+            "cargo",
+            "run",
+            "--quiet",
+            "-p",
+            "caveclod-examples",
+            "--example",
+            "viewer",
+            "--",
+            &input,
+            "--cameras",
+            "4",
+            "--frames",
+            "300",
+            "--validation",
+            "--screenshot",
+            &shot,
+            "--min-coverage",
+            "0.1",
+        ],
+    ))?;
+    println!("viewer screenshot: {shot}");
+    Ok(())
+}
+
+/// Spot with its texture as a material: a copy of the OBJ that names an MTL, the MTL, and
+/// the texture, in a temporary directory (Spot ships without an MTL). Returns the OBJ.
+fn textured_spot() -> Result<PathBuf, String> {
+    let dir = env::temp_dir().join("caveclod-viewer-spot");
+    fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mesh = fs::read_to_string(VIEWER_MESH).map_err(|e| format!("{VIEWER_MESH}: {e}"))?;
+    let obj = dir.join("spot.obj");
+    let files = [
+        (
+            obj.clone(),
+            format!("mtllib spot.mtl\nusemtl spot\n{mesh}").into_bytes(),
+        ),
+        (
+            dir.join("spot.mtl"),
+            b"newmtl spot\nKd 1 1 1\nmap_Kd spot_texture.png\n".to_vec(),
+        ),
+        (
+            dir.join("spot_texture.png"),
+            fs::read(VIEWER_TEXTURE).map_err(|e| format!("{VIEWER_TEXTURE}: {e}"))?,
+        ),
+    ];
+    for (path, bytes) in files {
+        fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(obj)
 }
 
 // ---------------------------------------------------------------------------------------

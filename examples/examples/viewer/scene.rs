@@ -1,0 +1,293 @@
+//! What the viewer shows, on the CPU: the hierarchy (a `.clod` file, or a source mesh baked
+//! before the window opens, with progress on stderr), its cameras (each its own
+//! `CameraState`, steered or animated, refined every frame against its own view unless
+//! frozen) and the display settings.
+
+use std::io::{IsTerminal as _, Write as _};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use caveclod_bake::import::ImportOptions;
+use caveclod_bake::pipeline::{bake_file, Stage};
+use caveclod_cli::aligned::AlignedBytes;
+use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_vulkan::Viewport;
+
+use crate::controls::CameraControl;
+
+/// Reads a `.clod` file, or bakes any other file caveclod-bake imports (OBJ, PLY, glTF,
+/// DEM, NPY) in memory, reporting its stages on stderr.
+pub fn load(path: &Path, spacing: Option<f32>) -> Result<AlignedBytes, String> {
+    let is_clod = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("clod"));
+    if is_clod {
+        return AlignedBytes::read(path).map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let start = Instant::now();
+    let mut progress = BakeProgress::new();
+    let baked = bake_file(path, &ImportOptions { spacing }, &mut |s| progress.show(s));
+    progress.finish();
+    let (baked, info) = baked.map_err(|e| e.to_string())?;
+    let bytes = baked
+        .to_bytes(&[])
+        .map_err(|e| format!("{}: serialising the bake: {e}", path.display()))?;
+    eprintln!(
+        "baked {} ({} triangles) in {:.1} s",
+        path.display(),
+        info.input_triangles,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(AlignedBytes::from_slice(&bytes))
+}
+
+/// Shows the bake's stage on stderr: on a terminal one line rewritten in place, with the
+/// collapses as a percentage; elsewhere (a log) one line per stage.
+struct BakeProgress {
+    terminal: bool,
+    percent: Option<u64>,
+    collapsing: bool,
+}
+
+impl BakeProgress {
+    fn new() -> Self {
+        Self {
+            terminal: std::io::stderr().is_terminal(),
+            percent: None,
+            collapsing: false,
+        }
+    }
+
+    fn show(&mut self, s: Stage) {
+        let line = match s {
+            Stage::Import => "importing".to_string(),
+            Stage::Weld => "welding".to_string(),
+            Stage::Collapse(done, most) => {
+                let percent = 100 * done / most.max(1);
+                let shown = if self.terminal {
+                    self.percent == Some(percent)
+                } else {
+                    self.collapsing
+                };
+                if shown {
+                    return;
+                }
+                self.percent = Some(percent);
+                self.collapsing = true;
+                if self.terminal {
+                    format!("collapsing {percent:3}%")
+                } else {
+                    "collapsing".to_string()
+                }
+            }
+            Stage::Assemble => "assembling".to_string(),
+        };
+        if self.terminal {
+            eprint!("\rbaking: {line:<20}");
+            let _ = std::io::stderr().flush();
+        } else {
+            eprintln!("baking: {line}");
+        }
+    }
+
+    /// Ends the rewritten line.
+    fn finish(&self) {
+        if self.terminal {
+            eprintln!();
+        }
+    }
+}
+
+/// How the mesh is coloured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColourMode {
+    /// The file's materials (base-colour textures and factors).
+    Materials,
+    /// A palette colour per surface.
+    Surface,
+    /// A colour per band of hierarchy depth of the active front.
+    Depth,
+}
+
+impl ColourMode {
+    /// The next mode; materials only when the file has them.
+    pub fn next(self, has_materials: bool) -> Self {
+        match self {
+            Self::Materials => Self::Surface,
+            Self::Surface => Self::Depth,
+            Self::Depth if has_materials => Self::Materials,
+            Self::Depth => Self::Surface,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Materials => "materials",
+            Self::Surface => "by surface",
+            Self::Depth => "by hierarchy depth",
+        }
+    }
+}
+
+/// What the keys change.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    /// Screen-space tolerance of refinement, pixels.
+    pub tolerance_px: f32,
+    pub colour: ColourMode,
+    pub wireframe: bool,
+    /// The camera the keys and mouse steer.
+    pub selected: usize,
+}
+
+/// One camera's figures of the last frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CameraStats {
+    pub polygons: u32,
+    /// Splits plus collapses.
+    pub operations: u32,
+    pub refine_ms: f64,
+    /// Index emission into the mapped index buffers (and, coloured by depth, the regrouping).
+    pub emit_ms: f64,
+}
+
+/// A camera: its front, how it moves, and whether its front is frozen.
+pub struct SceneCamera<'h> {
+    pub state: CameraState<'h>,
+    pub control: CameraControl,
+    /// The view the front was last refined for, while frozen: the front stays as it was
+    /// while the camera keeps moving.
+    pub frozen: Option<Frozen>,
+    /// Moves by itself until steered.
+    pub animated: bool,
+    pub stats: CameraStats,
+}
+
+/// A frozen camera's view and the aspect of its viewport then.
+#[derive(Clone, Copy, Debug)]
+pub struct Frozen {
+    pub look: LookAt,
+    pub aspect: f32,
+}
+
+/// The hierarchy, its cameras and the settings.
+pub struct Scene<'h> {
+    pub h: Hierarchy<'h>,
+    /// The directory the materials' texture paths are relative to (the input's).
+    pub texture_dir: PathBuf,
+    pub cameras: Vec<SceneCamera<'h>>,
+    pub settings: Settings,
+}
+
+impl<'h> Scene<'h> {
+    /// One camera per memory (each [`CameraState::words_needed`] words), placed around
+    /// the mesh as caveclod's snapshots place them; animated if `animate`.
+    pub fn new(
+        h: Hierarchy<'h>,
+        texture_dir: PathBuf,
+        memories: &'h mut [Vec<u32>],
+        tolerance_px: f32,
+        animate: bool,
+    ) -> Result<Self, String> {
+        let m = h.meta();
+        let (lo, hi) = (
+            caveclod_core::glam::Vec3::from_array(m.bounds_min),
+            caveclod_core::glam::Vec3::from_array(m.bounds_max),
+        );
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-6);
+        let looks = caveclod_cli::snapshot::orbit(&h, memories.len());
+        let mut cameras = Vec::with_capacity(memories.len());
+        for (i, (memory, look)) in memories.iter_mut().zip(looks).enumerate() {
+            let state =
+                CameraState::new(&h, memory).map_err(|e| format!("camera {}: {e}", i + 1))?;
+            cameras.push(SceneCamera {
+                state,
+                control: CameraControl::from_look(&look, centre, radius, i),
+                frozen: None,
+                animated: animate,
+                stats: CameraStats::default(),
+            });
+        }
+        let colour = if h.materials().is_some() {
+            ColourMode::Materials
+        } else {
+            ColourMode::Surface
+        };
+        Ok(Self {
+            h,
+            texture_dir,
+            cameras,
+            settings: Settings {
+                tolerance_px,
+                colour,
+                wireframe: false,
+                selected: 0,
+            },
+        })
+    }
+
+    /// Moves the animated cameras by `dt` seconds.
+    pub fn animate(&mut self, dt: f32) {
+        for c in self.cameras.iter_mut().filter(|c| c.animated) {
+            c.control.animate(dt);
+        }
+    }
+
+    /// Refines every camera that is not frozen against its own view in its viewport.
+    pub fn refine(&mut self, viewports: &[Viewport]) -> Result<(), String> {
+        let params = RefineParams {
+            tolerance_px: self.settings.tolerance_px,
+            ..RefineParams::default()
+        };
+        for (i, (c, vp)) in self.cameras.iter_mut().zip(viewports).enumerate() {
+            if c.frozen.is_some() {
+                c.stats.operations = 0;
+                c.stats.refine_ms = 0.0;
+                continue;
+            }
+            let view = c.control.look().view(vp.width, vp.height);
+            let start = Instant::now();
+            let stats = c
+                .state
+                .refine(&self.h, &view, &params)
+                .map_err(|e| format!("camera {}: refinement: {e}", i + 1))?;
+            c.stats.refine_ms = start.elapsed().as_secs_f64() * 1e3;
+            c.stats.operations = stats.splits + stats.collapses;
+            c.stats.polygons = stats.active_polygons;
+        }
+        Ok(())
+    }
+
+    /// Freezes the selected camera's front at its current view, or thaws it.
+    pub fn toggle_freeze(&mut self, viewport: Viewport) {
+        if let Some(c) = self.cameras.get_mut(self.settings.selected) {
+            c.frozen = match c.frozen {
+                Some(_) => None,
+                None => Some(Frozen {
+                    look: c.control.look(),
+                    aspect: viewport.aspect(),
+                }),
+            };
+        }
+    }
+
+    /// Multiplies the tolerance by `factor`, within 0.05 to 500 pixels.
+    pub fn scale_tolerance(&mut self, factor: f32) {
+        self.settings.tolerance_px = (self.settings.tolerance_px * factor).clamp(0.05, 500.0);
+    }
+
+    /// Steers camera `i` from now on (if there is one).
+    pub fn select(&mut self, i: usize) {
+        if i < self.cameras.len() {
+            self.settings.selected = i;
+        }
+    }
+
+    /// The steered camera (stops animating).
+    pub fn steered(&mut self) -> Option<&mut SceneCamera<'h>> {
+        let c = self.cameras.get_mut(self.settings.selected)?;
+        c.animated = false;
+        Some(c)
+    }
+}

@@ -1,0 +1,384 @@
+//! The window and everything the GPU holds for it: the host's device ([`Gpu`]), caveclod's
+//! context, recorder, vertex buffer and per-camera index rings, the swapchain and frame
+//! slots, and egui's renderer; made when the window opens, destroyed explicitly on exit.
+
+use caveclod_vulkan::ash::vk;
+use caveclod_vulkan::{
+    CameraIndices, Context, Recorder, RecorderDesc, TargetFormats, VertexBuffer,
+};
+use egui_ash_renderer::allocator::GpuAllocator;
+use egui_ash_renderer::{DynamicRendering, Options, RenderMode};
+use winit::dpi::PhysicalSize;
+use winit::event::WindowEvent;
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Window;
+
+use caveclod_cli::materials::GpuMaterials;
+
+use crate::depth::DepthBands;
+use crate::gpu::{vk_err, Gpu};
+use crate::scene::Scene;
+use crate::swapchain::{FrameSlot, Swapchain, SwapchainDesc, FRAMES_IN_FLIGHT};
+
+/// egui's renderer, drawing with the host's allocator.
+pub type EguiRenderer = egui_ash_renderer::Renderer<GpuAllocator>;
+
+/// How to open the window.
+#[derive(Clone, Copy, Debug)]
+pub struct WindowDesc {
+    pub width: u32,
+    pub height: u32,
+    pub vsync: bool,
+    pub validation: bool,
+}
+
+/// A camera's index rings: one list per surface, and one per depth band.
+pub struct Rings {
+    pub surfaces: CameraIndices,
+    pub bands: CameraIndices,
+}
+
+/// What the frames draw with, besides the host's device.
+pub struct Resources {
+    pub recorder: Recorder,
+    /// The file's materials for the recorder, if it has any.
+    pub materials: Option<GpuMaterials>,
+    pub vertices: VertexBuffer,
+    pub rings: Vec<Rings>,
+    pub slots: Vec<FrameSlot>,
+    /// Where egui's texture uploads allocate their command buffers.
+    pub upload_pool: vk::CommandPool,
+    pub egui: EguiRenderer,
+    /// `None` while the window has no area (minimised).
+    pub swapchain: Option<Swapchain>,
+}
+
+/// The window, the GPU side and the egui state.
+pub struct Viewer {
+    pub gpu: Gpu,
+    pub ctx: Context,
+    pub res: Resources,
+    pub desc: SwapchainDesc,
+    pub bands: DepthBands,
+    pub surface_colours: Vec<[f32; 4]>,
+    pub band_colours: Vec<[f32; 4]>,
+    pub egui_ctx: egui::Context,
+    pub egui_state: egui_winit::State,
+    /// The swapchain no longer matches the window.
+    pub stale: bool,
+    /// Frames recorded so far (frame `n` uses slot `n % FRAMES_IN_FLIGHT`).
+    pub frame: u64,
+    /// egui textures to free once the GPU is done with the frames that drew them.
+    pub pending_free: Vec<egui::TextureId>,
+    // Last: the surface is destroyed (in `destroy`) before the window is dropped.
+    pub window: Window,
+}
+
+impl Viewer {
+    /// Opens the window and makes everything the frames need for `scene`.
+    pub fn new(
+        event_loop: &ActiveEventLoop,
+        scene: &Scene<'_>,
+        w: WindowDesc,
+    ) -> Result<Self, String> {
+        let attributes = Window::default_attributes()
+            .with_title("caveclod viewer")
+            .with_inner_size(PhysicalSize::new(w.width, w.height));
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| format!("opening the window: {e}"))?;
+        let gpu = Gpu::new(&window, w.validation)?;
+        let made = gpu.context().and_then(|ctx| {
+            let ready = SwapchainDesc::choose(&gpu, w.vsync)
+                .and_then(|desc| Ok((desc, DepthBands::new(&scene.h)?)))
+                .and_then(|(desc, bands)| {
+                    let res = Resources::new(&gpu, &ctx, scene, desc, &bands, &window)?;
+                    Ok((desc, bands, res))
+                });
+            match ready {
+                Ok(r) => Ok((ctx, r)),
+                Err(e) => {
+                    let _ = ctx.destroy();
+                    Err(e)
+                }
+            }
+        });
+        let (ctx, (desc, bands, res)) = match made {
+            Ok(m) => m,
+            Err(e) => {
+                let _ = gpu.destroy();
+                return Err(e);
+            }
+        };
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            None,
+        );
+        let surface_colours = (0..scene.h.surface_count())
+            .map(caveclod_cli::snapshot::palette)
+            .collect();
+        let band_colours = bands.colours();
+        Ok(Self {
+            gpu,
+            ctx,
+            res,
+            desc,
+            bands,
+            surface_colours,
+            band_colours,
+            egui_ctx,
+            egui_state,
+            stale: false,
+            frame: 0,
+            pending_free: Vec::new(),
+            window,
+        })
+    }
+
+    /// Passes a window event to egui; `true` if egui wants it for itself.
+    pub fn on_window_event(&mut self, event: &WindowEvent) -> bool {
+        self.egui_state
+            .on_window_event(&self.window, event)
+            .consumed
+    }
+
+    /// The window's drawable size.
+    pub fn size(&self) -> vk::Extent2D {
+        let s = self.window.inner_size();
+        vk::Extent2D {
+            width: s.width,
+            height: s.height,
+        }
+    }
+
+    /// Replaces the swapchain with one for the window's current size (none while the
+    /// window has no area).
+    pub fn recreate_swapchain(&mut self) -> Result<(), String> {
+        self.gpu.wait_idle()?;
+        let old = self.res.swapchain.take();
+        let made = Swapchain::new(
+            &self.gpu,
+            self.desc,
+            self.size(),
+            old.as_ref()
+                .map_or(vk::SwapchainKHR::null(), Swapchain::raw),
+        );
+        if let Some(old) = old {
+            old.destroy(&self.gpu);
+        }
+        self.res.swapchain = made?;
+        self.stale = false;
+        Ok(())
+    }
+
+    /// Waits for the GPU, then destroys everything in reverse order of creation; returns
+    /// the validation messages recorded (including the teardown's) and the first error.
+    pub fn destroy(self) -> (Vec<String>, Result<(), String>) {
+        let log = self.gpu.log.clone();
+        let mut result = self.gpu.wait_idle();
+        let mut keep = |r: Result<(), String>| {
+            if let (Ok(()), Err(e)) = (&result, r) {
+                result = Err(e);
+            }
+        };
+        keep(self.res.destroy(&self.gpu, &self.ctx));
+        keep(self.ctx.destroy().map_err(|e| format!("caveclod: {e}")));
+        keep(self.gpu.destroy());
+        drop(self.window);
+        (log.take(), result)
+    }
+}
+
+impl Resources {
+    /// Recorder (for the swapchain's formats, wireframe where the device has it), vertex
+    /// buffer, index rings, frame slots, egui's renderer and the swapchain, each step
+    /// undoing the earlier ones if it fails.
+    fn new(
+        gpu: &Gpu,
+        ctx: &Context,
+        scene: &Scene<'_>,
+        desc: SwapchainDesc,
+        bands: &DepthBands,
+        window: &Window,
+    ) -> Result<Self, String> {
+        let formats = TargetFormats {
+            colour: desc.format.format,
+            depth: desc.depth,
+            samples: vk::SampleCountFlags::TYPE_1,
+        };
+        let recorder = Recorder::new(
+            ctx,
+            RecorderDesc {
+                wireframe: ctx.features().fill_mode_non_solid,
+                ..RecorderDesc::dynamic(formats)
+            },
+        )
+        .map_err(|e| format!("caveclod recorder: {e}"))?;
+        let materials = match GpuMaterials::load(ctx, &recorder, &scene.h, &scene.texture_dir) {
+            Ok(m) => m,
+            Err(e) => {
+                let _ = recorder.destroy(ctx);
+                return Err(format!("materials: {e}"));
+            }
+        };
+        let undo = |materials: Option<GpuMaterials>, recorder: Recorder| {
+            if let Some(m) = materials {
+                let _ = m.destroy(ctx);
+            }
+            let _ = recorder.destroy(ctx);
+        };
+        let vertices = match VertexBuffer::from_hierarchy(ctx, "mesh", &scene.h) {
+            Ok(v) => v,
+            Err(e) => {
+                undo(materials, recorder);
+                return Err(format!("vertex buffer: {e}"));
+            }
+        };
+        let rings = (0..scene.cameras.len())
+            .map(|i| Rings {
+                surfaces: CameraIndices::new(
+                    &format!("camera {}", i + 1),
+                    scene.h.surface_count(),
+                    FRAMES_IN_FLIGHT,
+                ),
+                bands: CameraIndices::new(
+                    &format!("camera {} depth bands", i + 1),
+                    bands.band_count(),
+                    FRAMES_IN_FLIGHT,
+                ),
+            })
+            .collect();
+        let (slots, upload_pool) = match frame_slots(gpu) {
+            Ok(s) => s,
+            Err(e) => {
+                let _ = vertices.destroy(ctx);
+                undo(materials, recorder);
+                return Err(e);
+            }
+        };
+        let egui = match egui_renderer(gpu, desc) {
+            Ok(r) => r,
+            Err(e) => {
+                destroy_slots(gpu, slots, upload_pool);
+                let _ = vertices.destroy(ctx);
+                undo(materials, recorder);
+                return Err(e);
+            }
+        };
+        let mut res = Self {
+            recorder,
+            materials,
+            vertices,
+            rings,
+            slots,
+            upload_pool,
+            egui,
+            swapchain: None,
+        };
+        let size = window.inner_size();
+        let extent = vk::Extent2D {
+            width: size.width,
+            height: size.height,
+        };
+        match Swapchain::new(gpu, desc, extent, vk::SwapchainKHR::null()) {
+            Ok(s) => {
+                res.swapchain = s;
+                Ok(res)
+            }
+            Err(e) => {
+                let _ = res.destroy(gpu, ctx);
+                Err(e)
+            }
+        }
+    }
+
+    /// Destroys everything; the device must be idle.
+    fn destroy(self, gpu: &Gpu, ctx: &Context) -> Result<(), String> {
+        if let Some(s) = self.swapchain {
+            s.destroy(gpu);
+        }
+        // egui's renderer frees its buffers, textures and pipeline when dropped (its only
+        // way to be destroyed); before the allocator it draws from.
+        drop(self.egui);
+        destroy_slots(gpu, self.slots, self.upload_pool);
+        let mut first = Ok(());
+        for r in self.rings {
+            for ring in [r.surfaces, r.bands] {
+                if let Err(e) = ring.destroy(ctx) {
+                    first = first.and(Err(format!("index ring: {e}")));
+                }
+            }
+        }
+        if let Err(e) = self.vertices.destroy(ctx) {
+            first = first.and(Err(format!("vertex buffer: {e}")));
+        }
+        if let Some(m) = self.materials {
+            if let Err(e) = m.destroy(ctx) {
+                first = first.and(Err(format!("materials: {e}")));
+            }
+        }
+        if let Err(e) = self.recorder.destroy(ctx) {
+            first = first.and(Err(format!("recorder: {e}")));
+        }
+        first
+    }
+}
+
+/// The frame slots and the pool egui's uploads use.
+fn frame_slots(gpu: &Gpu) -> Result<(Vec<FrameSlot>, vk::CommandPool), String> {
+    let mut slots = Vec::with_capacity(FRAMES_IN_FLIGHT);
+    for _ in 0..FRAMES_IN_FLIGHT {
+        match FrameSlot::new(gpu) {
+            Ok(s) => slots.push(s),
+            Err(e) => {
+                destroy_slots(gpu, slots, vk::CommandPool::null());
+                return Err(e);
+            }
+        }
+    }
+    let info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(gpu.family)
+        .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+    // SAFETY: valid create info.
+    match unsafe { gpu.device.create_command_pool(&info, None) } {
+        Ok(pool) => Ok((slots, pool)),
+        Err(e) => {
+            destroy_slots(gpu, slots, vk::CommandPool::null());
+            Err(vk_err("vkCreateCommandPool")(e))
+        }
+    }
+}
+
+fn destroy_slots(gpu: &Gpu, slots: Vec<FrameSlot>, pool: vk::CommandPool) {
+    for s in slots {
+        s.destroy(gpu);
+    }
+    // SAFETY: the device is idle (the callers' contract); a null pool is ignored.
+    unsafe { gpu.device.destroy_command_pool(pool, None) };
+}
+
+/// egui's renderer for the swapchain's formats, drawing in the same dynamic rendering as
+/// caveclod (no depth test), one vertex and index buffer per frame in flight.
+fn egui_renderer(gpu: &Gpu, desc: SwapchainDesc) -> Result<EguiRenderer, String> {
+    EguiRenderer::with_gpu_allocator(
+        gpu.allocator.clone(),
+        gpu.device.clone(),
+        RenderMode::DynamicRendering(DynamicRendering {
+            color_attachment_format: desc.format.format,
+            depth_attachment_format: Some(desc.depth),
+            stencil_attachment_format: None,
+        }),
+        Options {
+            in_flight_frames: FRAMES_IN_FLIGHT,
+            enable_depth_test: false,
+            enable_depth_write: false,
+            srgb_framebuffer: desc.srgb(),
+        },
+    )
+    .map_err(|e| format!("egui renderer: {e}"))
+}
