@@ -45,10 +45,9 @@ const APT_PACKAGES: &[&str] = &[
     "libxi6",
     "libxkbcommon-x11-0",
 ];
-/// The mesh the viewer check opens (baked on the fly, with a material naming its texture)
-/// and the image it writes.
-const VIEWER_MESH: &str = "data/spot/spot_triangulated.obj";
-const VIEWER_TEXTURE: &str = "data/spot/spot_texture.png";
+/// The mesh the viewer check opens (baked on the fly; its material names its texture) and
+/// the image it writes.
+const VIEWER_INPUT: &str = "data/spot/spot_triangulated.obj";
 const VIEWER_SCREENSHOT: &str = "caveclod-viewer-check.png";
 
 const USAGE: &str = "\
@@ -499,8 +498,6 @@ fn secs(d: Duration) -> String {
 /// camera's viewport is at least 10% non-background outside its panel, and exits non-zero
 /// on a validation message (this tool stays std-only, so it cannot decode the PNG).
 fn viewer_check() -> Result<(), String> {
-    let input = textured_spot()?;
-    let input = input.to_string_lossy();
     let shot = env::temp_dir().join(VIEWER_SCREENSHOT);
     let shot = shot.to_string_lossy();
     run(cmd(
@@ -517,7 +514,7 @@ fn viewer_check() -> Result<(), String> {
             "--example",
             "viewer",
             "--",
-            &input,
+            VIEWER_INPUT,
             "--cameras",
             "4",
             "--frames",
@@ -531,33 +528,6 @@ fn viewer_check() -> Result<(), String> {
     ))?;
     println!("viewer screenshot: {shot}");
     Ok(())
-}
-
-/// Spot with its texture as a material: a copy of the OBJ that names an MTL, the MTL, and
-/// the texture, in a temporary directory (Spot ships without an MTL). Returns the OBJ.
-fn textured_spot() -> Result<PathBuf, String> {
-    let dir = env::temp_dir().join("caveclod-viewer-spot");
-    fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mesh = fs::read_to_string(VIEWER_MESH).map_err(|e| format!("{VIEWER_MESH}: {e}"))?;
-    let obj = dir.join("spot.obj");
-    let files = [
-        (
-            obj.clone(),
-            format!("mtllib spot.mtl\nusemtl spot\n{mesh}").into_bytes(),
-        ),
-        (
-            dir.join("spot.mtl"),
-            b"newmtl spot\nKd 1 1 1\nmap_Kd spot_texture.png\n".to_vec(),
-        ),
-        (
-            dir.join("spot_texture.png"),
-            fs::read(VIEWER_TEXTURE).map_err(|e| format!("{VIEWER_TEXTURE}: {e}"))?,
-        ),
-    ];
-    for (path, bytes) in files {
-        fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    Ok(obj)
 }
 
 // ---------------------------------------------------------------------------------------

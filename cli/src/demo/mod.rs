@@ -23,6 +23,9 @@ use crate::aligned::AlignedBytes;
 use caveclod_bake::baked::{write_atomically, Baked};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::bake_file;
+use caveclod_vulkan::{Context, HeadlessDesc};
+
+use crate::snapshot::{render_snapshot, write_png, Layout, SnapshotDesc};
 
 pub use flights::{fly_all, ratios, Flights, Ratios, DISPLAY_FPS, SEGMENT, THREADS_ROUNDS};
 pub use report::results_table;
@@ -168,7 +171,8 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
     report::write_csv(&csv, &flights)?;
     files.push(csv);
     files.extend(figures::write_plots(&options.out, &flights)?);
-    let pictures = draw_pictures(&h, options, &mut files, say);
+    let mut pictures = draw_pictures(&h, options, &mut files, say);
+    pictures.push_str(&draw_model(&model, options, &mut files, say));
     let mut text = report::report(
         &terrain,
         &model,
@@ -208,6 +212,54 @@ fn bake_inputs(
     say(&format!("baking {}", shown(&model_path)));
     let model = bake_cached(&model_path, &cache, options.rebake)?;
     Ok((terrain, model))
+}
+
+/// Draws Spot with its texture from four orbiting cameras (one split-screen frame, each
+/// camera refined at 1 px) into `spot.png`, adding it to `files`; returns the report's
+/// sentence about it (empty when no pictures are drawn).
+fn draw_model(
+    model: &Loaded,
+    options: &DemoOptions,
+    files: &mut Vec<PathBuf>,
+    say: &mut dyn FnMut(&str),
+) -> String {
+    if options.no_render {
+        return String::new();
+    }
+    say("drawing Spot with its texture from 4 cameras");
+    let drawn = (|| -> Result<PathBuf, String> {
+        let h = model.hierarchy()?;
+        let ctx = Context::headless(&HeadlessDesc {
+            validation: false,
+            prefer_lavapipe: true,
+        })
+        .map_err(|e| e.to_string())?;
+        let desc = SnapshotDesc {
+            cameras: 4,
+            tolerance_px: 1.0,
+            width: 1280,
+            height: 720,
+            layout: Layout::SplitScreen,
+            materials_dir: model.input.parent().map(Path::to_path_buf),
+        };
+        let snapshot = render_snapshot(&ctx, &h, &desc).map_err(|e| e.to_string());
+        let destroyed = ctx.destroy().map_err(|e| e.to_string());
+        let snapshot = snapshot?;
+        destroyed?;
+        let path = options.out.join("spot.png");
+        let image = snapshot.images.first().ok_or("no image drawn")?;
+        write_png(image, &path).map_err(|e| e.to_string())?;
+        Ok(path)
+    })();
+    match drawn {
+        Ok(path) => {
+            files.push(path);
+            " Spot with its texture (its material, drawn by the record path), four cameras \
+             at 1 px: `spot.png`."
+                .to_string()
+        }
+        Err(e) => format!(" Spot was not drawn: {e}."),
+    }
 }
 
 /// Draws the four cameras' split screen at four frames of the flight on the Vulkan device,
