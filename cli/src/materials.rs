@@ -97,11 +97,13 @@ impl GpuMaterials {
                         AlphaMode::Mask { cutoff } => cutoff,
                         AlphaMode::Opaque | AlphaMode::Blend => 0.0,
                     },
+                    blend: m.alpha == AlphaMode::Blend,
                 },
                 None => SurfaceMaterial {
                     texture: None,
                     factor: palette(s),
                     alpha_cutoff: 0.0,
+                    blend: false,
                 },
             })
             .collect();

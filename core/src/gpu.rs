@@ -184,11 +184,33 @@ pub fn shade(
     rgb.extend(colour.w)
 }
 
-/// The base colour of a fragment: the sampled base-colour `texel` times the push block's
-/// colour, component-wise.
+/// The base colour of a fragment: the sampled base-colour `texel` times the interpolated
+/// (linear) vertex colour times the push block's colour, component-wise.
 #[inline]
-pub fn base_colour(texel: Vec4, push: &DrawPush) -> Vec4 {
-    texel * Vec4::from_array(push.colour)
+pub fn base_colour(texel: Vec4, vertex: Vec4, push: &DrawPush) -> Vec4 {
+    texel * vertex * Vec4::from_array(push.colour)
+}
+
+/// One sRGB-encoded channel in `0..=1` as linear light (the sRGB transfer function).
+#[inline]
+fn srgb_channel(s: f32) -> f32 {
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        libm::powf((s + 0.055) / 1.055, 2.4)
+    }
+}
+
+/// A stored vertex colour as the vertex stage reads it (RGBA8 as UNORM: sRGB-encoded colour,
+/// linear alpha) in linear RGBA.
+#[inline]
+pub fn vertex_colour(encoded: Vec4) -> Vec4 {
+    Vec4::new(
+        srgb_channel(encoded.x),
+        srgb_channel(encoded.y),
+        srgb_channel(encoded.z),
+        encoded.w,
+    )
 }
 
 /// Whether a fragment of base colour `base` is discarded: its alpha is below the push
@@ -247,16 +269,36 @@ mod tests {
         let push = DrawPush::material(Mat4::IDENTITY, Vec4::new(1.0, 0.5, 0.5, 0.8), 0.5);
         let n = Vec3::from_array(LIGHT_DIRECTION);
         let texel = Vec4::new(0.5, 1.0, 0.2, 1.0);
-        let base = base_colour(texel, &push);
+        let base = base_colour(texel, Vec4::ONE, &push);
         assert_eq!(base, Vec4::new(0.5, 0.5, 0.1, 0.8));
+        let tinted = base_colour(texel, Vec4::new(1.0, 0.5, 1.0, 0.5), &push);
+        assert_eq!(tinted, Vec4::new(0.5, 0.25, 0.1, 0.4));
         assert!(!cut(base, &push));
         let want = shade(n, true, Vec2::ZERO, base, 0.0);
         assert_eq!(fragment(n, true, Vec2::ZERO, base, &push), want);
         // 0.5 * 0.8 = 0.4 is below the cutoff.
-        let faint = base_colour(Vec4::new(1.0, 1.0, 1.0, 0.5), &push);
+        let faint = base_colour(Vec4::new(1.0, 1.0, 1.0, 0.5), Vec4::ONE, &push);
         assert!(cut(faint, &push));
         // Palette blocks never discard.
         let palette = DrawPush::new(Mat4::IDENTITY, Vec4::ONE);
-        assert!(!cut(base_colour(Vec4::ZERO, &palette), &palette));
+        assert!(!cut(base_colour(Vec4::ZERO, Vec4::ONE, &palette), &palette));
+    }
+
+    #[test]
+    fn vertex_colours_decode_as_the_file_format_does() {
+        for v in [0u8, 1, 10, 11, 64, 128, 200, 254, 255] {
+            let c = [v, 255 - v, v / 2, v];
+            let encoded = Vec4::new(
+                f32::from(c[0]) / 255.0,
+                f32::from(c[1]) / 255.0,
+                f32::from(c[2]) / 255.0,
+                f32::from(c[3]) / 255.0,
+            );
+            let want = Vec4::from_array(crate::format::materials::vertex_colour_linear(c));
+            assert!(
+                (vertex_colour(encoded) - want).abs().max_element() < 1e-6,
+                "{c:?}"
+            );
+        }
     }
 }

@@ -272,7 +272,8 @@ fn main() -> Fallible<()> {
     // The host's frame: caveclod's uploads, then its draws inside the host's render pass.
     // SAFETY: `cmd` is fresh.
     unsafe { d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()) }?;
-    let (vertices, vertex_staging) = VertexBuffer::record_upload(&ctx, cmd, "spot", h.vertices())?;
+    let (vertices, vertex_staging) =
+        VertexBuffer::record_upload(&ctx, cmd, "spot", h.vertices(), h.vertex_colours())?;
     let desc = TextureDesc {
         width: texture.width(),
         height: texture.height(),
@@ -284,6 +285,7 @@ fn main() -> Fallible<()> {
         texture: Some(&tex),
         factor: [1.0; 4],
         alpha_cutoff: 0.0,
+        blend: false,
     };
     let materials = MaterialSet::new(&ctx, &recorder, &vec![surface; h.surface_count()])?;
     let clear = vk::ClearValue {

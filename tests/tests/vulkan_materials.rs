@@ -5,6 +5,7 @@
 //!   `T * F`: the texture is sampled and multiplied.
 //! - A texture whose alpha is below the cutoff draws nothing.
 //! - Textures get a full mip chain; wrongly sized pixels are refused.
+//! - Vertex colours multiply the surface colour; blended surfaces mix with what lies behind.
 //! - Lighting is two-sided: a front face is lit by its normal, a back face by the reversed
 //!   normal (so a triangle facing the light is lit in front and ambient-only behind).
 
@@ -82,6 +83,7 @@ fn plain(factor: [f32; 4]) -> SurfaceMaterial<'static> {
         texture: None,
         factor,
         alpha_cutoff: 0.0,
+        blend: false,
     }
 }
 
@@ -96,6 +98,7 @@ fn a_texel_times_its_factor_equals_the_product_as_factor() {
         texture: Some(&texel),
         factor,
         alpha_cutoff: 0.0,
+        blend: false,
     };
     let a = render_with(&ctx, &[textured, textured]);
     let b = render_with(&ctx, &[plain(product), plain(product)]);
@@ -121,6 +124,7 @@ fn fragments_below_the_alpha_cutoff_are_discarded() {
         texture: Some(&clear),
         factor: [1.0; 4],
         alpha_cutoff: 0.5,
+        blend: false,
     };
     let kept = SurfaceMaterial {
         alpha_cutoff: 0.1,
@@ -154,19 +158,39 @@ fn textures_get_a_full_mip_chain_and_reject_wrong_sizes() {
 }
 
 /// One triangle, counter-clockwise seen from +z, its normal +z, seen from `eye_z` on the z
-/// axis: the pixel at the image centre.
-fn triangle_seen_from(ctx: &Context, eye_z: f32) -> [u8; 4] {
-    let normal = [0.0, 0.0, 1.0];
+/// axis, its three vertices coloured `colour` if given, drawn with `material` (else the
+/// palette): the pixel at the image centre.
+fn triangle_pixel(
+    ctx: &Context,
+    eye_z: f32,
+    colour: Option<[u8; 4]>,
+    material: Option<SurfaceMaterial<'_>>,
+) -> [u8; 4] {
     let vertex = |x: f32, y: f32| caveclod_core::format::Vertex {
         position: [x, y, 0.0],
-        normal,
+        normal: [0.0, 0.0, 1.0],
         uv: [0.01, 0.01],
     };
     let vertices = [vertex(-1.0, -1.0), vertex(1.0, -1.0), vertex(0.0, 1.0)];
-    let buffer = ok(
+    let mut buffer = ok(
         VertexBuffer::from_vertices(ctx, "triangle", &vertices),
         "vertices",
     );
+    if let Some(c) = colour {
+        let desc = caveclod_vulkan::BufferDesc::cpu_to_gpu(
+            12,
+            caveclod_vulkan::ash::vk::BufferUsageFlags::VERTEX_BUFFER,
+        );
+        let mut colours = ok(
+            caveclod_vulkan::Buffer::new(ctx, "colours", desc),
+            "colours",
+        );
+        let mapped = colours.mapped_mut().unwrap_or_else(|| panic!("not mapped"));
+        for k in 0..3 {
+            mapped[4 * k..4 * k + 4].copy_from_slice(&c);
+        }
+        buffer.colours = Some(colours);
+    }
     let look = caveclod_vulkan::LookAt {
         eye: glam::Vec3::new(0.0, 0.0, eye_z),
         target: glam::Vec3::ZERO,
@@ -176,24 +200,113 @@ fn triangle_seen_from(ctx: &Context, eye_z: f32) -> [u8; 4] {
         far: 10.0,
     };
     let list: [&[u32]; 2] = [&[0, 1, 2], &[]];
-    let image = render_alone(
-        ctx,
-        &buffer,
-        2,
-        &look,
-        (SIZE, SIZE),
-        IndexSource::Lists(&list),
+    let mut renderer = ok(
+        caveclod_vulkan::Renderer::new(ctx, caveclod_vulkan::RendererDesc::single(SIZE, SIZE)),
+        "renderer",
     );
+    let set = material.map(|m| ok(MaterialSet::new(ctx, renderer.recorder(), &[m, m]), "set"));
+    let mut indices = CameraIndices::new("triangle", 2, 2);
+    let viewport = Viewport::full(SIZE, SIZE);
+    ok(
+        renderer.render(
+            ctx,
+            &mut [CameraDraw {
+                target: 0,
+                viewport,
+                view_proj: look.view_projection(viewport.aspect()),
+                vertices: &buffer,
+                indices: &mut indices,
+                source: IndexSource::Lists(&list),
+                colours: &COLOURS,
+                materials: set.as_ref(),
+                morph: None,
+            }],
+        ),
+        "render",
+    );
+    let image = ok(renderer.read_target(ctx, 0), "read back");
+    ok(renderer.destroy(ctx), "destroy renderer");
+    if let Some(s) = set {
+        s.destroy(ctx);
+    }
+    ok(indices.destroy(ctx), "destroy indices");
     ok(buffer.destroy(ctx), "destroy vertices");
     image.pixel(SIZE / 2, SIZE / 2).unwrap_or([0; 4])
+}
+
+fn triangle_seen_from(ctx: &Context, eye_z: f32) -> [u8; 4] {
+    triangle_pixel(ctx, eye_z, None, None)
+}
+
+/// The byte a channel of linear value `c` lit by `k` is stored as in the RGBA8 target.
+fn byte(c: f32, k: f32) -> i32 {
+    (c * k * 255.0).round() as i32
+}
+
+/// The lighting factor of a face looking at the light's z component (the triangle's).
+fn front_light() -> f32 {
+    let light = glam::Vec3::from_array(caveclod_core::gpu::LIGHT_DIRECTION).normalize();
+    0.25 + 0.75 * light.z
+}
+
+#[test]
+fn vertex_colours_multiply_the_surface_colour() {
+    let ctx = context();
+    // sRGB (255, 188, 0) is linear (1, 0.5, 0) to within a byte.
+    let c = triangle_pixel(&ctx, 3.0, Some([255, 188, 0, 255]), None);
+    let linear = caveclod_core::format::materials::vertex_colour_linear([255, 188, 0, 255]);
+    let lit = front_light();
+    for i in 0..3 {
+        let want = byte(COLOURS[0][i] * linear[i], lit);
+        assert!(
+            (i32::from(c[i]) - want).abs() <= 1,
+            "{c:?}: channel {i} wants {want}"
+        );
+    }
+    assert_eq!(c[2], 0, "blue is multiplied by a zero vertex colour");
+    assert_clean(&ctx, "vertex colours");
+    ok(ctx.destroy(), "destroy context");
+}
+
+#[test]
+fn blended_surfaces_mix_with_what_lies_behind() {
+    let ctx = context();
+    let half = SurfaceMaterial {
+        texture: None,
+        factor: [1.0, 1.0, 1.0, 0.5],
+        alpha_cutoff: 0.0,
+        blend: true,
+    };
+    let blended = triangle_pixel(&ctx, 3.0, None, Some(half));
+    let opaque = triangle_pixel(
+        &ctx,
+        3.0,
+        None,
+        Some(SurfaceMaterial {
+            blend: false,
+            ..half
+        }),
+    );
+    let lit = front_light();
+    // Over the black background: half the lit white; opaque: all of it.
+    for i in 0..3 {
+        assert!(
+            (i32::from(blended[i]) - byte(0.5, lit)).abs() <= 1,
+            "{blended:?}"
+        );
+        assert!(
+            (i32::from(opaque[i]) - byte(1.0, lit)).abs() <= 1,
+            "{opaque:?}"
+        );
+    }
+    assert_clean(&ctx, "blending");
+    ok(ctx.destroy(), "destroy context");
 }
 
 #[test]
 fn front_faces_are_lit_by_their_normal_and_back_faces_by_its_reverse() {
     let ctx = context();
-    let light = glam::Vec3::from_array(caveclod_core::gpu::LIGHT_DIRECTION).normalize();
-    let byte = |c: f32, k: f32| (c * k * 255.0).round() as i32;
-    let lit = 0.25 + 0.75 * light.z;
+    let lit = front_light();
     let front = triangle_seen_from(&ctx, 3.0);
     let back = triangle_seen_from(&ctx, -3.0);
     for (i, &c) in COLOURS[0][..3].iter().enumerate() {

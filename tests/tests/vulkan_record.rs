@@ -108,6 +108,7 @@ fn host_frame(
             cmd,
             "terrain",
             h.vertices(),
+            h.vertex_colours(),
         ));
     });
     let (vertices, staging) = ok(

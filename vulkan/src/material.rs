@@ -7,8 +7,10 @@
 
 use ash::vk;
 
+use crate::buffer::Buffer;
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
+use crate::mesh::upload;
 use crate::texture::{Texture, TextureDesc};
 
 /// One surface's material, as the GPU draws it.
@@ -22,6 +24,9 @@ pub struct SurfaceMaterial<'a> {
     /// Fragments whose alpha (texel × factor) is below this are discarded (glTF `MASK`);
     /// 0 keeps every fragment.
     pub alpha_cutoff: f32,
+    /// Blend over what is drawn by alpha (glTF `BLEND`), after the camera's opaque
+    /// surfaces, without writing depth; triangles are not sorted.
+    pub blend: bool,
 }
 
 /// The descriptor set layout, sampler and white texture every [`Recorder`](crate::Recorder)
@@ -30,6 +35,8 @@ pub(crate) struct Bindings {
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) sampler: vk::Sampler,
     white: Texture,
+    /// One white vertex colour, bound with stride 0 for meshes without colours.
+    pub(crate) white_colour: Buffer,
     pool: vk::DescriptorPool,
     /// The white texture's set, for palette colours.
     pub(crate) white_set: vk::DescriptorSet,
@@ -182,19 +189,34 @@ impl Bindings {
                 return Err(e);
             }
         };
+        let white_colour = match upload(
+            ctx,
+            "white vertex colour",
+            &[255; 4],
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                partial(Some(white), Some(pool));
+                return Err(e);
+            }
+        };
         match write_sets(ctx, pool, set_layout, sampler, &[white.image.view]) {
             Ok(sets) if sets.len() == 1 => Ok(Self {
                 set_layout,
                 sampler,
                 white,
+                white_colour,
                 pool,
                 white_set: sets[0],
             }),
             Ok(_) => {
+                let _ = white_colour.destroy(ctx);
                 partial(Some(white), Some(pool));
                 Err(Error::InvalidArgument("no descriptor set allocated".into()))
             }
             Err(e) => {
+                let _ = white_colour.destroy(ctx);
                 partial(Some(white), Some(pool));
                 Err(e)
             }
@@ -210,7 +232,8 @@ impl Bindings {
             ctx.device
                 .destroy_descriptor_set_layout(self.set_layout, None);
         }
-        self.white.destroy(ctx)
+        let colour = self.white_colour.destroy(ctx);
+        self.white.destroy(ctx).and(colour)
     }
 }
 
@@ -222,6 +245,7 @@ pub struct MaterialSet {
     pool: vk::DescriptorPool,
     sets: Vec<vk::DescriptorSet>,
     looks: Vec<([f32; 4], f32)>,
+    blend: Vec<bool>,
 }
 
 impl MaterialSet {
@@ -247,6 +271,7 @@ impl MaterialSet {
                     .iter()
                     .map(|s| (s.factor, s.alpha_cutoff))
                     .collect(),
+                blend: surfaces.iter().map(|s| s.blend).collect(),
             }),
             Err(e) => {
                 // SAFETY: the pool's sets are unused.
@@ -271,6 +296,11 @@ impl MaterialSet {
         let set = *self.sets.get(s)?;
         let (factor, cutoff) = *self.looks.get(s)?;
         Some((set, factor, cutoff))
+    }
+
+    /// Whether surface `s` blends.
+    pub(crate) fn blends(&self, s: usize) -> Option<bool> {
+        self.blend.get(s).copied()
     }
 
     /// Destroys the sets. The GPU must be done with every command buffer that bound them.

@@ -25,12 +25,44 @@ pub struct VertexBuffer {
     pub buffer: Buffer,
     /// Number of vertices.
     pub count: u32,
+    /// One RGBA8 colour per vertex (sRGB-encoded colour, linear alpha), if the mesh has
+    /// them ([`Hierarchy::vertex_colours`]); drawn multiplied with the material.
+    pub colours: Option<Buffer>,
 }
 
 impl VertexBuffer {
-    /// Uploads a hierarchy's vertex buffer.
+    /// Uploads a hierarchy's vertex buffer and, if it has them, its vertex colours.
     pub fn from_hierarchy(ctx: &Context, name: &str, h: &Hierarchy<'_>) -> Result<Self> {
-        Self::from_vertices(ctx, name, h.vertices())
+        let mut v = Self::from_vertices(ctx, name, h.vertices())?;
+        if let Some(colours) = h.vertex_colours() {
+            match Self::colour_count(name, colours, v.count).and_then(|()| {
+                upload(
+                    ctx,
+                    &format!("{name} colours"),
+                    bytemuck::cast_slice(colours),
+                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                )
+            }) {
+                Ok(b) => v.colours = Some(b),
+                Err(e) => {
+                    let _ = v.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        }
+        Ok(v)
+    }
+
+    /// Refuses colours that are not one per vertex.
+    fn colour_count(name: &str, colours: &[[u8; 4]], count: u32) -> Result<()> {
+        if colours.len() == count as usize {
+            Ok(())
+        } else {
+            Err(Error::InvalidArgument(format!(
+                "vertex buffer {name}: {} colours for {count} vertices",
+                colours.len()
+            )))
+        }
     }
 
     /// Uploads `vertices` through a staging buffer into a new device-local buffer (one
@@ -45,7 +77,11 @@ impl VertexBuffer {
             vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         ctx.count_vertex_upload();
-        Ok(Self { buffer, count })
+        Ok(Self {
+            buffer,
+            count,
+            colours: None,
+        })
     }
 
     /// Records the upload of `vertices` into a new device-local buffer in the caller's
@@ -55,6 +91,9 @@ impl VertexBuffer {
     /// `COMPUTE_SHADER`; `VERTEX_ATTRIBUTE_READ` and `SHADER_STORAGE_READ`), so draws and
     /// geomorph dispatches recorded after it in submission order see the vertices.
     ///
+    /// With `colours` (one RGBA8 per vertex, e.g. [`Hierarchy::vertex_colours`]), their
+    /// buffer is uploaded the same way, in the same staging buffer.
+    ///
     /// The returned [`Staging`] must stay alive until the GPU has executed `cmd`; then
     /// destroy it.
     pub fn record_upload(
@@ -62,8 +101,12 @@ impl VertexBuffer {
         cmd: vk::CommandBuffer,
         name: &str,
         vertices: &[Vertex],
+        colours: Option<&[[u8; 4]]>,
     ) -> Result<(Self, Staging)> {
         let count = vertex_count(name, vertices)?;
+        if let Some(c) = colours {
+            Self::colour_count(name, c, count)?;
+        }
         let bytes: &[u8] = bytemuck::cast_slice(vertices);
         let staging = staging_with(ctx, name, bytes)?;
         let buffer = match Buffer::new(
@@ -84,12 +127,63 @@ impl VertexBuffer {
         };
         record_copy(ctx, cmd, &staging, &buffer, bytes.len() as u64);
         ctx.count_vertex_upload();
-        Ok((Self { buffer, count }, Staging { buffer: staging }))
+        let mut v = Self {
+            buffer,
+            count,
+            colours: None,
+        };
+        let Some(colours) = colours else {
+            return Ok((
+                v,
+                Staging {
+                    buffer: staging,
+                    more: None,
+                },
+            ));
+        };
+        let colour_bytes: &[u8] = bytemuck::cast_slice(colours);
+        let recorded = staging_with(ctx, &format!("{name} colours"), colour_bytes).and_then(|s| {
+            match Buffer::new(
+                ctx,
+                &format!("{name} colours"),
+                BufferDesc::gpu_only(
+                    colour_bytes.len() as u64,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                ),
+            ) {
+                Ok(b) => {
+                    record_copy(ctx, cmd, &s, &b, colour_bytes.len() as u64);
+                    Ok((b, s))
+                }
+                Err(e) => {
+                    let _ = s.destroy(ctx);
+                    Err(e)
+                }
+            }
+        });
+        match recorded {
+            Ok((b, s)) => {
+                v.colours = Some(b);
+                Ok((
+                    v,
+                    Staging {
+                        buffer: staging,
+                        more: Some(s),
+                    },
+                ))
+            }
+            Err(e) => {
+                let _ = staging.destroy(ctx);
+                let _ = v.destroy(ctx);
+                Err(e)
+            }
+        }
     }
 
-    /// Destroys the buffer. The GPU must be done with it.
+    /// Destroys the buffers. The GPU must be done with them.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
-        self.buffer.destroy(ctx)
+        let colours = self.colours.map_or(Ok(()), |c| c.destroy(ctx));
+        self.buffer.destroy(ctx).and(colours)
     }
 }
 
@@ -100,12 +194,15 @@ impl VertexBuffer {
 #[must_use = "a staging buffer must be destroyed after its upload executed"]
 pub struct Staging {
     pub(crate) buffer: Buffer,
+    /// A second staging buffer of the same upload (vertex colours).
+    pub(crate) more: Option<Buffer>,
 }
 
 impl Staging {
-    /// Destroys the staging buffer. The GPU must be done with the upload.
+    /// Destroys the staging buffers. The GPU must be done with the upload.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
-        self.buffer.destroy(ctx)
+        let more = self.more.map_or(Ok(()), |b| b.destroy(ctx));
+        self.buffer.destroy(ctx).and(more)
     }
 }
 

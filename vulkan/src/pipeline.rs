@@ -4,8 +4,9 @@
 //! The module is embedded with `include_bytes!` and read with `ash::util::read_spv`, which
 //! fixes alignment, so users of this crate never need rust-gpu. Vertex layouts, push-constant
 //! ranges and descriptor bindings here mirror the interface contract: `draw_vs`/`draw_fs`
-//! (binding 0: `caveclod_core::format::Vertex`, stride 32; 96-byte [`DrawPush`] for vertex and
-//! fragment; set 0: the base-colour texture and sampler), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
+//! (binding 0: `caveclod_core::format::Vertex`, stride 32; binding 1: RGBA8 vertex colours,
+//! stride dynamic; 96-byte [`DrawPush`] for vertex and fragment; set 0: the base-colour
+//! texture and sampler), `geomorph_vs` (bindings 0 and 1: coarse and fine `Vertex`, binding 2:
 //! [`MorphInstance`] per instance; same push constants) and `geomorph_cs` (three storage
 //! buffers, 16-byte [`MorphPush`]).
 //!
@@ -80,6 +81,9 @@ pub(crate) struct PipelineTarget {
     pub(crate) polygon_mode: vk::PolygonMode,
     /// Set 0 (the material's texture and sampler).
     pub(crate) set_layout: vk::DescriptorSetLayout,
+    /// Blend by alpha over what is drawn (`src_alpha, 1 - src_alpha`), testing depth but
+    /// not writing it: for `BLEND` materials.
+    pub(crate) blend: bool,
 }
 
 /// A drawing pipeline (`draw_vs` or `geomorph_vs`, with `draw_fs`) and its layout (set 0
@@ -90,6 +94,8 @@ pub(crate) struct DrawPipeline {
     pub(crate) raw: vk::Pipeline,
     /// Its layout (set 0, push constants).
     pub(crate) layout: vk::PipelineLayout,
+    /// It runs `geomorph_vs` (coarse, fine and instance streams) rather than `draw_vs`.
+    pub(crate) morphs: bool,
 }
 
 impl DrawPipeline {
@@ -125,7 +131,11 @@ impl DrawPipeline {
         // SAFETY: the pipeline (if any) no longer needs the module.
         unsafe { d.destroy_shader_module(module, None) };
         match raw {
-            Ok(raw) => Ok(Self { raw, layout }),
+            Ok(raw) => Ok(Self {
+                raw,
+                layout,
+                morphs: vertex_stage == VertexStage::Geomorph,
+            }),
             Err(e) => {
                 // SAFETY: unused layout.
                 unsafe { d.destroy_pipeline_layout(layout, None) };
@@ -163,7 +173,18 @@ impl DrawPipeline {
             ]
         };
         let (bindings, attributes) = match vertex_stage {
-            VertexStage::Draw => (vec![per_vertex(0)], vertex(0, 0).to_vec()),
+            VertexStage::Draw => {
+                // Binding 1: the vertex colours, RGBA8 (stride set when binding: 4, or 0
+                // for one white colour).
+                let colours = vk::VertexInputBindingDescription {
+                    binding: 1,
+                    stride: 4,
+                    input_rate: vk::VertexInputRate::VERTEX,
+                };
+                let mut attributes = vertex(0, 0).to_vec();
+                attributes.push(attribute(3, 1, vk::Format::R8G8B8A8_UNORM, 0));
+                (vec![per_vertex(0), colours], attributes)
+            }
             VertexStage::Geomorph => {
                 let mut attributes = vertex(0, 0).to_vec();
                 attributes.extend(vertex(1, 3));
@@ -195,13 +216,29 @@ impl DrawPipeline {
         let has_depth = target.formats.depth != vk::Format::UNDEFINED;
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(has_depth)
-            .depth_write_enable(has_depth)
+            .depth_write_enable(has_depth && !target.blend)
             .depth_compare_op(vk::CompareOp::LESS);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .blend_enable(target.blend)
+            .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+            .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+            .alpha_blend_op(vk::BlendOp::ADD)
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        // The vertex-colour stride is set per draw (Vulkan 1.3 core dynamic state), so one
+        // pipeline serves meshes with and without colours.
+        let dynamic_states = match vertex_stage {
+            VertexStage::Draw => vec![
+                vk::DynamicState::VIEWPORT,
+                vk::DynamicState::SCISSOR,
+                vk::DynamicState::VERTEX_INPUT_BINDING_STRIDE,
+            ],
+            VertexStage::Geomorph => vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR],
+        };
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let colour_formats = [target.formats.colour];
         let mut rendering = vk::PipelineRenderingCreateInfo::default()

@@ -127,7 +127,13 @@ impl Texture {
             }
         };
         record_levels(&ctx.device, cmd, &staging, &image);
-        Ok((Self { image, desc }, Staging { buffer: staging }))
+        Ok((
+            Self { image, desc },
+            Staging {
+                buffer: staging,
+                more: None,
+            },
+        ))
     }
 
     /// The description.

@@ -15,7 +15,9 @@
 #![cfg_attr(target_arch = "spirv", no_std)]
 #![deny(missing_docs)]
 
-use caveclod_core::gpu::{base_colour, cut, fragment, morph_vertex, DrawPush, MorphPush};
+use caveclod_core::gpu::{
+    base_colour, cut, fragment, morph_vertex, vertex_colour, DrawPush, MorphPush,
+};
 use caveclod_core::Vertex;
 use spirv_std::glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use spirv_std::image::Image2d;
@@ -33,20 +35,26 @@ fn vertex(position: Vec3, normal: Vec3, uv: Vec2) -> Vertex {
     }
 }
 
-/// Vertex stage for drawing: binding 0 holds `Vertex` records (stride 32).
+/// Vertex stage for drawing: binding 0 holds `Vertex` records (stride 32), binding 1 the
+/// vertex colours (RGBA8 read as UNORM, sRGB-encoded; stride 4, or 0 for one colour for
+/// every vertex).
+#[allow(clippy::too_many_arguments)]
 #[spirv(vertex)]
 pub fn draw_vs(
     #[spirv(location = 0)] position: Vec3,
     #[spirv(location = 1)] normal: Vec3,
     #[spirv(location = 2)] uv: Vec2,
+    #[spirv(location = 3)] colour: Vec4,
     #[spirv(push_constant)] push: &DrawPush,
     #[spirv(position)] out_position: &mut Vec4,
     #[spirv(location = 0)] out_normal: &mut Vec3,
     #[spirv(location = 1)] out_uv: &mut Vec2,
+    #[spirv(location = 2)] out_colour: &mut Vec4,
 ) {
     *out_position = Mat4::from_cols_array(&push.view_proj) * position.extend(1.0);
     *out_normal = normal;
     *out_uv = uv;
+    *out_colour = vertex_colour(colour);
 }
 
 /// Fragment stage for `draw_vs` and `geomorph_vs`: the base-colour texture (set 0, binding
@@ -56,6 +64,7 @@ pub fn draw_vs(
 pub fn draw_fs(
     #[spirv(location = 0)] normal: Vec3,
     #[spirv(location = 1)] uv: Vec2,
+    #[spirv(location = 2)] vertex: Vec4,
     #[spirv(front_facing)] front_facing: bool,
     #[spirv(descriptor_set = 0, binding = 0)] texture: &Image2d,
     #[spirv(descriptor_set = 0, binding = 1)] sampler: &Sampler,
@@ -63,7 +72,7 @@ pub fn draw_fs(
     #[spirv(location = 0)] out_colour: &mut Vec4,
 ) {
     let texel: Vec4 = texture.sample(*sampler, uv);
-    let base = base_colour(texel, push);
+    let base = base_colour(texel, vertex, push);
     if cut(base, push) {
         spirv_std::arch::kill();
     }
@@ -88,7 +97,9 @@ pub fn geomorph_vs(
     #[spirv(position)] out_position: &mut Vec4,
     #[spirv(location = 0)] out_normal: &mut Vec3,
     #[spirv(location = 1)] out_uv: &mut Vec2,
+    #[spirv(location = 2)] out_colour: &mut Vec4,
 ) {
+    *out_colour = Vec4::ONE;
     let v = morph_vertex(
         vertex(a_position, a_normal, a_uv),
         vertex(b_position, b_normal, b_uv),
@@ -278,19 +289,23 @@ mod tests {
             Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)),
             Vec4::new(0.5, 0.5, 0.5, 1.0),
         );
-        let (mut pos, mut n, mut uv) = (Vec4::ZERO, Vec3::ZERO, Vec2::ZERO);
+        let (mut pos, mut n, mut uv, mut colour) = (Vec4::ZERO, Vec3::ZERO, Vec2::ZERO, Vec4::ZERO);
         let normal = Vec3::new(0.0, 2.0, 0.0);
+        let encoded = Vec4::new(1.0, 0.5, 0.0, 0.25);
         draw_vs(
             Vec3::new(1.0, 1.0, 1.0),
             normal,
             Vec2::new(0.5, 0.25),
+            encoded,
             &push,
             &mut pos,
             &mut n,
             &mut uv,
+            &mut colour,
         );
         assert_eq!(pos, Vec4::new(2.0, 3.0, 4.0, 1.0));
         assert_eq!((n, uv), (normal, Vec2::new(0.5, 0.25)));
+        assert_eq!(colour, vertex_colour(encoded));
 
         let inst = MorphInstance {
             offset_scale: [10.0, 0.0, 0.0, 2.0],
@@ -310,7 +325,9 @@ mod tests {
             &mut pos,
             &mut n,
             &mut uv,
+            &mut colour,
         );
+        assert_eq!(colour, Vec4::ONE);
         // morphed position (1, 0, 0) * 2 + (10, 0, 0), then translated by (1, 2, 3).
         assert_eq!(pos, Vec4::new(13.0, 2.0, 3.0, 1.0));
         let h = core::f32::consts::FRAC_1_SQRT_2;
@@ -319,7 +336,7 @@ mod tests {
 
         // `draw_fs` samples a texture, which only the GPU can; its arithmetic is
         // `fragment`, tested in caveclod-core.
-        let base = base_colour(Vec4::ONE, &push);
+        let base = base_colour(Vec4::ONE, colour, &push);
         assert!(!cut(base, &push));
         assert_eq!(
             fragment(n, true, uv, base, &push),

@@ -1,6 +1,7 @@
 //! The record path: caveclod's draws recorded into the caller's command buffer, inside the
 //! caller's rendering (the design decisions are on [`Recorder`]).
 
+mod draw;
 mod target;
 mod viewport;
 
@@ -8,8 +9,7 @@ pub use target::{RecorderDesc, Rendering, TargetFormats};
 pub use viewport::Viewport;
 
 use ash::vk;
-use caveclod_core::gpu::DrawPush;
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 
 use crate::device::Context;
 use crate::error::{Error, Result};
@@ -55,10 +55,12 @@ pub struct Morph<'a> {
 }
 
 /// The pipelines of one [`RecorderDesc`]: fill (always), wireframe (if asked), each with
-/// the plain and, if asked, the geomorphing vertex stage.
+/// the plain and, if asked, the geomorphing vertex stage; the fill set also blends.
 struct Pipelines {
     draw: DrawPipeline,
     morph: Option<DrawPipeline>,
+    /// The plain stage blending by alpha (fill only), for `BLEND` materials.
+    blend: Option<DrawPipeline>,
 }
 
 /// Records caveclod's draws into a command buffer the caller owns.
@@ -149,6 +151,7 @@ impl Recorder {
             rendering: desc.rendering,
             polygon_mode,
             set_layout: bindings.set_layout,
+            blend: false,
         };
         let draw = DrawPipeline::new(ctx, VertexStage::Draw, target)?;
         let morph = if desc.geomorph {
@@ -162,7 +165,25 @@ impl Recorder {
         } else {
             None
         };
-        Ok(Pipelines { draw, morph })
+        let blend = if polygon_mode == vk::PolygonMode::FILL {
+            let blending = PipelineTarget {
+                blend: true,
+                ..target
+            };
+            match DrawPipeline::new(ctx, VertexStage::Draw, blending) {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    draw.destroy(ctx);
+                    if let Some(m) = morph {
+                        m.destroy(ctx);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Pipelines { draw, morph, blend })
     }
 
     /// The description.
@@ -248,90 +269,6 @@ impl Recorder {
         Ok(())
     }
 
-    /// Binds `cam`'s pipeline, viewport and vertex streams, then draws each of its
-    /// non-empty surfaces of frame slot `slot` (every instance, for a geomorphing camera).
-    /// Returns the draws recorded.
-    fn draw_camera(
-        &self,
-        d: &ash::Device,
-        cmd: vk::CommandBuffer,
-        slot: usize,
-        cam: &RecordCamera<'_>,
-    ) -> u32 {
-        let set = match (&self.wireframe, cam.wireframe) {
-            (Some(w), true) => w,
-            _ => &self.fill,
-        };
-        let (pipeline, instances) = match (&cam.morph, &set.morph) {
-            (Some(m), Some(p)) => (p, m.instances.count),
-            _ => (&set.draw, 1),
-        };
-        let (viewport, scissor) = viewport_and_scissor(cam.viewport);
-        // SAFETY: `cmd` is recording inside rendering compatible with the pipeline (the
-        // caller's contract on `record`); the vertex buffers are alive.
-        unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
-            d.cmd_set_viewport(cmd, 0, &[viewport]);
-            d.cmd_set_scissor(cmd, 0, &[scissor]);
-            match &cam.morph {
-                Some(m) => d.cmd_bind_vertex_buffers(
-                    cmd,
-                    0,
-                    &[
-                        cam.vertices.buffer.raw,
-                        m.fine.buffer.raw,
-                        m.instances.buffer.raw,
-                    ],
-                    &[0, 0, 0],
-                ),
-                None => d.cmd_bind_vertex_buffers(cmd, 0, &[cam.vertices.buffer.raw], &[0]),
-            }
-        }
-        let mut draws = 0;
-        for s in 0..cam.indices.surface_count() {
-            let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
-                continue;
-            };
-            let (set, push) = match cam.materials.and_then(|m| m.get(s)) {
-                Some((set, factor, cutoff)) => (
-                    set,
-                    DrawPush::material(cam.view_proj, Vec4::from_array(factor), cutoff),
-                ),
-                None => {
-                    let colour = cam.colours.get(s).copied().unwrap_or([1.0; 4]);
-                    (
-                        self.bindings.white_set,
-                        DrawPush::new(cam.view_proj, Vec4::from_array(colour)),
-                    )
-                }
-            };
-            // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count`
-            // indices below the bound vertex count (checked by `Recorder::check_camera`);
-            // the set was written for this recorder's layout and names live images.
-            unsafe {
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    pipeline.layout,
-                    0,
-                    &[set],
-                    &[],
-                );
-                d.cmd_bind_index_buffer(cmd, buffer, 0, vk::IndexType::UINT32);
-                d.cmd_push_constants(
-                    cmd,
-                    pipeline.layout,
-                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                    0,
-                    bytemuck::bytes_of(&push),
-                );
-                d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
-            }
-            draws += 1;
-        }
-        draws
-    }
-
     /// Destroys the pipelines, the set layout, the sampler and the white texture. The GPU
     /// must be done with every command buffer that recorded them; destroy the recorder's
     /// material sets first.
@@ -346,30 +283,7 @@ impl Recorder {
 
 fn destroy_pipelines(ctx: &Context, p: Pipelines) {
     p.draw.destroy(ctx);
-    if let Some(m) = p.morph {
-        m.destroy(ctx);
+    for extra in [p.morph, p.blend].into_iter().flatten() {
+        extra.destroy(ctx);
     }
-}
-
-/// The Vulkan viewport (depth 0..1) and scissor of the same rectangle.
-fn viewport_and_scissor(v: Viewport) -> (vk::Viewport, vk::Rect2D) {
-    let viewport = vk::Viewport {
-        x: v.x as f32,
-        y: v.y as f32,
-        width: v.width as f32,
-        height: v.height as f32,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
-    let scissor = vk::Rect2D {
-        offset: vk::Offset2D {
-            x: v.x as i32,
-            y: v.y as i32,
-        },
-        extent: vk::Extent2D {
-            width: v.width,
-            height: v.height,
-        },
-    };
-    (viewport, scissor)
 }
