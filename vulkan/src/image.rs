@@ -111,10 +111,8 @@ impl Image {
             }
         };
         // SAFETY: the allocation satisfies `requirements`.
-        if let Err(e) =
-            unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
-                .vk("vkBindImageMemory")
-        {
+        let bound = unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
+        if let Err(e) = bound.vk("vkBindImageMemory") {
             free(allocation);
             return Err(e);
         }

@@ -142,9 +142,20 @@ impl DebugMessenger {
         Ok(Self { loader, raw, log })
     }
 
-    /// Unregisters the messenger; call before destroying the instance.
+    /// Unregisters the messenger (as dropping it does); call before destroying the
+    /// instance.
     pub fn destroy(self) {
-        // SAFETY: `raw` was created from this loader's instance, which is still alive.
+        drop(self);
+    }
+}
+
+/// A messenger unregisters itself when dropped, so it must be dropped (or destroyed) before
+/// its instance is destroyed, as Vulkan requires of every child of an instance.
+impl Drop for DebugMessenger {
+    fn drop(&mut self) {
+        // SAFETY: `raw` was created from this loader's instance; destroying that instance
+        // while a messenger is alive violates `vkDestroyInstance`'s contract, which the
+        // (unsafe) call that destroys the instance must uphold, so the instance is alive.
         unsafe { self.loader.destroy_debug_utils_messenger(self.raw, None) };
     }
 }

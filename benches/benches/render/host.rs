@@ -179,12 +179,10 @@ impl<'s, 'c> HostSetup<'s, 'c> {
         let signalled = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
         let slots = cmds
             .into_iter()
-            // SAFETY: valid create info.
             .map(|cmd| {
-                (
-                    cmd,
-                    or_exit(unsafe { d.create_fence(&signalled, None) }, "fence"),
-                )
+                // SAFETY: valid create info.
+                let fence = unsafe { d.create_fence(&signalled, None) };
+                (cmd, or_exit(fence, "fence"))
             })
             .collect();
         let surfaces = cams.first().map_or(0, |c| c.surface_polygons().len());
