@@ -43,6 +43,18 @@ impl GpuMaterials {
         h: &Hierarchy<'_>,
         dir: &Path,
     ) -> Result<Option<Self>> {
+        Self::load_with(ctx, recorder, h, dir, true)
+    }
+
+    /// [`load`](Self::load), drawing `BLEND` materials opaque unless `blend`: for images
+    /// that must not depend on triangle order (blended triangles are not sorted).
+    pub fn load_with(
+        ctx: &Context,
+        recorder: &Recorder,
+        h: &Hierarchy<'_>,
+        dir: &Path,
+        blend: bool,
+    ) -> Result<Option<Self>> {
         let Some(materials) = h.materials() else {
             return Ok(None);
         };
@@ -97,7 +109,7 @@ impl GpuMaterials {
                         AlphaMode::Mask { cutoff } => cutoff,
                         AlphaMode::Opaque | AlphaMode::Blend => 0.0,
                     },
-                    blend: m.alpha == AlphaMode::Blend,
+                    blend: blend && m.alpha == AlphaMode::Blend,
                 },
                 None => SurfaceMaterial {
                     texture: None,
