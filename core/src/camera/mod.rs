@@ -6,11 +6,14 @@ mod compact;
 mod emit;
 mod index_cache;
 mod layout;
+mod morph;
+mod morph_map;
 mod ops;
 mod pair_map;
 mod refine;
 
 pub use emit::EmitError;
+pub use morph::MorphVertex;
 pub use ops::OpError;
 pub use refine::{RefineParams, RefineStats};
 
@@ -20,6 +23,7 @@ use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PolyKey};
 use certificate::{Odometer, UNKNOWN};
 pub(crate) use layout::{Layout, Scalars};
+use morph::Morphs;
 use pair_map::PairMap;
 
 /// Absent link / empty entry.
@@ -118,6 +122,13 @@ pub struct CameraConfig {
     /// but makes refinement slower, because the array keeps the entries of nearby nodes
     /// together and the table scatters them.
     pub hashed_pair_map: bool,
+    /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the [`CameraState`]
+    /// docs): each moves a split's floating child, one or two vertices, between its parent's
+    /// position and its own over [`RefineParams::refine_morph_s`] or
+    /// [`coarsen_morph_s`](RefineParams::coarsen_morph_s). 72 bytes per morph; 0 in
+    /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
+    /// camera without morphs splits and collapses at once.
+    pub max_morphs: u32,
 }
 
 impl CameraConfig {
@@ -128,6 +139,7 @@ impl CameraConfig {
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
+            max_morphs: 0,
         }
     }
 
@@ -140,7 +152,15 @@ impl CameraConfig {
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
+            max_morphs: 0,
         }
+    }
+
+    /// This configuration with room for `max_morphs` geomorphs at once: enough for the
+    /// splits and collapses of visible nodes the camera makes within one morph's duration.
+    /// When the room is taken, a split happens at once ([`RefineStats::morphs_dropped`]).
+    pub fn with_morphs(self, max_morphs: u32) -> Self {
+        Self { max_morphs, ..self }
     }
 
     /// A forced split pushes at most a few nodes per level; 32 per level of depth (and at
@@ -167,6 +187,14 @@ pub enum CameraError {
         /// Splits in the hierarchy.
         split_count: u32,
     },
+    /// The configuration asks for more morphs than indices can name: morphed emission
+    /// writes `vertex_count + slot`, two slots per morph, which must stay below `u32::MAX`.
+    TooManyMorphs {
+        /// Asked for.
+        max_morphs: u32,
+        /// Vertices of the hierarchy.
+        vertex_count: u32,
+    },
 }
 
 impl core::fmt::Display for CameraError {
@@ -187,6 +215,14 @@ impl core::fmt::Display for CameraError {
                     "max_pairs {max_pairs} exceeds the hierarchy's {split_count} splits"
                 )
             }
+            Self::TooManyMorphs {
+                max_morphs,
+                vertex_count,
+            } => write!(
+                f,
+                "max_morphs {max_morphs}: two slots per morph after {vertex_count} vertices \
+                 exceed 32-bit indices"
+            ),
         }
     }
 }
@@ -296,6 +332,8 @@ pub(crate) struct Front<'m> {
     pub churn: u32,
     /// The eye's path length, for the records' certificates.
     pub odometer: Odometer,
+    /// The geomorphs in progress (empty arrays without morph memory).
+    pub morphs: Morphs<'m>,
 }
 
 impl<'m> CameraState<'m> {
@@ -346,6 +384,13 @@ impl<'m> CameraState<'m> {
                 split_count: ns as u32,
             });
         }
+        let slots = 2 * u64::from(config.max_morphs);
+        if h.vertices().len() as u64 + slots >= u64::from(NONE) {
+            return Err(CameraError::TooManyMorphs {
+                max_morphs: config.max_morphs,
+                vertex_count: h.vertices().len() as u32,
+            });
+        }
         Ok(Layout::of(h, config))
     }
 
@@ -383,6 +428,7 @@ impl<'m> CameraState<'m> {
         }
         f.active_polygons = f.base;
         f.churn = 0;
+        f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);
     }
 
@@ -424,6 +470,9 @@ impl<'m> CameraState<'m> {
             + core::mem::size_of_val(&*f.active)
             + core::mem::size_of_val(&*f.slots)
             + core::mem::size_of_val(&*f.triangles)
+            + core::mem::size_of_val(&*f.morphs.vertices)
+            + core::mem::size_of_val(&*f.morphs.states)
+            + f.morphs.map.bytes()
             + core::mem::size_of::<Self>()
     }
 

@@ -1,0 +1,541 @@
+//! Geomorphs of view-dependent refinement (Hoppe's `SrVertexMorph`, SIGGRAPH 97 §5), in the
+//! camera's memory, for the GPU to blend.
+//!
+//! Only a split's floating child moves: the hierarchy keeps every node at an original
+//! position (half-edge collapses), so the stationary child already stands where its parent
+//! stood. A *morph* is the floating child's vertices travelling between the parent's vertex
+//! (`t = 0`) and their own (`t = 1`):
+//! - a **refine morph** starts at `t = 0` when refinement splits a visible node, and rises at
+//!   `1 / refine_morph_s` per second of the caller's clock; at 1 it ends;
+//! - a **coarsen morph** starts when refinement wants a legal collapse of a visible parent:
+//!   `t` falls from where it stands (1, or a refine morph's value) at `1 / coarsen_morph_s`
+//!   per second, and at 0 the collapse is applied;
+//! - a coarsen morph is **aborted** when the parent's split is wanted again or the collapse
+//!   became illegal (a neighbouring split, or a child split): it turns into a refine morph
+//!   from where it stands, back to the fine position, and then ends.
+//!
+//! A split or collapse of a node outside the view (the frustum and the normal cone, as
+//! refinement tests them) happens at once, and a collapse that happens at once ends its
+//! floating child's morph. `t` moves at a constant speed (a full morph takes its duration;
+//! Hoppe's restart the duration from wherever the vertex stands).
+//!
+//! Each pass first steps every morph ([`Front::sweep_morphs`]): a coarsen morph's parent is
+//! asked again whether its split is wanted and its collapse legal before it moves, so an
+//! abort happens on the pass after the change, before the vertex has moved on. The sweep is
+//! O(morphs); a camera without morph memory never runs it, and the walk over the active nodes
+//! looks at morphs only where it applies a split or would collapse.
+//!
+//! A morph has two vertex slots: a floating child is FREE (one surface group at its
+//! position) or SHARP (two), so two vertices cover every position a floating child may
+//! have; a position with more, or without a vertex, moves at once (counted as dropped). Slot
+//! `k` of morph `m` is vertex slot `2m + k`; its [`MorphVertex`] names the two persistent
+//! vertices (the parent's in the same surface group, or any of the parent's where that
+//! group has none) and the current `t`. Morphed emission writes `vertex_count + slot` for a
+//! corner whose vertex morphs ([`CameraState::emit_indices_morphed`]), found through a small
+//! map from vertex to slot (`morph_map`); the persistent vertex buffer is never written.
+//!
+//! A split of a vertex that is still morphing leaves its morph running (the stationary child
+//! keeps the position, so the vertex keeps its morph); the new floating child starts from
+//! the parent's persistent vertex, not from where the parent's morph has it (the GPU blends
+//! every slot from persistent vertices, in any order).
+
+use bytemuck::{Pod, Zeroable};
+
+use super::morph_map::MorphMap;
+use super::refine::{Criterion, RefineParams, RefineStats};
+use super::{CameraState, Front, OpError, FREE, NONE};
+use crate::hierarchy::Hierarchy;
+use crate::ids::NodeId;
+
+/// One morphing vertex as the GPU reads it: blend persistent vertex `from` (the coarse
+/// vertex, at the parent's position) and `to` (the fine one) at `t`
+/// ([`gpu::morph_vertex`](crate::gpu::morph_vertex)`(vertices[from], vertices[to], t)`), and
+/// write the result where morphed emission points, `vertex_count + slot`. An idle slot has
+/// `from == to == u32::MAX` ([`MorphVertex::IDLE`]): nothing points at it and it is skipped.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MorphVertex {
+    /// The coarse vertex: the parent's, in the same surface group where it has one.
+    pub from: u32,
+    /// The fine vertex: the floating child's own.
+    pub to: u32,
+    /// 0 gives `from`, 1 gives `to`.
+    pub t: f32,
+    /// Zero; pads the record to 16 bytes.
+    pub _pad: u32,
+}
+
+const _: () = assert!(core::mem::size_of::<MorphVertex>() == 16);
+
+impl MorphVertex {
+    /// A slot without a morphing vertex.
+    pub const IDLE: Self = Self {
+        from: NONE,
+        to: NONE,
+        t: 0.0,
+        _pad: 0,
+    };
+
+    /// `true` for a slot without a morphing vertex.
+    pub fn is_idle(&self) -> bool {
+        self.to == NONE
+    }
+}
+
+/// Vertex slots per morph.
+pub(crate) const VERTICES_PER_MORPH: usize = 2;
+
+pub(crate) const MORPH_VERTEX_WORDS: usize = core::mem::size_of::<MorphVertex>() / 4;
+
+/// A morph's state besides its vertices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub(crate) struct MorphState {
+    /// The node whose split made the floating child that morphs, or [`FREE`] with the free
+    /// list's link in the low bits.
+    parent: u32,
+    /// [`REFINING`] or [`COARSENING`].
+    phase: u32,
+}
+
+pub(crate) const STATE_WORDS: usize = core::mem::size_of::<MorphState>() / 4;
+
+/// Towards the fine position, then end.
+const REFINING: u32 = 0;
+/// Towards the parent's position, then collapse.
+const COARSENING: u32 = 1;
+
+/// End of the free list, in a free state's low bits.
+const LAST: u32 = FREE - 1;
+
+/// The morph pool of one camera: its vertex slots (what the GPU reads), its states, the
+/// map from vertex to slot, and a free list.
+#[derive(Debug)]
+pub(crate) struct Morphs<'m> {
+    /// Two per morph.
+    pub vertices: &'m mut [MorphVertex],
+    pub states: &'m mut [MorphState],
+    pub map: MorphMap<'m>,
+    pub scalars: MorphScalars,
+}
+
+/// The pool's state besides its arrays.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MorphScalars {
+    /// High-water mark of `states`.
+    pub len: u32,
+    /// Head of the free list (`NONE` when empty).
+    pub free_head: u32,
+    /// Morphs in progress.
+    pub live: u32,
+}
+
+impl MorphScalars {
+    pub const EMPTY: Self = Self {
+        len: 0,
+        free_head: NONE,
+        live: 0,
+    };
+}
+
+impl Morphs<'_> {
+    /// Most morphs at once.
+    #[inline]
+    pub fn capacity(&self) -> usize {
+        self.states.len()
+    }
+
+    /// No morph.
+    pub fn clear(&mut self) {
+        self.vertices.fill(MorphVertex::IDLE);
+        self.map.clear();
+        self.scalars = MorphScalars::EMPTY;
+    }
+
+    /// The vertex slots up to the high-water mark.
+    pub fn live_vertices(&self) -> &[MorphVertex] {
+        let n = (self.scalars.len as usize).saturating_mul(VERTICES_PER_MORPH);
+        &self.vertices[..n.min(self.vertices.len())]
+    }
+
+    fn state(&self, m: u32) -> Option<MorphState> {
+        self.states
+            .get(m as usize)
+            .copied()
+            .filter(|s| s.parent & FREE == 0)
+    }
+
+    /// The morph whose vertex slot `slot` is, if live.
+    fn of_slot(&self, slot: u32) -> Option<u32> {
+        let m = slot / VERTICES_PER_MORPH as u32;
+        self.state(m).map(|_| m)
+    }
+
+    fn alloc(&mut self) -> Option<u32> {
+        let s = &mut self.scalars;
+        let m = if s.free_head != NONE {
+            let m = s.free_head;
+            let link = self.states.get(m as usize)?.parent & !FREE;
+            s.free_head = if link == LAST { NONE } else { link };
+            m
+        } else {
+            let m = s.len;
+            if m as usize >= self.states.len() {
+                return None;
+            }
+            s.len += 1;
+            m
+        };
+        s.live += 1;
+        Some(m)
+    }
+
+    /// Ends morph `m`: its slots go idle and it joins the free list (when none is left, the
+    /// pool starts from its first slot again, so the GPU's slot range shrinks to nothing).
+    fn free(&mut self, m: u32) {
+        if self.state(m).is_none() {
+            return;
+        }
+        self.unmap(m);
+        let s = &mut self.scalars;
+        let link = if s.free_head == NONE {
+            LAST
+        } else {
+            s.free_head
+        };
+        if let Some(state) = self.states.get_mut(m as usize) {
+            *state = MorphState {
+                parent: FREE | link,
+                phase: REFINING,
+            };
+            s.free_head = m;
+        }
+        s.live = s.live.saturating_sub(1);
+        if s.live == 0 {
+            *s = MorphScalars::EMPTY;
+        }
+    }
+
+    /// Idles morph `m`'s vertex slots and takes them out of the map.
+    fn unmap(&mut self, m: u32) {
+        for k in 0..VERTICES_PER_MORPH as u32 {
+            let slot = m * VERTICES_PER_MORPH as u32 + k;
+            if let Some(v) = self.vertices.get_mut(slot as usize) {
+                if !v.is_idle() {
+                    self.map.remove(v.to, slot);
+                }
+                *v = MorphVertex::IDLE;
+            }
+        }
+    }
+
+    fn set_t(&mut self, m: u32, t: f32) {
+        let start = m as usize * VERTICES_PER_MORPH;
+        for v in self
+            .vertices
+            .iter_mut()
+            .skip(start)
+            .take(VERTICES_PER_MORPH)
+        {
+            v.t = t;
+        }
+    }
+
+    fn t(&self, m: u32) -> f32 {
+        self.vertices
+            .get(m as usize * VERTICES_PER_MORPH)
+            .map_or(1.0, |v| v.t)
+    }
+}
+
+/// How far `t` moves in `dt` seconds of a morph lasting `duration` seconds: all the way for
+/// a duration that is zero, negative or not a number (morphs off).
+#[inline]
+fn step(dt: f32, duration: f32) -> f32 {
+    if duration > 0.0 {
+        (dt / duration).min(1.0)
+    } else {
+        1.0
+    }
+}
+
+impl Front<'_> {
+    /// The morph of the vertices at `floating`'s position, if any.
+    fn morph_of(&self, h: &Hierarchy<'_>, floating: NodeId) -> Option<u32> {
+        let first = h.vertex_keys(Self::position_of(h, floating)).first()?;
+        self.morphs.of_slot(self.morphs.map.get(first.vertex)?)
+    }
+
+    /// Starts (or restarts) the morph of `parent`'s floating child at `t`, in `phase`;
+    /// `false` if there is no room or the positions' vertices cannot morph.
+    fn start_morph(&mut self, h: &Hierarchy<'_>, parent: NodeId, t: f32, phase: u32) -> bool {
+        let Some(s) = h.split(parent) else {
+            return false;
+        };
+        let at = Self::position_of(h, parent);
+        let fine = h.vertex_keys(Self::position_of(h, s.floating));
+        let Some(any_coarse) = h.vertex_keys(at).first() else {
+            return false;
+        };
+        if fine.is_empty() || fine.len() > VERTICES_PER_MORPH {
+            return false;
+        }
+        let m = match self.morph_of(h, s.floating) {
+            Some(m) => {
+                self.morphs.unmap(m);
+                m
+            }
+            None => match self.morphs.alloc() {
+                Some(m) => m,
+                None => return false,
+            },
+        };
+        let mut mapped = true;
+        for k in 0..VERTICES_PER_MORPH {
+            let slot = m * VERTICES_PER_MORPH as u32 + k as u32;
+            let v = match fine.get(k) {
+                Some(key) => {
+                    mapped &= self.morphs.map.insert(key.vertex, slot).is_some();
+                    MorphVertex {
+                        from: h.vertex_index(key.group, at).unwrap_or(any_coarse.vertex),
+                        to: key.vertex,
+                        t,
+                        _pad: 0,
+                    }
+                }
+                None => MorphVertex::IDLE,
+            };
+            if let Some(dst) = self.morphs.vertices.get_mut(slot as usize) {
+                *dst = v;
+            }
+        }
+        if let Some(state) = self.morphs.states.get_mut(m as usize) {
+            *state = MorphState {
+                parent: parent.0,
+                phase,
+            };
+        }
+        if !mapped {
+            // The map has room for every slot (see `morph_map`); a camera whose own
+            // bookkeeping says otherwise moves this vertex at once.
+            self.morphs.free(m);
+        }
+        mapped
+    }
+
+    /// Ends the morph of the vertices at `floating`'s position, if any (its pair collapsed).
+    pub fn end_morph_of(&mut self, h: &Hierarchy<'_>, floating: NodeId) {
+        if let Some(m) = self.morph_of(h, floating) {
+            self.morphs.free(m);
+        }
+    }
+
+    /// After refinement applied the split of `node`: a refine morph of its floating child,
+    /// if the node is visible and refine morphs are on.
+    pub(super) fn morph_split(
+        &mut self,
+        h: &Hierarchy<'_>,
+        c: &Criterion,
+        p: &RefineParams,
+        node: NodeId,
+        st: &mut RefineStats,
+    ) {
+        // Zero, negative and NaN durations all mean "at once".
+        let on = p.refine_morph_s > 0.0;
+        if !on || !h.split_bounds(node).is_some_and(|b| c.visible(b)) {
+            return;
+        }
+        if self.start_morph(h, node, 0.0, REFINING) {
+            st.morphs_started += 1;
+        } else {
+            st.morphs_dropped += 1;
+        }
+    }
+
+    /// Whether refinement, wanting the legal collapse of `parent`, waits for a coarsen
+    /// morph instead: one running already, one turned from a refine morph, or one started
+    /// now. `false` (collapse at once, ending any morph of the floating child) for a parent
+    /// outside the view, coarsen morphs off, or no room.
+    pub(super) fn defers_collapse(
+        &mut self,
+        h: &Hierarchy<'_>,
+        c: &Criterion,
+        p: &RefineParams,
+        parent: NodeId,
+        st: &mut RefineStats,
+    ) -> bool {
+        let (Some(b), Some(s)) = (h.split_bounds(parent), h.split(parent)) else {
+            return false;
+        };
+        let running = self.morph_of(h, s.floating);
+        if p.coarsen_morph_s > 0.0 && c.visible(b) {
+            if let Some(m) = running {
+                if let Some(state) = self.morphs.states.get_mut(m as usize) {
+                    if state.phase != COARSENING {
+                        state.phase = COARSENING;
+                        st.morphs_started += 1;
+                    }
+                }
+                return true;
+            }
+            if self.start_morph(h, parent, 1.0, COARSENING) {
+                st.morphs_started += 1;
+                return true;
+            }
+            st.morphs_dropped += 1;
+        } else if let Some(m) = running {
+            self.morphs.free(m);
+            st.morphs_finished += 1;
+        }
+        false
+    }
+
+    /// Steps every morph by `p.dt_s` (see the module docs): a coarsen morph whose parent's
+    /// split is wanted again or whose collapse is illegal turns back; one whose parent left
+    /// the view, or that reached 0, collapses (while the pass has operations left); a refine
+    /// morph that reached 1 ends.
+    pub(super) fn sweep_morphs(
+        &mut self,
+        h: &Hierarchy<'_>,
+        c: &Criterion,
+        p: &RefineParams,
+        st: &mut RefineStats,
+        max_ops: u32,
+    ) -> Result<(), OpError> {
+        let dt = if p.dt_s > 0.0 && p.dt_s.is_finite() {
+            p.dt_s
+        } else {
+            0.0
+        };
+        let (up, down) = (step(dt, p.refine_morph_s), step(dt, p.coarsen_morph_s));
+        let len = (self.morphs.scalars.len as usize).min(self.morphs.capacity()) as u32;
+        for m in 0..len {
+            let Some(state) = self.morphs.state(m) else {
+                continue;
+            };
+            let parent = NodeId(state.parent);
+            if !self.is_split(parent) {
+                // Its pair is gone (the camera's bookkeeping ends such morphs at the collapse).
+                self.morphs.free(m);
+                continue;
+            }
+            let t = self.morphs.t(m);
+            if state.phase == COARSENING {
+                let bounds = h.split_bounds(parent);
+                let slots = if bounds.is_some_and(|b| c.wants_split(b)) {
+                    None
+                } else {
+                    self.collapse_slots(h, parent)
+                };
+                if let Some(slots) = slots {
+                    let visible = bounds.is_some_and(|b| c.visible(b));
+                    let t = if visible { (t - down).max(0.0) } else { 0.0 };
+                    if t <= 0.0 && st.operations() < max_ops {
+                        self.apply_collapse(h, parent, slots)?;
+                        self.morphs.free(m);
+                        st.collapses += 1;
+                        st.morphs_finished += 1;
+                    } else {
+                        self.morphs.set_t(m, t);
+                    }
+                    continue;
+                }
+                if let Some(s) = self.morphs.states.get_mut(m as usize) {
+                    s.phase = REFINING;
+                }
+                st.morphs_aborted += 1;
+            }
+            let t = (t + up).min(1.0);
+            if t >= 1.0 {
+                self.morphs.free(m);
+                st.morphs_finished += 1;
+            } else {
+                self.morphs.set_t(m, t);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The filter morphed emission asks first: a bit per hash of each morphing vertex (4,096
+/// bits), so a corner that does not morph (nearly all) costs one read of a 512-byte array
+/// on the stack, and only the rest probe the map.
+pub(crate) struct MorphRemap<'a, 'm> {
+    bits: [u64; 64],
+    map: &'a MorphMap<'m>,
+    base: u32,
+}
+
+#[inline(always)]
+fn filter_bit(vertex: u32) -> usize {
+    (vertex.wrapping_mul(0x85EB_CA6B) >> 20) as usize
+}
+
+impl<'a, 'm> MorphRemap<'a, 'm> {
+    /// The remap of a camera's morphing vertices to `base + slot`; `None` when nothing
+    /// morphs (emission is then the plain one).
+    pub fn of(morphs: &'a Morphs<'m>, base: u32) -> Option<Self> {
+        if morphs.scalars.live == 0 {
+            return None;
+        }
+        let mut bits = [0u64; 64];
+        for v in morphs.live_vertices().iter().filter(|v| !v.is_idle()) {
+            let b = filter_bit(v.to);
+            bits[b >> 6] |= 1 << (b & 63);
+        }
+        Some(Self {
+            bits,
+            map: &morphs.map,
+            base,
+        })
+    }
+
+    /// `base + slot` for a morphing vertex, else the vertex itself.
+    #[inline(always)]
+    pub fn index(&self, vertex: u32) -> u32 {
+        let b = filter_bit(vertex);
+        if self.bits[b >> 6] & (1 << (b & 63)) == 0 {
+            return vertex;
+        }
+        match self.map.get(vertex) {
+            Some(slot) => self.base.saturating_add(slot),
+            None => vertex,
+        }
+    }
+}
+
+impl CameraState<'_> {
+    /// The morph vertex slots up to the highest in use, for the GPU to blend each frame
+    /// (slot `s` is `morph_vertices()[s]`; idle ones are [`MorphVertex::IDLE`]): the
+    /// persistent indices and `t` of every vertex that morphs. Empty when nothing morphs.
+    pub fn morph_vertices(&self) -> &[MorphVertex] {
+        self.front.morphs.live_vertices()
+    }
+
+    /// Morphs in progress (each moves one or two of [`morph_vertices`](Self::morph_vertices)).
+    pub fn morph_count(&self) -> u32 {
+        self.front.morphs.scalars.live
+    }
+
+    /// Most morphs this camera holds at once ([`CameraConfig::max_morphs`](super::CameraConfig));
+    /// its vertex slots are twice as many.
+    pub fn max_morphs(&self) -> u32 {
+        self.front.morphs.capacity() as u32
+    }
+
+    /// Ends every morph at once: refine morphs snap to the fine position, coarsen morphs back
+    /// to it too (their collapses wait for refinement to want them again). The front is
+    /// unchanged.
+    pub fn finish_morphs(&mut self) {
+        self.front.morphs.clear();
+    }
+}
+
+/// Word count of the morph arrays for `max_morphs` morphs: vertex slots, states, map.
+pub(crate) fn words(max_morphs: usize) -> [usize; 3] {
+    [
+        max_morphs.saturating_mul(VERTICES_PER_MORPH * MORPH_VERTEX_WORDS),
+        max_morphs.saturating_mul(STATE_WORDS),
+        super::morph_map::capacity(max_morphs).saturating_mul(super::morph_map::ENTRY_WORDS),
+    ]
+}
