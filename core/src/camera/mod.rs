@@ -248,6 +248,9 @@ impl core::error::Error for CameraError {}
 /// | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
 /// | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
 /// | `stack` | `stack_len` | the explicit stack of forced splits |
+/// | `morph_vertices` | 8 × `max_morphs` | per morph two [`MorphVertex`] slots: persistent `from`, `to`, and `t`, what the GPU blends |
+/// | `morph_states` | 2 × `max_morphs` | per morph the split whose floating child morphs, and its direction, with a free list |
+/// | `morph_map` | 2 × (4 × `max_morphs` + 1), 0 without morphs | morph slot by morphing vertex, hashed, for morphed emission |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
@@ -301,6 +304,15 @@ impl core::error::Error for CameraError {}
 /// - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 ///   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 ///   memory gets a hard polygon budget for free.
+/// - **Geomorphs are data for the GPU, kept beside the front.** A split of a visible node
+///   starts its floating child at the parent's vertex, and a wanted collapse of a visible
+///   parent glides the child back first (Hoppe's refine and coarsen morphs; see `morph`).
+///   The persistent vertex buffer is never written: the camera keeps per morphing vertex its
+///   two persistent indices and `t` ([`morph_vertices`](Self::morph_vertices)), the GPU
+///   blends them into a per-camera buffer, and morphed emission points a morphing corner
+///   at `vertex_count + slot`. The front itself changes exactly when it would without morphs,
+///   save that a collapse waits for its morph; a camera without morph memory never looks at
+///   morphs at all. 72 bytes per morph.
 #[derive(Debug)]
 pub struct CameraState<'m> {
     pub(crate) front: Front<'m>,
