@@ -13,6 +13,7 @@ use crate::hierarchy::Hierarchy;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Layout {
     splits: usize,
+    vertices: usize,
     roots: usize,
     base: usize,
     surfaces: usize,
@@ -23,6 +24,7 @@ impl Layout {
     pub(crate) fn of(h: &Hierarchy<'_>, config: &CameraConfig) -> Self {
         Self {
             splits: h.splits().len(),
+            vertices: h.vertices().len(),
             roots: h.roots().len(),
             base: h.base_polygon_count(),
             surfaces: h.surface_count(),
@@ -45,7 +47,8 @@ impl Layout {
         } else {
             0
         };
-        let [morph_vertices, morph_states, morph_map] = super::morph::words(c.max_morphs as usize);
+        let [morph_vertices, morph_states, morph_map] =
+            super::morph::words(c.max_morphs as usize, self.vertices);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
             mp,
@@ -143,7 +146,7 @@ impl<'m> CameraState<'m> {
                 morphs: Morphs {
                     vertices: bytemuck::cast_slice_mut(morph_vertices),
                     states: bytemuck::cast_slice_mut(morph_states),
-                    map: MorphMap::new(bytemuck::cast_slice_mut(morph_map)),
+                    map: MorphMap::new(morph_map, c.max_morphs as usize, layout.vertices),
                     scalars: scalars.morphs,
                 },
             },

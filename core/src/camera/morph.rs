@@ -31,8 +31,9 @@
 //! `k` of morph `m` is vertex slot `2m + k`; its [`MorphVertex`] names the two persistent
 //! vertices (the parent's in the same surface group, or any of the parent's where that
 //! group has none) and the current `t`. Morphed emission writes `vertex_count + slot` for a
-//! corner whose vertex morphs ([`CameraState::emit_indices_morphed`]), found through a small
-//! map from vertex to slot (`morph_map`); the persistent vertex buffer is never written.
+//! corner whose vertex morphs ([`CameraState::emit_indices_morphed`]), found through a bit
+//! per vertex and a small map from vertex to slot (`morph_map`); the persistent vertex
+//! buffer is never written.
 //!
 //! A split of a vertex that is still morphing leaves its morph running (the stationary child
 //! keeps the position, so the vertex keeps its morph); the new floating child starts from
@@ -413,12 +414,9 @@ impl Front<'_> {
             let Some(state) = self.morphs.state(m) else {
                 continue;
             };
+            // A collapse ends its floating child's morph, so the parent is split (and were it
+            // not, a coarsen morph would find the collapse illegal and turn back).
             let parent = NodeId(state.parent);
-            if !self.is_split(parent) {
-                // Its pair is gone (the camera's bookkeeping ends such morphs at the collapse).
-                self.morphs.free(m);
-                continue;
-            }
             let t = self.morphs.t(m);
             if state.phase == COARSENING {
                 let bounds = h.split_bounds(parent);
@@ -457,44 +455,27 @@ impl Front<'_> {
     }
 }
 
-/// The filter morphed emission asks first: a bit per hash of each morphing vertex (4,096
-/// bits), so a corner that does not morph (nearly all) costs one read of a 512-byte array
-/// on the stack, and only the rest probe the map.
+/// Morphed emission's view of the map: `base + slot` for a corner whose vertex morphs.
 pub(crate) struct MorphRemap<'a, 'm> {
-    bits: [u64; 64],
     map: &'a MorphMap<'m>,
     base: u32,
-}
-
-#[inline(always)]
-fn filter_bit(vertex: u32) -> usize {
-    (vertex.wrapping_mul(0x85EB_CA6B) >> 20) as usize
 }
 
 impl<'a, 'm> MorphRemap<'a, 'm> {
     /// The remap of a camera's morphing vertices to `base + slot`; `None` when nothing
     /// morphs (emission is then the plain one).
     pub fn of(morphs: &'a Morphs<'m>, base: u32) -> Option<Self> {
-        if morphs.scalars.live == 0 {
-            return None;
-        }
-        let mut bits = [0u64; 64];
-        for v in morphs.live_vertices().iter().filter(|v| !v.is_idle()) {
-            let b = filter_bit(v.to);
-            bits[b >> 6] |= 1 << (b & 63);
-        }
-        Some(Self {
-            bits,
+        (morphs.scalars.live > 0).then_some(Self {
             map: &morphs.map,
             base,
         })
     }
 
-    /// `base + slot` for a morphing vertex, else the vertex itself.
+    /// `base + slot` for a morphing vertex, else the vertex itself: nearly every corner
+    /// costs one read of its bit (see `morph_map`).
     #[inline(always)]
     pub fn index(&self, vertex: u32) -> u32 {
-        let b = filter_bit(vertex);
-        if self.bits[b >> 6] & (1 << (b & 63)) == 0 {
+        if !self.map.morphs(vertex) {
             return vertex;
         }
         match self.map.get(vertex) {
@@ -531,11 +512,12 @@ impl CameraState<'_> {
     }
 }
 
-/// Word count of the morph arrays for `max_morphs` morphs: vertex slots, states, map.
-pub(crate) fn words(max_morphs: usize) -> [usize; 3] {
+/// Word count of the morph arrays for `max_morphs` morphs over `vertices` vertices: vertex
+/// slots, states, map.
+pub(crate) fn words(max_morphs: usize, vertices: usize) -> [usize; 3] {
     [
         max_morphs.saturating_mul(VERTICES_PER_MORPH * MORPH_VERTEX_WORDS),
         max_morphs.saturating_mul(STATE_WORDS),
-        super::morph_map::capacity(max_morphs).saturating_mul(super::morph_map::ENTRY_WORDS),
+        MorphMap::words(max_morphs, vertices),
     ]
 }

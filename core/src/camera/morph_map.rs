@@ -1,11 +1,15 @@
 //! The camera's map from a morphing vertex (its persistent vertex-buffer index) to its morph
 //! slot, which morphed emission asks for every corner.
 //!
-//! An open-addressed table of `4 × max_morphs + 1` entries (a morph has at most two
-//! vertices, so the table is never more than half full and never full): linear probing from
-//! a multiplicative hash, deletion by shifting the rest of the run back, as in the hashed
-//! pair map. Only vertices that morph are in it, a few hundred at most, so the table stays in
-//! the nearest caches while emission probes it.
+//! Two parts: a bit per vertex of the hierarchy, set while the vertex morphs, and an
+//! open-addressed table of `4 × max_morphs + 1` entries from vertex to slot (a morph has at
+//! most two vertices, so the table is never more than half full and never full): linear
+//! probing from a multiplicative hash, deletion by shifting the rest of the run back, as in
+//! the hashed pair map. Emission reads the bit of every corner, in the order the polygons
+//! name their vertices, which keeps those reads close together; only a morphing corner
+//! probes the table, whose scattered reads would otherwise cost every corner a cache miss
+//! once thousands of vertices morph. The bits cost one per vertex, an eighth of a byte,
+//! against the pair map's two bytes per splittable node.
 
 use super::NONE;
 use bytemuck::{Pod, Zeroable};
@@ -23,14 +27,23 @@ const EMPTY: Entry = Entry {
     slot: NONE,
 };
 
-pub(crate) const ENTRY_WORDS: usize = core::mem::size_of::<Entry>() / 4;
+const ENTRY_WORDS: usize = core::mem::size_of::<Entry>() / 4;
 
 /// Entries for `max_morphs` morphs: none without morphs.
-pub(crate) fn capacity(max_morphs: usize) -> usize {
+fn capacity(max_morphs: usize) -> usize {
     if max_morphs == 0 {
         0
     } else {
         max_morphs.saturating_mul(4).saturating_add(1)
+    }
+}
+
+/// Words of the bits for `vertices` vertices: none without morphs.
+fn bit_words(max_morphs: usize, vertices: usize) -> usize {
+    if max_morphs == 0 {
+        0
+    } else {
+        vertices.div_ceil(32)
     }
 }
 
@@ -44,12 +57,46 @@ fn home(vertex: u32, len: usize) -> usize {
 /// Morph slot by vertex index, over caller memory.
 #[derive(Debug)]
 pub(crate) struct MorphMap<'m> {
+    /// Bit `v % 32` of word `v / 32`: vertex `v` morphs.
+    bits: &'m mut [u32],
     table: &'m mut [Entry],
 }
 
 impl<'m> MorphMap<'m> {
-    pub fn new(table: &'m mut [Entry]) -> Self {
-        Self { table }
+    /// Words for `max_morphs` morphs over `vertices` vertices.
+    pub fn words(max_morphs: usize, vertices: usize) -> usize {
+        capacity(max_morphs)
+            .saturating_mul(ENTRY_WORDS)
+            .saturating_add(bit_words(max_morphs, vertices))
+    }
+
+    /// The map over `memory` (at least [`words`](Self::words) words).
+    pub fn new(memory: &'m mut [u32], max_morphs: usize, vertices: usize) -> Self {
+        let table_words = capacity(max_morphs).saturating_mul(ENTRY_WORDS);
+        let (table, bits) = memory.split_at_mut(table_words.min(memory.len()));
+        let bits_len = bit_words(max_morphs, vertices).min(bits.len());
+        Self {
+            bits: &mut bits[..bits_len],
+            table: bytemuck::cast_slice_mut(table),
+        }
+    }
+
+    /// Whether `vertex` morphs: one read of its bit.
+    #[inline(always)]
+    pub fn morphs(&self, vertex: u32) -> bool {
+        self.bits
+            .get(vertex as usize / 32)
+            .is_some_and(|w| w & (1 << (vertex % 32)) != 0)
+    }
+
+    fn set_bit(&mut self, vertex: u32, on: bool) {
+        if let Some(w) = self.bits.get_mut(vertex as usize / 32) {
+            if on {
+                *w |= 1 << (vertex % 32);
+            } else {
+                *w &= !(1 << (vertex % 32));
+            }
+        }
     }
 
     /// Where `vertex` is, or the empty entry its probe ends at.
@@ -93,6 +140,7 @@ impl<'m> MorphMap<'m> {
             Ok(at) | Err(at) => at,
         };
         *self.table.get_mut(at)? = Entry { vertex, slot };
+        self.set_bit(vertex, true);
         Some(())
     }
 
@@ -101,6 +149,7 @@ impl<'m> MorphMap<'m> {
         if let Ok(at) = self.find(vertex) {
             if self.table.get(at).is_some_and(|e| e.slot == slot) {
                 self.remove_at(at);
+                self.set_bit(vertex, false);
             }
         }
     }
@@ -140,10 +189,11 @@ impl<'m> MorphMap<'m> {
     /// No vertex morphs.
     pub fn clear(&mut self) {
         self.table.fill(EMPTY);
+        self.bits.fill(0);
     }
 
     pub fn bytes(&self) -> usize {
-        core::mem::size_of_val(&*self.table)
+        core::mem::size_of_val(&*self.table) + core::mem::size_of_val(&*self.bits)
     }
 }
 
@@ -158,9 +208,10 @@ mod tests {
         const VERTICES: usize = 300;
         const MORPHS: usize = 8;
         let steps = if cfg!(miri) { 300 } else { 20_000 };
-        let mut table = [EMPTY; 33];
-        assert_eq!(capacity(MORPHS), table.len());
-        let mut map = MorphMap::new(&mut table);
+        let mut memory = [0u32; 2 * 33 + 10];
+        assert_eq!(MorphMap::words(MORPHS, VERTICES), memory.len());
+        let mut map = MorphMap::new(&mut memory, MORPHS, VERTICES);
+        map.clear();
         let mut direct = [NONE; VERTICES];
         let mut live = 0usize;
         let mut state = 0x2545_F491u32;
@@ -183,10 +234,13 @@ mod tests {
             }
             for (i, &d) in direct.iter().enumerate() {
                 assert_eq!(map.get(i as u32), (d != NONE).then_some(d), "vertex {i}");
+                assert_eq!(map.morphs(i as u32), d != NONE, "vertex {i}");
             }
         }
         assert_eq!(map.get(NONE), None);
-        assert_eq!(map.bytes(), 33 * 8);
-        assert_eq!(MorphMap::new(&mut []).get(3), None);
+        assert!(!map.morphs(NONE));
+        assert_eq!(map.bytes(), 33 * 8 + 40);
+        assert_eq!(MorphMap::words(0, VERTICES), 0);
+        assert_eq!(MorphMap::new(&mut [], 0, VERTICES).get(3), None);
     }
 }
