@@ -214,7 +214,7 @@ fn morph_memory_is_sized_and_bounded() {
     assert_eq!(plain, CameraState::words_needed(&h));
     for n in [1u32, 7, 300] {
         let words = CameraState::words_needed_for(&h, &morph_config(&h, n));
-        let bits = h.vertices().len().div_ceil(32);
+        let bits = h.vertices().len().div_ceil(32) + h.splits().len().div_ceil(32);
         assert_eq!(words - plain, 18 * n as usize + 2 + bits, "{n} morphs");
     }
     let huge = morph_config(&h, u32::MAX / 2);
@@ -403,6 +403,114 @@ fn aborted_coarsen_morphs_return_to_the_fine_state() {
     }
     assert_eq!(cam.split_count(), fine_splits);
     assert_eq!(sorted_front(&cam), fine_front);
+}
+
+/// The parent whose split made the floating child that vertex `to` belongs to, and that
+/// child (see [`check_morphs`]).
+fn morph_pair(h: &Hierarchy<'_>, cam: &CameraState<'_>, pos: &[u32], to: u32) -> (NodeId, NodeId) {
+    let u = cam
+        .active_nodes()
+        .find(|n| h.nodes()[n.index()].position.0 == pos[to as usize])
+        .expect("an active node at the morphing vertex");
+    let mut child = u;
+    loop {
+        let p = h.nodes()[child.index()].parent;
+        if h.nodes()[p.index()].position != h.nodes()[u.index()].position {
+            return (p, child);
+        }
+        child = p;
+    }
+}
+
+/// A split nearby that makes a pending collapse illegal aborts its coarsen morph on the next
+/// pass, before the vertex moves on; so does a split of the floating child itself.
+#[test]
+fn an_illegal_collapse_aborts_its_coarsen_morph() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let config = morph_config(&h, 256);
+    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
+    let pos = position_of_vertex(&h);
+    let far = approach(&h, 1.0);
+    let mut neighbour_aborts = 0;
+    let mut child_aborts = 0;
+    // Each round: settle at a front partly refined, start coarsen morphs far, then make one
+    // pending collapse illegal, by a neighbour's split in even rounds and by the floating
+    // child's in odd ones.
+    let rounds = [0.2f32, 0.5, 1.0, 2.0].iter().flat_map(|&tol| {
+        [0.0f32, 0.1, 0.3]
+            .map(|k| (tol, k))
+            .into_iter()
+            .flat_map(|c| [c, c])
+    });
+    for (round, (tolerance_px, k)) in rounds.enumerate() {
+        let p = RefineParams {
+            tolerance_px,
+            ..fine()
+        };
+        cam.reset(&h);
+        settle(&h, &mut cam, &approach(&h, k), &p);
+        cam.refine(&h, &far, &p).expect("refine");
+        cam.refine(&h, &far, &p).expect("refine");
+        let pending: Vec<(u32, f32)> = cam
+            .morph_vertices()
+            .iter()
+            .filter(|m| !m.is_idle() && m.t < 1.0)
+            .map(|m| (m.to, m.t))
+            .collect();
+        let by_child = round % 2 == 1;
+        let mut target = None;
+        'search: for &(to, t) in &pending {
+            let (parent, floating) = morph_pair(&h, &cam, &pos, to);
+            assert!(cam.can_collapse(&h, parent));
+            if by_child {
+                if h.split(floating).is_some() {
+                    cam.force_split_own_stack(&h, floating).expect("forced split");
+                    target = Some((to, t));
+                    break 'search;
+                }
+                continue;
+            }
+            let sp = h.split(parent).expect("a split");
+            let nodes: Vec<NodeId> = cam.active_nodes().collect();
+            for w in nodes {
+                if w == sp.stationary || w == sp.floating || !cam.can_split(&h, w) {
+                    continue;
+                }
+                cam.split(&h, w).expect("legal split");
+                if !cam.can_collapse(&h, parent) {
+                    target = Some((to, t));
+                    break 'search;
+                }
+                cam.collapse(&h, w).expect("undo");
+            }
+        }
+        let Some((to, t)) = target else {
+            continue;
+        };
+        let st = cam.refine(&h, &far, &p).expect("refine");
+        assert!(st.morphs_aborted > 0, "round {round}: {st:?}");
+        let now = cam
+            .morph_vertices()
+            .iter()
+            .find(|m| m.to == to)
+            .map_or(1.0, |m| m.t);
+        assert!(
+            now > t,
+            "round {round}: the aborted morph rises ({t} -> {now})"
+        );
+        check_morphs(&h, &cam, &pos);
+        if by_child {
+            child_aborts += 1;
+        } else {
+            neighbour_aborts += 1;
+        }
+    }
+    assert!(
+        neighbour_aborts > 0 && child_aborts > 0,
+        "{neighbour_aborts} {child_aborts}"
+    );
 }
 
 /// Coarsen morphs that reach 0 collapse; moving away for good ends at the far front of a

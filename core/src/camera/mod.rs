@@ -125,8 +125,8 @@ pub struct CameraConfig {
     /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the [`CameraState`]
     /// docs): each moves a split's floating child, one or two vertices, between its parent's
     /// position and its own over [`RefineParams::refine_morph_s`] or
-    /// [`coarsen_morph_s`](RefineParams::coarsen_morph_s). 72 bytes per morph and a bit per
-    /// vertex of the hierarchy; 0 in
+    /// [`coarsen_morph_s`](RefineParams::coarsen_morph_s). 72 bytes per morph, and a bit per
+    /// vertex of the hierarchy and per pair; 0 in
     /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
     /// camera without morphs splits and collapses at once.
     pub max_morphs: u32,
@@ -252,6 +252,7 @@ impl core::error::Error for CameraError {}
 /// | `morph_vertices` | 8 × `max_morphs` | per morph two [`MorphVertex`] slots: persistent `from`, `to`, and `t`, what the GPU blends |
 /// | `morph_states` | 2 × `max_morphs` | per morph the split whose floating child morphs, and its direction, with a free list |
 /// | `morph_map` | 2 × (4 × `max_morphs` + 1) + vertices / 32, 0 without morphs | a bit per vertex (it morphs), and the morph slot by morphing vertex, hashed, for morphed emission |
+/// | `coarsening` | `max_pairs` / 32, 0 without morphs | a bit per pair: its floating child coarsen-morphs |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
@@ -313,8 +314,11 @@ impl core::error::Error for CameraError {}
 ///   blends them into a per-camera buffer, and morphed emission points a morphing corner
 ///   at `vertex_count + slot`. The front itself changes exactly when it would without morphs,
 ///   save that a collapse waits for its morph; a camera without morph memory never looks at
-///   morphs at all. 72 bytes per morph, and a bit per vertex that tells morphed emission
-///   which corners morph without a probe of the map for the others.
+///   morphs at all. 72 bytes per morph, a bit per vertex that tells morphed emission which
+///   corners morph without a probe of the map for the others, and a bit per pair that tells
+///   refinement which collapses wait for their coarsen morph. A coarsening pair's
+///   remembered-refusal bit remembers the opposite answer, "legal, nothing changed since",
+///   so stepping a coarsen morph rarely asks the preconditions again.
 #[derive(Debug)]
 pub struct CameraState<'m> {
     pub(crate) front: Front<'m>,
@@ -487,6 +491,7 @@ impl<'m> CameraState<'m> {
             + core::mem::size_of_val(&*f.morphs.vertices)
             + core::mem::size_of_val(&*f.morphs.states)
             + f.morphs.map.bytes()
+            + core::mem::size_of_val(&*f.morphs.coarsening)
             + core::mem::size_of::<Self>()
     }
 

@@ -1,5 +1,5 @@
-//! Geomorphs of view-dependent refinement (Hoppe's `SrVertexMorph`, SIGGRAPH 97 §5), in the
-//! camera's memory, for the GPU to blend.
+//! Geomorphs of view-dependent refinement (Hoppe's `SrVertexMorph`), in the camera's memory,
+//! for the GPU to blend.
 //!
 //! Only a split's floating child moves: the hierarchy keeps every node at an original
 //! position (half-edge collapses), so the stationary child already stands where its parent
@@ -23,7 +23,12 @@
 //! asked again whether its split is wanted and its collapse legal before it moves, so an
 //! abort happens on the pass after the change, before the vertex has moved on. The sweep is
 //! O(morphs); a camera without morph memory never runs it, and the walk over the active nodes
-//! looks at morphs only where it applies a split or would collapse.
+//! looks at morphs only where it applies a split or would collapse. A pair whose coarsen
+//! morph runs has a bit set (`coarsening`, a bit per pair): the walk leaves such a pair to the
+//! sweep without asking whether its collapse is legal. The sweep asks cheaply too: the
+//! camera's bit per pair that remembers a refused collapse until either slot changes (see the
+//! [`CameraState`] docs) remembers, for a coarsening pair, that its collapse was found legal
+//! and nothing it depends on changed since, besides a child's split, which the sweep reads.
 //!
 //! A morph has two vertex slots: a floating child is FREE (one surface group at its
 //! position) or SHARP (two), so two vertices cover every position a floating child may
@@ -110,13 +115,15 @@ const COARSENING: u32 = 1;
 const LAST: u32 = FREE - 1;
 
 /// The morph pool of one camera: its vertex slots (what the GPU reads), its states, the
-/// map from vertex to slot, and a free list.
+/// map from vertex to slot, a bit per pair that coarsen-morphs, and a free list.
 #[derive(Debug)]
 pub(crate) struct Morphs<'m> {
     /// Two per morph.
     pub vertices: &'m mut [MorphVertex],
     pub states: &'m mut [MorphState],
     pub map: MorphMap<'m>,
+    /// Bit `k % 32` of word `k / 32`: pair `k`'s floating child coarsen-morphs.
+    pub coarsening: &'m mut [u32],
     pub scalars: MorphScalars,
 }
 
@@ -150,7 +157,26 @@ impl Morphs<'_> {
     pub fn clear(&mut self) {
         self.vertices.fill(MorphVertex::IDLE);
         self.map.clear();
+        self.coarsening.fill(0);
         self.scalars = MorphScalars::EMPTY;
+    }
+
+    /// Whether pair `pair`'s floating child coarsen-morphs.
+    #[inline]
+    pub fn is_coarsening(&self, pair: u32) -> bool {
+        self.coarsening
+            .get(pair as usize / 32)
+            .is_some_and(|w| w & (1 << (pair % 32)) != 0)
+    }
+
+    pub fn set_coarsening(&mut self, pair: u32, on: bool) {
+        if let Some(w) = self.coarsening.get_mut(pair as usize / 32) {
+            if on {
+                *w |= 1 << (pair % 32);
+            } else {
+                *w &= !(1 << (pair % 32));
+            }
+        }
     }
 
     /// The vertex slots up to the high-water mark.
@@ -261,6 +287,48 @@ fn step(dt: f32, duration: f32) -> f32 {
 }
 
 impl Front<'_> {
+    /// Sets morph `m` (of `parent`'s floating child) coarsening or refining, and its pair's
+    /// bit with it. A pair that starts to coarsen-morph had its collapse found legal just
+    /// now: its remembered-refusal bit remembers that (see the module docs); one that stops
+    /// for any reason but an illegal collapse forgets it.
+    fn set_phase(&mut self, m: u32, parent: NodeId, phase: u32) {
+        if let Some(state) = self.morphs.states.get_mut(m as usize) {
+            state.phase = phase;
+        }
+        if let Some(pair) = self.pair_of.get(parent.index()).filter(|&p| p != NONE) {
+            let on = phase == COARSENING;
+            self.morphs.set_coarsening(pair, on);
+            if on {
+                self.remember_refusal(pair);
+            } else {
+                self.forget_refusal(pair);
+            }
+        }
+    }
+
+    /// Ends morph `m`; a coarsening pair's bits go with it.
+    fn free_morph(&mut self, m: u32) {
+        if let Some(state) = self.morphs.state(m) {
+            if state.phase == COARSENING {
+                self.set_phase(m, NodeId(state.parent), REFINING);
+            }
+            self.morphs.free(m);
+        }
+    }
+
+    /// Every coarsening pair's bit again, from the morphs (after compaction moved pairs).
+    pub fn mark_coarsening_pairs(&mut self) {
+        self.morphs.coarsening.fill(0);
+        let len = (self.morphs.scalars.len as usize).min(self.morphs.capacity());
+        for m in 0..len as u32 {
+            if let Some(state) = self.morphs.state(m).filter(|s| s.phase == COARSENING) {
+                if let Some(pair) = self.pair_of.get(state.parent as usize) {
+                    self.morphs.set_coarsening(pair, true);
+                }
+            }
+        }
+    }
+
     /// The morph of the vertices at `floating`'s position, if any.
     fn morph_of(&self, h: &Hierarchy<'_>, floating: NodeId) -> Option<u32> {
         let first = h.vertex_keys(Self::position_of(h, floating)).first()?;
@@ -313,21 +381,25 @@ impl Front<'_> {
         if let Some(state) = self.morphs.states.get_mut(m as usize) {
             *state = MorphState {
                 parent: parent.0,
-                phase,
+                phase: REFINING,
             };
         }
         if !mapped {
             // The map has room for every slot (see `morph_map`); a camera whose own
             // bookkeeping says otherwise moves this vertex at once.
-            self.morphs.free(m);
+            self.free_morph(m);
+            return false;
         }
-        mapped
+        if phase == COARSENING {
+            self.set_phase(m, parent, COARSENING);
+        }
+        true
     }
 
     /// Ends the morph of the vertices at `floating`'s position, if any (its pair collapsed).
     pub fn end_morph_of(&mut self, h: &Hierarchy<'_>, floating: NodeId) {
         if let Some(m) = self.morph_of(h, floating) {
-            self.morphs.free(m);
+            self.free_morph(m);
         }
     }
 
@@ -353,10 +425,10 @@ impl Front<'_> {
         }
     }
 
-    /// Whether refinement, wanting the legal collapse of `parent`, waits for a coarsen
-    /// morph instead: one running already, one turned from a refine morph, or one started
-    /// now. `false` (collapse at once, ending any morph of the floating child) for a parent
-    /// outside the view, coarsen morphs off, or no room.
+    /// Whether refinement, wanting the legal collapse of `parent` (whose pair does not
+    /// coarsen-morph yet), waits for a coarsen morph instead: a refine morph turned around,
+    /// or one started now. `false` (collapse at once, ending any morph of the floating child)
+    /// for a parent outside the view, coarsen morphs off, or no room.
     pub(super) fn defers_collapse(
         &mut self,
         h: &Hierarchy<'_>,
@@ -371,12 +443,10 @@ impl Front<'_> {
         let running = self.morph_of(h, s.floating);
         if p.coarsen_morph_s > 0.0 && c.visible(b) {
             if let Some(m) = running {
-                if let Some(state) = self.morphs.states.get_mut(m as usize) {
-                    if state.phase != COARSENING {
-                        state.phase = COARSENING;
-                        st.morphs_started += 1;
-                    }
+                if self.morphs.state(m).is_some_and(|s| s.phase != COARSENING) {
+                    st.morphs_started += 1;
                 }
+                self.set_phase(m, parent, COARSENING);
                 return true;
             }
             if self.start_morph(h, parent, 1.0, COARSENING) {
@@ -385,10 +455,30 @@ impl Front<'_> {
             }
             st.morphs_dropped += 1;
         } else if let Some(m) = running {
-            self.morphs.free(m);
+            self.free_morph(m);
             st.morphs_finished += 1;
         }
         false
+    }
+
+    /// Whether the collapse into `parent`, whose pair coarsen-morphs, is still legal: its
+    /// children unsplit, and its slots as they were when it was found legal (the pair's
+    /// remembered bit, see the module docs) or found legal now.
+    fn coarsening_legal(&mut self, h: &Hierarchy<'_>, parent: NodeId) -> bool {
+        let (Some(s), Some(pair)) = (h.split(parent), self.pair_of.get(parent.index())) else {
+            return false;
+        };
+        if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
+            return false;
+        }
+        if self.refusal_remembered(pair) {
+            return true;
+        }
+        let legal = self.collapse_slots(h, parent).is_some();
+        if legal {
+            self.remember_refusal(pair);
+        }
+        legal
     }
 
     /// Steps every morph by `p.dt_s` (see the module docs): a coarsen morph whose parent's
@@ -420,32 +510,35 @@ impl Front<'_> {
             let t = self.morphs.t(m);
             if state.phase == COARSENING {
                 let bounds = h.split_bounds(parent);
-                let slots = if bounds.is_some_and(|b| c.wants_split(b)) {
-                    None
-                } else {
-                    self.collapse_slots(h, parent)
-                };
-                if let Some(slots) = slots {
+                let wanted = bounds.is_some_and(|b| c.wants_split(b));
+                let legal = !wanted && self.coarsening_legal(h, parent);
+                if legal {
                     let visible = bounds.is_some_and(|b| c.visible(b));
                     let t = if visible { (t - down).max(0.0) } else { 0.0 };
                     if t <= 0.0 && st.operations() < max_ops {
-                        self.apply_collapse(h, parent, slots)?;
-                        self.morphs.free(m);
-                        st.collapses += 1;
-                        st.morphs_finished += 1;
-                    } else {
-                        self.morphs.set_t(m, t);
+                        if let Some(slots) = self.collapse_slots(h, parent) {
+                            self.apply_collapse(h, parent, slots)?;
+                            self.free_morph(m);
+                            st.collapses += 1;
+                            st.morphs_finished += 1;
+                            continue;
+                        }
                     }
+                    self.morphs.set_t(m, t);
                     continue;
                 }
-                if let Some(s) = self.morphs.states.get_mut(m as usize) {
-                    s.phase = REFINING;
+                self.set_phase(m, parent, REFINING);
+                if !wanted {
+                    // Refused: remembered as any refusal is, until something changes.
+                    if let Some(pair) = self.pair_of.get(parent.index()).filter(|&k| k != NONE) {
+                        self.remember_refusal(pair);
+                    }
                 }
                 st.morphs_aborted += 1;
             }
             let t = (t + up).min(1.0);
             if t >= 1.0 {
-                self.morphs.free(m);
+                self.free_morph(m);
                 st.morphs_finished += 1;
             } else {
                 self.morphs.set_t(m, t);
@@ -508,16 +601,27 @@ impl CameraState<'_> {
     /// to it too (their collapses wait for refinement to want them again). The front is
     /// unchanged.
     pub fn finish_morphs(&mut self) {
-        self.front.morphs.clear();
+        let f = &mut self.front;
+        if f.morphs.scalars.live > 0 {
+            // A coarsening pair's remembered bit says "legal"; without the morph it would read
+            // as a refusal.
+            f.refused.fill(0);
+        }
+        f.morphs.clear();
     }
 }
 
-/// Word count of the morph arrays for `max_morphs` morphs over `vertices` vertices: vertex
-/// slots, states, map.
-pub(crate) fn words(max_morphs: usize, vertices: usize) -> [usize; 3] {
+/// Word count of the morph arrays for `max_morphs` morphs over `vertices` vertices and
+/// `max_pairs` pairs: vertex slots, states, map, coarsening bits.
+pub(crate) fn words(max_morphs: usize, vertices: usize, max_pairs: usize) -> [usize; 4] {
     [
         max_morphs.saturating_mul(VERTICES_PER_MORPH * MORPH_VERTEX_WORDS),
         max_morphs.saturating_mul(STATE_WORDS),
         MorphMap::words(max_morphs, vertices),
+        if max_morphs == 0 {
+            0
+        } else {
+            max_pairs.div_ceil(32)
+        },
     ]
 }

@@ -476,6 +476,12 @@ impl Front<'_> {
         let last = self.pairs - 1;
         self.pairs = last;
         self.forget_refusal(last);
+        if !self.morphs.coarsening.is_empty() {
+            // The last pair's coarsening bit moves with it.
+            let moved = self.morphs.is_coarsening(last);
+            self.morphs.set_coarsening(last, false);
+            self.morphs.set_coarsening(k, moved && k != last);
+        }
         if k == last {
             return Ok(());
         }

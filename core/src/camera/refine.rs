@@ -374,6 +374,11 @@ impl CameraState<'_> {
             };
             if unwanted {
                 let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
+                if morphing && f.morphs.is_coarsening(pair) {
+                    // Its coarsen morph runs: the sweep decides its collapse.
+                    i += 1;
+                    continue;
+                }
                 if pair != NONE && f.refusal_remembered(pair) {
                     st.refusals_remembered += 1;
                 } else if pair != NONE {
