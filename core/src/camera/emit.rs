@@ -181,7 +181,7 @@ impl CameraState<'_> {
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
         match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
-            Some(m) => self.emit_lists(h, out, written, |tri| tri.map(|i| m.index(i))),
+            Some(m) => self.emit_lists(h, out, written, |tri| m.triangle(tri)),
             None => self.emit_lists(h, out, written, |tri| tri),
         }
     }
@@ -257,7 +257,7 @@ impl CameraState<'_> {
         offsets: &mut [u32],
     ) -> Result<usize, EmitError> {
         match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
-            Some(m) => self.emit_packed(h, out, offsets, |tri| tri.map(|i| m.index(i))),
+            Some(m) => self.emit_packed(h, out, offsets, |tri| m.triangle(tri)),
             None => self.emit_packed(h, out, offsets, |tri| tri),
         }
     }

@@ -39,7 +39,7 @@ impl Layout {
     }
 
     /// Words of each array, in the order they lie in memory.
-    fn array_words(&self) -> [usize; 12] {
+    fn array_words(&self) -> [usize; 13] {
         let c = &self.config;
         let mp = c.max_pairs as usize;
         let triangles = if c.index_cache {
@@ -47,7 +47,7 @@ impl Layout {
         } else {
             0
         };
-        let [morph_vertices, morph_states, morph_map, coarsening] =
+        let [morph_vertices, morph_states, morph_map, coarsening, morph_free] =
             super::morph::words(c.max_morphs as usize, self.vertices, mp);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
@@ -62,6 +62,7 @@ impl Layout {
             morph_states,
             morph_map,
             coarsening,
+            morph_free,
         ]
     }
 
@@ -111,7 +112,7 @@ impl<'m> CameraState<'m> {
     /// least `layout.words()` words) and whose other state is `scalars`. Nothing is written:
     /// the words are the camera's as they were when `scalars` was taken, or are reset next.
     pub(crate) fn carve(memory: &'m mut [u32], layout: &Layout, scalars: Scalars) -> Self {
-        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len, morph_vertex_words, morph_state_words, morph_map_words, coarsening_words] =
+        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len, morph_vertex_words, morph_state_words, morph_map_words, coarsening_words, free_words] =
             layout.array_words();
         let c = &layout.config;
         let (pair_of, rest) = memory.split_at_mut(pair_words);
@@ -125,7 +126,8 @@ impl<'m> CameraState<'m> {
         let (morph_vertices, rest) = rest.split_at_mut(morph_vertex_words);
         let (morph_states, rest) = rest.split_at_mut(morph_state_words);
         let (morph_map, rest) = rest.split_at_mut(morph_map_words);
-        let (coarsening, _) = rest.split_at_mut(coarsening_words);
+        let (coarsening, rest) = rest.split_at_mut(coarsening_words);
+        let (morph_free, _) = rest.split_at_mut(free_words);
         let mp = c.max_pairs as usize;
         Self {
             front: Front {
@@ -150,6 +152,7 @@ impl<'m> CameraState<'m> {
                     states: bytemuck::cast_slice_mut(morph_states),
                     map: MorphMap::new(morph_map, c.max_morphs as usize, layout.vertices),
                     coarsening,
+                    free: morph_free,
                     scalars: scalars.morphs,
                 },
             },

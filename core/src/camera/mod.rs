@@ -250,9 +250,10 @@ impl core::error::Error for CameraError {}
 /// | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
 /// | `stack` | `stack_len` | the explicit stack of forced splits |
 /// | `morph_vertices` | 8 × `max_morphs` | per morph two [`MorphVertex`] slots: persistent `from`, `to`, and `t`, what the GPU blends |
-/// | `morph_states` | 2 × `max_morphs` | per morph the split whose floating child morphs, and its direction, with a free list |
+/// | `morph_states` | 2 × `max_morphs` | per morph the split whose floating child morphs, and its direction |
 /// | `morph_map` | 2 × (4 × `max_morphs` + 1) + vertices / 32, 0 without morphs | a bit per vertex (it morphs), and the morph slot by morphing vertex, hashed, for morphed emission |
 /// | `coarsening` | `max_pairs` / 32, 0 without morphs | a bit per pair: its floating child coarsen-morphs |
+/// | `morph_free` | `max_morphs` / 32 | a bit per free morph (a new one takes the lowest) |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
@@ -492,6 +493,7 @@ impl<'m> CameraState<'m> {
             + core::mem::size_of_val(&*f.morphs.states)
             + f.morphs.map.bytes()
             + core::mem::size_of_val(&*f.morphs.coarsening)
+            + core::mem::size_of_val(&*f.morphs.free)
             + core::mem::size_of::<Self>()
     }
 

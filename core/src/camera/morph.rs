@@ -97,8 +97,7 @@ pub(crate) const MORPH_VERTEX_WORDS: usize = core::mem::size_of::<MorphVertex>()
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub(crate) struct MorphState {
-    /// The node whose split made the floating child that morphs, or [`FREE`] with the free
-    /// list's link in the low bits.
+    /// The node whose split made the floating child that morphs, or [`FREE`].
     parent: u32,
     /// [`REFINING`] or [`COARSENING`].
     phase: u32,
@@ -111,11 +110,8 @@ const REFINING: u32 = 0;
 /// Towards the parent's position, then collapse.
 const COARSENING: u32 = 1;
 
-/// End of the free list, in a free state's low bits.
-const LAST: u32 = FREE - 1;
-
 /// The morph pool of one camera: its vertex slots (what the GPU reads), its states, the
-/// map from vertex to slot, a bit per pair that coarsen-morphs, and a free list.
+/// map from vertex to slot, a bit per pair that coarsen-morphs, and a bit per free morph.
 #[derive(Debug)]
 pub(crate) struct Morphs<'m> {
     /// Two per morph.
@@ -124,16 +120,20 @@ pub(crate) struct Morphs<'m> {
     pub map: MorphMap<'m>,
     /// Bit `k % 32` of word `k / 32`: pair `k`'s floating child coarsen-morphs.
     pub coarsening: &'m mut [u32],
+    /// Bit `m % 32` of word `m / 32`: morph `m` is free. A new morph takes the lowest free
+    /// one, so the morphs in progress stay at the bottom of the pool and the slots the GPU
+    /// reads (up to the highest in progress) stay few.
+    pub free: &'m mut [u32],
     pub scalars: MorphScalars,
 }
 
 /// The pool's state besides its arrays.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MorphScalars {
-    /// High-water mark of `states`.
+    /// One past the highest morph in progress.
     pub len: u32,
-    /// Head of the free list (`NONE` when empty).
-    pub free_head: u32,
+    /// No word of `free` below this one has a bit set.
+    pub low: u32,
     /// Morphs in progress.
     pub live: u32,
 }
@@ -141,7 +141,7 @@ pub(crate) struct MorphScalars {
 impl MorphScalars {
     pub const EMPTY: Self = Self {
         len: 0,
-        free_head: NONE,
+        low: 0,
         live: 0,
     };
 }
@@ -158,6 +158,16 @@ impl Morphs<'_> {
         self.vertices.fill(MorphVertex::IDLE);
         self.map.clear();
         self.coarsening.fill(0);
+        self.states.fill(MorphState {
+            parent: FREE,
+            phase: REFINING,
+        });
+        self.free.fill(u32::MAX);
+        // The bits past the last morph stay clear, so no search ever finds them.
+        let n = self.states.len();
+        if let Some(last) = self.free.last_mut().filter(|_| n % 32 != 0) {
+            *last = (1 << (n % 32)) - 1;
+        }
         self.scalars = MorphScalars::EMPTY;
     }
 
@@ -198,48 +208,47 @@ impl Morphs<'_> {
         self.state(m).map(|_| m)
     }
 
+    /// The lowest free morph, taken.
     fn alloc(&mut self) -> Option<u32> {
         let s = &mut self.scalars;
-        let m = if s.free_head != NONE {
-            let m = s.free_head;
-            let link = self.states.get(m as usize)?.parent & !FREE;
-            s.free_head = if link == LAST { NONE } else { link };
-            m
-        } else {
-            let m = s.len;
-            if m as usize >= self.states.len() {
-                return None;
-            }
-            s.len += 1;
-            m
-        };
+        let low = s.low as usize;
+        let (k, w) = self
+            .free
+            .iter_mut()
+            .enumerate()
+            .skip(low)
+            .find(|(_, w)| **w != 0)?;
+        let m = (k * 32) as u32 + w.trailing_zeros();
+        *w &= *w - 1;
+        s.low = k as u32;
+        s.len = s.len.max(m + 1);
         s.live += 1;
         Some(m)
     }
 
-    /// Ends morph `m`: its slots go idle and it joins the free list (when none is left, the
-    /// pool starts from its first slot again, so the GPU's slot range shrinks to nothing).
+    /// Ends morph `m`: its slots go idle and it is free again; the high-water mark drops
+    /// below the free morphs at the top.
     fn free(&mut self, m: u32) {
         if self.state(m).is_none() {
             return;
         }
         self.unmap(m);
-        let s = &mut self.scalars;
-        let link = if s.free_head == NONE {
-            LAST
-        } else {
-            s.free_head
-        };
         if let Some(state) = self.states.get_mut(m as usize) {
-            *state = MorphState {
-                parent: FREE | link,
-                phase: REFINING,
-            };
-            s.free_head = m;
+            state.parent = FREE;
+        }
+        let s = &mut self.scalars;
+        if let Some(w) = self.free.get_mut(m as usize / 32) {
+            *w |= 1 << (m % 32);
+            s.low = s.low.min(m / 32);
         }
         s.live = s.live.saturating_sub(1);
-        if s.live == 0 {
-            *s = MorphScalars::EMPTY;
+        while s.len > 0
+            && self
+                .states
+                .get(s.len as usize - 1)
+                .is_none_or(|x| x.parent & FREE != 0)
+        {
+            s.len -= 1;
         }
     }
 
@@ -564,11 +573,21 @@ impl<'a, 'm> MorphRemap<'a, 'm> {
         })
     }
 
-    /// `base + slot` for a morphing vertex, else the vertex itself: nearly every corner
-    /// costs one read of its bit (see `morph_map`).
+    /// A triangle's indices with each morphing vertex at `base + slot`: a triangle without
+    /// one (nearly all) costs the reads of its three bits and one branch (see `morph_map`).
     #[inline(always)]
-    pub fn index(&self, vertex: u32) -> u32 {
-        if !self.map.morphs(vertex) {
+    pub fn triangle(&self, tri: [u32; 3]) -> [u32; 3] {
+        let [a, b, c] = tri.map(|v| self.map.bit(v));
+        if a | b | c == 0 {
+            return tri;
+        }
+        tri.map(|v| self.index(v))
+    }
+
+    /// `base + slot` for a morphing vertex, else the vertex itself.
+    #[inline]
+    fn index(&self, vertex: u32) -> u32 {
+        if self.map.bit(vertex) == 0 {
             return vertex;
         }
         match self.map.get(vertex) {
@@ -612,8 +631,8 @@ impl CameraState<'_> {
 }
 
 /// Word count of the morph arrays for `max_morphs` morphs over `vertices` vertices and
-/// `max_pairs` pairs: vertex slots, states, map, coarsening bits.
-pub(crate) fn words(max_morphs: usize, vertices: usize, max_pairs: usize) -> [usize; 4] {
+/// `max_pairs` pairs: vertex slots, states, map, coarsening bits, free bits.
+pub(crate) fn words(max_morphs: usize, vertices: usize, max_pairs: usize) -> [usize; 5] {
     [
         max_morphs.saturating_mul(VERTICES_PER_MORPH * MORPH_VERTEX_WORDS),
         max_morphs.saturating_mul(STATE_WORDS),
@@ -623,5 +642,6 @@ pub(crate) fn words(max_morphs: usize, vertices: usize, max_pairs: usize) -> [us
         } else {
             max_pairs.div_ceil(32)
         },
+        max_morphs.div_ceil(32),
     ]
 }

@@ -81,12 +81,12 @@ impl<'m> MorphMap<'m> {
         }
     }
 
-    /// Whether `vertex` morphs: one read of its bit.
+    /// Whether `vertex` morphs (non-zero) or not (zero): one read of its bit, no branch.
     #[inline(always)]
-    pub fn morphs(&self, vertex: u32) -> bool {
+    pub fn bit(&self, vertex: u32) -> u32 {
         self.bits
             .get(vertex as usize / 32)
-            .is_some_and(|w| w & (1 << (vertex % 32)) != 0)
+            .map_or(0, |w| w & (1 << (vertex % 32)))
     }
 
     fn set_bit(&mut self, vertex: u32, on: bool) {
@@ -234,11 +234,11 @@ mod tests {
             }
             for (i, &d) in direct.iter().enumerate() {
                 assert_eq!(map.get(i as u32), (d != NONE).then_some(d), "vertex {i}");
-                assert_eq!(map.morphs(i as u32), d != NONE, "vertex {i}");
+                assert_eq!(map.bit(i as u32) != 0, d != NONE, "vertex {i}");
             }
         }
         assert_eq!(map.get(NONE), None);
-        assert!(!map.morphs(NONE));
+        assert_eq!(map.bit(NONE), 0);
         assert_eq!(map.bytes(), 33 * 8 + 40);
         assert_eq!(MorphMap::words(0, VERTICES), 0);
         assert_eq!(MorphMap::new(&mut [], 0, VERTICES).get(3), None);
