@@ -17,7 +17,7 @@
 //! A split or collapse of a node outside the view (the frustum and the normal cone, as
 //! refinement tests them) happens at once, and a collapse that happens at once ends its
 //! floating child's morph. `t` moves at a constant speed (a full morph takes its duration;
-//! Hoppe's restart the duration from wherever the vertex stands).
+//! Hoppe's morphs take the whole duration again from wherever the vertex stands).
 //!
 //! Each pass first steps every morph ([`Front::sweep_morphs`]): a coarsen morph's parent is
 //! asked again whether its split is wanted and its collapse legal before it moves, so an
