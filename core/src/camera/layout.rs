@@ -2,8 +2,8 @@
 //! view the same words as the same camera again.
 
 use super::certificate::Odometer;
-use super::morph::{MorphScalars, Morphs};
 use super::morph_map::MorphMap;
+use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
 use super::{CameraConfig, CameraState, Front, ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
 use crate::hierarchy::Hierarchy;
@@ -48,7 +48,7 @@ impl Layout {
             0
         };
         let [morph_vertices, morph_states, morph_map, coarsening, morph_free] =
-            super::morph::words(c.max_morphs as usize, self.vertices, mp);
+            super::morph_pool::words(c.max_morphs as usize, self.vertices, mp);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
             mp,

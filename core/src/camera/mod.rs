@@ -8,6 +8,7 @@ mod index_cache;
 mod layout;
 mod morph;
 mod morph_map;
+mod morph_pool;
 mod ops;
 mod pair_map;
 mod refine;
@@ -23,7 +24,7 @@ use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PolyKey};
 use certificate::{Odometer, UNKNOWN};
 pub(crate) use layout::{Layout, Scalars};
-use morph::Morphs;
+use morph_pool::Morphs;
 use pair_map::PairMap;
 
 /// Absent link / empty entry.
