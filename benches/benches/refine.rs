@@ -13,6 +13,10 @@
 //! - `emit/packed`: index emission of the settled near front (throughput: polygons).
 //! - `frame/moving_refine_emit`: a moving refine pass plus emission, Hoppe's "faces per
 //!   second including refinement" (throughput: active polygons).
+//! - `geomorph/moving_pass`, `geomorph/emit_packed_morphed`: the moving pass and the
+//!   emission of a camera with morph memory at the default durations and 60 passes per
+//!   second; its baseline is `refine/moving_pass` and `emit/packed` (throughput: active
+//!   polygons).
 //! - `cameras/round_robin`, `cameras/one_at_a_time`: four budgeted cameras over four
 //!   stretches of the terrain, the same passes in turn or each camera several in a row
 //!   (throughput: active polygons).
@@ -449,6 +453,76 @@ fn bench_emit(c: &mut Criterion, h: &Hierarchy<'_>, near: &View, moving: &[View]
     same_emission(h, &cam, &plain, "compaction keeps the two cameras alike");
 }
 
+/// Morphs a camera on the moving path holds at most: the splits and collapses of visible
+/// nodes within a morph's duration, with room to spare.
+const MAX_MORPHS: u32 = 4096;
+
+fn bench_geomorphs(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
+    let p = RefineParams::default();
+    let config = CameraConfig::full(h).with_morphs(MAX_MORPHS);
+    let mut memory = vec![0u32; CameraState::words_needed_for(h, &config)];
+    let mut cam = must(CameraState::with_config(h, &mut memory, &config));
+    settle(&mut cam, h, &moving[0], &p);
+    let mean_front = lap(&mut cam, h, moving, &p);
+    let mut g = c.benchmark_group("geomorph");
+    g.throughput(Throughput::Elements(mean_front));
+    let mut k = 0usize;
+    let acc = Cell::new((0u64, 0u64, 0u64));
+    g.bench_function("moving_pass", |b| {
+        b.iter(|| {
+            k = (k + 1) % moving.len();
+            let st = must(cam.refine(h, &moving[k], &p));
+            let (n, m, d) = acc.get();
+            acc.set((
+                n + 1,
+                m + u64::from(st.morphing),
+                d + u64::from(st.morphs_dropped),
+            ));
+            st
+        })
+    });
+    let mut out = vec![0u32; 3 * h.polygon_count()];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    let morphing = cam.morph_count();
+    g.bench_function("emit_packed_morphed", |b| {
+        b.iter(|| must(cam.emit_indices_packed_morphed(h, &mut out, &mut offsets)))
+    });
+    g.finish();
+    let (n, m, d) = acc.get();
+    if n > 0 {
+        eprintln!(
+            "geomorph/moving_pass: {:.0} morphs in progress and {:.1} dropped per pass on \
+             average ({n} passes); emission timed with {morphing} morphs",
+            m as f64 / n as f64,
+            d as f64 / n as f64
+        );
+    }
+    // What was timed: morphed emission is the plain one with the morphing corners at their
+    // slots, and with the morphs ended it is the plain one.
+    let n = must(cam.emit_indices_packed_morphed(h, &mut out, &mut offsets));
+    let mut plain = vec![0u32; n];
+    must(cam.emit_indices_packed(h, &mut plain, &mut offsets));
+    let vertices = h.vertices().len();
+    let slots = cam.morph_vertices();
+    for (&morphed, &i) in out[..n].iter().zip(&plain) {
+        if morphed as usize >= vertices {
+            assert_eq!(
+                slots[morphed as usize - vertices].to,
+                i,
+                "a morph slot's vertex"
+            );
+        } else {
+            assert_eq!(morphed, i);
+        }
+    }
+    cam.finish_morphs();
+    must(cam.emit_indices_packed_morphed(h, &mut out, &mut offsets));
+    assert!(
+        out[..n] == plain[..],
+        "finished morphs emit the plain indices"
+    );
+}
+
 /// Asserts that two cameras emit the same indices; returns how many.
 fn same_emission(h: &Hierarchy<'_>, a: &CameraState<'_>, b: &CameraState<'_>, what: &str) -> usize {
     let emit = |cam: &CameraState<'_>| {
@@ -586,5 +660,6 @@ fn main() {
     bench_budgeted(&mut c, &h, &moving);
     bench_cameras(&mut c, &h, s, &ground);
     bench_emit(&mut c, &h, &near, &moving);
+    bench_geomorphs(&mut c, &h, &moving);
     c.final_summary();
 }

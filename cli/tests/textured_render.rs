@@ -142,6 +142,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         max_ops: u32::MAX,
         frustum_culling: false,
         backface_culling: false,
+        ..RefineParams::default()
     };
     while ok(
         cam.refine(&h, &look.view(SIZE, SIZE), &everything),

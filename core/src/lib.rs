@@ -15,6 +15,11 @@
 //!   emitted the same way, as a cut of its nodes in caller memory.
 //! - The shaders' math ([`gpu`]: geomorphing and shading) is defined here too, so the rust-gpu
 //!   shaders and the CPU run the same functions.
+//! - Geomorphs of refinement (a split's new vertex gliding out of its parent, and back before
+//!   a collapse) are per-camera data too: a camera with morph memory
+//!   ([`CameraConfig::with_morphs`]) lists its morphing vertices
+//!   ([`CameraState::morph_vertices`]) for the GPU to blend, and its morphed emission points
+//!   at them.
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
@@ -68,7 +73,8 @@ mod prefetch;
 mod view;
 
 pub use camera::{
-    CameraConfig, CameraError, CameraState, EmitError, OpError, RefineParams, RefineStats,
+    CameraConfig, CameraError, CameraState, EmitError, MorphVertex, OpError, RefineParams,
+    RefineStats,
 };
 pub use format::error::FormatError;
 pub use glam;

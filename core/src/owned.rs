@@ -295,6 +295,24 @@ mod tests {
     }
 
     #[test]
+    fn owned_camera_keeps_its_morphs_across_frames() {
+        let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
+        let h = buf.hierarchy().unwrap();
+        let config = CameraConfig::full(&h).with_morphs(16);
+        let mut owned = OwnedCamera::with_config(&h, &config).expect("camera");
+        let [near, ..] = views(&h);
+        let (count, slots) = {
+            let mut cam = owned.camera(&h);
+            let stats = cam.refine(&h, &near, &RefineParams::default()).unwrap();
+            assert!(stats.morphing > 0, "{stats:?}");
+            (cam.morph_count(), cam.morph_vertices().to_vec())
+        };
+        let cam = owned.camera(&h);
+        assert_eq!(cam.morph_count(), count);
+        assert_eq!(cam.morph_vertices(), &slots[..]);
+    }
+
+    #[test]
     fn a_forgotten_guard_restarts_from_the_base_mesh() {
         let buf = HierarchyBuf::from_bytes(GOLDEN).expect("valid");
         let h = buf.hierarchy().unwrap();

@@ -1,6 +1,7 @@
 //! The runtime allocates nothing: with a counting global allocator, refinement from 20
-//! views, compaction, forced splits, collapses, and index emission leave the count unchanged
-//! once the hierarchy, the camera memory and the output buffers exist.
+//! views, compaction, forced splits, collapses, index emission, and geomorphs (their
+//! refinement and morphed emission) leave the count unchanged once the hierarchy, the camera
+//! memory and the output buffers exist.
 //!
 //! Allocations are counted per thread (the test harness allocates on its own threads), and
 //! the test shows the counter works by watching one `Vec::with_capacity(1)` change it.
@@ -10,7 +11,7 @@ mod counting;
 
 use std::hint::black_box;
 
-use caveclod_core::{CameraState, Hierarchy, NodeId};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, NodeId, RefineParams};
 use common::{golden, params, views};
 use counting::allocations;
 
@@ -74,6 +75,54 @@ fn the_runtime_does_not_allocate() {
         after,
         before,
         "the runtime allocated {} times",
+        after - before
+    );
+}
+
+#[test]
+fn geomorphs_do_not_allocate() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let config = CameraConfig::full(&h).with_morphs(6);
+    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let views = views(&h, 20);
+    let dts = [0.0f32, 1.0 / 60.0, 0.1, 0.5];
+    let max_indices = 3 * h.polygon_count();
+    let mut packed = vec![0u32; max_indices];
+    let mut offsets = vec![0u32; h.surface_count() + 1];
+    let mut lists: Vec<Vec<u32>> = (0..h.surface_count())
+        .map(|_| vec![0u32; max_indices])
+        .collect();
+    let mut slices: Vec<&mut [u32]> = lists.iter_mut().map(|l| l.as_mut_slice()).collect();
+    let mut written = vec![0u32; h.surface_count()];
+
+    let before = allocations();
+    let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
+    let mut morphs = 0u64;
+    for (i, view) in views.iter().enumerate() {
+        let p = RefineParams {
+            dt_s: dts[i % dts.len()],
+            ..params(i)
+        };
+        let stats = cam.refine(&h, view, &p).expect("refine");
+        morphs += u64::from(stats.morphs_started + stats.morphs_finished + stats.morphs_dropped);
+        black_box(cam.morph_vertices());
+        cam.emit_indices_packed_morphed(&h, &mut packed, &mut offsets)
+            .expect("emit packed");
+        cam.emit_indices_morphed(&h, &mut slices, &mut written)
+            .expect("emit lists");
+        if i % 6 == 5 {
+            cam.compact(&h);
+        }
+    }
+    cam.finish_morphs();
+    cam.reset(&h);
+    let after = allocations();
+    assert!(morphs > 0, "the views must make the camera morph");
+    assert_eq!(
+        after,
+        before,
+        "geomorphs allocated {} times",
         after - before
     );
 }

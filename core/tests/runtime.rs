@@ -369,6 +369,7 @@ fn too_little_camera_memory_is_refused() {
         stack_len: 64,
         index_cache: true,
         hashed_pair_map: false,
+        max_morphs: 0,
     };
     assert_eq!(
         CameraState::with_config(&h, &mut memory, &config).err(),
@@ -388,6 +389,7 @@ fn a_full_camera_refuses_splits_without_failing() {
         stack_len: 256,
         index_cache: true,
         hashed_pair_map: true,
+        max_morphs: 0,
     };
     let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
     let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
@@ -521,6 +523,7 @@ fn refine_stats_count_every_split_applied() {
             index_cache: true,
             // Both layouts of the pair map (small budgets hash where asked).
             hashed_pair_map: max_pairs % 2 == 0,
+            max_morphs: 0,
         };
         let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
         let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");

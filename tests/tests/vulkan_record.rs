@@ -286,6 +286,7 @@ fn frames_create_no_resource_once_the_ring_is_sized() {
         max_ops: u32::MAX,
         frustum_culling: false,
         backface_culling: false,
+        ..caveclod_core::RefineParams::default()
     };
     let view = scene.look.view(SIZE, SIZE);
     while ok(cam.refine(&h, &view, &everything), "split everything").splits > 0 {}

@@ -57,6 +57,9 @@ impl Front<'_> {
         self.sort_pairs();
         self.links_to_slots(live);
         self.refused.fill(0);
+        if self.morphs.scalars.live > 0 {
+            self.mark_coarsening_pairs();
+        }
         self.churn = 0;
     }
 

@@ -7,8 +7,14 @@
 //! without it, it follows the chain of reads through the hierarchy, [`BATCH`] slots at a
 //! time. Either way the indices, their order and the errors are the same: the first corner
 //! without a vertex, in slot and corner order, is [`EmitError::MissingVertex`].
+//!
+//! Morphed emission ([`CameraState::emit_indices_morphed`]) writes the same triangles in the
+//! same order, but a corner whose vertex morphs gets `vertex_count + slot`, its morph slot
+//! past the persistent vertices (see `morph`); with nothing morphing it is the plain
+//! emission.
 
 use super::index_cache::BATCH;
+use super::morph::MorphRemap;
 use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{PolyId, SurfaceId};
@@ -161,6 +167,34 @@ impl CameraState<'_> {
         out: &mut [&mut [u32]],
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
+        self.emit_lists(h, out, written, |tri| tri)
+    }
+
+    /// [`emit_indices`](Self::emit_indices) with every corner whose vertex morphs pointing
+    /// at its morph slot: `h.vertices().len() + slot`, where the GPU writes the blended
+    /// vertex of [`morph_vertices`](Self::morph_vertices)`()[slot]`. With nothing morphing
+    /// it writes what `emit_indices` writes.
+    pub fn emit_indices_morphed(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [&mut [u32]],
+        written: &mut [u32],
+    ) -> Result<usize, EmitError> {
+        match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
+            Some(m) => self.emit_lists(h, out, written, |tri| m.triangle(tri)),
+            None => self.emit_lists(h, out, written, |tri| tri),
+        }
+    }
+
+    /// The lists of [`emit_indices`](Self::emit_indices), each triangle through `remap`.
+    #[inline]
+    fn emit_lists(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [&mut [u32]],
+        written: &mut [u32],
+        remap: impl Fn([u32; 3]) -> [u32; 3],
+    ) -> Result<usize, EmitError> {
         if !self.is_for(h) {
             return Err(EmitError::WrongHierarchy);
         }
@@ -184,7 +218,7 @@ impl CameraState<'_> {
         self.for_each_triangle(h, |s, tri| {
             let at = written[s] as usize;
             if let Some(dst) = out[s].get_mut(at..at + 3) {
-                dst.copy_from_slice(&tri);
+                dst.copy_from_slice(&remap(tri));
                 written[s] += 3;
                 total += 3;
             }
@@ -210,6 +244,33 @@ impl CameraState<'_> {
         h: &Hierarchy<'_>,
         out: &mut [u32],
         offsets: &mut [u32],
+    ) -> Result<usize, EmitError> {
+        self.emit_packed(h, out, offsets, |tri| tri)
+    }
+
+    /// [`emit_indices_packed`](Self::emit_indices_packed) with morphing corners pointing at
+    /// their morph slots, as [`emit_indices_morphed`](Self::emit_indices_morphed) writes them.
+    pub fn emit_indices_packed_morphed(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [u32],
+        offsets: &mut [u32],
+    ) -> Result<usize, EmitError> {
+        match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
+            Some(m) => self.emit_packed(h, out, offsets, |tri| m.triangle(tri)),
+            None => self.emit_packed(h, out, offsets, |tri| tri),
+        }
+    }
+
+    /// The packed output of [`emit_indices_packed`](Self::emit_indices_packed), each
+    /// triangle through `remap`.
+    #[inline]
+    fn emit_packed(
+        &self,
+        h: &Hierarchy<'_>,
+        out: &mut [u32],
+        offsets: &mut [u32],
+        remap: impl Fn([u32; 3]) -> [u32; 3],
     ) -> Result<usize, EmitError> {
         if !self.is_for(h) {
             return Err(EmitError::WrongHierarchy);
@@ -239,7 +300,7 @@ impl CameraState<'_> {
         self.for_each_triangle(h, |s, tri| {
             let at = offsets[s + 1] as usize;
             if let Some(dst) = out.get_mut(at..at + 3) {
-                dst.copy_from_slice(&tri);
+                dst.copy_from_slice(&remap(tri));
                 offsets[s + 1] += 3;
             }
         })?;

@@ -2,6 +2,8 @@
 //! view the same words as the same camera again.
 
 use super::certificate::Odometer;
+use super::morph_map::MorphMap;
+use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
 use super::{CameraConfig, CameraState, Front, ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
 use crate::hierarchy::Hierarchy;
@@ -11,6 +13,7 @@ use crate::hierarchy::Hierarchy;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Layout {
     splits: usize,
+    vertices: usize,
     roots: usize,
     base: usize,
     surfaces: usize,
@@ -21,6 +24,7 @@ impl Layout {
     pub(crate) fn of(h: &Hierarchy<'_>, config: &CameraConfig) -> Self {
         Self {
             splits: h.splits().len(),
+            vertices: h.vertices().len(),
             roots: h.roots().len(),
             base: h.base_polygon_count(),
             surfaces: h.surface_count(),
@@ -35,7 +39,7 @@ impl Layout {
     }
 
     /// Words of each array, in the order they lie in memory.
-    fn array_words(&self) -> [usize; 8] {
+    fn array_words(&self) -> [usize; 13] {
         let c = &self.config;
         let mp = c.max_pairs as usize;
         let triangles = if c.index_cache {
@@ -43,6 +47,8 @@ impl Layout {
         } else {
             0
         };
+        let [morph_vertices, morph_states, morph_map, coarsening, morph_free] =
+            super::morph_pool::words(c.max_morphs as usize, self.vertices, mp);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
             mp,
@@ -52,6 +58,11 @@ impl Layout {
             mp.div_ceil(32),
             triangles,
             c.stack_len as usize,
+            morph_vertices,
+            morph_states,
+            morph_map,
+            coarsening,
+            morph_free,
         ]
     }
 
@@ -75,6 +86,7 @@ pub(crate) struct Scalars {
     active_polygons: u32,
     churn: u32,
     odometer: Odometer,
+    morphs: MorphScalars,
 }
 
 impl Scalars {
@@ -90,6 +102,7 @@ impl Scalars {
             active_polygons: 0,
             churn: 0,
             odometer: Odometer::new(),
+            morphs: MorphScalars::EMPTY,
         }
     }
 }
@@ -99,7 +112,7 @@ impl<'m> CameraState<'m> {
     /// least `layout.words()` words) and whose other state is `scalars`. Nothing is written:
     /// the words are the camera's as they were when `scalars` was taken, or are reset next.
     pub(crate) fn carve(memory: &'m mut [u32], layout: &Layout, scalars: Scalars) -> Self {
-        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len] =
+        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len, morph_vertex_words, morph_state_words, morph_map_words, coarsening_words, free_words] =
             layout.array_words();
         let c = &layout.config;
         let (pair_of, rest) = memory.split_at_mut(pair_words);
@@ -109,7 +122,12 @@ impl<'m> CameraState<'m> {
         let (surface_polygons, rest) = rest.split_at_mut(surfaces);
         let (refused, rest) = rest.split_at_mut(refused_len);
         let (triangles, rest) = rest.split_at_mut(triangle_words);
-        let (stack, _) = rest.split_at_mut(stack_len);
+        let (stack, rest) = rest.split_at_mut(stack_len);
+        let (morph_vertices, rest) = rest.split_at_mut(morph_vertex_words);
+        let (morph_states, rest) = rest.split_at_mut(morph_state_words);
+        let (morph_map, rest) = rest.split_at_mut(morph_map_words);
+        let (coarsening, rest) = rest.split_at_mut(coarsening_words);
+        let (morph_free, _) = rest.split_at_mut(free_words);
         let mp = c.max_pairs as usize;
         Self {
             front: Front {
@@ -129,6 +147,14 @@ impl<'m> CameraState<'m> {
                 active_polygons: scalars.active_polygons,
                 churn: scalars.churn,
                 odometer: scalars.odometer,
+                morphs: Morphs {
+                    vertices: bytemuck::cast_slice_mut(morph_vertices),
+                    states: bytemuck::cast_slice_mut(morph_states),
+                    map: MorphMap::new(morph_map, c.max_morphs as usize, layout.vertices),
+                    coarsening,
+                    free: morph_free,
+                    scalars: scalars.morphs,
+                },
             },
             stack: bytemuck::cast_slice_mut(stack),
         }
@@ -148,6 +174,7 @@ impl<'m> CameraState<'m> {
             active_polygons: f.active_polygons,
             churn: f.churn,
             odometer: f.odometer,
+            morphs: f.morphs.scalars,
         }
     }
 }

@@ -6,11 +6,15 @@ mod compact;
 mod emit;
 mod index_cache;
 mod layout;
+mod morph;
+mod morph_map;
+mod morph_pool;
 mod ops;
 mod pair_map;
 mod refine;
 
 pub use emit::EmitError;
+pub use morph::MorphVertex;
 pub use ops::OpError;
 pub use refine::{RefineParams, RefineStats};
 
@@ -20,6 +24,7 @@ use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PolyKey};
 use certificate::{Odometer, UNKNOWN};
 pub(crate) use layout::{Layout, Scalars};
+use morph_pool::Morphs;
 use pair_map::PairMap;
 
 /// Absent link / empty entry.
@@ -118,6 +123,14 @@ pub struct CameraConfig {
     /// but makes refinement slower, because the array keeps the entries of nearby nodes
     /// together and the table scatters them.
     pub hashed_pair_map: bool,
+    /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the [`CameraState`]
+    /// docs): each moves a split's floating child, one or two vertices, between its parent's
+    /// position and its own over [`RefineParams::refine_morph_s`] or
+    /// [`coarsen_morph_s`](RefineParams::coarsen_morph_s). 72 bytes per morph, and a bit per
+    /// vertex of the hierarchy and per pair; 0 in
+    /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
+    /// camera without morphs splits and collapses at once.
+    pub max_morphs: u32,
 }
 
 impl CameraConfig {
@@ -128,6 +141,7 @@ impl CameraConfig {
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
+            max_morphs: 0,
         }
     }
 
@@ -140,7 +154,15 @@ impl CameraConfig {
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
+            max_morphs: 0,
         }
+    }
+
+    /// This configuration with room for `max_morphs` geomorphs at once: enough for the
+    /// splits and collapses of visible nodes the camera makes within one morph's duration.
+    /// When the room is taken, a split happens at once ([`RefineStats::morphs_dropped`]).
+    pub fn with_morphs(self, max_morphs: u32) -> Self {
+        Self { max_morphs, ..self }
     }
 
     /// A forced split pushes at most a few nodes per level; 32 per level of depth (and at
@@ -167,6 +189,14 @@ pub enum CameraError {
         /// Splits in the hierarchy.
         split_count: u32,
     },
+    /// The configuration asks for more morphs than indices can name: morphed emission
+    /// writes `vertex_count + slot`, two slots per morph, which must stay below `u32::MAX`.
+    TooManyMorphs {
+        /// Asked for.
+        max_morphs: u32,
+        /// Vertices of the hierarchy.
+        vertex_count: u32,
+    },
 }
 
 impl core::fmt::Display for CameraError {
@@ -187,6 +217,14 @@ impl core::fmt::Display for CameraError {
                     "max_pairs {max_pairs} exceeds the hierarchy's {split_count} splits"
                 )
             }
+            Self::TooManyMorphs {
+                max_morphs,
+                vertex_count,
+            } => write!(
+                f,
+                "max_morphs {max_morphs}: two slots per morph after {vertex_count} vertices \
+                 exceed 32-bit indices"
+            ),
         }
     }
 }
@@ -212,6 +250,11 @@ impl core::error::Error for CameraError {}
 /// | `refused` | `max_pairs` / 32 | a bit per live pair: its collapse was refused and nothing it depends on changed since |
 /// | `triangles` | 4 × slots (0 without the index cache) | per slot its polygon's three vertex indices, surface and surface group |
 /// | `stack` | `stack_len` | the explicit stack of forced splits |
+/// | `morph_vertices` | 8 × `max_morphs` | per morph two [`MorphVertex`] slots: persistent `from`, `to`, and `t`, what the GPU blends |
+/// | `morph_states` | 2 × `max_morphs` | per morph the split whose floating child morphs, and its direction |
+/// | `morph_map` | 2 × (4 × `max_morphs` + 1) + vertices / 32, 0 without morphs | a bit per vertex (it morphs), and the morph slot by morphing vertex, hashed, for morphed emission |
+/// | `coarsening` | `max_pairs` / 32, 0 without morphs | a bit per pair: its floating child coarsen-morphs |
+/// | `morph_free` | `max_morphs` / 32 | a bit per free morph (a new one takes the lowest) |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
@@ -265,6 +308,19 @@ impl core::error::Error for CameraError {}
 /// - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 ///   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed
 ///   memory gets a hard polygon budget for free.
+/// - **Geomorphs are data for the GPU, kept beside the front.** A split of a visible node
+///   starts its floating child at the parent's vertex, and a wanted collapse of a visible
+///   parent glides the child back first (Hoppe's refine and coarsen morphs; see `morph`).
+///   The persistent vertex buffer is never written: the camera keeps per morphing vertex its
+///   two persistent indices and `t` ([`morph_vertices`](Self::morph_vertices)), the GPU
+///   blends them into a per-camera buffer, and morphed emission points a morphing corner
+///   at `vertex_count + slot`. The front itself changes exactly when it would without morphs,
+///   save that a collapse waits for its morph; a camera without morph memory never looks at
+///   morphs at all. 72 bytes per morph, a bit per vertex that tells morphed emission which
+///   corners morph without a probe of the map for the others, and a bit per pair that tells
+///   refinement which collapses wait for their coarsen morph. A coarsening pair's
+///   remembered-refusal bit remembers the opposite answer, "legal, nothing changed since",
+///   so stepping a coarsen morph rarely asks the preconditions again.
 #[derive(Debug)]
 pub struct CameraState<'m> {
     pub(crate) front: Front<'m>,
@@ -296,6 +352,8 @@ pub(crate) struct Front<'m> {
     pub churn: u32,
     /// The eye's path length, for the records' certificates.
     pub odometer: Odometer,
+    /// The geomorphs in progress (empty arrays without morph memory).
+    pub morphs: Morphs<'m>,
 }
 
 impl<'m> CameraState<'m> {
@@ -346,6 +404,13 @@ impl<'m> CameraState<'m> {
                 split_count: ns as u32,
             });
         }
+        let slots = 2 * u64::from(config.max_morphs);
+        if h.vertices().len() as u64 + slots >= u64::from(NONE) {
+            return Err(CameraError::TooManyMorphs {
+                max_morphs: config.max_morphs,
+                vertex_count: h.vertices().len() as u32,
+            });
+        }
         Ok(Layout::of(h, config))
     }
 
@@ -383,6 +448,7 @@ impl<'m> CameraState<'m> {
         }
         f.active_polygons = f.base;
         f.churn = 0;
+        f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);
     }
 
@@ -424,6 +490,11 @@ impl<'m> CameraState<'m> {
             + core::mem::size_of_val(&*f.active)
             + core::mem::size_of_val(&*f.slots)
             + core::mem::size_of_val(&*f.triangles)
+            + core::mem::size_of_val(&*f.morphs.vertices)
+            + core::mem::size_of_val(&*f.morphs.states)
+            + f.morphs.map.bytes()
+            + core::mem::size_of_val(&*f.morphs.coarsening)
+            + core::mem::size_of_val(&*f.morphs.free)
             + core::mem::size_of::<Self>()
     }
 

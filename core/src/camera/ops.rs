@@ -449,6 +449,10 @@ impl Front<'_> {
         }
         *self.active.get_mut(rv as usize).ok_or(bad)? = ActiveVertex::of(h, v);
         self.free_record(ru);
+        // The floating child's vertices are gone from the front: so is their morph.
+        if self.morphs.scalars.live > 0 {
+            self.end_morph_of(h, s.floating);
+        }
         self.pair_of.set(v.index(), NONE).ok_or(bad)?;
         // v is active again: its parent's collapse may have become legal.
         if let Some(pp) = h.node(v).and_then(|n| self.pair_of.get(n.parent.index())) {
@@ -472,6 +476,12 @@ impl Front<'_> {
         let last = self.pairs - 1;
         self.pairs = last;
         self.forget_refusal(last);
+        if !self.morphs.coarsening.is_empty() {
+            // The last pair's coarsening bit moves with it.
+            let moved = self.morphs.is_coarsening(last);
+            self.morphs.set_coarsening(last, false);
+            self.morphs.set_coarsening(k, moved && k != last);
+        }
         if k == last {
             return Ok(());
         }
@@ -557,12 +567,13 @@ impl Front<'_> {
         budget: u32,
     ) -> Result<u32, OpError> {
         let mut applied = 0;
-        self.force_split_counted(h, v, stack, budget, &mut applied)
+        self.force_split_counted(h, v, stack, budget, &mut applied, |_, _| {})
             .map(|()| applied)
     }
 
     /// [`force_split`](Self::force_split) that counts the splits it applies in `applied`,
-    /// also when it stops with an error (the splits applied before the error stay).
+    /// also when it stops with an error (the splits applied before the error stay), and
+    /// calls `after_split` with each node it split (refinement starts morphs there).
     pub fn force_split_counted(
         &mut self,
         h: &Hierarchy<'_>,
@@ -570,6 +581,7 @@ impl Front<'_> {
         stack: &mut [NodeId],
         budget: u32,
         applied: &mut u32,
+        mut after_split: impl FnMut(&mut Self, NodeId),
     ) -> Result<(), OpError> {
         if h.split(v).is_none() {
             return Err(OpError::Leaf { node: v });
@@ -623,6 +635,7 @@ impl Front<'_> {
                 top -= 1;
                 self.apply_split(h, u, slots)?;
                 *applied += 1;
+                after_split(self, u);
             }
         }
         Ok(())

@@ -33,7 +33,23 @@ pub struct RefineParams {
     pub frustum_culling: bool,
     /// Coarsen where the normal cone faces away from the eye.
     pub backface_culling: bool,
+    /// Seconds of the caller's clock since this camera's previous pass: how far its morphs
+    /// move in this one. The default is one frame at 60 Hz, so a caller that does not set it
+    /// gets morphs that count frames; pass the frame's real time for morphs that last the
+    /// same at any frame rate (and 0 for a repeated pass within one frame).
+    pub dt_s: f32,
+    /// Seconds a refine morph takes (a split's floating child gliding out of its parent's
+    /// position); 0 splits at once. Only a camera with morph memory
+    /// ([`CameraConfig::max_morphs`](super::CameraConfig::max_morphs)) morphs.
+    pub refine_morph_s: f32,
+    /// Seconds a coarsen morph takes (the floating child gliding back before its collapse);
+    /// 0 collapses at once.
+    pub coarsen_morph_s: f32,
 }
+
+/// Hoppe's viewer defaults at 60 frames per second: 32 frames to refine, 16 to coarsen.
+const REFINE_MORPH_S: f32 = 32.0 / 60.0;
+const COARSEN_MORPH_S: f32 = 16.0 / 60.0;
 
 impl Default for RefineParams {
     fn default() -> Self {
@@ -42,6 +58,21 @@ impl Default for RefineParams {
             max_ops: u32::MAX,
             frustum_culling: true,
             backface_culling: true,
+            dt_s: 1.0 / 60.0,
+            refine_morph_s: REFINE_MORPH_S,
+            coarsen_morph_s: COARSEN_MORPH_S,
+        }
+    }
+}
+
+impl RefineParams {
+    /// These parameters with morphs off: every split and collapse at once (what a camera
+    /// without morph memory always does).
+    pub fn without_morphs(self) -> Self {
+        Self {
+            refine_morph_s: 0.0,
+            coarsen_morph_s: 0.0,
+            ..self
         }
     }
 }
@@ -75,6 +106,21 @@ pub struct RefineStats {
     /// unwanted, or its coarsening parent's still wanted or still unwanted (see the module
     /// docs of `camera`).
     pub certified: u32,
+    /// Morphs begun: refine morphs of splits of visible nodes, coarsen morphs of wanted
+    /// collapses of visible parents (also one that turns a refine morph around).
+    pub morphs_started: u32,
+    /// Morphs ended: refine morphs that reached the fine position, coarsen morphs whose
+    /// collapse was applied, and morphs whose pair refinement collapsed at once (its parent
+    /// left the view, or coarsen morphs are off).
+    pub morphs_finished: u32,
+    /// Coarsen morphs turned back towards the fine position: the parent's split was wanted
+    /// again, or a split nearby made the collapse illegal.
+    pub morphs_aborted: u32,
+    /// Splits and collapses that wanted a morph but happened at once: the morph memory was
+    /// full (or the vertex cannot morph: a position with more than two surface groups).
+    pub morphs_dropped: u32,
+    /// Morphs in progress after the pass.
+    pub morphing: u32,
 }
 
 impl RefineStats {
@@ -96,7 +142,7 @@ const SHY: f32 = 1.0 - 1.0 / (1u32 << 20) as f32;
 /// planes are kept transposed, four to a vector, so a sphere meets four planes in one test.
 /// The answers are those of the plain formulas, bit for bit: the same products and sums in
 /// the same order, and an early "no" only where the full test cannot say "yes".
-struct Criterion {
+pub(super) struct Criterion {
     eye: Vec3,
     tz2: f32,
     /// Plane `k`'s `x`, `y`, `z`, `w` in lane `k % 4` of `planes[k / 4][0..4]`; the lanes of
@@ -134,8 +180,24 @@ impl Criterion {
         })
     }
 
+    /// Refinement's visibility of a node: its sphere inside the frustum and its normal cone
+    /// not facing away (each where the pass culls by it), as Hoppe's `is_visible`.
+    #[inline]
+    pub(super) fn visible(&self, b: &SplitBounds) -> bool {
+        let p = Vec3::from_array(b.point);
+        if self.frustum && !self.sphere_visible(p, b.radius) {
+            return false;
+        }
+        if !self.backface || b.cone_sin2 >= 1.0 {
+            return true;
+        }
+        let pe = p - self.eye;
+        let vdot = pe.dot(Vec3::from_array(b.cone_normal()));
+        !(vdot > 0.0 && vdot * vdot > pe.length_squared() * b.cone_sin2)
+    }
+
     #[inline(always)]
-    fn wants_split(&self, b: &SplitBounds) -> bool {
+    pub(super) fn wants_split(&self, b: &SplitBounds) -> bool {
         let p = Vec3::from_array(b.point);
         let pe = p - self.eye;
         let pem2 = pe.length_squared();
@@ -204,6 +266,11 @@ impl CameraState<'_> {
             params.backface_culling,
             &mut f.active[..live],
         );
+        // Morphs move first, so a morph started by this pass shows its start this frame.
+        let morphing = f.morphs.capacity() > 0;
+        if f.morphs.scalars.live > 0 {
+            f.sweep_morphs(h, &c, params, &mut st, max_ops)?;
+        }
         let mut i = 0usize;
         while i < f.active_len as usize && st.operations() < max_ops {
             let a = f.active[i];
@@ -253,7 +320,13 @@ impl CameraState<'_> {
                     }
                     let mut applied = 0;
                     let budget = max_ops - st.operations();
-                    let result = f.force_split_counted(h, v, self.stack, budget, &mut applied);
+                    let result = if morphing {
+                        f.force_split_counted(h, v, self.stack, budget, &mut applied, |f, x| {
+                            f.morph_split(h, &c, params, x, &mut st)
+                        })
+                    } else {
+                        f.force_split_counted(h, v, self.stack, budget, &mut applied, |_, _| {})
+                    };
                     // Every split applied counts, also those forced before an error.
                     st.splits += applied;
                     match result {
@@ -301,10 +374,19 @@ impl CameraState<'_> {
             };
             if unwanted {
                 let pair = f.pair_of.get(parent.index()).unwrap_or(NONE);
+                if morphing && f.morphs.is_coarsening(pair) {
+                    // Its coarsen morph runs: the sweep decides its collapse.
+                    i += 1;
+                    continue;
+                }
                 if pair != NONE && f.refusal_remembered(pair) {
                     st.refusals_remembered += 1;
                 } else if pair != NONE {
                     if let Some(slots) = f.collapse_slots(h, parent) {
+                        if morphing && f.defers_collapse(h, &c, params, parent, &mut st) {
+                            i += 1;
+                            continue; // a coarsen morph runs first
+                        }
                         f.apply_collapse(h, parent, slots)?;
                         st.collapses += 1;
                         continue; // the record now holds the parent: look again
@@ -317,6 +399,7 @@ impl CameraState<'_> {
         }
         st.active_nodes = f.active_nodes;
         st.active_polygons = f.active_polygons;
+        st.morphing = f.morphs.scalars.live;
         Ok(st)
     }
 }

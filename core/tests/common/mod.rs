@@ -7,6 +7,8 @@
 
 #![allow(dead_code)] // each test binary uses a part of this module
 
+pub mod morphs;
+
 use caveclod_core::format::{checksum64, FileHeader};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
