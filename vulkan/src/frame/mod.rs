@@ -294,7 +294,7 @@ impl Renderer {
         // SAFETY: `cmd` is reset.
         unsafe { d.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
         for t in 0..self.targets.len() {
-            stats.draws += self.record_target(ctx, cmd, t, slot_index, &records)?;
+            stats.draws += self.record_target(ctx, cmd, t, slot_index, &records);
         }
         // SAFETY: `cmd` is recording.
         unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;

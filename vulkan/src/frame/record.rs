@@ -13,7 +13,6 @@ use ash::vk;
 use super::{Renderer, Target};
 use crate::buffer::Buffer;
 use crate::device::Context;
-use crate::error::Result;
 use crate::image::Image;
 use crate::record::RecordCamera;
 
@@ -27,17 +26,17 @@ impl Renderer {
         t: usize,
         slot: usize,
         cameras: &[(usize, RecordCamera<'_>)],
-    ) -> Result<u32> {
+    ) -> u32 {
         let d = &ctx.device;
         let target = &self.targets[t];
         to_attachment_layouts(d, cmd, target);
         begin_rendering(d, cmd, target, self.desc.clear_colour);
-        let of_target: Vec<RecordCamera<'_>> = cameras
+        // Every camera passed `Recorder::check_camera` in `Renderer::render`.
+        let draws = cameras
             .iter()
             .filter(|(target, _)| *target == t)
-            .map(|(_, c)| *c)
-            .collect();
-        let draws = self.recorder.record(ctx, cmd, slot, &of_target);
+            .map(|(_, c)| self.recorder.draw_camera(d, cmd, slot, c))
+            .sum();
         // SAFETY: `cmd` is recording inside the rendering begun above.
         unsafe { d.cmd_end_rendering(cmd) };
         if let Some(buffer) = self.slots[slot].readback.get(t) {

@@ -14,8 +14,9 @@ const COLOUR_STRIDE: u64 = 4;
 
 impl Recorder {
     /// Draws `cam`'s non-empty surfaces of frame slot `slot` (every instance, for a
-    /// geomorphing camera). Returns the draws recorded.
-    pub(super) fn draw_camera(
+    /// geomorphing camera), `cam` having passed [`Recorder::check_camera`]. Returns the
+    /// draws recorded.
+    pub(crate) fn draw_camera(
         &self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
