@@ -179,6 +179,7 @@ fn main() {
                         source: IndexSource::Lists(&list_refs),
                         colours: &COLOURS,
                         materials: None,
+                        refine_morphs: None,
                         morph: Some(Morph {
                             fine: &fine,
                             instances: &inst_buffer,

@@ -263,6 +263,7 @@ fn draw(
             readback: true,
             clear_colour: [0.02, 0.02, 0.03, 1.0],
             geomorph: false,
+            refine_morphs: false,
         },
     );
     let mut renderer = match renderer {
@@ -298,6 +299,7 @@ fn draw(
                 source,
                 colours: &colours,
                 materials: gpu.as_ref().map(|g| &g.set),
+                refine_morphs: None,
                 morph: None,
             })
             .collect();

@@ -87,6 +87,7 @@ fn draw(
                 source,
                 colours: &[],
                 materials: Some(&materials.set),
+                refine_morphs: None,
                 morph: None,
             }],
         ),

@@ -24,7 +24,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::records::Vertex;
+use crate::camera::MorphVertex;
+use crate::format::Vertex;
 
 /// Push constants of the drawing stages (`draw_vs`, `draw_fs`, `geomorph_vs`): 96 bytes at
 /// offset 0, visible to the vertex and fragment stages.
@@ -94,12 +95,57 @@ pub struct MorphPush {
     pub dst_offset: u32,
 }
 
+/// Push constants of the morphing vertex stage (`morphing_vs`, which draws a camera's front
+/// with its refinement geomorphs): the drawing block at offset 0 (which `draw_fs` reads too),
+/// then how to find the camera's morphing vertices. 112 bytes, vertex and fragment stages.
+///
+/// An index below `vertex_count` is a persistent vertex; index `vertex_count + s` is morph
+/// slot `s` ([`MorphVertex`], as [`CameraState::morph_vertices`] lists them and morphed
+/// emission points at them).
+///
+/// [`CameraState::morph_vertices`]: crate::CameraState::morph_vertices
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MorphingPush {
+    /// The drawing block.
+    pub draw: DrawPush,
+    /// Vertices in the persistent vertex buffer.
+    pub vertex_count: u32,
+    /// Morph slots the slot buffer holds this frame (a slot at or past it is not read).
+    pub slot_count: u32,
+    /// [`MORPH_IN_VERTEX_STAGE`]: blend each morphing corner from its slot here;
+    /// [`MORPH_BLENDED`]: read the vertex the compute stage (or the host) blended into the
+    /// camera's blended buffer.
+    pub source: u32,
+    /// 1: a vertex colour per persistent vertex (RGBA8, binding 3); 0: white.
+    pub colours: u32,
+}
+
+/// [`MorphingPush::source`]: the vertex stage blends morphing corners from their slots.
+pub const MORPH_IN_VERTEX_STAGE: u32 = 0;
+/// [`MorphingPush::source`]: the vertex stage reads morphing corners from the blended buffer.
+pub const MORPH_BLENDED: u32 = 1;
+
+/// Push constants of the refinement-geomorph compute stage (`morphing_cs`): 16 bytes at
+/// offset 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MorphSlotsPush {
+    /// Slots to blend: invocation `s < slot_count` writes slot `s`.
+    pub slot_count: u32,
+    /// Zero; pads the block to 16 bytes.
+    pub _pad: [u32; 3],
+}
+
 /// The sizes the shader interface declares; the shaders and the Vulkan host rely on them.
 const _: () = {
     assert!(core::mem::size_of::<Vertex>() == 32);
     assert!(core::mem::size_of::<DrawPush>() == 96);
     assert!(core::mem::size_of::<MorphInstance>() == 32);
     assert!(core::mem::size_of::<MorphPush>() == 16);
+    assert!(core::mem::size_of::<MorphingPush>() == 112);
+    assert!(core::mem::size_of::<MorphSlotsPush>() == 16);
+    assert!(core::mem::size_of::<MorphVertex>() == 16);
 };
 
 /// `v` divided by its length, or `zero` when the length is zero (or not finite).
@@ -131,6 +177,34 @@ pub fn morph_vertex(a: Vertex, b: Vertex, t: f32) -> Vertex {
         normal: normalize_or(n, n).to_array(),
         uv: (ua + (ub - ua) * t).to_array(),
     }
+}
+
+/// The vertex a refinement geomorph's slot stands for: [`morph_vertex`] of the persistent
+/// vertices `from` and `to` of `vertices` at the slot's `t`; `None` for an idle slot or one
+/// naming a vertex past the end of `vertices`. What the compute stage writes per slot and
+/// the vertex stage computes per morphing corner.
+#[inline]
+pub fn morph_slot_vertex(vertices: &[Vertex], slot: MorphVertex) -> Option<Vertex> {
+    let from = *vertices.get(slot.from as usize)?;
+    let to = *vertices.get(slot.to as usize)?;
+    Some(morph_vertex(from, to, slot.t))
+}
+
+/// The linear colour of a morphing vertex: the stored (sRGB-encoded) colours `from` and `to`
+/// decoded by [`vertex_colour`], then `a + (b - a) * t`.
+#[inline]
+pub fn morph_colour(from: Vec4, to: Vec4, t: f32) -> Vec4 {
+    let a = vertex_colour(from);
+    let b = vertex_colour(to);
+    a + (b - a) * t
+}
+
+/// An RGBA8 vertex colour (`R` in the low byte, as the file stores it) as the UNORM
+/// vector the drawing stage's vertex input reads.
+#[inline]
+pub fn unpack_colour(packed: u32) -> Vec4 {
+    let channel = |shift: u32| ((packed >> shift) & 0xff) as f32 / 255.0;
+    Vec4::new(channel(0), channel(8), channel(16), channel(24))
 }
 
 /// The checkerboard of the shading: 1.0 where `floor(8u) + floor(8v)` is even, else 0.0
@@ -282,6 +356,42 @@ mod tests {
         // Palette blocks never discard.
         let palette = DrawPush::new(Mat4::IDENTITY, Vec4::ONE);
         assert!(!cut(base_colour(Vec4::ZERO, Vec4::ONE, &palette), &palette));
+    }
+
+    #[test]
+    fn a_morph_slot_blends_its_two_persistent_vertices() {
+        let v = |x: f32| Vertex {
+            position: [x, 2.0 * x, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            uv: [x, 0.0],
+        };
+        let vertices = [v(0.0), v(1.0), v(4.0)];
+        let slot = MorphVertex {
+            from: 0,
+            to: 2,
+            t: 0.25,
+            _pad: 0,
+        };
+        assert_eq!(
+            morph_slot_vertex(&vertices, slot),
+            Some(morph_vertex(v(0.0), v(4.0), 0.25))
+        );
+        assert_eq!(morph_slot_vertex(&vertices, MorphVertex::IDLE), None);
+        let past = MorphVertex { to: 3, ..slot };
+        assert_eq!(morph_slot_vertex(&vertices, past), None);
+    }
+
+    #[test]
+    fn morph_colours_blend_in_linear_light() {
+        let red = unpack_colour(0xff00_00ff);
+        assert_eq!(red, Vec4::new(1.0, 0.0, 0.0, 1.0));
+        let grey = unpack_colour(0x8080_8080);
+        assert_eq!(morph_colour(red, grey, 0.0), vertex_colour(red));
+        let end = morph_colour(red, grey, 1.0) - vertex_colour(grey);
+        assert!(end.abs().max_element() < 1e-6, "{end}");
+        let half = morph_colour(red, grey, 0.5);
+        let want = (vertex_colour(red) + vertex_colour(grey)) * 0.5;
+        assert!((half - want).abs().max_element() < 1e-6);
     }
 
     #[test]

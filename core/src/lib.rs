@@ -86,10 +86,3 @@ pub use octree::select::{CutError, OctreeCut, SelectStats};
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
 pub use view::{LookAt, View};
-
-// The committed SPIR-V (vulkan/spirv/) is keyed to the exact bytes of `gpu.rs` and of the
-// shader crate, which name the vertex record at these two paths; both go when the shaders
-// are next rebuilt with the rust-gpu toolchain (shaders/README.md).
-use format::records;
-#[doc(hidden)]
-pub use format::Vertex;

@@ -328,6 +328,7 @@ fn main() -> Fallible<()> {
         indices: &indices,
         colours: &[],
         materials: materials_ref,
+        refine_morphs: None,
         morph: None,
         wireframe: false,
     };

@@ -157,6 +157,7 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
                 source: IndexSource::Lists(&list_refs),
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: Some(Morph {
                     fine: &fine,
                     instances: &inst_buffer,

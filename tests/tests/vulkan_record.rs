@@ -78,6 +78,7 @@ impl Scene {
             indices,
             colours: &COLOURS,
             materials: None,
+            refine_morphs: None,
             morph: None,
             wireframe: false,
         }

@@ -154,6 +154,7 @@ fn vertex_buffer_written_once_index_bytes_reported() {
                     },
                     colours: &COLOURS,
                     materials: None,
+                    refine_morphs: None,
                     morph: None,
                 }],
             ),
@@ -249,6 +250,7 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
             },
             colours: &COLOURS,
             materials: None,
+            refine_morphs: None,
             morph: None,
         })
         .collect();
@@ -426,6 +428,7 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
                 source: IndexSource::Lists(&list_refs),
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: Some(Morph {
                     fine: &fine_buffer,
                     instances: &instances,
@@ -546,6 +549,7 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
                 },
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: None,
             }
         })

@@ -28,6 +28,15 @@ pub enum IndexSource<'a, 'c> {
         /// The camera's front.
         camera: &'a CameraState<'c>,
     },
+    /// Emitted by a refined camera with its morphing corners pointing at its morph slots
+    /// ([`CameraState::emit_indices_morphed`]), for a draw with the camera's
+    /// [`CameraMorphs`](crate::CameraMorphs).
+    MorphedCamera {
+        /// The shared hierarchy.
+        hierarchy: &'a Hierarchy<'a>,
+        /// The camera's front.
+        camera: &'a CameraState<'c>,
+    },
     /// Given lists, one per surface (e.g. an unbaked mesh drawn directly).
     Lists(&'a [&'a [u32]]),
 }
@@ -174,6 +183,10 @@ impl CameraIndices {
             IndexSource::Camera {
                 hierarchy,
                 camera: state,
+            }
+            | IndexSource::MorphedCamera {
+                hierarchy,
+                camera: state,
             } => {
                 if hierarchy.surface_count() != surfaces {
                     return Err(Error::InvalidArgument(format!(
@@ -219,6 +232,15 @@ impl CameraIndices {
                 cam.emit_indices(hierarchy, &mut outs, &mut written)
                     .map_err(|source| Error::Emit { camera, source })?;
                 u32::try_from(hierarchy.vertices().len()).unwrap_or(u32::MAX)
+            }
+            IndexSource::MorphedCamera {
+                hierarchy,
+                camera: cam,
+            } => {
+                cam.emit_indices_morphed(hierarchy, &mut outs, &mut written)
+                    .map_err(|source| Error::Emit { camera, source })?;
+                let slots = cam.morph_vertices().len();
+                u32::try_from(hierarchy.vertices().len() + slots).unwrap_or(u32::MAX)
             }
             IndexSource::Lists(lists) => {
                 let mut bound = 0u32;

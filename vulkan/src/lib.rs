@@ -60,6 +60,7 @@
 //!     source: IndexSource::Camera { hierarchy: &h, camera: &cam },
 //!     colours: &colours,
 //!     materials: None,
+//!     refine_morphs: None,
 //!     morph: None,
 //! }])?;
 //! let image = renderer.read_target(&ctx, 0)?;
@@ -77,6 +78,7 @@ pub use ash;
 pub use gpu_allocator;
 
 mod buffer;
+mod camera_morphs;
 mod device;
 mod error;
 mod frame;
@@ -94,6 +96,7 @@ mod texture;
 mod validation;
 
 pub use buffer::{Buffer, BufferDesc};
+pub use camera_morphs::{CameraMorphs, MorphStage};
 pub use caveclod_core::LookAt;
 pub use device::{Context, HeadlessDesc, HostDevice, SharedAllocator};
 pub use error::{Error, Result};

@@ -193,7 +193,7 @@ impl Bindings {
             ctx,
             "white vertex colour",
             &[255; 4],
-            vk::BufferUsageFlags::VERTEX_BUFFER,
+            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         ) {
             Ok(b) => b,
             Err(e) => {

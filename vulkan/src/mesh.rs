@@ -21,12 +21,14 @@ pub const VERTEX_STRIDE: u32 = std::mem::size_of::<Vertex>() as u32;
 /// context ([`Context::vertex_uploads`]) so tests can check that.
 #[derive(Debug)]
 pub struct VertexBuffer {
-    /// The buffer (vertex and storage usage: the geomorph compute stage reads it too).
+    /// The buffer (vertex and storage usage: the geomorph compute stages and the morphing
+    /// vertex stage read it too).
     pub buffer: Buffer,
     /// Number of vertices.
     pub count: u32,
     /// One RGBA8 colour per vertex (sRGB-encoded colour, linear alpha), if the mesh has
-    /// them ([`Hierarchy::vertex_colours`]); drawn multiplied with the material.
+    /// them ([`Hierarchy::vertex_colours`]); drawn multiplied with the material (vertex and
+    /// storage usage: the morphing vertex stage pulls them).
     pub colours: Option<Buffer>,
 }
 
@@ -40,7 +42,7 @@ impl VertexBuffer {
                     ctx,
                     &format!("{name} colours"),
                     bytemuck::cast_slice(colours),
-                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
                 )
             }) {
                 Ok(b) => v.colours = Some(b),
@@ -148,7 +150,9 @@ impl VertexBuffer {
                 &format!("{name} colours"),
                 BufferDesc::gpu_only(
                     colour_bytes.len() as u64,
-                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    vk::BufferUsageFlags::VERTEX_BUFFER
+                        | vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_DST,
                 ),
             ) {
                 Ok(b) => {

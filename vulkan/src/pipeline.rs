@@ -25,7 +25,7 @@
 use std::ffi::CStr;
 
 use ash::vk;
-use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush};
+use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush, MorphSlotsPush, MorphingPush};
 
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
@@ -46,10 +46,16 @@ pub(crate) mod entry {
     pub(crate) const GEOMORPH_VS: &CStr = c"geomorph_vs";
     /// Geomorph compute stage.
     pub(crate) const GEOMORPH_CS: &CStr = c"geomorph_cs";
+    /// Vertex stage pulling a camera's front with its refinement geomorphs.
+    pub(crate) const MORPHING_VS: &CStr = c"morphing_vs";
+    /// Refinement-geomorph compute stage.
+    pub(crate) const MORPHING_CS: &CStr = c"morphing_cs";
 }
 
 /// Threads per workgroup of `geomorph_cs`.
 pub(crate) const GEOMORPH_LOCAL_SIZE: u32 = 64;
+/// Threads per workgroup of `morphing_cs`.
+pub(crate) const MORPHING_LOCAL_SIZE: u32 = 64;
 
 /// Creates a shader module from SPIR-V bytes.
 pub(crate) fn shader_module(ctx: &Context, spirv: &[u8]) -> Result<vk::ShaderModule> {
@@ -68,6 +74,9 @@ pub(crate) enum VertexStage {
     /// `geomorph_vs`: bindings 0 and 1, `Vertex` per vertex (coarse, fine); binding 2,
     /// `MorphInstance` per instance.
     Geomorph,
+    /// `morphing_vs`: no vertex input; vertices pulled from the storage buffers of set 1
+    /// ([`PipelineTarget::morph_set_layout`]), 112-byte `MorphingPush`.
+    Morphing,
 }
 
 /// What a [`DrawPipeline`] draws into, and how it fills triangles.
@@ -81,6 +90,8 @@ pub(crate) struct PipelineTarget {
     pub(crate) polygon_mode: vk::PolygonMode,
     /// Set 0 (the material's texture and sampler).
     pub(crate) set_layout: vk::DescriptorSetLayout,
+    /// Set 1 of the morphing stage (the camera's storage buffers); unused by the others.
+    pub(crate) morph_set_layout: vk::DescriptorSetLayout,
     /// Blend by alpha over what is drawn (`src_alpha, 1 - src_alpha`), testing depth but
     /// not writing it: for `BLEND` materials.
     pub(crate) blend: bool,
@@ -94,8 +105,8 @@ pub(crate) struct DrawPipeline {
     pub(crate) raw: vk::Pipeline,
     /// Its layout (set 0, push constants).
     pub(crate) layout: vk::PipelineLayout,
-    /// It runs `geomorph_vs` (coarse, fine and instance streams) rather than `draw_vs`.
-    pub(crate) morphs: bool,
+    /// Its vertex stage.
+    pub(crate) stage: VertexStage,
 }
 
 impl DrawPipeline {
@@ -107,12 +118,18 @@ impl DrawPipeline {
     ) -> Result<Self> {
         let d = &ctx.device;
         let module = shader_module(ctx, SPIRV)?;
+        let (push_size, set_layouts) = match vertex_stage {
+            VertexStage::Morphing => (
+                std::mem::size_of::<MorphingPush>(),
+                vec![target.set_layout, target.morph_set_layout],
+            ),
+            _ => (std::mem::size_of::<DrawPush>(), vec![target.set_layout]),
+        };
         let ranges = [vk::PushConstantRange {
             stage_flags: vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             offset: 0,
-            size: std::mem::size_of::<DrawPush>() as u32,
+            size: push_size as u32,
         }];
-        let set_layouts = [target.set_layout];
         let layout_info = vk::PipelineLayoutCreateInfo::default()
             .set_layouts(&set_layouts)
             .push_constant_ranges(&ranges);
@@ -134,7 +151,7 @@ impl DrawPipeline {
             Ok(raw) => Ok(Self {
                 raw,
                 layout,
-                morphs: vertex_stage == VertexStage::Geomorph,
+                stage: vertex_stage,
             }),
             Err(e) => {
                 // SAFETY: unused layout.
@@ -154,6 +171,7 @@ impl DrawPipeline {
         let vs = match vertex_stage {
             VertexStage::Draw => entry::DRAW_VS,
             VertexStage::Geomorph => entry::GEOMORPH_VS,
+            VertexStage::Morphing => entry::MORPHING_VS,
         };
         let stages = [
             stage(vk::ShaderStageFlags::VERTEX, module, vs),
@@ -197,6 +215,7 @@ impl DrawPipeline {
                 };
                 (vec![per_vertex(0), per_vertex(1), instance], attributes)
             }
+            VertexStage::Morphing => (Vec::new(), Vec::new()),
         };
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&bindings)
@@ -237,7 +256,9 @@ impl DrawPipeline {
                 vk::DynamicState::SCISSOR,
                 vk::DynamicState::VERTEX_INPUT_BINDING_STRIDE,
             ],
-            VertexStage::Geomorph => vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR],
+            VertexStage::Geomorph | VertexStage::Morphing => {
+                vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR]
+            }
         };
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let colour_formats = [target.formats.colour];
@@ -300,70 +321,17 @@ pub(crate) struct GeomorphPipeline {
 impl GeomorphPipeline {
     /// Creates the compute pipeline.
     pub(crate) fn new(ctx: &Context) -> Result<Self> {
-        let d = &ctx.device;
-        let bindings: Vec<_> = (0..3)
-            .map(|b| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: valid create info.
-        let set_layout = unsafe { d.create_descriptor_set_layout(&set_info, None) }
-            .vk("vkCreateDescriptorSetLayout")?;
-        let set_layouts = [set_layout];
-        let ranges = [vk::PushConstantRange {
-            stage_flags: vk::ShaderStageFlags::COMPUTE,
-            offset: 0,
-            size: std::mem::size_of::<MorphPush>() as u32,
-        }];
-        let layout_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(&ranges);
-        // SAFETY: valid create info.
-        let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }
-            .vk("vkCreatePipelineLayout")
-        {
-            Ok(l) => l,
-            Err(e) => {
-                // SAFETY: unused.
-                unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
-                return Err(e);
-            }
-        };
-        let raw = shader_module(ctx, SPIRV).and_then(|module| {
-            let info = [vk::ComputePipelineCreateInfo::default()
-                .stage(stage(
-                    vk::ShaderStageFlags::COMPUTE,
-                    module,
-                    entry::GEOMORPH_CS,
-                ))
-                .layout(layout)];
-            // SAFETY: valid create info referring to live objects.
-            let r = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
-                .map_err(|(_, e)| e)
-                .vk("vkCreateComputePipelines");
-            // SAFETY: the pipeline no longer needs the module.
-            unsafe { d.destroy_shader_module(module, None) };
-            r?.first()
-                .copied()
-                .ok_or_else(|| Error::Shader("no compute pipeline returned".into()))
-        });
-        match raw {
-            Ok(raw) => Ok(Self {
+        let set_layout = storage_set_layout(ctx, 3, vk::ShaderStageFlags::COMPUTE)?;
+        let push = std::mem::size_of::<MorphPush>() as u32;
+        match compute_pipeline(ctx, set_layout, entry::GEOMORPH_CS, push) {
+            Ok((raw, layout)) => Ok(Self {
                 raw,
                 layout,
                 set_layout,
             }),
             Err(e) => {
                 // SAFETY: unused.
-                unsafe {
-                    d.destroy_pipeline_layout(layout, None);
-                    d.destroy_descriptor_set_layout(set_layout, None);
-                }
+                unsafe { ctx.device.destroy_descriptor_set_layout(set_layout, None) };
                 Err(e)
             }
         }
@@ -377,6 +345,119 @@ impl GeomorphPipeline {
             ctx.device.destroy_pipeline_layout(self.layout, None);
             ctx.device
                 .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// The refinement-geomorph compute pipeline (`morphing_cs`) and the set layout of a
+/// camera's morph buffers, which the morphing vertex stage binds as set 1 and the compute
+/// stage as set 0: bindings 0 (persistent vertices), 1 (morph slots), 2 (blended vertices),
+/// 3 (vertex colours), storage buffers, vertex and compute stages.
+#[derive(Debug)]
+pub(crate) struct MorphingPipeline {
+    /// The compute pipeline.
+    pub(crate) raw: vk::Pipeline,
+    /// Its layout (the morph set, push constants).
+    pub(crate) layout: vk::PipelineLayout,
+    /// The morph set's layout.
+    pub(crate) set_layout: vk::DescriptorSetLayout,
+}
+
+impl MorphingPipeline {
+    /// Creates the set layout and the compute pipeline.
+    pub(crate) fn new(ctx: &Context) -> Result<Self> {
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::COMPUTE;
+        let set_layout = storage_set_layout(ctx, 4, stages)?;
+        let push = std::mem::size_of::<MorphSlotsPush>() as u32;
+        match compute_pipeline(ctx, set_layout, entry::MORPHING_CS, push) {
+            Ok((raw, layout)) => Ok(Self {
+                raw,
+                layout,
+                set_layout,
+            }),
+            Err(e) => {
+                // SAFETY: unused.
+                unsafe { ctx.device.destroy_descriptor_set_layout(set_layout, None) };
+                Err(e)
+            }
+        }
+    }
+
+    /// Destroys pipeline and layouts. The GPU must be done with them, and with every set of
+    /// the layout.
+    pub(crate) fn destroy(self, ctx: &Context) {
+        // SAFETY: the caller guarantees no pending work uses them.
+        unsafe {
+            ctx.device.destroy_pipeline(self.raw, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+            ctx.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// A set layout of `count` storage buffers at bindings `0..count`, visible to `stages`.
+fn storage_set_layout(
+    ctx: &Context,
+    count: u32,
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::DescriptorSetLayout> {
+    let bindings: Vec<_> = (0..count)
+        .map(|b| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    // SAFETY: valid create info.
+    unsafe { ctx.device.create_descriptor_set_layout(&info, None) }
+        .vk("vkCreateDescriptorSetLayout")
+}
+
+/// A compute pipeline of entry point `name` over one set of `set_layout` and
+/// `push_size` bytes of push constants, with its layout.
+fn compute_pipeline(
+    ctx: &Context,
+    set_layout: vk::DescriptorSetLayout,
+    name: &CStr,
+    push_size: u32,
+) -> Result<(vk::Pipeline, vk::PipelineLayout)> {
+    let d = &ctx.device;
+    let set_layouts = [set_layout];
+    let ranges = [vk::PushConstantRange {
+        stage_flags: vk::ShaderStageFlags::COMPUTE,
+        offset: 0,
+        size: push_size,
+    }];
+    let layout_info = vk::PipelineLayoutCreateInfo::default()
+        .set_layouts(&set_layouts)
+        .push_constant_ranges(&ranges);
+    // SAFETY: valid create info.
+    let layout =
+        unsafe { d.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
+    let raw = shader_module(ctx, SPIRV).and_then(|module| {
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage(vk::ShaderStageFlags::COMPUTE, module, name))
+            .layout(layout)];
+        // SAFETY: valid create info referring to live objects.
+        let r = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map_err(|(_, e)| e)
+            .vk("vkCreateComputePipelines");
+        // SAFETY: the pipeline no longer needs the module.
+        unsafe { d.destroy_shader_module(module, None) };
+        r?.first()
+            .copied()
+            .ok_or_else(|| Error::Shader("no compute pipeline returned".into()))
+    });
+    match raw {
+        Ok(raw) => Ok((raw, layout)),
+        Err(e) => {
+            // SAFETY: unused.
+            unsafe { d.destroy_pipeline_layout(layout, None) };
+            Err(e)
         }
     }
 }

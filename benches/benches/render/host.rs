@@ -245,6 +245,7 @@ impl<'s, 'c> HostSetup<'s, 'c> {
                 indices: ind,
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: None,
                 wireframe: false,
             })

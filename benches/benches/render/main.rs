@@ -157,6 +157,7 @@ impl<'s, 'c> Setup<'s, 'c> {
                 },
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: None,
             })
             .collect();
@@ -238,6 +239,7 @@ fn bench_frames(
                     },
                     colours: &COLOURS,
                     materials: None,
+                    refine_morphs: None,
                     morph: None,
                 })
                 .collect();

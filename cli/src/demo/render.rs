@@ -1,7 +1,8 @@
 //! The demo's pictures: the four fly-over cameras drawn into the quadrants of one 1280 x 720
 //! image on the Vulkan device (lavapipe unless a GPU is preferred), at a few frames of the
 //! flight. Each camera refines its own front every frame for its own quadrant's view, exactly
-//! as in the measured flights; only the sampled frames are drawn and read back.
+//! as in the measured flights, with geomorphs (blended by the compute stage); only the
+//! sampled frames are drawn and read back.
 
 use std::path::{Path, PathBuf};
 
@@ -9,14 +10,17 @@ use crate::snapshot::{palette, write_png};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
-    VertexBuffer, Viewport,
+    CameraDraw, CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt,
+    MorphStage, Renderer, RendererDesc, VertexBuffer, Viewport,
 };
 
 use crate::flyover::{clip, eye_at, routes, Ground, FOV_Y_DEG};
 
 /// Image size of a split-screen frame.
 pub const SIZE: (u32, u32) = (1280, 720);
+
+/// Morphs each drawn camera holds at once.
+const MAX_MORPHS: u32 = 8192;
 
 /// Renders `frames` frames of the 4-camera fly-over and writes `frame-NNN.png` into `out` at
 /// each of `shots` (frame numbers). Returns the files and the device's name.
@@ -52,7 +56,7 @@ fn draw(
     let (near, far) = clip(&ground);
     let all = routes();
     let viewports = Viewport::split_screen(SIZE.0, SIZE.1, 4).map_err(err)?;
-    let config = CameraConfig::full(h);
+    let config = CameraConfig::full(h).with_morphs(MAX_MORPHS);
     let words = CameraState::words_needed_for(h, &config);
     let mut memories: Vec<Vec<u32>> = (0..4).map(|_| vec![0u32; words]).collect();
     let mut cams = Vec::with_capacity(4);
@@ -69,6 +73,7 @@ fn draw(
             readback: true,
             clear_colour: [0.55, 0.7, 0.9, 1.0],
             geomorph: false,
+            refine_morphs: true,
         },
     ) {
         Ok(r) => r,
@@ -80,6 +85,30 @@ fn draw(
     let mut indices: Vec<CameraIndices> = (0..4)
         .map(|i| CameraIndices::new(&format!("camera {i}"), h.surface_count(), 1))
         .collect();
+    let mut morphs = Vec::with_capacity(4);
+    for i in 0..4 {
+        let name = format!("camera {i}");
+        let stage = MorphStage::Compute;
+        match CameraMorphs::new(
+            ctx,
+            renderer.recorder(),
+            &name,
+            &vertices,
+            stage,
+            MAX_MORPHS,
+            1,
+        ) {
+            Ok(m) => morphs.push(m),
+            Err(e) => {
+                let _ = renderer.destroy(ctx);
+                let _ = vertices.destroy(ctx);
+                morphs
+                    .into_iter()
+                    .for_each(|m: CameraMorphs| drop(m.destroy(ctx)));
+                return Err(e.to_string());
+            }
+        }
+    }
     let params = RefineParams::default();
     let mut written = Vec::new();
     let mut outcome = Ok(());
@@ -114,19 +143,21 @@ fn draw(
         }
         let mut draws: Vec<CameraDraw<'_, '_>> = indices
             .iter_mut()
+            .zip(morphs.iter_mut())
             .enumerate()
-            .map(|(i, ind)| CameraDraw {
+            .map(|(i, (ind, morphs))| CameraDraw {
                 target: 0,
                 viewport: viewports[i],
                 view_proj: looks[i].view_projection(viewports[i].aspect()),
                 vertices: &vertices,
                 indices: ind,
-                source: IndexSource::Camera {
+                source: IndexSource::MorphedCamera {
                     hierarchy: h,
                     camera: &cams[i],
                 },
                 colours: &colours,
                 materials: None,
+                refine_morphs: Some(morphs),
                 morph: None,
             })
             .collect();
@@ -150,6 +181,7 @@ fn draw(
     }
     let cleanup = renderer
         .destroy(ctx)
+        .and_then(|()| morphs.into_iter().try_for_each(|m| m.destroy(ctx)))
         .and_then(|()| vertices.destroy(ctx))
         .and_then(|()| indices.into_iter().try_for_each(|i| i.destroy(ctx)));
     outcome?;

@@ -95,6 +95,7 @@ fn render_with(
             readback: true,
             clear_colour: [0.55, 0.7, 0.9, 1.0],
             geomorph: true,
+            refine_morphs: false,
         },
     )
     .map_err(e)?;
@@ -282,6 +283,7 @@ fn draw_levels(
             source: IndexSource::Lists(lists),
             colours: scene.colours,
             materials: None,
+            refine_morphs: None,
             morph: Some(Morph {
                 fine: &levels[*i].b,
                 instances: inst,

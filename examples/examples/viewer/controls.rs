@@ -128,6 +128,8 @@ pub enum Action {
     Finer,
     Wireframe,
     CycleColour,
+    /// Geomorphs in the vertex stage, in the compute stage, or off.
+    CycleMorphs,
     Freeze,
     Quit,
 }
@@ -245,6 +247,7 @@ fn action(code: KeyCode) -> Option<Action> {
         KeyCode::Minus | KeyCode::NumpadSubtract => Action::Finer,
         KeyCode::KeyZ => Action::Wireframe,
         KeyCode::KeyC => Action::CycleColour,
+        KeyCode::KeyG => Action::CycleMorphs,
         KeyCode::KeyF | KeyCode::Space => Action::Freeze,
         KeyCode::Escape => Action::Quit,
         _ => return None,
@@ -263,6 +266,7 @@ pub const KEY_HELP: &[(&str, &str)] = &[
     ("+ / -", "tolerance coarser / finer"),
     ("Z", "wireframe"),
     ("C", "colour by surface / depth"),
+    ("G", "geomorphs: vertex stage / compute stage / off"),
     ("F, Space", "freeze the steered camera's front"),
     ("Esc", "quit"),
 ];

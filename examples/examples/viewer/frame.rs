@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use caveclod_core::glam::Mat4;
 use caveclod_vulkan::ash::vk;
-use caveclod_vulkan::{Buffer, BufferDesc, IndexSource, RecordCamera, RgbaImage, Viewport};
+use caveclod_vulkan::{
+    Buffer, BufferDesc, CameraMorphs, IndexSource, RecordCamera, RgbaImage, Viewport,
+};
 
 use crate::render::{self, FrameTarget};
 use crate::scene::{ColourMode, Frozen, Scene};
@@ -124,15 +126,25 @@ impl Viewer {
         for (i, c) in scene.cameras.iter_mut().enumerate() {
             let rings = &mut self.res.rings[i];
             let start = Instant::now();
-            match scene.settings.colour {
-                ColourMode::Materials | ColourMode::Surface => {
+            match (scene.settings.colour, scene.settings.morphs.stage()) {
+                (ColourMode::Materials | ColourMode::Surface, Some(stage)) => {
+                    let source = IndexSource::MorphedCamera {
+                        hierarchy: h,
+                        camera: &c.state,
+                    };
+                    rings
+                        .morphs_mut(stage)
+                        .fill(slot, h.vertices(), &c.state)
+                        .and_then(|_| rings.surfaces.fill(&self.ctx, slot, source))
+                }
+                (ColourMode::Materials | ColourMode::Surface, None) => {
                     let source = IndexSource::Camera {
                         hierarchy: h,
                         camera: &c.state,
                     };
                     rings.surfaces.fill(&self.ctx, slot, source)
                 }
-                ColourMode::Depth => {
+                (ColourMode::Depth, _) => {
                     self.bands.regroup(h, &c.state)?;
                     let lists = self.bands.lists();
                     rings
@@ -236,6 +248,12 @@ impl Viewer {
         };
         let by_depth = scene.settings.colour == ColourMode::Depth;
         let wireframe = scene.settings.wireframe && self.res.recorder.desc().wireframe;
+        // Depth bands regroup the plain front; the other colourings draw the morphs.
+        let stage = scene.settings.morphs.stage().filter(|_| !by_depth);
+        let morphs: Vec<&CameraMorphs> = match stage {
+            Some(stage) => self.res.rings.iter().map(|r| r.morphs(stage)).collect(),
+            None => Vec::new(),
+        };
         let cameras: Vec<RecordCamera<'_>> = views
             .iter()
             .zip(&self.res.rings)
@@ -257,12 +275,18 @@ impl Viewer {
                     ColourMode::Materials => self.res.materials.as_ref().map(|m| &m.set),
                     ColourMode::Surface | ColourMode::Depth => None,
                 },
+                refine_morphs: stage.map(|s| rings.morphs(s)),
                 morph: None,
                 wireframe,
             })
             .collect();
         let d = &self.gpu.device;
         let s = &self.res.slots[slot];
+        render::open(d, s.cmd)?;
+        self.res
+            .recorder
+            .record_morph_blends(&self.ctx, s.cmd, slot, &morphs)
+            .map_err(|e| format!("caveclod: {e}"))?;
         render::begin(d, s.cmd, &target, clear_colour(self.desc.srgb()))?;
         self.res
             .recorder

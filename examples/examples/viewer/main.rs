@@ -113,7 +113,8 @@ fn run(args: &Args) -> Result<ExitCode, String> {
     let h = asset
         .hierarchy()
         .map_err(|e| format!("{}: {e}", args.input.display()))?;
-    let mut memories = vec![vec![0u32; CameraState::words_needed(&h)]; usize::from(args.cameras)];
+    let words = CameraState::words_needed_for(&h, &scene::camera_config(&h));
+    let mut memories = vec![vec![0u32; words]; usize::from(args.cameras)];
     let texture_dir = args.input.parent().map_or_else(
         || std::path::PathBuf::from("."),
         std::path::Path::to_path_buf,
@@ -203,6 +204,7 @@ impl<'a, 'h> App<'a, 'h> {
             Action::CycleColour => {
                 s.settings.colour = s.settings.colour.next(s.h.materials().is_some())
             }
+            Action::CycleMorphs => s.settings.morphs = s.settings.morphs.next(),
             Action::Freeze => {
                 let viewport = self.viewer.as_ref().and_then(|v| {
                     let e = v.size();
@@ -229,8 +231,9 @@ impl<'a, 'h> App<'a, 'h> {
             }
         }
         let limit = self.args.frames;
-        self.scene
-            .animate(if limit.is_some() { FRAMES_DT } else { dt });
+        let dt = if limit.is_some() { FRAMES_DT } else { dt };
+        self.scene.animate(dt);
+        self.scene.dt_s = dt;
         let last = limit.is_some_and(|n| self.drawn + 1 >= n);
         let capture = last && self.args.screenshot.is_some();
         let Some(viewer) = self.viewer.as_mut() else {

@@ -17,15 +17,9 @@ pub struct FrameTarget {
     pub extent: vk::Extent2D,
 }
 
-/// Begins `cmd` (reset by the caller's pool flag), transitions the attachments from
-/// whatever they held and begins dynamic rendering, clearing colour to `clear` (linear)
-/// and depth to 1.
-pub fn begin(
-    d: &ash::Device,
-    cmd: vk::CommandBuffer,
-    t: &FrameTarget,
-    clear: [f32; 4],
-) -> Result<(), String> {
+/// Resets and begins `cmd` (its pool allows resetting it), for the work recorded before
+/// the rendering (caveclod's geomorph dispatches).
+pub fn open(d: &ash::Device, cmd: vk::CommandBuffer) -> Result<(), String> {
     let begin =
         vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
     // SAFETY: `cmd`'s last submission completed (its slot's fence was waited for) and its
@@ -36,6 +30,17 @@ pub fn begin(
         d.begin_command_buffer(cmd, &begin)
             .map_err(|e| format!("vkBeginCommandBuffer: {e}"))?;
     }
+    Ok(())
+}
+
+/// Transitions the attachments of `cmd` (begun by [`open`]) from whatever they held and
+/// begins dynamic rendering, clearing colour to `clear` (linear) and depth to 1.
+pub fn begin(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    t: &FrameTarget,
+    clear: [f32; 4],
+) -> Result<(), String> {
     let barriers = [
         // Waits for the acquire semaphore, which the submission waits for at the colour
         // output stage.

@@ -10,7 +10,8 @@ use std::time::Instant;
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, Stage};
 use caveclod_cli::aligned::AlignedBytes;
-use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_vulkan::MorphStage;
 use caveclod_vulkan::Viewport;
 
 use crate::controls::CameraControl;
@@ -129,6 +130,51 @@ impl ColourMode {
     }
 }
 
+/// Morphs each camera holds at once: a few thousand splits and collapses in flight, for
+/// 72 bytes each.
+const MAX_MORPHS: u32 = 8192;
+
+/// The configuration of the viewer's cameras: full resolution anywhere, with morph memory.
+pub fn camera_config(h: &Hierarchy<'_>) -> CameraConfig {
+    CameraConfig::full(h).with_morphs(MAX_MORPHS)
+}
+
+/// Where geomorphs are blended, if they are on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Morphs {
+    Vertex,
+    Compute,
+    Off,
+}
+
+impl Morphs {
+    /// The mode after this one.
+    pub fn next(self) -> Self {
+        match self {
+            Self::Vertex => Self::Compute,
+            Self::Compute => Self::Off,
+            Self::Off => Self::Vertex,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Vertex => "geomorphs in the vertex stage",
+            Self::Compute => "geomorphs in the compute stage",
+            Self::Off => "geomorphs off",
+        }
+    }
+
+    /// The stage blending them, when on.
+    pub fn stage(self) -> Option<MorphStage> {
+        match self {
+            Self::Vertex => Some(MorphStage::Vertex),
+            Self::Compute => Some(MorphStage::Compute),
+            Self::Off => None,
+        }
+    }
+}
+
 /// What the keys change.
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
@@ -136,6 +182,7 @@ pub struct Settings {
     pub tolerance_px: f32,
     pub colour: ColourMode,
     pub wireframe: bool,
+    pub morphs: Morphs,
     /// The camera the keys and mouse steer.
     pub selected: usize,
 }
@@ -144,6 +191,8 @@ pub struct Settings {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CameraStats {
     pub polygons: u32,
+    /// Morphs in progress.
+    pub morphing: u32,
     /// Splits plus collapses.
     pub operations: u32,
     pub refine_ms: f64,
@@ -177,10 +226,13 @@ pub struct Scene<'h> {
     pub texture_dir: PathBuf,
     pub cameras: Vec<SceneCamera<'h>>,
     pub settings: Settings,
+    /// Seconds since the previous frame: how far morphs move.
+    pub dt_s: f32,
 }
 
 impl<'h> Scene<'h> {
-    /// One camera per memory (each [`CameraState::words_needed`] words), placed around
+    /// One camera per memory (each [`CameraState::words_needed_for`] [`camera_config`]
+    /// words), placed around
     /// the mesh as caveclod's snapshots place them; animated if `animate`.
     pub fn new(
         h: Hierarchy<'h>,
@@ -199,8 +251,8 @@ impl<'h> Scene<'h> {
         let looks = caveclod_cli::snapshot::orbit(&h, memories.len());
         let mut cameras = Vec::with_capacity(memories.len());
         for (i, (memory, look)) in memories.iter_mut().zip(looks).enumerate() {
-            let state =
-                CameraState::new(&h, memory).map_err(|e| format!("camera {}: {e}", i + 1))?;
+            let state = CameraState::with_config(&h, memory, &camera_config(&h))
+                .map_err(|e| format!("camera {}: {e}", i + 1))?;
             cameras.push(SceneCamera {
                 state,
                 control: CameraControl::from_look(&look, centre, radius, i),
@@ -222,8 +274,10 @@ impl<'h> Scene<'h> {
                 tolerance_px,
                 colour,
                 wireframe: false,
+                morphs: Morphs::Vertex,
                 selected: 0,
             },
+            dt_s: 1.0 / 60.0,
         })
     }
 
@@ -238,7 +292,13 @@ impl<'h> Scene<'h> {
     pub fn refine(&mut self, viewports: &[Viewport]) -> Result<(), String> {
         let params = RefineParams {
             tolerance_px: self.settings.tolerance_px,
+            dt_s: self.dt_s,
             ..RefineParams::default()
+        };
+        // Off, morphs in progress end on the next pass and new operations happen at once.
+        let params = match self.settings.morphs {
+            Morphs::Off => params.without_morphs(),
+            Morphs::Vertex | Morphs::Compute => params,
         };
         for (i, (c, vp)) in self.cameras.iter_mut().zip(viewports).enumerate() {
             if c.frozen.is_some() {
@@ -255,6 +315,7 @@ impl<'h> Scene<'h> {
             c.stats.refine_ms = start.elapsed().as_secs_f64() * 1e3;
             c.stats.operations = stats.splits + stats.collapses;
             c.stats.polygons = stats.active_polygons;
+            c.stats.morphing = stats.morphing;
         }
         Ok(())
     }

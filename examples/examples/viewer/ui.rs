@@ -58,6 +58,7 @@ fn settings(ui: &mut egui::Ui, scene: &Scene<'_>, info: &PanelInfo<'_>) {
             String::new()
         }
     ));
+    ui.label(s.morphs.name());
     ui.label(if !info.wireframe_available {
         "wireframe unavailable (no fillModeNonSolid)"
     } else if s.wireframe {
@@ -75,7 +76,15 @@ fn settings(ui: &mut egui::Ui, scene: &Scene<'_>, info: &PanelInfo<'_>) {
 
 fn cameras(ui: &mut egui::Ui, scene: &Scene<'_>) {
     egui::Grid::new("cameras").striped(true).show(ui, |ui| {
-        for head in ["camera", "polygons", "ops", "refine ms", "emit ms", ""] {
+        for head in [
+            "camera",
+            "polygons",
+            "ops",
+            "morphing",
+            "refine ms",
+            "emit ms",
+            "",
+        ] {
             ui.strong(head);
         }
         ui.end_row();
@@ -88,6 +97,7 @@ fn cameras(ui: &mut egui::Ui, scene: &Scene<'_>) {
             ui.label(format!("{}{steered}", i + 1));
             ui.monospace(format!("{:>9}", c.stats.polygons));
             ui.monospace(format!("{:>6}", c.stats.operations));
+            ui.monospace(format!("{:>6}", c.stats.morphing));
             ui.monospace(format!("{:>6.2}", c.stats.refine_ms));
             ui.monospace(format!("{:>6.2}", c.stats.emit_ms));
             ui.label(match (c.frozen.is_some(), c.animated) {

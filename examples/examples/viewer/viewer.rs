@@ -4,7 +4,8 @@
 
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
-    CameraIndices, Context, Recorder, RecorderDesc, TargetFormats, VertexBuffer,
+    CameraIndices, CameraMorphs, Context, MorphStage, Recorder, RecorderDesc, TargetFormats,
+    VertexBuffer,
 };
 use egui_ash_renderer::allocator::GpuAllocator;
 use egui_ash_renderer::{DynamicRendering, Options, RenderMode};
@@ -32,10 +33,31 @@ pub struct WindowDesc {
     pub validation: bool,
 }
 
-/// A camera's index rings: one list per surface, and one per depth band.
+/// A camera's index rings: one list per surface, and one per depth band; and its morph
+/// slots for each stage that can blend them.
 pub struct Rings {
     pub surfaces: CameraIndices,
     pub bands: CameraIndices,
+    pub vertex_morphs: CameraMorphs,
+    pub compute_morphs: CameraMorphs,
+}
+
+impl Rings {
+    /// The morphs blended by `stage` (the vertex or the compute stage).
+    pub fn morphs(&self, stage: MorphStage) -> &CameraMorphs {
+        match stage {
+            MorphStage::Compute => &self.compute_morphs,
+            MorphStage::Vertex | MorphStage::Host => &self.vertex_morphs,
+        }
+    }
+
+    /// As [`Rings::morphs`], to fill.
+    pub fn morphs_mut(&mut self, stage: MorphStage) -> &mut CameraMorphs {
+        match stage {
+            MorphStage::Compute => &mut self.compute_morphs,
+            MorphStage::Vertex | MorphStage::Host => &mut self.vertex_morphs,
+        }
+    }
 }
 
 /// What the frames draw with, besides the host's device.
@@ -215,6 +237,7 @@ impl Resources {
             ctx,
             RecorderDesc {
                 wireframe: ctx.features().fill_mode_non_solid,
+                refine_morphs: true,
                 ..RecorderDesc::dynamic(formats)
             },
         )
@@ -239,23 +262,18 @@ impl Resources {
                 return Err(format!("vertex buffer: {e}"));
             }
         };
-        let rings = (0..scene.cameras.len())
-            .map(|i| Rings {
-                surfaces: CameraIndices::new(
-                    &format!("camera {}", i + 1),
-                    scene.h.surface_count(),
-                    FRAMES_IN_FLIGHT,
-                ),
-                bands: CameraIndices::new(
-                    &format!("camera {} depth bands", i + 1),
-                    bands.band_count(),
-                    FRAMES_IN_FLIGHT,
-                ),
-            })
-            .collect();
+        let rings = match rings(ctx, &recorder, &vertices, scene, bands) {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = vertices.destroy(ctx);
+                undo(materials, recorder);
+                return Err(e);
+            }
+        };
         let (slots, upload_pool) = match frame_slots(gpu) {
             Ok(s) => s,
             Err(e) => {
+                let _ = destroy_rings(ctx, rings);
                 let _ = vertices.destroy(ctx);
                 undo(materials, recorder);
                 return Err(e);
@@ -265,6 +283,7 @@ impl Resources {
             Ok(r) => r,
             Err(e) => {
                 destroy_slots(gpu, slots, upload_pool);
+                let _ = destroy_rings(ctx, rings);
                 let _ = vertices.destroy(ctx);
                 undo(materials, recorder);
                 return Err(e);
@@ -306,14 +325,7 @@ impl Resources {
         // way to be destroyed); before the allocator it draws from.
         drop(self.egui);
         destroy_slots(gpu, self.slots, self.upload_pool);
-        let mut first = Ok(());
-        for r in self.rings {
-            for ring in [r.surfaces, r.bands] {
-                if let Err(e) = ring.destroy(ctx) {
-                    first = first.and(Err(format!("index ring: {e}")));
-                }
-            }
-        }
+        let mut first = destroy_rings(ctx, self.rings);
         if let Err(e) = self.vertices.destroy(ctx) {
             first = first.and(Err(format!("vertex buffer: {e}")));
         }
@@ -381,4 +393,66 @@ fn egui_renderer(gpu: &Gpu, desc: SwapchainDesc) -> Result<EguiRenderer, String>
         },
     )
     .map_err(|e| format!("egui renderer: {e}"))
+}
+
+/// Each camera's index rings and morph slots.
+fn rings(
+    ctx: &Context,
+    recorder: &Recorder,
+    vertices: &VertexBuffer,
+    scene: &Scene<'_>,
+    bands: &DepthBands,
+) -> Result<Vec<Rings>, String> {
+    let mut rings = Vec::with_capacity(scene.cameras.len());
+    for (i, c) in scene.cameras.iter().enumerate() {
+        let name = format!("camera {}", i + 1);
+        let morphs = |stage| {
+            let max = c.state.max_morphs();
+            CameraMorphs::new(ctx, recorder, &name, vertices, stage, max, FRAMES_IN_FLIGHT)
+                .map_err(|e| format!("{name}: morphs: {e}"))
+        };
+        let made = morphs(MorphStage::Vertex).and_then(|v| match morphs(MorphStage::Compute) {
+            Ok(c) => Ok((v, c)),
+            Err(e) => {
+                let _ = v.destroy(ctx);
+                Err(e)
+            }
+        });
+        let (vertex_morphs, compute_morphs) = match made {
+            Ok(m) => m,
+            Err(e) => {
+                let _ = destroy_rings(ctx, rings);
+                return Err(e);
+            }
+        };
+        rings.push(Rings {
+            surfaces: CameraIndices::new(&name, scene.h.surface_count(), FRAMES_IN_FLIGHT),
+            bands: CameraIndices::new(
+                &format!("{name} depth bands"),
+                bands.band_count(),
+                FRAMES_IN_FLIGHT,
+            ),
+            vertex_morphs,
+            compute_morphs,
+        });
+    }
+    Ok(rings)
+}
+
+/// Destroys every ring; the device must be done with them.
+fn destroy_rings(ctx: &Context, rings: Vec<Rings>) -> Result<(), String> {
+    let mut first = Ok(());
+    for r in rings {
+        for ring in [r.surfaces, r.bands] {
+            if let Err(e) = ring.destroy(ctx) {
+                first = first.and(Err(format!("index ring: {e}")));
+            }
+        }
+        for m in [r.vertex_morphs, r.compute_morphs] {
+            if let Err(e) = m.destroy(ctx) {
+                first = first.and(Err(format!("morphs: {e}")));
+            }
+        }
+    }
+    first
 }

@@ -6,19 +6,27 @@
 //! block so the interface can be read off this file; `vulkan/spirv/INTERFACE.md` is the
 //! contract the Vulkan host follows.
 //!
-//! - `draw_vs` + `draw_fs`: draw a mesh of `caveclod_core::Vertex` with a view-projection
+//! - `draw_vs` + `draw_fs`: draw a mesh of `caveclod_core::format::Vertex` with a view-projection
 //!   matrix, a colour and shading parameters ([`DrawPush`]), the base-colour texture of set 0
 //!   sampled and lit through [`fragment`].
 //! - `geomorph_vs` (+ `draw_fs`): draw the geomorph of two vertex streams at a per-instance
 //!   `t`, placed by the instance's offset and scale ([`caveclod_core::gpu::MorphInstance`]).
 //! - `geomorph_cs`: write [`morph_vertex`] of two vertex buffers into a third ([`MorphPush`]).
+//! - `morphing_vs` (+ `draw_fs`): draw a camera's front with its refinement geomorphs,
+//!   pulling vertices from storage buffers: an index past the persistent vertices is a morph
+//!   slot, blended here or read from what `morphing_cs` wrote ([`MorphingPush`]).
+//! - `morphing_cs`: write each morph slot's blended vertex
+//!   ([`caveclod_core::gpu::morph_slot_vertex`]) into the
+//!   camera's blended buffer ([`MorphSlotsPush`]).
 #![cfg_attr(target_arch = "spirv", no_std)]
 #![deny(missing_docs)]
 
+use caveclod_core::MorphVertex;
+use caveclod_core::format::Vertex;
 use caveclod_core::gpu::{
-    base_colour, cut, fragment, morph_vertex, vertex_colour, DrawPush, MorphPush,
+    base_colour, cut, fragment, morph_colour, morph_vertex, unpack_colour, vertex_colour,
+    DrawPush, MorphPush, MorphSlotsPush, MorphingPush, MORPH_BLENDED,
 };
-use caveclod_core::Vertex;
 use spirv_std::glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use spirv_std::image::Image2d;
 use spirv_std::{spirv, Sampler};
@@ -178,6 +186,144 @@ pub fn geomorph_cs(
     write_vertex(out, so, v);
 }
 
+/// Words per morph slot in a slot buffer: a [`MorphVertex`] (`from`, `to`, `t`'s bits, 0).
+const SLOT_WORDS: usize = 4;
+
+/// Morph slot `slot` of a slot buffer, if it lies wholly inside it and is not idle.
+fn read_slot(slots: &[u32], slot: u32) -> Option<MorphVertex> {
+    let s = slot as usize;
+    if s >= slots.len() / SLOT_WORDS {
+        return None;
+    }
+    let w = s * SLOT_WORDS;
+    let m = MorphVertex {
+        from: slots[w],
+        to: slots[w + 1],
+        t: f32::from_bits(slots[w + 2]),
+        _pad: 0,
+    };
+    if m.is_idle() {
+        None
+    } else {
+        Some(m)
+    }
+}
+
+/// Vertex `index` of a buffer of `f32`s, or the zero vertex past its end.
+fn vertex_at(buffer: &[f32], index: u32) -> Vertex {
+    match vertex_start(buffer.len(), index) {
+        Some(start) => read_vertex(buffer, start),
+        None => vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO),
+    }
+}
+
+/// The stored (sRGB-encoded) colour of persistent vertex `index`: white without colours or
+/// past the end of the buffer.
+fn colour_at(colours: &[u32], on: bool, index: u32) -> Vec4 {
+    let i = index as usize;
+    if on && i < colours.len() {
+        unpack_colour(colours[i])
+    } else {
+        Vec4::ONE
+    }
+}
+
+/// The vertex and linear colour `morphing_vs` draws for index `index` (see [`MorphingPush`]):
+/// a persistent vertex as stored, or a morph slot's blend of its two persistent vertices
+/// (computed here, or read from `blended`), with the blend of their colours. An index past
+/// the slots, or an idle slot, gives the zero vertex.
+fn pulled_vertex(
+    index: u32,
+    vertices: &[f32],
+    slots: &[u32],
+    blended: &[f32],
+    colours: &[u32],
+    push: &MorphingPush,
+) -> (Vertex, Vec4) {
+    let has_colours = push.colours != 0;
+    if index < push.vertex_count {
+        let colour = vertex_colour(colour_at(colours, has_colours, index));
+        return (vertex_at(vertices, index), colour);
+    }
+    let slot = index - push.vertex_count;
+    let morph = if slot < push.slot_count {
+        read_slot(slots, slot)
+    } else {
+        None
+    };
+    let Some(m) = morph else {
+        return (vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO), Vec4::ONE);
+    };
+    let v = if push.source == MORPH_BLENDED {
+        vertex_at(blended, slot)
+    } else {
+        morph_vertex(vertex_at(vertices, m.from), vertex_at(vertices, m.to), m.t)
+    };
+    let colour = morph_colour(
+        colour_at(colours, has_colours, m.from),
+        colour_at(colours, has_colours, m.to),
+        m.t,
+    );
+    (v, colour)
+}
+
+/// Vertex stage for a camera's front with refinement geomorphs. Vertices are pulled from
+/// set 1: binding 0 the persistent vertices (`f32`s, 8 per vertex), binding 1 the camera's
+/// morph slots (`u32`s, 4 per slot), binding 2 its blended vertices (`f32`s, 8 per slot),
+/// binding 3 the vertex colours (one RGBA8 `u32` per vertex); [`pulled_vertex`] says what
+/// an index stands for. Outputs as `draw_vs`.
+#[allow(clippy::too_many_arguments)]
+#[spirv(vertex)]
+pub fn morphing_vs(
+    #[spirv(vertex_index)] index: i32,
+    #[spirv(storage_buffer, descriptor_set = 1, binding = 0)] vertices: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 1, binding = 1)] slots: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 1, binding = 2)] blended: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 1, binding = 3)] colours: &[u32],
+    #[spirv(push_constant)] push: &MorphingPush,
+    #[spirv(position)] out_position: &mut Vec4,
+    #[spirv(location = 0)] out_normal: &mut Vec3,
+    #[spirv(location = 1)] out_uv: &mut Vec2,
+    #[spirv(location = 2)] out_colour: &mut Vec4,
+) {
+    let (v, colour) = pulled_vertex(index as u32, vertices, slots, blended, colours, push);
+    let position = Vec3::from_array(v.position);
+    *out_position = Mat4::from_cols_array(&push.draw.view_proj) * position.extend(1.0);
+    *out_normal = Vec3::from_array(v.normal);
+    *out_uv = Vec2::from_array(v.uv);
+    *out_colour = colour;
+}
+
+/// Compute stage for refinement geomorphs (64 invocations per workgroup): invocation
+/// `s < slot_count` writes morph slot `s`'s vertex, [`morph_vertex`] of its two persistent
+/// vertices at its `t`, to `blended[s]`. Idle slots, and slots or vertices not wholly
+/// inside their buffers, are skipped.
+#[spirv(compute(threads(64)))]
+pub fn morphing_cs(
+    #[spirv(global_invocation_id)] id: UVec3,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] vertices: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] slots: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] blended: &mut [f32],
+    #[spirv(push_constant)] push: &MorphSlotsPush,
+) {
+    let s = id.x;
+    if s >= push.slot_count {
+        return;
+    }
+    let Some(m) = read_slot(slots, s) else {
+        return;
+    };
+    let (Some(a), Some(b), Some(out)) = (
+        vertex_start(vertices.len(), m.from),
+        vertex_start(vertices.len(), m.to),
+        vertex_start(blended.len(), s),
+    ) else {
+        return;
+    };
+    let v = morph_vertex(read_vertex(vertices, a), read_vertex(vertices, b), m.t);
+    write_vertex(blended, out, v);
+}
+
 /// The entry points run on the CPU as plain functions (the builder runs these tests before
 /// compiling to SPIR-V).
 #[cfg(all(test, not(target_arch = "spirv")))]
@@ -268,6 +414,106 @@ mod tests {
         };
         run_cs(&a, &b, &mut out, push, 2);
         assert!(out.iter().all(|&f| f == -7.0));
+    }
+
+    fn slot_words(slots: &[MorphVertex]) -> Vec<u32> {
+        slots
+            .iter()
+            .flat_map(|m| [m.from, m.to, m.t.to_bits(), 0])
+            .collect()
+    }
+
+    fn morph_slots() -> Vec<MorphVertex> {
+        let slot = |from, to, t| MorphVertex {
+            from,
+            to,
+            t,
+            _pad: 0,
+        };
+        vec![slot(0, 3, 0.25), MorphVertex::IDLE, slot(4, 1, 0.75), slot(2, 9, 0.5)]
+    }
+
+    #[test]
+    fn morphing_cs_writes_each_live_slot_as_the_cpu_blends_it() {
+        let vs = vertices(0.5, 5);
+        let (v, m) = (floats(&vs), morph_slots());
+        let words = slot_words(&m);
+        let mut out = vec![-7.0f32; 8 * 4];
+        let push = MorphSlotsPush {
+            slot_count: 4,
+            _pad: [0; 3],
+        };
+        for x in 0..64 {
+            morphing_cs(UVec3::new(x, 0, 0), &v, &words, &mut out, &push);
+        }
+        for (s, slot) in m.iter().enumerate() {
+            let got = &out[8 * s..8 * s + 8];
+            match caveclod_core::gpu::morph_slot_vertex(&vs, *slot) {
+                Some(want) => assert_eq!(got, &floats(&[want])[..], "slot {s}"),
+                // Idle, or naming vertex 9 of 5: untouched.
+                None => assert!(got.iter().all(|&f| f == -7.0), "slot {s}"),
+            }
+        }
+        // A count below the slots leaves the rest alone.
+        let mut out = vec![-7.0f32; 8 * 4];
+        let push = MorphSlotsPush {
+            slot_count: 1,
+            _pad: [0; 3],
+        };
+        for x in 0..64 {
+            morphing_cs(UVec3::new(x, 0, 0), &v, &words, &mut out, &push);
+        }
+        assert!(out[8..].iter().all(|&f| f == -7.0));
+    }
+
+    #[test]
+    fn morphing_vs_draws_persistent_vertices_and_slots_from_either_source() {
+        let vs = vertices(0.5, 5);
+        let (v, m) = (floats(&vs), morph_slots());
+        let words = slot_words(&m);
+        let colours: Vec<u32> = (0..5u32).map(|i| 0x8000_0000 | (i * 40)).collect();
+        // What the compute stage would have written.
+        let blended: Vec<f32> = m
+            .iter()
+            .flat_map(|&slot| {
+                let b = caveclod_core::gpu::morph_slot_vertex(&vs, slot);
+                floats(&[b.unwrap_or(vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO))])
+            })
+            .collect();
+        let draw = DrawPush::new(Mat4::IDENTITY, Vec4::ONE);
+        for source in [caveclod_core::gpu::MORPH_IN_VERTEX_STAGE, MORPH_BLENDED] {
+            let push = MorphingPush {
+                draw,
+                vertex_count: 5,
+                slot_count: 4,
+                source,
+                colours: 1,
+            };
+            let run = |index: i32| {
+                let (mut pos, mut n, mut uv, mut c) = (Vec4::ZERO, Vec3::ZERO, Vec2::ZERO, Vec4::ZERO);
+                morphing_vs(
+                    index, &v, &words, &blended, &colours, &push, &mut pos, &mut n, &mut uv, &mut c,
+                );
+                (pos, n, uv, c)
+            };
+            // A persistent vertex, as stored, with its decoded colour.
+            let (pos, n, uv, c) = run(2);
+            assert_eq!(pos, Vec3::from_array(vs[2].position).extend(1.0));
+            assert_eq!((n, uv), (Vec3::from_array(vs[2].normal), Vec2::from_array(vs[2].uv)));
+            assert_eq!(c, vertex_colour(unpack_colour(colours[2])));
+            // Slot 2 (index 7): vertex 4 towards vertex 1 at 0.75, colours blended alike.
+            let want = morph_vertex(vs[4], vs[1], 0.75);
+            let (pos, n, uv, c) = run(7);
+            assert_eq!(pos, Vec3::from_array(want.position).extend(1.0), "source {source}");
+            assert_eq!((n, uv), (Vec3::from_array(want.normal), Vec2::from_array(want.uv)));
+            let want_colour =
+                morph_colour(unpack_colour(colours[4]), unpack_colour(colours[1]), 0.75);
+            assert_eq!(c, want_colour);
+            // An idle slot and an index past the slots: the zero vertex.
+            for idle in [6, 9] {
+                assert_eq!(run(idle).0, Vec4::new(0.0, 0.0, 0.0, 1.0), "index {idle}");
+            }
+        }
     }
 
     #[test]

@@ -155,6 +155,7 @@ pub fn render_alone(
                 source,
                 colours: &COLOURS,
                 materials: None,
+                refine_morphs: None,
                 morph: None,
             }],
         ),

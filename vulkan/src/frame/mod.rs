@@ -8,6 +8,7 @@ use ash::vk;
 use glam::Mat4;
 
 use crate::buffer::{Buffer, BufferDesc};
+use crate::camera_morphs::CameraMorphs;
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::image::{Image, ImageDesc};
@@ -30,6 +31,8 @@ pub struct RendererDesc {
     pub clear_colour: [f32; 4],
     /// Also create the geomorphing pipeline (`geomorph_vs`), for [`CameraDraw::morph`].
     pub geomorph: bool,
+    /// Also create the refinement-geomorph pipelines, for [`CameraDraw::refine_morphs`].
+    pub refine_morphs: bool,
 }
 
 impl RendererDesc {
@@ -41,6 +44,7 @@ impl RendererDesc {
             readback: true,
             clear_colour: [0.0, 0.0, 0.0, 1.0],
             geomorph: false,
+            refine_morphs: false,
         }
     }
 }
@@ -66,6 +70,9 @@ pub struct CameraDraw<'a, 'c> {
     pub materials: Option<&'a MaterialSet>,
     /// Geomorph instead of drawing `vertices` as they are (needs [`RendererDesc::geomorph`]).
     pub morph: Option<Morph<'a>>,
+    /// The camera's refinement geomorphs (needs [`RendererDesc::refine_morphs`] and
+    /// `source` [`IndexSource::MorphedCamera`]), filled from the camera each frame.
+    pub refine_morphs: Option<&'a mut CameraMorphs>,
 }
 
 impl CameraDraw<'_, '_> {
@@ -79,8 +86,26 @@ impl CameraDraw<'_, '_> {
             colours: self.colours,
             materials: self.materials,
             morph: self.morph,
+            refine_morphs: self.refine_morphs.as_deref(),
             wireframe: false,
         }
+    }
+}
+
+/// Fills camera `i`'s morphs, if it has any, for frame slot `slot` from the camera its
+/// indices come from.
+fn fill_morphs(i: usize, slot: usize, cam: &mut CameraDraw<'_, '_>) -> Result<()> {
+    let Some(morphs) = cam.refine_morphs.as_deref_mut() else {
+        return Ok(());
+    };
+    match cam.source {
+        IndexSource::MorphedCamera { hierarchy, camera } => {
+            morphs.fill(slot, hierarchy.vertices(), camera)?;
+            Ok(())
+        }
+        _ => Err(Error::InvalidArgument(format!(
+            "camera {i}: refinement geomorphs need IndexSource::MorphedCamera"
+        ))),
     }
 }
 
@@ -156,6 +181,7 @@ impl Renderer {
             ctx,
             RecorderDesc {
                 geomorph: desc.geomorph,
+                refine_morphs: desc.refine_morphs,
                 ..RecorderDesc::dynamic(TargetFormats::HEADLESS)
             },
         ) {
@@ -277,6 +303,7 @@ impl Renderer {
                 .fill_camera(ctx, slot_index, Some(i), cam.source)?;
             stats.index_bytes += bytes;
             stats.camera_index_bytes.push(bytes);
+            fill_morphs(i, slot_index, cam)?;
         }
         let records: Vec<(usize, RecordCamera<'_>)> = cameras
             .iter()
@@ -293,6 +320,14 @@ impl Renderer {
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: `cmd` is reset.
         unsafe { d.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        let morphs: Vec<&CameraMorphs> = records
+            .iter()
+            .filter_map(|(_, r)| r.refine_morphs)
+            .collect();
+        if !morphs.is_empty() {
+            self.recorder
+                .record_morph_blends(ctx, cmd, slot_index, &morphs)?;
+        }
         for t in 0..self.targets.len() {
             stats.draws += self.record_target(ctx, cmd, t, slot_index, &records);
         }

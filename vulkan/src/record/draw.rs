@@ -3,11 +3,12 @@
 //! are drawn after the others, through the blending pipeline.
 
 use ash::vk;
-use caveclod_core::gpu::DrawPush;
+use caveclod_core::gpu::{DrawPush, MORPH_BLENDED, MORPH_IN_VERTEX_STAGE};
 use glam::Vec4;
 
 use super::{RecordCamera, Recorder, Viewport};
-use crate::pipeline::DrawPipeline;
+use crate::camera_morphs::{CameraMorphs, MorphStage};
+use crate::pipeline::{DrawPipeline, VertexStage};
 
 /// Bytes per vertex colour (RGBA8).
 const COLOUR_STRIDE: u64 = 4;
@@ -27,11 +28,14 @@ impl Recorder {
             (Some(w), true) => w,
             _ => &self.fill,
         };
-        let (pipeline, instances, blend) = match (&cam.morph, &set.morph) {
-            (Some(m), Some(p)) => (p, m.instances.count, None),
+        let (pipeline, instances, blend) = match (&cam.morph, &set.morph, &set.morphing) {
+            (Some(m), Some(p), _) => (p, m.instances.count, None),
+            (None, _, Some(p)) if cam.refine_morphs.is_some() => {
+                (p, 1, set.morphing_blend.as_ref())
+            }
             _ => (&set.draw, 1, set.blend.as_ref()),
         };
-        self.bind_camera(d, cmd, cam, pipeline);
+        self.bind_camera(d, cmd, slot, cam, pipeline);
         // Without a blending pipeline (wireframe, geomorph) every surface is drawn in one pass.
         let blends =
             |s: usize| blend.is_some() && cam.materials.and_then(|m| m.blends(s)).unwrap_or(false);
@@ -49,14 +53,22 @@ impl Recorder {
 
     /// Binds `pipeline`, `cam`'s viewport and scissor, and its vertex streams: for the
     /// plain stage the vertices and their colours (or one white colour, stride 0); for the
-    /// geomorphing stage coarse and fine vertices and the instances.
+    /// geomorphing stage coarse and fine vertices and the instances; for the morphing stage
+    /// the camera's morph set (set 1) and the tail of its push block.
     fn bind_camera(
         &self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
+        slot: usize,
         cam: &RecordCamera<'_>,
         pipeline: &DrawPipeline,
     ) {
+        if pipeline.stage == VertexStage::Morphing {
+            if let Some(m) = cam.refine_morphs {
+                bind_morphs(d, cmd, slot, cam.viewport, m, pipeline);
+                return;
+            }
+        }
         let (viewport, scissor) = viewport_and_scissor(cam.viewport);
         let (colours, colour_stride) = match &cam.vertices.colours {
             Some(c) => (c.raw, COLOUR_STRIDE),
@@ -70,7 +82,7 @@ impl Recorder {
             d.cmd_set_viewport(cmd, 0, &[viewport]);
             d.cmd_set_scissor(cmd, 0, &[scissor]);
             match &cam.morph {
-                Some(m) if pipeline.morphs => d.cmd_bind_vertex_buffers(
+                Some(m) if pipeline.stage == VertexStage::Geomorph => d.cmd_bind_vertex_buffers(
                     cmd,
                     0,
                     &[
@@ -149,6 +161,56 @@ impl Recorder {
             draws += 1;
         }
         draws
+    }
+}
+
+/// Binds the morphing `pipeline`, the viewport and scissor, `morphs`' set of frame slot
+/// `slot` as set 1, and the last 16 bytes of its `MorphingPush` (vertex count, slot count,
+/// where the blended vertices come from, whether vertex colours exist); each surface
+/// pushes the drawing block before it.
+fn bind_morphs(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    slot: usize,
+    viewport: Viewport,
+    morphs: &CameraMorphs,
+    pipeline: &DrawPipeline,
+) {
+    let (viewport, scissor) = viewport_and_scissor(viewport);
+    let (vertex_count, slot_count, colours) = morphs.push_fields(slot);
+    let source = match morphs.stage() {
+        MorphStage::Vertex => MORPH_IN_VERTEX_STAGE,
+        MorphStage::Compute | MorphStage::Host => MORPH_BLENDED,
+    };
+    let tail = [vertex_count, slot_count, source, u32::from(colours)];
+    let draw_size = std::mem::size_of::<DrawPush>() as u32;
+    // `check_camera` made sure the ring has the slot.
+    let Some((set, _)) = morphs.set(slot) else {
+        return;
+    };
+    // SAFETY: `cmd` is recording inside rendering compatible with the pipeline (the
+    // caller's contract on `record`); the set was written for this recorder's morph layout
+    // (set 1 of the pipeline's layout) and names live buffers; the push range of the layout
+    // covers the 16 bytes after the drawing block, for both stages.
+    unsafe {
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+        d.cmd_set_viewport(cmd, 0, &[viewport]);
+        d.cmd_set_scissor(cmd, 0, &[scissor]);
+        d.cmd_bind_descriptor_sets(
+            cmd,
+            vk::PipelineBindPoint::GRAPHICS,
+            pipeline.layout,
+            1,
+            &[set],
+            &[],
+        );
+        d.cmd_push_constants(
+            cmd,
+            pipeline.layout,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            draw_size,
+            bytemuck::cast_slice(&tail),
+        );
     }
 }
 

@@ -11,12 +11,14 @@ pub use viewport::Viewport;
 use ash::vk;
 use glam::Mat4;
 
+use crate::buffer::Buffer;
+use crate::camera_morphs::{workgroups, CameraMorphs};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::indices::CameraIndices;
 use crate::material::{Bindings, MaterialSet};
 use crate::mesh::{MorphInstances, VertexBuffer};
-use crate::pipeline::{DrawPipeline, PipelineTarget, VertexStage};
+use crate::pipeline::{DrawPipeline, MorphingPipeline, PipelineTarget, VertexStage};
 
 /// One camera's draws in a recorded frame.
 #[derive(Clone, Copy, Debug)]
@@ -39,6 +41,12 @@ pub struct RecordCamera<'a> {
     /// Geomorph instead of drawing `vertices` as they are (needs
     /// [`RecorderDesc::geomorph`]).
     pub morph: Option<Morph<'a>>,
+    /// The camera's refinement geomorphs, filled for the slot being recorded
+    /// ([`CameraMorphs::fill`]); its indices then come from morphed emission
+    /// ([`IndexSource::MorphedCamera`](crate::IndexSource)). Needs
+    /// [`RecorderDesc::refine_morphs`]; a [`MorphStage::Compute`](crate::MorphStage) camera
+    /// also needs [`Recorder::record_morph_blends`] before the rendering.
+    pub refine_morphs: Option<&'a CameraMorphs>,
     /// Draw edges only (needs [`RecorderDesc::wireframe`]).
     pub wireframe: bool,
 }
@@ -55,12 +63,33 @@ pub struct Morph<'a> {
 }
 
 /// The pipelines of one [`RecorderDesc`]: fill (always), wireframe (if asked), each with
-/// the plain and, if asked, the geomorphing vertex stage; the fill set also blends.
+/// the plain and, if asked, the geomorphing and the morphing vertex stage; the fill set
+/// also blends.
 struct Pipelines {
     draw: DrawPipeline,
     morph: Option<DrawPipeline>,
     /// The plain stage blending by alpha (fill only), for `BLEND` materials.
     blend: Option<DrawPipeline>,
+    /// The morphing stage (refinement geomorphs), and its blending twin (fill only).
+    morphing: Option<DrawPipeline>,
+    morphing_blend: Option<DrawPipeline>,
+}
+
+impl Default for Pipelines {
+    /// No pipelines: null handles, which destroying ignores.
+    fn default() -> Self {
+        Self {
+            draw: DrawPipeline {
+                raw: vk::Pipeline::null(),
+                layout: vk::PipelineLayout::null(),
+                stage: VertexStage::Draw,
+            },
+            morph: None,
+            blend: None,
+            morphing: None,
+            morphing_blend: None,
+        }
+    }
 }
 
 /// Records caveclod's draws into a command buffer the caller owns.
@@ -91,6 +120,8 @@ struct Pipelines {
 pub struct Recorder {
     desc: RecorderDesc,
     bindings: Bindings,
+    /// The refinement-geomorph compute stage and the morph set layout.
+    morphing: Option<MorphingPipeline>,
     fill: Pipelines,
     wireframe: Option<Pipelines>,
 }
@@ -108,18 +139,10 @@ impl Recorder {
             });
         }
         let bindings = Bindings::new(ctx)?;
-        let fill = match Self::pipelines(ctx, &desc, &bindings, vk::PolygonMode::FILL) {
-            Ok(p) => p,
-            Err(e) => {
-                let _ = bindings.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let wireframe = if desc.wireframe {
-            match Self::pipelines(ctx, &desc, &bindings, vk::PolygonMode::LINE) {
-                Ok(p) => Some(p),
+        let morphing = if desc.refine_morphs {
+            match MorphingPipeline::new(ctx) {
+                Ok(m) => Some(m),
                 Err(e) => {
-                    destroy_pipelines(ctx, fill);
                     let _ = bindings.destroy(ctx);
                     return Err(e);
                 }
@@ -127,12 +150,54 @@ impl Recorder {
         } else {
             None
         };
-        Ok(Self {
+        let morph_set_layout = morphing
+            .as_ref()
+            .map_or(vk::DescriptorSetLayout::null(), |m| m.set_layout);
+        let mut r = Self {
             desc,
             bindings,
-            fill,
-            wireframe,
-        })
+            morphing,
+            fill: Pipelines::default(),
+            wireframe: None,
+        };
+        let made = Self::pipelines(
+            ctx,
+            &desc,
+            &r.bindings,
+            morph_set_layout,
+            vk::PolygonMode::FILL,
+        )
+        .and_then(|fill| {
+            r.fill = fill;
+            if desc.wireframe {
+                let line = vk::PolygonMode::LINE;
+                r.wireframe = Some(Self::pipelines(
+                    ctx,
+                    &desc,
+                    &r.bindings,
+                    morph_set_layout,
+                    line,
+                )?);
+            }
+            Ok(())
+        });
+        match made {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                let _ = r.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    /// The morph set layout, when made with [`RecorderDesc::refine_morphs`].
+    pub(crate) fn morph_set_layout(&self) -> Option<vk::DescriptorSetLayout> {
+        self.morphing.as_ref().map(|m| m.set_layout)
+    }
+
+    /// The one white vertex colour, for meshes without colours.
+    pub(crate) fn white_colour(&self) -> &Buffer {
+        &self.bindings.white_colour
     }
 
     /// The set layout, sampler and white texture shared with material sets.
@@ -140,10 +205,12 @@ impl Recorder {
         &self.bindings
     }
 
+    /// The pipelines for one polygon mode. On an error, the ones made so far are destroyed.
     fn pipelines(
         ctx: &Context,
         desc: &RecorderDesc,
         bindings: &Bindings,
+        morph_set_layout: vk::DescriptorSetLayout,
         polygon_mode: vk::PolygonMode,
     ) -> Result<Pipelines> {
         let target = PipelineTarget {
@@ -151,39 +218,39 @@ impl Recorder {
             rendering: desc.rendering,
             polygon_mode,
             set_layout: bindings.set_layout,
+            morph_set_layout,
             blend: false,
         };
-        let draw = DrawPipeline::new(ctx, VertexStage::Draw, target)?;
-        let morph = if desc.geomorph {
-            match DrawPipeline::new(ctx, VertexStage::Geomorph, target) {
-                Ok(p) => Some(p),
-                Err(e) => {
-                    draw.destroy(ctx);
-                    return Err(e);
+        let blending = PipelineTarget {
+            blend: true,
+            ..target
+        };
+        let fill = polygon_mode == vk::PolygonMode::FILL;
+        let mut p = Pipelines::default();
+        let made = (|| -> Result<()> {
+            p.draw = DrawPipeline::new(ctx, VertexStage::Draw, target)?;
+            if desc.geomorph {
+                p.morph = Some(DrawPipeline::new(ctx, VertexStage::Geomorph, target)?);
+            }
+            if fill {
+                p.blend = Some(DrawPipeline::new(ctx, VertexStage::Draw, blending)?);
+            }
+            if desc.refine_morphs {
+                p.morphing = Some(DrawPipeline::new(ctx, VertexStage::Morphing, target)?);
+                if fill {
+                    let b = DrawPipeline::new(ctx, VertexStage::Morphing, blending)?;
+                    p.morphing_blend = Some(b);
                 }
             }
-        } else {
-            None
-        };
-        let blend = if polygon_mode == vk::PolygonMode::FILL {
-            let blending = PipelineTarget {
-                blend: true,
-                ..target
-            };
-            match DrawPipeline::new(ctx, VertexStage::Draw, blending) {
-                Ok(p) => Some(p),
-                Err(e) => {
-                    draw.destroy(ctx);
-                    if let Some(m) = morph {
-                        m.destroy(ctx);
-                    }
-                    return Err(e);
-                }
+            Ok(())
+        })();
+        match made {
+            Ok(()) => Ok(p),
+            Err(e) => {
+                destroy_pipelines(ctx, p);
+                Err(e)
             }
-        } else {
-            None
-        };
-        Ok(Pipelines { draw, morph, blend })
+        }
     }
 
     /// The description.
@@ -245,11 +312,30 @@ impl Recorder {
             }
             _ => {}
         }
-        if c.indices.vertex_bound(slot) > c.vertices.count {
+        let vertex_bound = match c.refine_morphs {
+            Some(m) => {
+                if self.morphing.is_none() {
+                    return refuse(
+                        "refinement geomorphs, but the recorder was made without refine_morphs"
+                            .into(),
+                    );
+                }
+                if let Err(why) = m.check(c.vertices, slot) {
+                    return refuse(why);
+                }
+                m.vertex_bound()
+            }
+            None => u64::from(c.vertices.count),
+        };
+        if u64::from(c.indices.vertex_bound(slot)) > vertex_bound {
             return refuse(format!(
-                "its indices reference {} vertices, the vertex buffer has {}",
+                "its indices reference {} vertices, the vertex buffer{} has {vertex_bound}",
                 c.indices.vertex_bound(slot),
-                c.vertices.count
+                if c.refine_morphs.is_some() {
+                    " with its morph slots"
+                } else {
+                    ""
+                },
             ));
         }
         if c.wireframe && self.wireframe.is_none() {
@@ -269,13 +355,87 @@ impl Recorder {
         Ok(())
     }
 
-    /// Destroys the pipelines, the set layout, the sampler and the white texture. The GPU
+    /// Records, outside rendering, the compute stage of every camera in `cameras` that
+    /// blends there ([`MorphStage::Compute`](crate::MorphStage)) for frame slot `slot`: one
+    /// dispatch per camera with morphing vertices, then one barrier from those compute
+    /// writes (`COMPUTE_SHADER`, `SHADER_STORAGE_WRITE`) to the morphing vertex stage's
+    /// reads (`VERTEX_SHADER`, `SHADER_STORAGE_READ`), so the draws recorded after it in
+    /// submission order see the blended vertices. Cameras blending elsewhere are skipped;
+    /// with nothing to dispatch nothing is recorded. Returns the dispatches recorded.
+    ///
+    /// `cmd` must be recording outside any rendering; each camera's slot `slot` must be
+    /// filled ([`CameraMorphs::fill`]) and stay alive until the GPU has executed `cmd`.
+    pub fn record_morph_blends(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        slot: usize,
+        cameras: &[&CameraMorphs],
+    ) -> Result<u32> {
+        let Some(pipeline) = &self.morphing else {
+            return Err(Error::InvalidArgument(
+                "morph blends, but the recorder was made without refine_morphs".into(),
+            ));
+        };
+        let dispatches: Vec<_> = cameras.iter().filter_map(|c| c.dispatch(slot)).collect();
+        if dispatches.is_empty() {
+            return Ok(0);
+        }
+        let d = &ctx.device;
+        let mut barriers = Vec::with_capacity(dispatches.len());
+        // SAFETY: `cmd` is recording outside rendering (the caller's contract); pipeline
+        // and sets are alive, and each set was written for this recorder's morph layout
+        // with buffers the camera keeps alive.
+        unsafe { d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw) };
+        for (set, push, blended) in &dispatches {
+            // SAFETY: as above.
+            unsafe {
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    pipeline.layout,
+                    0,
+                    &[*set],
+                    &[],
+                );
+                d.cmd_push_constants(
+                    cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(push),
+                );
+                d.cmd_dispatch(cmd, workgroups(push.slot_count), 1, 1);
+            }
+            barriers.push(
+                vk::BufferMemoryBarrier2::default()
+                    .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                    .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::VERTEX_SHADER)
+                    .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .buffer(*blended)
+                    .offset(0)
+                    .size(vk::WHOLE_SIZE),
+            );
+        }
+        let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barriers);
+        // SAFETY: `cmd` is recording outside rendering; the buffers are alive.
+        unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
+        Ok(dispatches.len() as u32)
+    }
+
+    /// Destroys the pipelines, the set layouts, the sampler and the white texture. The GPU
     /// must be done with every command buffer that recorded them; destroy the recorder's
-    /// material sets first.
+    /// material sets and camera morphs first.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
         destroy_pipelines(ctx, self.fill);
         if let Some(w) = self.wireframe {
             destroy_pipelines(ctx, w);
+        }
+        if let Some(m) = self.morphing {
+            m.destroy(ctx);
         }
         self.bindings.destroy(ctx)
     }
@@ -283,7 +443,10 @@ impl Recorder {
 
 fn destroy_pipelines(ctx: &Context, p: Pipelines) {
     p.draw.destroy(ctx);
-    for extra in [p.morph, p.blend].into_iter().flatten() {
+    for extra in [p.morph, p.blend, p.morphing, p.morphing_blend]
+        .into_iter()
+        .flatten()
+    {
         extra.destroy(ctx);
     }
 }

@@ -134,21 +134,27 @@ pub struct RecorderDesc {
     /// [`DeviceFeatures`](crate::DeviceFeatures)), for
     /// [`RecordCamera::wireframe`](crate::RecordCamera).
     pub wireframe: bool,
+    /// Also make the refinement-geomorph pipelines (the morphing vertex stage and the
+    /// compute stage), for [`RecordCamera::refine_morphs`](crate::RecordCamera) and
+    /// [`CameraMorphs`](crate::CameraMorphs).
+    pub refine_morphs: bool,
 }
 
 impl RecorderDesc {
-    /// Dynamic rendering into `formats`; no geomorph, no wireframe.
+    /// Dynamic rendering into `formats`; no geomorph, no wireframe, no refinement
+    /// geomorphs.
     pub fn dynamic(formats: TargetFormats) -> Self {
         Self {
             formats,
             rendering: Rendering::Dynamic,
             geomorph: false,
             wireframe: false,
+            refine_morphs: false,
         }
     }
 
     /// Subpass `subpass` of the caller's `render_pass`, whose attachments have `formats`;
-    /// no geomorph, no wireframe.
+    /// no geomorph, no wireframe, no refinement geomorphs.
     pub fn render_pass(formats: TargetFormats, render_pass: vk::RenderPass, subpass: u32) -> Self {
         Self {
             formats,
@@ -158,6 +164,7 @@ impl RecorderDesc {
             },
             geomorph: false,
             wireframe: false,
+            refine_morphs: false,
         }
     }
 }
