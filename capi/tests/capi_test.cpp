@@ -3,6 +3,8 @@
 // counts against the Rust API's (which `cargo xtask test` passes in, from `caveclod refine`).
 //
 // usage: capi_test FILE.clod  EX EY EZ TX TY TZ POLYGONS INDICES  EX EY EZ TX TY TZ POLYGONS INDICES
+//                  OTHER.clod
+// (OTHER.clod: any other hierarchy, for the cameras' wrong-hierarchy status)
 
 #include "caveclod.h"
 
@@ -140,7 +142,8 @@ std::size_t emit_and_check(CaveclodCamera *cam, const CaveclodHierarchy *h,
 }
 
 /// Every bad input through the C interface returns its documented status.
-void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHierarchyCounts &hc) {
+void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHierarchyCounts &hc,
+                const CaveclodHierarchy &other) {
     CaveclodHierarchy bad;
     // Null pointers.
     CHECK_STATUS(caveclod_hierarchy_open(nullptr, file.len, &bad), CAVECLOD_STATUS_NULL_POINTER);
@@ -252,8 +255,13 @@ void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHi
     CHECK_STATUS(caveclod_camera_emit(&cam, &h, nullptr, capacities.data(), written.data(),
                                       hc.surfaces, false, nullptr),
                  CAVECLOD_STATUS_NULL_POINTER);
-    // A camera given another hierarchy: a copy of the file with one split fewer cannot be
-    // made here, so the zeroed handle stands in (refused before any camera work).
+    // A camera given another hierarchy, or an unopened one.
+    CHECK_STATUS(caveclod_camera_refine(&cam, &other, &view, nullptr, nullptr),
+                 CAVECLOD_STATUS_WRONG_HIERARCHY);
+    CHECK_STATUS(caveclod_camera_reset(&cam, &other), CAVECLOD_STATUS_WRONG_HIERARCHY);
+    CHECK_STATUS(caveclod_camera_emit_packed(&cam, &other, out.data(), out.size(), offsets.data(),
+                                             offsets.size(), false, nullptr),
+                 CAVECLOD_STATUS_WRONG_HIERARCHY);
     CHECK_STATUS(caveclod_camera_reset(&cam, &zeroed), CAVECLOD_STATUS_INVALID_HANDLE);
     CHECK_STATUS(caveclod_camera_reset(&cam, &h), CAVECLOD_STATUS_OK);
 
@@ -285,9 +293,10 @@ void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHi
 }  // namespace
 
 int main(int argc, char **argv) {
-    if (argc != 18) {
+    if (argc != 19) {
         std::fprintf(stderr,
-                     "usage: capi_test FILE.clod (EX EY EZ TX TY TZ POLYGONS INDICES) x 2\n");
+                     "usage: capi_test FILE.clod (EX EY EZ TX TY TZ POLYGONS INDICES) x 2 "
+                     "OTHER.clod\n");
         return 2;
     }
     CHECK(caveclod_abi_version() >> 16 == CAVECLOD_ABI_VERSION >> 16);
@@ -303,7 +312,11 @@ int main(int argc, char **argv) {
     CHECK_STATUS(caveclod_hierarchy_vertices(&h, &vertices, &vertex_bytes), CAVECLOD_STATUS_OK);
     CHECK(vertices != nullptr && vertex_bytes == hc.vertex_buffer_bytes);
 
-    bad_inputs(file, h, hc);
+    AlignedBytes other_file = read_file(argv[18]);
+    CaveclodHierarchy other;
+    CHECK_STATUS(caveclod_hierarchy_open(other_file.data(), other_file.len, &other),
+                 CAVECLOD_STATUS_OK);
+    bad_inputs(file, h, hc, other);
 
     // Two full cameras over the one hierarchy, each with its own view, refined in turn.
     CaveclodCameraConfig config;

@@ -27,6 +27,9 @@ const VIEWS: [[[f32; 3]; 2]; 3] = [
     [[0.35, 0.25, 0.45], [0.0, 0.1, 0.0]],
 ];
 
+/// Another hierarchy, for the C++ test's wrong-hierarchy statuses.
+const OTHER: &str = "core/tests/data/terrain6.clod";
+
 /// The polygon budget of the fixed-memory examples: below what the first view wants, so
 /// the budget binds.
 const BUDGET: &str = "1500";
@@ -223,6 +226,7 @@ pub fn check() -> Result<(), String> {
             .arg(polygons.to_string())
             .arg(indices.to_string());
     }
+    test.arg(root.join(OTHER));
     print!("{}", output(test)?);
 
     // arena.c against its Rust twin, then with an arena too small for the file.
