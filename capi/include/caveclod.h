@@ -463,7 +463,7 @@ enum CaveclodStatus caveclod_camera_index_count(struct CaveclodCamera *cam,
 // `cam` is null or a camera nothing else uses during the call; `h` is null or an opened
 // hierarchy; `lists`, `capacities` and `written` are null or valid for `list_count`
 // entries; each list is null or writable for its capacity, and no two lists (nor a list
-// and `written`) overlap.
+// and `written`, nor either and the camera's memory) overlap.
 enum CaveclodStatus caveclod_camera_emit(struct CaveclodCamera *cam,
                                          const struct CaveclodHierarchy *h,
                                          uint32_t *const *lists,

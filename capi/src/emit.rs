@@ -73,7 +73,7 @@ pub unsafe extern "C" fn caveclod_camera_index_count(
 /// `cam` is null or a camera nothing else uses during the call; `h` is null or an opened
 /// hierarchy; `lists`, `capacities` and `written` are null or valid for `list_count`
 /// entries; each list is null or writable for its capacity, and no two lists (nor a list
-/// and `written`) overlap.
+/// and `written`, nor either and the camera's memory) overlap.
 #[no_mangle]
 pub unsafe extern "C" fn caveclod_camera_emit(
     cam: *mut CaveclodCamera,
