@@ -271,6 +271,21 @@ typedef struct CaveclodOctree {
     uint64_t opaque[CAVECLOD_OCTREE_WORDS];
 } CaveclodOctree;
 
+// The counts of an octree.
+typedef struct CaveclodOctreeCounts {
+    // Surfaces (the hierarchy's).
+    uint32_t surfaces;
+    // Vertices of the octree's own vertex buffer (32 bytes each, the hierarchy's layout);
+    // every index a cut emits is below it.
+    uint32_t vertices;
+    // Bytes of that vertex buffer.
+    uint64_t vertex_buffer_bytes;
+    // Nodes (blocks of all levels).
+    uint32_t nodes;
+    // Levels; the root's is `levels - 1`.
+    uint32_t levels;
+} CaveclodOctreeCounts;
+
 // One camera's cut of an octree, in caller memory: an opaque value like `CaveclodCamera`
 // (never copied; one thread at a time).
 typedef struct CaveclodOctreeCut {
@@ -566,6 +581,26 @@ enum CaveclodStatus caveclod_hierarchy_vertices(const struct CaveclodHierarchy *
 // writable.
 enum CaveclodStatus caveclod_octree_open(const struct CaveclodHierarchy *h,
                                          struct CaveclodOctree *out);
+
+// Writes the counts of `o` to `out`.
+//
+// Thread-safety: any thread, concurrently with any call that reads `o`.
+//
+// # Safety
+// `o` is null or an opened octree; `out` is null or writable.
+enum CaveclodStatus caveclod_octree_counts(const struct CaveclodOctree *o,
+                                           struct CaveclodOctreeCounts *out);
+
+// Points `*vertices` at the octree's vertex buffer inside the file's bytes and writes its
+// byte length to `*bytes` (upload it once; cuts index into it).
+//
+// Thread-safety: any thread, concurrently with any call that reads `o`.
+//
+// # Safety
+// `o` is null or an opened octree; `vertices` and `bytes` are null or writable.
+enum CaveclodStatus caveclod_octree_vertices(const struct CaveclodOctree *o,
+                                             const void **vertices,
+                                             size_t *bytes);
 
 // Writes to `*bytes` the memory a cut of `o` needs (aligned to `CAVECLOD_MEMORY_ALIGN`).
 //

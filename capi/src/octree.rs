@@ -33,6 +33,23 @@ pub struct CaveclodOctreeCut {
     opaque: [u64; CAVECLOD_OCTREE_CUT_WORDS],
 }
 
+/// The counts of an octree.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CaveclodOctreeCounts {
+    /// Surfaces (the hierarchy's).
+    pub surfaces: u32,
+    /// Vertices of the octree's own vertex buffer (32 bytes each, the hierarchy's layout);
+    /// every index a cut emits is below it.
+    pub vertices: u32,
+    /// Bytes of that vertex buffer.
+    pub vertex_buffer_bytes: u64,
+    /// Nodes (blocks of all levels).
+    pub nodes: u32,
+    /// Levels; the root's is `levels - 1`.
+    pub levels: u32,
+}
+
 /// What one selection did (the core's `SelectStats`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -109,6 +126,55 @@ pub unsafe extern "C" fn caveclod_octree_open(
         // SAFETY: `out` is writable and the blob holds a `Cell<Octree>` (asserted).
         unsafe { ffi::fill(out, OCTREE_TAG, o) };
         Ok(())
+    })
+}
+
+/// Writes the counts of `o` to `out`.
+///
+/// Thread-safety: any thread, concurrently with any call that reads `o`.
+///
+/// # Safety
+/// `o` is null or an opened octree; `out` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn caveclod_octree_counts(
+    o: *const CaveclodOctree,
+    out: *mut CaveclodOctreeCounts,
+) -> CaveclodStatus {
+    guarded(|| {
+        // SAFETY: the caller's contract.
+        let o = unsafe { octree(o) }?;
+        let counts = CaveclodOctreeCounts {
+            surfaces: o.surface_count() as u32,
+            vertices: o.vertices().len() as u32,
+            vertex_buffer_bytes: core::mem::size_of_val(o.vertices()) as u64,
+            nodes: o.node_count() as u32,
+            levels: o.level_count(),
+        };
+        // SAFETY: the caller's contract.
+        unsafe { ffi::output(out, counts) }
+    })
+}
+
+/// Points `*vertices` at the octree's vertex buffer inside the file's bytes and writes its
+/// byte length to `*bytes` (upload it once; cuts index into it).
+///
+/// Thread-safety: any thread, concurrently with any call that reads `o`.
+///
+/// # Safety
+/// `o` is null or an opened octree; `vertices` and `bytes` are null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn caveclod_octree_vertices(
+    o: *const CaveclodOctree,
+    vertices: *mut *const core::ffi::c_void,
+    bytes: *mut usize,
+) -> CaveclodStatus {
+    guarded(|| {
+        // SAFETY: the caller's contract.
+        let v = unsafe { octree(o) }?.vertices();
+        // SAFETY: the caller's contract.
+        unsafe { ffi::output(vertices, v.as_ptr().cast()) }?;
+        // SAFETY: the caller's contract.
+        unsafe { ffi::output(bytes, core::mem::size_of_val(v)) }
     })
 }
 

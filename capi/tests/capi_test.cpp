@@ -3,8 +3,9 @@
 // counts against the Rust API's (which `cargo xtask test` passes in, from `caveclod refine`).
 //
 // usage: capi_test FILE.clod  EX EY EZ TX TY TZ POLYGONS INDICES  EX EY EZ TX TY TZ POLYGONS INDICES
-//                  OTHER.clod
-// (OTHER.clod: any other hierarchy, for the cameras' wrong-hierarchy status)
+//                  OTHER.clod OCTREE.clod
+// (OTHER.clod: any other hierarchy, for the cameras' wrong-hierarchy status; OCTREE.clod: an
+// out-of-core bake, whose octree two cuts select)
 
 #include "caveclod.h"
 
@@ -290,13 +291,72 @@ void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHi
     CHECK(std::strcmp(caveclod_status_message(CAVECLOD_STATUS_OK), "success") == 0);
 }
 
+/// Two cuts of an out-of-core bake's octree: statuses, and every index below the octree's
+/// vertex count.
+void octree_cuts(const char *path) {
+    AlignedBytes file = read_file(path);
+    CaveclodHierarchy h;
+    CHECK_STATUS(caveclod_hierarchy_open(file.data(), file.len, &h), CAVECLOD_STATUS_OK);
+    CaveclodOctree o;
+    CHECK_STATUS(caveclod_octree_open(&h, &o), CAVECLOD_STATUS_OK);
+    CaveclodOctreeCounts oc{};
+    CHECK_STATUS(caveclod_octree_counts(&o, &oc), CAVECLOD_STATUS_OK);
+    CHECK(oc.nodes > 0 && oc.vertices > 0 && oc.vertex_buffer_bytes == 32ull * oc.vertices);
+    const void *vertices = nullptr;
+    std::size_t vertex_bytes = 0;
+    CHECK_STATUS(caveclod_octree_vertices(&o, &vertices, &vertex_bytes), CAVECLOD_STATUS_OK);
+    CHECK(vertices != nullptr && vertex_bytes == oc.vertex_buffer_bytes);
+    std::size_t bytes = 0;
+    CHECK_STATUS(caveclod_octree_cut_memory_size(&o, &bytes), CAVECLOD_STATUS_OK);
+    Memory memory[2] = {Memory(bytes), Memory(bytes)};
+    CaveclodOctreeCut cuts[2];
+    CHECK_STATUS(caveclod_octree_cut_init(&o, memory[0].data(), bytes - 4, &cuts[0]),
+                 CAVECLOD_STATUS_MEMORY_TOO_SMALL);
+    CHECK_STATUS(caveclod_octree_cut_init(&o, static_cast<unsigned char *>(memory[0].data()) + 4,
+                                          bytes, &cuts[0]),
+                 CAVECLOD_STATUS_MISALIGNED);
+    const float eyes[2][3] = {{0.0f, 0.3f, 2.5f}, {0.3f, 0.2f, 0.4f}};
+    const float target[3] = {0.0f, 0.0f, 0.0f};
+    for (int c = 0; c < 2; ++c) {
+        CHECK_STATUS(caveclod_octree_cut_init(&o, memory[c].data(), bytes, &cuts[c]),
+                     CAVECLOD_STATUS_OK);
+        CaveclodView view = view_of(eyes[c], target);
+        CaveclodSelectStats stats{};
+        CHECK_STATUS(caveclod_octree_cut_select(&cuts[c], &o, &view, 1.0f, &stats),
+                     CAVECLOD_STATUS_OK);
+        CHECK(stats.selected > 0 && stats.triangles > 0);
+        CHECK_STATUS(caveclod_octree_cut_select(&cuts[c], &o, &view, -1.0f, nullptr),
+                     CAVECLOD_STATUS_INVALID_ARGUMENT);
+        std::size_t total = 0, emitted = 0;
+        CHECK_STATUS(caveclod_octree_cut_total_index_count(&cuts[c], &o, &total), CAVECLOD_STATUS_OK);
+        CHECK(total == 3 * static_cast<std::size_t>(stats.triangles));
+        std::vector<std::uint32_t> out(total), offsets(oc.surfaces + 1);
+        CHECK_STATUS(caveclod_octree_cut_emit_packed(&cuts[c], &o, out.data(), total - 1,
+                                                     offsets.data(), offsets.size(), nullptr),
+                     CAVECLOD_STATUS_OUTPUT_TOO_SMALL);
+        CHECK_STATUS(caveclod_octree_cut_emit_packed(&cuts[c], &o, out.data(), total,
+                                                     offsets.data(), offsets.size(), &emitted),
+                     CAVECLOD_STATUS_OK);
+        CHECK(emitted == total && offsets[oc.surfaces] == total);
+        for (std::uint32_t i : out) {
+            if (i >= oc.vertices) {
+                std::fprintf(stderr, "FAIL: octree index %u out of range (%u vertices)\n", i,
+                             oc.vertices);
+                ++failures;
+                break;
+            }
+        }
+        std::printf("octree cut %d: %u nodes, %u triangles\n", c, stats.selected, stats.triangles);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
-    if (argc != 19) {
+    if (argc != 20) {
         std::fprintf(stderr,
                      "usage: capi_test FILE.clod (EX EY EZ TX TY TZ POLYGONS INDICES) x 2 "
-                     "OTHER.clod\n");
+                     "OTHER.clod OCTREE.clod\n");
         return 2;
     }
     CHECK(caveclod_abi_version() >> 16 == CAVECLOD_ABI_VERSION >> 16);
@@ -398,6 +458,8 @@ int main(int argc, char **argv) {
         CHECK((m.from == UINT32_MAX && m.to == UINT32_MAX) || (m.from < hc.vertices && m.to < hc.vertices));
     }
     emit_and_check(&morph_cam, &h, hc, true, hc.vertices + static_cast<std::uint32_t>(slot_count));
+
+    octree_cuts(argv[19]);
 
     if (failures > 0) {
         std::fprintf(stderr, "%d check(s) failed\n", failures);

@@ -6,7 +6,8 @@
 //! `-fsanitize=address,undefined` where the compiler links it), and runs them:
 //! - `refine.c` must print exactly what `caveclod refine --json` prints for each view;
 //! - the C++ test checks every bad input's status, two cameras' indices and counts (against
-//!   the CLI's numbers for its views), a budgeted camera and a morphing one;
+//!   the CLI's numbers for its views), a budgeted camera, a morphing one, and two cuts of
+//!   the octree of an out-of-core bake;
 //! - `arena.c` must give the Rust twin's counts (`examples/fixed_arena.rs`), and report a
 //!   full arena as its status (exit code 3) when given too small a one.
 
@@ -157,6 +158,14 @@ pub fn check() -> Result<(), String> {
     let mut bake = Command::new(&cli);
     bake.arg("bake").arg(root.join(INPUT)).arg("-o").arg(&clod);
     run(bake)?;
+    let octree_clod = dir.join("spot-ooc.clod");
+    let mut bake = Command::new(&cli);
+    bake.arg("bake")
+        .arg(root.join(INPUT))
+        .arg("-o")
+        .arg(&octree_clod)
+        .arg("--out-of-core");
+    run(bake)?;
 
     let c99 = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1"];
     let (refine_c, arena_c, test_cpp) =
@@ -226,7 +235,7 @@ pub fn check() -> Result<(), String> {
             .arg(polygons.to_string())
             .arg(indices.to_string());
     }
-    test.arg(root.join(OTHER));
+    test.arg(root.join(OTHER)).arg(&octree_clod);
     print!("{}", output(test)?);
 
     // arena.c against its Rust twin, then with an arena too small for the file.
