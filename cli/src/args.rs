@@ -33,6 +33,10 @@ pub enum Command {
     /// Render a .clod file headless (lavapipe unless --gpu) from 1-4 cameras orbiting it, each
     /// refining its own front, into one split-screen PNG (or one PNG per camera).
     Render(RenderArgs),
+    /// Refine one camera over a .clod file until a pass changes nothing, emit its indices and
+    /// print the counts (1280 × 720, 60° vertical fov, +Y up, near 0.1, far 1e5, 1 px,
+    /// culling on: the views of the C example `capi/examples/refine.c`).
+    Refine(RefineArgs),
 }
 
 /// Options of `caveclod bake`.
@@ -156,6 +160,31 @@ pub struct InfoArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Options of `caveclod refine`.
+#[derive(Args)]
+pub struct RefineArgs {
+    /// The file.
+    pub file: PathBuf,
+    /// Eye point, `X,Y,Z`.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    pub eye: [f32; 3],
+    /// Point looked at, `X,Y,Z`.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    pub target: [f32; 3],
+    /// Print one JSON line `{"active_polygons": N, "indices": M, "surfaces": S}`.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// A point written `X,Y,Z`.
+fn parse_point(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    <[f32; 3]>::try_from(parts).map_err(|p| format!("{} numbers given, 3 needed (X,Y,Z)", p.len()))
 }
 
 /// Options of `caveclod generate`.

@@ -7,7 +7,9 @@
 //! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
 //!   no_std build for a microcontroller target, the interactive viewer under Xvfb (its
 //!   screenshot's coverage and no validation message), clippy on the core crate without its
-//!   `prefetch` feature (where it forbids `unsafe`), and the core crate's tests under miri.
+//!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
+//!   the C interface (`capi`): the C examples and the C++ test built with the system's
+//!   compilers, run, and compared with the Rust API's numbers.
 //!   Every step prints a header and its wall time; the run ends with `N passed, M failed`.
 //! - `check-shaders`: the committed SPIR-V (`vulkan/spirv`) is up to date and valid: the
 //!   manifest's source hash equals the hash of the current shader sources (computed by
@@ -15,9 +17,13 @@
 //!   those of the module, and `spirv-val --target-env vulkan1.2` accepts every `.spv` there.
 //!   It never builds shaders (that needs the rust-gpu toolchain); it says how to.
 //! - `demo [ARGS..]`: `caveclod demo` in release mode, with `ARGS` forwarded.
+//! - `capi-header`: writes the C interface's header `capi/include/caveclod.h` from the
+//!   `caveclod-capi` sources (cbindgen; a test fails while the committed one differs).
+//! - `capi-check`: the C interface's step of `test` alone (see [`capi`]).
 //!
 //! Only std: the tool must build before anything else is installed.
 
+mod capi;
 mod shader_manifest;
 
 use std::env;
@@ -57,9 +63,12 @@ commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
                         spirv-val, Xvfb and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
-  test                  setup, then shader check, fmt, clippy, tests, no_std build,
+  test                  setup, then shader check, fmt, clippy, tests, the C interface
+                        (C examples, C++ test), no_std build,
                         the viewer under Xvfb, clippy without prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
+  capi-header           write capi/include/caveclod.h from the caveclod-capi sources
+  capi-check            test's C interface step alone
   demo [ARGS..]         setup's Vulkan packages, then
                         cargo run --release -p caveclod-cli --bin caveclod -- demo ARGS
 ";
@@ -76,6 +85,8 @@ fn main() -> ExitCode {
         }
         "test" => parse_flags(rest, &[]).and_then(|_| test()),
         "check-shaders" => parse_flags(rest, &[]).and_then(|_| check_shaders()),
+        "capi-header" => parse_flags(rest, &[]).and_then(|_| capi::write_header()),
+        "capi-check" => parse_flags(rest, &[]).and_then(|_| capi::check()),
         "demo" => demo(rest),
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
@@ -407,6 +418,11 @@ fn test_steps() -> Vec<(String, Step)> {
         step(
             "cargo test --workspace",
             &["test", "--workspace", "--no-fail-fast"],
+        ),
+        (
+            "C interface: refine.c and arena.c (C99), the C++17 test (sanitizers), against the Rust API"
+                .to_string(),
+            Box::new(capi::check),
         ),
         step(
             "cargo build -p caveclod-core --target thumbv7em-none-eabihf",

@@ -6,6 +6,7 @@ mod export;
 mod flyover;
 mod generate;
 mod info;
+mod refine;
 mod render;
 
 use std::path::Path;
@@ -26,6 +27,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Generate(a) => generate::generate(&a),
         Command::Export(a) => export::export(&a),
         Command::Render(a) => render::render(&a),
+        Command::Refine(a) => refine::refine(&a),
     }
 }
 

@@ -1,0 +1,284 @@
+//! The C interface's step of `cargo xtask test`, and `cargo xtask capi-header`.
+//!
+//! The step builds the static library (`caveclod-capi`) and the `caveclod` binary, bakes
+//! Spot, compiles the C99 examples (`refine.c`, `arena.c`) and the C++17 test with the
+//! system's `cc` and `c++` (`-Wall -Wextra -Werror`; the C++ test also under
+//! `-fsanitize=address,undefined` where the compiler links it), and runs them:
+//! - `refine.c` must print exactly what `caveclod refine --json` prints for each view;
+//! - the C++ test checks every bad input's status, two cameras' indices and counts (against
+//!   the CLI's numbers for its views), a budgeted camera, a morphing one, and two cuts of
+//!   the octree of an out-of-core bake;
+//! - `arena.c` must give the Rust twin's counts (`examples/fixed_arena.rs`), and report a
+//!   full arena as its status (exit code 3) when given too small a one.
+
+use std::env;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::{cmd, run, succeeds, workspace_root};
+
+/// The mesh the C programs refine (baked on the fly).
+const INPUT: &str = "data/spot/spot_triangulated.obj";
+
+/// Views of Spot (about a unit across, at the origin) as `[eye, target]`: from the front,
+/// from behind and above, and close up (partly outside the frustum).
+const VIEWS: [[[f32; 3]; 2]; 3] = [
+    [[0.0, 0.3, 2.5], [0.0, 0.0, 0.0]],
+    [[-1.5, 1.2, -1.8], [0.0, 0.2, 0.0]],
+    [[0.35, 0.25, 0.45], [0.0, 0.1, 0.0]],
+];
+
+/// Another hierarchy, for the C++ test's wrong-hierarchy statuses.
+const OTHER: &str = "core/tests/data/terrain6.clod";
+
+/// The polygon budget of the fixed-memory examples: below what the first view wants, so
+/// the budget binds.
+const BUDGET: &str = "1500";
+
+/// Native libraries a Rust static library needs on this platform (what
+/// `rustc --print native-static-libs` lists).
+fn native_libs() -> &'static [&'static str] {
+    if cfg!(target_os = "macos") {
+        &["-lSystem", "-lc", "-lm"]
+    } else {
+        &[
+            "-lgcc_s",
+            "-lutil",
+            "-lrt",
+            "-lpthread",
+            "-lm",
+            "-ldl",
+            "-lc",
+        ]
+    }
+}
+
+/// Cargo's target directory for this workspace.
+fn target_dir() -> PathBuf {
+    env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map(|p| {
+            if p.is_relative() {
+                workspace_root().join(p)
+            } else {
+                p
+            }
+        })
+        .unwrap_or_else(|| workspace_root().join("target"))
+}
+
+/// `cargo xtask capi-header`: writes `capi/include/caveclod.h` from the sources.
+pub fn write_header() -> Result<(), String> {
+    let mut c = cmd(
+        "cargo",
+        &["test", "-p", "caveclod-capi", "--test", "header", "--quiet"],
+    );
+    c.env("CAVECLOD_BLESS_HEADER", "1");
+    run(c)?;
+    println!("wrote capi/include/caveclod.h");
+    Ok(())
+}
+
+/// Runs `c`, echoing it, and returns its standard output; `Err` on a non-zero exit.
+fn output(mut c: Command) -> Result<String, String> {
+    let shown = crate::show(&c);
+    println!("$ {shown}");
+    let out = c
+        .output()
+        .map_err(|e| format!("could not start `{shown}`: {e}"))?;
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    if !out.status.success() {
+        return Err(format!(
+            "`{shown}` failed ({}):\n{stdout}{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    Ok(stdout)
+}
+
+/// Compiles `sources` with `compiler` and `flags` against the header and the static
+/// library into `out`.
+fn compile(
+    compiler: &str,
+    flags: &[&str],
+    source: &Path,
+    library: &Path,
+    out: &Path,
+) -> Result<(), String> {
+    let include = workspace_root().join("capi/include");
+    let mut c = cmd(compiler, flags);
+    c.arg("-I").arg(&include).arg(source).arg(library);
+    c.args(native_libs()).arg("-o").arg(out);
+    run(c)
+}
+
+/// `true` if `c++` builds and runs a program under the sanitizers here.
+fn sanitizers_work(dir: &Path) -> bool {
+    let src = dir.join("sanitizer_probe.cpp");
+    let exe = dir.join("sanitizer_probe");
+    std::fs::write(&src, "int main() { return 0; }\n").is_ok()
+        && succeeds({
+            let mut c = cmd("c++", &["-fsanitize=address,undefined"]);
+            c.arg(&src).arg("-o").arg(&exe);
+            c
+        })
+        && succeeds(Command::new(&exe))
+}
+
+/// The value of `"key": N` in a JSON line.
+fn field(json: &str, key: &str) -> Option<u64> {
+    let at = json.find(&format!("\"{key}\":"))? + key.len() + 3;
+    let digits: String = json[at..]
+        .trim_start()
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect();
+    digits.parse().ok()
+}
+
+fn coords(p: [f32; 3]) -> Vec<String> {
+    p.iter().map(|x| x.to_string()).collect()
+}
+
+/// The step of `cargo xtask test`.
+pub fn check() -> Result<(), String> {
+    let root = workspace_root();
+    let dir = env::temp_dir().join("caveclod-capi-check");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    run(cmd("cargo", &["build", "-p", "caveclod-capi"]))?;
+    run(cmd(
+        "cargo",
+        &["build", "-p", "caveclod-cli", "--bin", "caveclod"],
+    ))?;
+    let debug = target_dir().join("debug");
+    let library = debug.join("libcaveclod.a");
+    let cli = debug.join("caveclod");
+    let clod = dir.join("spot.clod");
+    let mut bake = Command::new(&cli);
+    bake.arg("bake").arg(root.join(INPUT)).arg("-o").arg(&clod);
+    run(bake)?;
+    let octree_clod = dir.join("spot-ooc.clod");
+    let mut bake = Command::new(&cli);
+    bake.arg("bake")
+        .arg(root.join(INPUT))
+        .arg("-o")
+        .arg(&octree_clod)
+        .arg("--out-of-core");
+    run(bake)?;
+
+    let c99 = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1"];
+    let (refine_c, arena_c, test_cpp) =
+        (dir.join("refine"), dir.join("arena"), dir.join("capi_test"));
+    compile(
+        "cc",
+        &c99,
+        &root.join("capi/examples/refine.c"),
+        &library,
+        &refine_c,
+    )?;
+    compile(
+        "cc",
+        &c99,
+        &root.join("capi/examples/arena.c"),
+        &library,
+        &arena_c,
+    )?;
+    let mut cpp = vec!["-std=c++17", "-Wall", "-Wextra", "-Werror", "-O1", "-g"];
+    if sanitizers_work(&dir) {
+        cpp.extend(["-fsanitize=address,undefined", "-fno-sanitize-recover=all"]);
+    } else {
+        println!(
+            "c++ cannot build with -fsanitize=address,undefined here: the C++ test runs without"
+        );
+    }
+    compile(
+        "c++",
+        &cpp,
+        &root.join("capi/tests/capi_test.cpp"),
+        &library,
+        &test_cpp,
+    )?;
+
+    // refine.c against `caveclod refine --json`, view by view.
+    let mut rust_counts = Vec::new();
+    for [eye, target] in VIEWS {
+        let (e, t) = (coords(eye), coords(target));
+        let mut c_run = Command::new(&refine_c);
+        c_run.arg(&clod).args(&e).args(&t);
+        let from_c = output(c_run)?;
+        let mut rust_run = Command::new(&cli);
+        rust_run
+            .arg("refine")
+            .arg(&clod)
+            .arg(format!("--eye={}", e.join(",")))
+            .arg(format!("--target={}", t.join(",")))
+            .arg("--json");
+        let from_rust = output(rust_run)?;
+        print!("refine.c:        {from_c}caveclod refine: {from_rust}");
+        if from_c != from_rust {
+            return Err(format!(
+                "refine.c and caveclod refine differ for eye {e:?} target {t:?}"
+            ));
+        }
+        let polygons = field(&from_rust, "active_polygons").ok_or("no active_polygons")?;
+        let indices = field(&from_rust, "indices").ok_or("no indices")?;
+        rust_counts.push((e, t, polygons, indices));
+    }
+
+    // The C++ test, with the Rust API's counts of its two views.
+    let mut test = Command::new(&test_cpp);
+    test.arg(&clod);
+    for (e, t, polygons, indices) in rust_counts.iter().take(2) {
+        test.args(e)
+            .args(t)
+            .arg(polygons.to_string())
+            .arg(indices.to_string());
+    }
+    test.arg(root.join(OTHER)).arg(&octree_clod);
+    print!("{}", output(test)?);
+
+    // arena.c against its Rust twin, then with an arena too small for the file.
+    let (e, t) = (coords(VIEWS[0][0]), coords(VIEWS[0][1]));
+    let mut c_run = Command::new(&arena_c);
+    c_run.arg(&clod).args(&e).args(&t).arg(BUDGET);
+    let from_c = output(c_run)?;
+    let mut twin = cmd(
+        "cargo",
+        &[
+            "run",
+            "--quiet",
+            "-p",
+            "caveclod-examples",
+            "--example",
+            "fixed_arena",
+            "--",
+        ],
+    );
+    twin.arg(&clod).args(&e).args(&t).arg(BUDGET);
+    let from_rust = output(twin)?;
+    print!("arena.c:     {from_c}fixed_arena: {from_rust}");
+    for key in ["active_polygons", "indices", "surfaces"] {
+        if field(&from_c, key).is_none() || field(&from_c, key) != field(&from_rust, key) {
+            return Err(format!("arena.c and fixed_arena differ in {key}"));
+        }
+    }
+    if field(&from_c, "active_polygons").is_none_or(|p| p > BUDGET.parse::<u64>().unwrap_or(0)) {
+        return Err("arena.c went over its polygon budget".into());
+    }
+    let mut small = Command::new(&arena_c);
+    small.arg(&clod).args(&e).args(&t).arg(BUDGET).arg("4096");
+    let shown = crate::show(&small);
+    let out = small
+        .output()
+        .map_err(|e| format!("could not start `{shown}`: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    print!("arena.c, 4096-byte arena: {text}");
+    if out.status.code() != Some(3) || field(&text, "status") != Some(15) {
+        return Err(format!(
+            "arena.c with a 4096-byte arena: expected CAVECLOD_STATUS_ARENA_FULL and exit code 3, got {}",
+            out.status
+        ));
+    }
+    Ok(())
+}
