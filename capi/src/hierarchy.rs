@@ -108,7 +108,7 @@ pub unsafe extern "C" fn caveclod_hierarchy_counts(
 
 /// The counts of `h`.
 pub(crate) fn counts_of(h: &Hierarchy<'_>) -> CaveclodHierarchyCounts {
-    let stride = core::mem::size_of::<caveclod_core::Vertex>();
+    let stride = core::mem::size_of::<caveclod_core::format::Vertex>();
     CaveclodHierarchyCounts {
         surfaces: h.surface_count() as u32,
         vertices: h.vertices().len() as u32,
@@ -124,7 +124,7 @@ pub(crate) fn counts_of(h: &Hierarchy<'_>) -> CaveclodHierarchyCounts {
     }
 }
 
-const _: () = assert!(core::mem::size_of::<caveclod_core::Vertex>() == 32);
+const _: () = assert!(core::mem::size_of::<caveclod_core::format::Vertex>() == 32);
 
 /// Points `*vertices` at the persistent vertex buffer inside the file's bytes
 /// (`counts.vertex_buffer_bytes` bytes, `counts.vertex_stride` per vertex; upload it once)
