@@ -244,6 +244,12 @@ fn record_levels(d: &ash::Device, cmd: vk::CommandBuffer, staging: &Buffer, imag
     let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
     let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let raw = image.raw;
+    // All levels leave UNDEFINED before the copy (level 0) and the blits (the others) write
+    // them.
+    let copy_or_blit = (
+        vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
+        vk::AccessFlags2::TRANSFER_WRITE,
+    );
     pipeline_barrier(
         d,
         cmd,
@@ -251,7 +257,7 @@ fn record_levels(d: &ash::Device, cmd: vk::CommandBuffer, staging: &Buffer, imag
             raw,
             level_range(0, levels),
             none,
-            copy,
+            copy_or_blit,
             vk::ImageLayout::UNDEFINED,
             dst,
         )],
