@@ -22,6 +22,15 @@ pub struct TextureDesc {
 }
 
 impl TextureDesc {
+    /// `width` × `height` sRGB-encoded colour (a base-colour texture).
+    pub fn srgb(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            srgb: true,
+        }
+    }
+
     fn format(&self) -> vk::Format {
         if self.srgb {
             vk::Format::R8G8B8A8_SRGB
