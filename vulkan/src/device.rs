@@ -48,8 +48,39 @@ pub struct HostDevice {
     /// The host's allocator, or `None` to let the context make its own.
     pub allocator: Option<SharedAllocator>,
     /// The features the host enabled on `device` (at least [`DeviceFeatures::REQUIRED`];
-    /// [`DeviceFeatures::enable`] sets them in its create-info chain).
+    /// [`DeviceFeatures::chain`] or [`DeviceFeatures::enable`] sets them in its create info).
     pub enabled: DeviceFeatures,
+}
+
+impl HostDevice {
+    /// The host's handles, claiming [`DeviceFeatures::REQUIRED`] (what
+    /// `DeviceFeatures::REQUIRED.chain()` enables), without an allocator (the context makes
+    /// its own unless [`allocator`](Self::allocator) gives the host's).
+    pub fn new(
+        instance: &ash::Instance,
+        device: &ash::Device,
+        physical_device: vk::PhysicalDevice,
+        queue_family: u32,
+        queue: vk::Queue,
+    ) -> Self {
+        Self {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            queue_family,
+            queue,
+            allocator: None,
+            enabled: DeviceFeatures::REQUIRED,
+        }
+    }
+
+    /// Shares the host's `allocator` with the context.
+    pub fn allocator(self, allocator: SharedAllocator) -> Self {
+        Self {
+            allocator: Some(allocator),
+            ..self
+        }
+    }
 }
 
 /// A device picked and created by the headless path.

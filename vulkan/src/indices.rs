@@ -41,6 +41,13 @@ pub enum IndexSource<'a, 'c> {
     Lists(&'a [&'a [u32]]),
 }
 
+impl<'a, 'c> IndexSource<'a, 'c> {
+    /// The indices `camera` emits over `hierarchy`.
+    pub fn camera(hierarchy: &'a Hierarchy<'a>, camera: &'a CameraState<'c>) -> Self {
+        Self::Camera { hierarchy, camera }
+    }
+}
+
 /// The index buffers of one camera, `[frame slot][surface]`: one host-visible buffer per
 /// surface and per frame in flight.
 ///

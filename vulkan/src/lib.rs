@@ -21,6 +21,8 @@
 //!   buffer inside its rendering: no submission, no wait, no queue lock.
 //! - Materials: [`Texture`] (RGBA8, mip chain) and [`MaterialSet`] (per surface texture ×
 //!   factor, alpha cutoff); without one, a palette colour per surface.
+//! - [`ImageReadback`]: a host's colour image copied into host memory by commands recorded
+//!   into the host's command buffer (screenshots, checks).
 //! - [`Renderer`]: the headless convenience over the recorder (RGBA8 + D32 targets, command
 //!   pool, fences, one submission per frame, [`RgbaImage`] read-back) for tests and tools.
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
@@ -105,8 +107,8 @@ pub use geomorph::Geomorph;
 pub use indices::{CameraIndices, IndexSource};
 pub use material::{MaterialSet, SurfaceMaterial};
 pub use mesh::{MorphInstances, Staging, VertexBuffer, VERTEX_STRIDE};
-pub use readback::{ImageDiff, RgbaImage};
+pub use readback::{ImageDiff, ImageReadback, RgbaImage};
 pub use record::{Morph, RecordCamera, Recorder, RecorderDesc, Rendering, TargetFormats, Viewport};
-pub use requirements::{DeviceFeatures, API_VERSION};
+pub use requirements::{DeviceFeatures, FeatureChain, API_VERSION};
 pub use texture::{Texture, TextureDesc};
 pub use validation::{DebugMessenger, ValidationLog, VALIDATION_LAYER};

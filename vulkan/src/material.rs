@@ -29,6 +29,18 @@ pub struct SurfaceMaterial<'a> {
     pub blend: bool,
 }
 
+impl<'a> SurfaceMaterial<'a> {
+    /// `texture` as it is: white factor, no alpha cutoff, opaque.
+    pub fn textured(texture: &'a Texture) -> Self {
+        Self {
+            texture: Some(texture),
+            factor: [1.0; 4],
+            alpha_cutoff: 0.0,
+            blend: false,
+        }
+    }
+}
+
 /// The descriptor set layout, sampler and white texture every [`Recorder`](crate::Recorder)
 /// shares among its pipelines and [`MaterialSet`]s, and the set palette draws bind.
 pub(crate) struct Bindings {

@@ -1,6 +1,11 @@
 //! Read-back pixels: an RGBA8 image, crops and comparisons (encoding it is the
-//! application's business).
+//! application's business), and [`ImageReadback`], which copies a host's colour image into
+//! host memory by commands recorded into the host's command buffer.
 
+use ash::vk;
+
+use crate::buffer::{Buffer, BufferDesc};
+use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::record::Viewport;
 
@@ -114,6 +119,138 @@ impl RgbaImage {
             .chunks_exact(4)
             .filter(|p| *p != background.as_slice())
             .count() as u64
+    }
+}
+
+/// A colour target's pixels on their way to the host, recorded into the caller's command
+/// buffer after its rendering (a screenshot of a host's frame, a test's check): a barrier
+/// from the colour attachment writes to a copy into a host-visible buffer, the copy, and a
+/// barrier to host reads. The caller submits and waits.
+#[derive(Debug)]
+pub struct ImageReadback {
+    buffer: Buffer,
+    extent: vk::Extent2D,
+    bgra: bool,
+}
+
+impl ImageReadback {
+    /// Records into `cmd` (recording, outside rendering) the read-back of `image`'s first
+    /// mip level and layer: `extent` texels of `format` (RGBA8 or BGRA8, UNORM or sRGB; one
+    /// sample), last written as a colour attachment and now in `layout`
+    /// (`COLOR_ATTACHMENT_OPTIMAL`, `TRANSFER_SRC_OPTIMAL` or `GENERAL`). The image is left in
+    /// `TRANSFER_SRC_OPTIMAL` (`GENERAL` stays `GENERAL`); keep it alive until `cmd` has
+    /// executed.
+    pub fn record(
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        image: vk::Image,
+        layout: vk::ImageLayout,
+        format: vk::Format,
+        extent: vk::Extent2D,
+    ) -> Result<Self> {
+        let bgra = match format {
+            vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB => false,
+            vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB => true,
+            _ => {
+                return Err(Error::InvalidArgument(format!(
+                    "read-back of {format:?}: RGBA8 or BGRA8 expected"
+                )))
+            }
+        };
+        let size = u64::from(extent.width) * u64::from(extent.height) * 4;
+        if size == 0 {
+            return Err(Error::InvalidArgument(format!(
+                "read-back of an empty {}x{} image",
+                extent.width, extent.height
+            )));
+        }
+        let buffer = Buffer::new(
+            ctx,
+            "image read-back",
+            BufferDesc::gpu_to_cpu(size, vk::BufferUsageFlags::TRANSFER_DST),
+        )?;
+        let copy_layout = match layout {
+            vk::ImageLayout::GENERAL => vk::ImageLayout::GENERAL,
+            _ => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        };
+        let to_copy = [vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+            .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+            .old_layout(layout)
+            .new_layout(copy_layout)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .level_count(1)
+                    .layer_count(1),
+            )];
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_extent(extent.into())];
+        let to_host = [vk::BufferMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .buffer(buffer.raw)
+            .size(vk::WHOLE_SIZE)];
+        let before = vk::DependencyInfo::default().image_memory_barriers(&to_copy);
+        let after = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
+        let d = &ctx.device;
+        // SAFETY: `cmd` is recording outside rendering and `image` is a live single-sample
+        // colour image in `layout` (the caller's contract); the buffer holds `extent` texels
+        // of 4 bytes.
+        unsafe {
+            d.cmd_pipeline_barrier2(cmd, &before);
+            d.cmd_copy_image_to_buffer(cmd, image, copy_layout, buffer.raw, &region);
+            d.cmd_pipeline_barrier2(cmd, &after);
+        }
+        Ok(Self {
+            buffer,
+            extent,
+            bgra,
+        })
+    }
+
+    /// The pixels as RGBA8 (BGRA swizzled), rows top to bottom; valid once the command
+    /// buffer [`record`](Self::record) recorded into has executed and been waited for.
+    pub fn image(&self) -> Result<RgbaImage> {
+        let n = self.buffer.desc.size as usize;
+        let mut pixels = match self.buffer.mapped() {
+            Some(bytes) if bytes.len() >= n => bytes[..n].to_vec(),
+            _ => {
+                return Err(Error::InvalidArgument(
+                    "read-back memory is not host-visible".into(),
+                ))
+            }
+        };
+        if self.bgra {
+            for p in pixels.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
+        }
+        Ok(RgbaImage {
+            width: self.extent.width,
+            height: self.extent.height,
+            pixels,
+        })
+    }
+
+    /// Destroys the buffer. The GPU must be done with the command buffer that copied into
+    /// it.
+    pub fn destroy(self, ctx: &Context) -> Result<()> {
+        self.buffer.destroy(ctx)
     }
 }
 

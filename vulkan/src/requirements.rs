@@ -10,7 +10,8 @@
 //! | a queue family with graphics (and compute, for the geomorph compute stage) | drawing, [`Geomorph`](crate::Geomorph) |
 //! | no device extension | swapchains and surfaces are the host's |
 //!
-//! A host that creates its own device enables these with [`DeviceFeatures::enable`] and says
+//! A host that creates its own device enables these with [`DeviceFeatures::chain`] (or
+//! [`DeviceFeatures::enable`], into feature structures it already has) and says
 //! what it enabled in [`HostDevice::enabled`](crate::HostDevice); [`Context::from_raw`]
 //! checks that against [`DeviceFeatures::REQUIRED`] and against what the physical device
 //! supports, and refuses with [`Error::Unsupported`](crate::Error::Unsupported) naming each
@@ -136,6 +137,45 @@ impl DeviceFeatures {
             f10.fill_mode_non_solid = vk::TRUE;
         }
     }
+
+    /// The feature structures of a device create info with `self`'s features set, for a
+    /// host that creates its device for this crate:
+    /// `DeviceFeatures::REQUIRED.chain().push(info)` ([`enable`](Self::enable) sets them in
+    /// structures the host already has).
+    pub fn chain(self) -> FeatureChain {
+        let mut c = FeatureChain::default();
+        self.enable(&mut c.vulkan10, &mut c.vulkan12, &mut c.vulkan13);
+        c
+    }
+}
+
+/// The feature structures of a host's `vk::DeviceCreateInfo`, made by
+/// [`DeviceFeatures::chain`]. Their fields are public: a host sets its own features in them
+/// too, then [`push`](Self::push)es them onto its create info.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FeatureChain {
+    /// Vulkan 1.0 features (`pEnabledFeatures`).
+    pub vulkan10: vk::PhysicalDeviceFeatures,
+    /// Vulkan 1.2 features.
+    pub vulkan12: vk::PhysicalDeviceVulkan12Features<'static>,
+    /// Vulkan 1.3 features.
+    pub vulkan13: vk::PhysicalDeviceVulkan13Features<'static>,
+}
+
+impl FeatureChain {
+    /// `info` with `pEnabledFeatures` set to [`vulkan10`](Self::vulkan10) and the 1.2 and 1.3
+    /// structures linked into its `pNext` chain ahead of what it already chains. `info` must
+    /// not enable features otherwise (its own `pEnabledFeatures`, or a
+    /// `PhysicalDeviceFeatures2`, `PhysicalDeviceVulkan12Features` or
+    /// `PhysicalDeviceVulkan13Features` in its chain).
+    pub fn push<'a>(&'a mut self, info: vk::DeviceCreateInfo<'a>) -> vk::DeviceCreateInfo<'a> {
+        // Forget an earlier push's links, so the structures chain into `info` alone.
+        self.vulkan12.p_next = std::ptr::null_mut();
+        self.vulkan13.p_next = std::ptr::null_mut();
+        info.enabled_features(&self.vulkan10)
+            .push_next(&mut self.vulkan12)
+            .push_next(&mut self.vulkan13)
+    }
 }
 
 /// Why a device does not qualify: its name, its version if too old, and the missing
@@ -180,6 +220,50 @@ mod tests {
             DeviceFeatures::REQUIRED.missing(DeviceFeatures::ALL),
             vec!["fillModeNonSolid"]
         );
+    }
+
+    /// The structure types of `info`'s `pNext` chain, at most 8.
+    fn chained(info: &vk::DeviceCreateInfo<'_>) -> Vec<vk::StructureType> {
+        let mut types = Vec::new();
+        let mut next = info.p_next.cast::<vk::BaseInStructure<'_>>();
+        while !next.is_null() && types.len() < 8 {
+            // SAFETY: every link of the chain is a live Vulkan structure, which starts with
+            // the base structure's fields.
+            let base = unsafe { &*next };
+            types.push(base.s_type);
+            next = base.p_next;
+        }
+        types
+    }
+
+    #[test]
+    fn the_chain_enables_the_features_in_a_create_info() {
+        let none = DeviceFeatures::default().chain();
+        assert_eq!(none.vulkan13.synchronization2, vk::FALSE);
+        assert_eq!(none.vulkan12.vulkan_memory_model, vk::FALSE);
+        let mut chain = DeviceFeatures::ALL.chain();
+        chain.vulkan12.descriptor_indexing = vk::TRUE;
+        let mut host_own = vk::PhysicalDeviceMultiviewFeatures::default();
+        // Pushing again relinks: still each structure once, no cycle.
+        for _ in 0..2 {
+            let base = vk::DeviceCreateInfo::default().push_next(&mut host_own);
+            let info = chain.push(base);
+            assert_eq!(
+                chained(&info),
+                vec![
+                    vk::StructureType::PHYSICAL_DEVICE_VULKAN_1_3_FEATURES,
+                    vk::StructureType::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES,
+                    vk::StructureType::PHYSICAL_DEVICE_MULTIVIEW_FEATURES,
+                ]
+            );
+            // SAFETY: `push` pointed it at the chain's live 1.0 features.
+            let f10 = unsafe { &*info.p_enabled_features };
+            assert_eq!(f10.fill_mode_non_solid, vk::TRUE);
+        }
+        assert_eq!(chain.vulkan13.synchronization2, vk::TRUE);
+        assert_eq!(chain.vulkan13.dynamic_rendering, vk::TRUE);
+        assert_eq!(chain.vulkan12.vulkan_memory_model, vk::TRUE);
+        assert_eq!(chain.vulkan12.descriptor_indexing, vk::TRUE);
     }
 
     #[test]

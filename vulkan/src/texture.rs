@@ -22,6 +22,15 @@ pub struct TextureDesc {
 }
 
 impl TextureDesc {
+    /// `width` × `height` sRGB-encoded colour (a base-colour texture).
+    pub fn srgb(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            srgb: true,
+        }
+    }
+
     fn format(&self) -> vk::Format {
         if self.srgb {
             vk::Format::R8G8B8A8_SRGB
@@ -244,6 +253,12 @@ fn record_levels(d: &ash::Device, cmd: vk::CommandBuffer, staging: &Buffer, imag
     let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
     let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let raw = image.raw;
+    // All levels leave UNDEFINED before the copy (level 0) and the blits (the others) write
+    // them.
+    let copy_or_blit = (
+        vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
+        vk::AccessFlags2::TRANSFER_WRITE,
+    );
     pipeline_barrier(
         d,
         cmd,
@@ -251,7 +266,7 @@ fn record_levels(d: &ash::Device, cmd: vk::CommandBuffer, staging: &Buffer, imag
             raw,
             level_range(0, levels),
             none,
-            copy,
+            copy_or_blit,
             vk::ImageLayout::UNDEFINED,
             dst,
         )],

@@ -72,15 +72,8 @@ impl Host {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
             .queue_priorities(&priorities)];
-        let mut f10 = vk::PhysicalDeviceFeatures::default();
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-        features.enable(&mut f10, &mut f12, &mut f13);
-        let dinfo = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queues)
-            .enabled_features(&f10)
-            .push_next(&mut f12)
-            .push_next(&mut f13);
+        let mut chain = features.chain();
+        let dinfo = chain.push(vk::DeviceCreateInfo::default().queue_create_infos(&queues));
         // SAFETY: valid create info; the features are supported by lavapipe.
         let device = ok(
             unsafe { instance.create_device(physical_device, &dinfo, None) },
@@ -575,8 +568,9 @@ impl HostTarget {
         unsafe { d.cmd_begin_rendering(cmd, &info) };
     }
 
-    /// The single-sample colour image: the resolve target, or the colour itself.
-    fn single_sample(&self) -> vk::Image {
+    /// The single-sample colour image: the resolve target, or the colour itself (after a
+    /// [`frame`](Self::frame), in `TRANSFER_SRC_OPTIMAL`).
+    pub fn single_sample(&self) -> vk::Image {
         self.resolve.as_ref().map_or(self.colour.image, |r| r.image)
     }
 

@@ -51,6 +51,65 @@ pub struct RecordCamera<'a> {
     pub wireframe: bool,
 }
 
+impl<'a> RecordCamera<'a> {
+    /// A camera drawing `vertices` through `indices` into `viewport` with `view_proj`:
+    /// filled, not geomorphing, and without colours or materials, so it needs
+    /// [`materials`](Self::materials) or [`colours`](Self::colours) before it is recorded.
+    pub fn new(
+        viewport: Viewport,
+        view_proj: Mat4,
+        vertices: &'a VertexBuffer,
+        indices: &'a CameraIndices,
+    ) -> Self {
+        Self {
+            viewport,
+            view_proj,
+            vertices,
+            indices,
+            colours: &[],
+            materials: None,
+            morph: None,
+            refine_morphs: None,
+            wireframe: false,
+        }
+    }
+
+    /// Draws the camera's refinement geomorphs, `morphs`, filled for the slot recorded
+    /// (its indices from [`IndexSource::MorphedCamera`](crate::IndexSource)).
+    pub fn refine_morphs(self, morphs: &'a CameraMorphs) -> Self {
+        Self {
+            refine_morphs: Some(morphs),
+            ..self
+        }
+    }
+
+    /// Draws the surfaces with `materials`.
+    pub fn materials(self, materials: &'a MaterialSet) -> Self {
+        Self {
+            materials: Some(materials),
+            ..self
+        }
+    }
+
+    /// Colours the surfaces with `colours` (when it has no materials).
+    pub fn colours(self, colours: &'a [[f32; 4]]) -> Self {
+        Self { colours, ..self }
+    }
+
+    /// Geomorphs with `morph`.
+    pub fn morph(self, morph: Morph<'a>) -> Self {
+        Self {
+            morph: Some(morph),
+            ..self
+        }
+    }
+
+    /// Draws edges only when `wireframe`.
+    pub fn wireframe(self, wireframe: bool) -> Self {
+        Self { wireframe, ..self }
+    }
+}
+
 /// A geomorphing draw: the camera's indices index both vertex streams alike; `vertices`
 /// (of the camera) are the coarse ends, `fine` the fine ends, and each instance morphs and
 /// places them by its [`MorphInstance`](caveclod_core::gpu::MorphInstance).
