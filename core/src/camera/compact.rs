@@ -61,6 +61,8 @@ impl Front<'_> {
             self.mark_coarsening_pairs();
         }
         self.churn = 0;
+        self.visit_cursor = 0;
+        self.compaction = super::compact_step::Progress::IDLE;
     }
 
     /// Rewrites every link into a pair's slot as `base + 2 * owner + side`, which survives
