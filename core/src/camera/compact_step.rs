@@ -190,13 +190,13 @@ impl Front<'_> {
             return Some(1);
         }
         let last = self.active_len - 1;
-        let fan = self.fan_start(h, last)?;
+        let (fan, looked) = self.fan_start(h, last)?;
         let work = self.check_fan(fan, last)?;
         self.free_head = rest;
         self.rename_fan(fan, last, hole);
         self.active[hole as usize] = self.active[last as usize];
         self.active_len = last;
-        Some(work + 2)
+        Some(looked + 2 * work + 2)
     }
 
     /// One step of the records' Shell sort by node; `None` when it is done.
@@ -257,18 +257,19 @@ impl Front<'_> {
     /// Swaps records `a` and `b` (both live) and renames them in every corner; its work, or
     /// `None` (nothing changed) if a fan contradicts the front.
     fn swap_records(&mut self, h: &Hierarchy<'_>, a: u32, b: u32) -> Option<u32> {
-        let (fa, fb) = (self.fan_start(h, a)?, self.fan_start(h, b)?);
+        let ((fa, looked_a), (fb, looked_b)) = (self.fan_start(h, a)?, self.fan_start(h, b)?);
         let work = self.check_fan(fa, a)? + self.check_fan(fb, b)?;
         self.rename_fan(fa, a, PARKED);
         self.rename_fan(fb, b, a);
         self.rename_fan(fa, PARKED, b);
         self.active.swap(a as usize, b as usize);
-        Some(2 * work + 2)
+        Some(looked_a + looked_b + 3 * work + 2)
     }
 
     /// A slot naming live record `r`, or `Empty` for a root no base polygon names (a vertex
-    /// without polygons); `None` if the front contradicts the hierarchy.
-    fn fan_start(&self, h: &Hierarchy<'_>, r: u32) -> Option<FanStart> {
+    /// without polygons), with the slots looked at to find it; `None` if the front
+    /// contradicts the hierarchy.
+    fn fan_start(&self, h: &Hierarchy<'_>, r: u32) -> Option<(FanStart, u32)> {
         let node = self.active.get(r as usize)?.node;
         if node & FREE != 0 {
             return None;
@@ -280,11 +281,9 @@ impl Front<'_> {
                 .is_some_and(|p| p.corners.contains(&r))
         };
         if h.node(n.parent).is_none() {
-            return Some(
-                (0..self.base)
-                    .find(|&s| names(s))
-                    .map_or(FanStart::Empty, FanStart::At),
-            );
+            let found = (0..self.base).find(|&s| names(s));
+            let looked = found.map_or(self.base, |s| s + 1);
+            return Some((found.map_or(FanStart::Empty, FanStart::At), looked));
         }
         let pair = self.pair_of.get(n.parent.index())?;
         if pair >= self.pairs {
@@ -294,7 +293,7 @@ impl Front<'_> {
         [left, left + 1]
             .into_iter()
             .find(|&s| names(s))
-            .map(FanStart::At)
+            .map(|s| (FanStart::At(s), 2))
     }
 
     /// Walks the fan of record `r` from `start`: its slots each name `r` once and the walk
