@@ -223,6 +223,18 @@ pub fn frame(
     rec: &mut Record,
     compact: CompactNow,
 ) -> Result<(), String> {
+    // A camera at its base mesh (new, or with nothing in view) refines in one full pass, as
+    // an engine settles a new camera: amortisation spreads coherent motion over frames.
+    let first = RefineParams {
+        visit_fraction: 1.0,
+        max_visits: u32::MAX,
+        ..*params
+    };
+    let params = if cam.split_count() == 0 {
+        &first
+    } else {
+        params
+    };
     let t0 = Instant::now();
     // Compaction counts as refinement time: it is what keeps the next passes local.
     if compact.step == 0 && compact.due {

@@ -35,7 +35,7 @@ const BUDGET_HEADROOM: f64 = 1.10;
 const SIZING_STRIDE: usize = 3;
 
 /// The fly-over's default work per frame of an incremental compaction.
-pub const COMPACT_STEP: u32 = 16_384;
+pub const COMPACT_STEP: u32 = 4_096;
 /// The fly-over's default share of the active list a refinement visits per frame.
 pub const VISIT_FRACTION: f32 = 1.0 / 3.0;
 
