@@ -616,7 +616,7 @@ fn bench_cameras(c: &mut Criterion, h: &Hierarchy<'_>, s: f32, ground: &Ground) 
 
 /// Work per call of the incremental compaction in `budget/compact_step` (the fly-over's
 /// default).
-const COMPACT_STEP: u32 = 16_384;
+const COMPACT_STEP: u32 = 4_096;
 
 /// Bounded frame cost, each form beside its baseline in the same run: a moving pass that
 /// visits a third of the active list (Hoppe's amortisation) against a full one; one call of

@@ -509,7 +509,9 @@ impl CameraState<'_> {
     /// the front holds still during ends in [`compact`](Self::compact)'s order; one it
     /// changes under ends less sorted, and the next sorts further. A cycle over `n` records
     /// and pairs costs about `n` comparisons per gap (a dozen gaps for 50,000), plus the
-    /// moves, which are few when the order is close to sorted. Never called by
+    /// moves, which are few when the order is close to sorted and dominate after heavy
+    /// churn: a front half replaced since the last cycle costs tens of times
+    /// [`compact`](Self::compact)'s work in all, spread over the steps. Never called by
     /// [`refine`](Self::refine); [`churn`](Self::churn) counts from a cycle's start.
     pub fn compact_step(&mut self, h: &Hierarchy<'_>, budget: u32) -> CompactProgress {
         if !self.is_for(h) {
