@@ -39,7 +39,7 @@ enum Step {
     ForceSplit(u32),
     Collapse(u32),
     Compact,
-    CompactStep(u32),
+    CompactBy(u32),
     Refine {
         eye: [f32; 3],
         target: [f32; 3],
@@ -55,7 +55,7 @@ fn step() -> impl Strategy<Value = Step> {
         2 => any::<u32>().prop_map(Step::ForceSplit),
         3 => any::<u32>().prop_map(Step::Collapse),
         1 => Just(Step::Compact),
-        2 => prop_oneof![1u32..20, 20u32..3000].prop_map(Step::CompactStep),
+        2 => prop_oneof![1u32..20, 20u32..3000].prop_map(Step::CompactBy),
         1 => (prop::array::uniform3(-20.0f32..20.0), prop::array::uniform3(-5.0f32..15.0), 0.05f32..20.0, prop_oneof![Just(u32::MAX), 1u32..50], prop_oneof![Just(u32::MAX), 1u32..100])
             .prop_map(|(eye, target, tolerance, max_ops, max_visits)| Step::Refine { eye, target, tolerance, max_ops, max_visits }),
     ]
@@ -156,7 +156,7 @@ proptest! {
                     plain.compact(&h);
                     prop_assert_eq!(snapshot_sorted(&h, &cam), before);
                 }
-                Step::CompactStep(budget) => {
+                Step::CompactBy(budget) => {
                     let before = snapshot_sorted(&h, &cam);
                     prop_assert_eq!(cam.compact_step(&h, budget), plain.compact_step(&h, budget));
                     prop_assert_eq!(snapshot_sorted(&h, &cam), before);
@@ -217,7 +217,7 @@ proptest! {
                     a.compact(&h);
                     b.compact(&h);
                 }
-                Step::CompactStep(budget) => {
+                Step::CompactBy(budget) => {
                     prop_assert_eq!(a.compact_step(&h, budget), b.compact_step(&h, budget));
                 }
                 Step::Refine { eye, target, tolerance, max_ops, max_visits } => {
