@@ -614,6 +614,106 @@ fn bench_cameras(c: &mut Criterion, h: &Hierarchy<'_>, s: f32, ground: &Ground) 
     assert_eq!(refusals.get(), 0, "the budget held every camera's front");
 }
 
+/// Work per call of the incremental compaction in `budget/compact_step` (the fly-over's
+/// default).
+const COMPACT_STEP: u32 = 4_096;
+
+/// Bounded frame cost, each form beside its baseline in the same run: a moving pass that
+/// visits a third of the active list (Hoppe's amortisation) against a full one; one call of
+/// `compact_step` per moving pass (a cycle started whenever none is under way) against the
+/// whole `compact` of a front churned by 30 passes; and a whole incremental cycle after
+/// that churn, for its total cost.
+fn bench_budget(c: &mut Criterion, h: &Hierarchy<'_>, moving: &[View]) {
+    let full = RefineParams::default();
+    let third = full.amortised(1.0 / 3.0);
+    let mut memory = vec![0u32; CameraState::words_needed(h)];
+    let mut cam = must(CameraState::new(h, &mut memory));
+    let mut g = c.benchmark_group("budget");
+    for (name, p) in [("moving_pass_full", &full), ("moving_pass_third", &third)] {
+        cam.reset(h);
+        settle(&mut cam, h, &moving[0], &full);
+        g.throughput(Throughput::Elements(lap(&mut cam, h, moving, p)));
+        let mut k = 0usize;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                k = (k + 1) % moving.len();
+                must(cam.refine(h, &moving[k], p))
+            })
+        });
+    }
+    cam.reset(h);
+    settle(&mut cam, h, &moving[0], &full);
+    g.throughput(Throughput::Elements(lap(&mut cam, h, moving, &full)));
+    let mut k = 0usize;
+    let mut churn = |cam: &mut CameraState<'_>, frames: usize| {
+        for _ in 0..frames {
+            k = (k + 1) % moving.len();
+            must(cam.refine(h, &moving[k], &full));
+        }
+    };
+    g.bench_function("compact_full", |b| {
+        b.iter_custom(|iters| {
+            let mut timed = Duration::ZERO;
+            for _ in 0..iters {
+                churn(&mut cam, CHURN_FRAMES);
+                let t = Instant::now();
+                cam.compact(h);
+                timed += t.elapsed();
+            }
+            timed
+        })
+    });
+    let cycles = Cell::new((0u64, 0u64));
+    g.bench_function("compact_step", |b| {
+        b.iter_custom(|iters| {
+            let mut timed = Duration::ZERO;
+            for _ in 0..iters {
+                churn(&mut cam, 1);
+                let t = Instant::now();
+                let done = cam.compact_step(h, COMPACT_STEP);
+                timed += t.elapsed();
+                let (n, ended) = cycles.get();
+                cycles.set((n + 1, ended + u64::from(done.finished)));
+            }
+            timed
+        })
+    });
+    g.bench_function("compact_cycle", |b| {
+        b.iter_custom(|iters| {
+            let mut timed = Duration::ZERO;
+            for _ in 0..iters {
+                churn(&mut cam, CHURN_FRAMES);
+                let t = Instant::now();
+                while !cam.compact_step(h, COMPACT_STEP).finished {}
+                timed += t.elapsed();
+            }
+            timed
+        })
+    });
+    g.finish();
+    let (n, ended) = cycles.get();
+    if ended > 0 {
+        eprintln!(
+            "budget/compact_step: a cycle every {:.0} steps of {COMPACT_STEP} while moving",
+            n as f64 / ended as f64
+        );
+    }
+    // What the incremental and the whole compaction leave behind is the same front.
+    let mut plain_memory = vec![0u32; CameraState::words_needed(h)];
+    let mut plain = must(CameraState::new(h, &mut plain_memory));
+    for (cam, step) in [(&mut cam, true), (&mut plain, false)] {
+        cam.reset(h);
+        settle(cam, h, &moving[0], &full);
+        lap(cam, h, moving, &full);
+        if step {
+            while !cam.compact_step(h, COMPACT_STEP).finished {}
+        } else {
+            cam.compact(h);
+        }
+    }
+    same_emission(h, &cam, &plain, "incremental and whole compaction agree");
+}
+
 fn main() {
     let benchmarking = std::env::args().any(|a| a == "--bench");
     let size: u32 = std::env::var("CAVECLOD_BENCH_SIZE")
@@ -657,6 +757,7 @@ fn main() {
         .configure_from_args();
     bench_ops(&mut c, &h, &near, &far);
     bench_refine(&mut c, &h, &near, &moving);
+    bench_budget(&mut c, &h, &moving);
     bench_budgeted(&mut c, &h, &moving);
     bench_cameras(&mut c, &h, s, &ground);
     bench_emit(&mut c, &h, &near, &moving);

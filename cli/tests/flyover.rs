@@ -18,6 +18,8 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         full_capacity: false,
         first_route: 0,
         compact_every: 30,
+        compact_step: caveclod_cli::flyover::COMPACT_STEP,
+        visit_fraction: caveclod_cli::flyover::VISIT_FRACTION,
         frames_in_flight: 2,
         index_cache: true,
         pin_threads: true,

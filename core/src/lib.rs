@@ -73,8 +73,8 @@ mod prefetch;
 mod view;
 
 pub use camera::{
-    CameraConfig, CameraError, CameraState, EmitError, MorphVertex, OpError, RefineParams,
-    RefineStats,
+    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, MorphVertex,
+    OpError, RefineParams, RefineStats,
 };
 pub use format::error::FormatError;
 pub use glam;

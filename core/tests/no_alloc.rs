@@ -1,5 +1,5 @@
 //! The runtime allocates nothing: with a counting global allocator, refinement from 20
-//! views, compaction, forced splits, collapses, index emission, and geomorphs (their
+//! views (full and amortised), compaction (whole and in steps), forced splits, collapses, index emission, and geomorphs (their
 //! refinement and morphed emission) leave the count unchanged once the hierarchy, the camera
 //! memory and the output buffers exist.
 //!
@@ -53,6 +53,13 @@ fn the_runtime_does_not_allocate() {
             .expect("emit lists");
         assert_eq!(n, m);
         cam.compact(&h);
+        // Amortised refinement and compaction steps.
+        let stats = cam
+            .refine(&h, view, &p.amortised(1.0 / 3.0))
+            .expect("refine");
+        work += u64::from(stats.operations());
+        cam.compact_step(&h, 50);
+        black_box(cam.lag(&h, view, p));
     }
     for v in (0..h.splits().len() as u32).map(NodeId) {
         if cam.is_node_active(&h, v) {

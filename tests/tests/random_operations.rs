@@ -6,6 +6,7 @@
 //! the same hierarchy never changes. A second property runs a budgeted camera whose pair map
 //! is hashed beside one with the same budget whose map is an array, through the same steps
 //! (capacity refusals included): they must keep the same front and emit the same indices.
+//! Steps include amortised refinement (a visit budget) and incremental compaction steps.
 
 use std::sync::OnceLock;
 
@@ -38,11 +39,13 @@ enum Step {
     ForceSplit(u32),
     Collapse(u32),
     Compact,
+    CompactBy(u32),
     Refine {
         eye: [f32; 3],
         target: [f32; 3],
         tolerance: f32,
         max_ops: u32,
+        max_visits: u32,
     },
 }
 
@@ -52,8 +55,9 @@ fn step() -> impl Strategy<Value = Step> {
         2 => any::<u32>().prop_map(Step::ForceSplit),
         3 => any::<u32>().prop_map(Step::Collapse),
         1 => Just(Step::Compact),
-        1 => (prop::array::uniform3(-20.0f32..20.0), prop::array::uniform3(-5.0f32..15.0), 0.05f32..20.0, prop_oneof![Just(u32::MAX), 1u32..50])
-            .prop_map(|(eye, target, tolerance, max_ops)| Step::Refine { eye, target, tolerance, max_ops }),
+        2 => prop_oneof![1u32..20, 20u32..3000].prop_map(Step::CompactBy),
+        1 => (prop::array::uniform3(-20.0f32..20.0), prop::array::uniform3(-5.0f32..15.0), 0.05f32..20.0, prop_oneof![Just(u32::MAX), 1u32..50], prop_oneof![Just(u32::MAX), 1u32..100])
+            .prop_map(|(eye, target, tolerance, max_ops, max_visits)| Step::Refine { eye, target, tolerance, max_ops, max_visits }),
     ]
 }
 
@@ -152,11 +156,17 @@ proptest! {
                     plain.compact(&h);
                     prop_assert_eq!(snapshot_sorted(&h, &cam), before);
                 }
-                Step::Refine { eye, target, tolerance, max_ops } => {
+                Step::CompactBy(budget) => {
+                    let before = snapshot_sorted(&h, &cam);
+                    prop_assert_eq!(cam.compact_step(&h, budget), plain.compact_step(&h, budget));
+                    prop_assert_eq!(snapshot_sorted(&h, &cam), before);
+                }
+                Step::Refine { eye, target, tolerance, max_ops, max_visits } => {
                     let view = LookAt { eye: Vec3::from(eye), target: Vec3::from(target), up: Vec3::Y, fov_y: 1.0, near: 0.05, far: 1e3 }.view(520, 400);
-                    let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
+                    let params = RefineParams { tolerance_px: tolerance, max_ops, max_visits, ..RefineParams::default() };
                     let st = cam.refine(&h, &view, &params).expect("refine");
                     prop_assert!(st.operations() <= max_ops);
+                    prop_assert!(st.nodes_visited <= max_visits.saturating_add(st.operations()));
                     prop_assert_eq!(plain.refine(&h, &view, &params), Ok(st));
                 }
             }
@@ -207,9 +217,12 @@ proptest! {
                     a.compact(&h);
                     b.compact(&h);
                 }
-                Step::Refine { eye, target, tolerance, max_ops } => {
+                Step::CompactBy(budget) => {
+                    prop_assert_eq!(a.compact_step(&h, budget), b.compact_step(&h, budget));
+                }
+                Step::Refine { eye, target, tolerance, max_ops, max_visits } => {
                     let view = LookAt { eye: Vec3::from(eye), target: Vec3::from(target), up: Vec3::Y, fov_y: 1.0, near: 0.05, far: 1e3 }.view(520, 400);
-                    let params = RefineParams { tolerance_px: tolerance, max_ops, ..RefineParams::default() };
+                    let params = RefineParams { tolerance_px: tolerance, max_ops, max_visits, ..RefineParams::default() };
                     prop_assert_eq!(a.refine(&h, &view, &params), b.refine(&h, &view, &params));
                 }
             }

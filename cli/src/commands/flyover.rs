@@ -49,6 +49,8 @@ fn options(a: &FlyoverArgs) -> FlyoverOptions {
         full_capacity: a.full_capacity,
         first_route: 0,
         compact_every: a.compact_every,
+        compact_step: a.compact_step,
+        visit_fraction: a.visit_fraction,
         frames_in_flight: usize::from(a.frames_in_flight),
         index_cache: !a.no_index_cache,
         pin_threads: !a.no_pin,

@@ -4,7 +4,9 @@
 
 use std::time::{Duration, Instant};
 
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, RefineStats, View};
+use caveclod_core::{
+    CameraConfig, CameraState, FrontLag, Hierarchy, RefineParams, RefineStats, View,
+};
 
 use super::gate::FrameGate;
 use super::placement::{balance, Cores};
@@ -24,6 +26,12 @@ pub struct Record {
     pub indices: Vec<u32>,
     pub refusals: u64,
     pub overflows: u64,
+    /// Per frame, the share of active nodes over the tolerance ([`FrontLag::share`]).
+    pub lag_share: Vec<f32>,
+    /// Per frame, their excess over the tolerance in pixels, per active node.
+    pub lag_px: Vec<f32>,
+    /// The largest excess of any node in any frame, in pixels.
+    pub lag_worst_px: f32,
 }
 
 impl Record {
@@ -34,6 +42,8 @@ impl Record {
             emit_ns: Vec::with_capacity(frames),
             active_polygons: Vec::with_capacity(frames),
             indices: Vec::with_capacity(frames),
+            lag_share: Vec::with_capacity(frames),
+            lag_px: Vec::with_capacity(frames),
             ..Self::default()
         }
     }
@@ -50,6 +60,24 @@ impl Record {
         self.indices.push(indices as u32);
         self.refusals += u64::from(st.capacity_refusals);
         self.overflows += u64::from(st.stack_overflows);
+    }
+
+    /// Records how far the front lags its view (measured outside the timed work).
+    pub fn push_lag(&mut self, lag: &FrontLag) {
+        self.lag_share.push(lag.share());
+        self.lag_px
+            .push(lag.excess_px / lag.active_nodes.max(1) as f32);
+        self.lag_worst_px = self.lag_worst_px.max(lag.worst_excess_px);
+    }
+
+    /// The mean share of active nodes over the tolerance.
+    pub fn lag_share_mean(&self) -> f64 {
+        mean(Self::steady(&self.lag_share).iter().map(|&x| f64::from(x)))
+    }
+
+    /// The mean excess over the tolerance per active node, in pixels.
+    pub fn lag_px_mean(&self) -> f64 {
+        mean(Self::steady(&self.lag_px).iter().map(|&x| f64::from(x)))
     }
 
     /// Frames after the first: the first frame refines from the base mesh.
@@ -159,7 +187,33 @@ fn index_lists(h: &Hierarchy<'_>, config: &CameraConfig, count: usize) -> Vec<In
         .collect()
 }
 
-/// Refines `cam` to `view`, emits its indices, and records the frame.
+/// How a flight's states compact, inside the timed refinement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Compaction {
+    /// A compaction starts every this many of a state's frames (0: never).
+    pub every: usize,
+    /// Work per frame of an incremental compaction ([`CameraState::compact_step`]), every
+    /// frame until its cycle ends; 0 compacts whole ([`CameraState::compact`]) when due.
+    pub step: u32,
+}
+
+/// A frame's compaction: whether one is due, and how (see [`Compaction`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CompactNow {
+    due: bool,
+    step: u32,
+}
+
+impl CompactNow {
+    /// No compaction, nor a step of one under way.
+    pub const NONE: Self = Self {
+        due: false,
+        step: 0,
+    };
+}
+
+/// Refines `cam` to `view`, emits its indices, and records the frame; then measures, outside
+/// the timed work, how far the front lags the view.
 pub fn frame(
     h: &Hierarchy<'_>,
     cam: &mut CameraState<'_>,
@@ -167,12 +221,26 @@ pub fn frame(
     params: &RefineParams,
     out: Option<&mut IndexBuffers>,
     rec: &mut Record,
-    compact: bool,
+    compact: CompactNow,
 ) -> Result<(), String> {
+    // A camera at its base mesh (new, or with nothing in view) refines in one full pass, as
+    // an engine settles a new camera: amortisation spreads coherent motion over frames.
+    let first = RefineParams {
+        visit_fraction: 1.0,
+        max_visits: u32::MAX,
+        ..*params
+    };
+    let params = if cam.split_count() == 0 {
+        &first
+    } else {
+        params
+    };
     let t0 = Instant::now();
     // Compaction counts as refinement time: it is what keeps the next passes local.
-    if compact {
+    if compact.step == 0 && compact.due {
         cam.compact(h);
+    } else if compact.step > 0 && (compact.due || cam.compacting()) {
+        cam.compact_step(h, compact.step);
     }
     let st = cam
         .refine(h, view, params)
@@ -190,6 +258,7 @@ pub fn frame(
     };
     let t2 = Instant::now();
     rec.push(&st, t1 - t0, t2 - t1, n);
+    rec.push_lag(&cam.lag(h, view, params));
     Ok(())
 }
 
@@ -218,9 +287,13 @@ fn camera_order(n: usize, cameras: usize) -> impl Iterator<Item = usize> {
     (0..cameras).map(move |k| if backwards { cameras - 1 - k } else { k })
 }
 
-/// Whether a state compacts before its `n`-th refinement (every `every`, 0 = never).
-fn compact_now(n: usize, every: usize) -> bool {
-    every > 0 && n % every == every - 1
+/// Whether a state starts a compaction before its `n`-th refinement (every `c.every`,
+/// 0 = never), and how.
+fn compact_now(n: usize, c: Compaction) -> CompactNow {
+    CompactNow {
+        due: c.every > 0 && n % c.every == c.every - 1,
+        step: c.step,
+    }
 }
 
 /// One flight of every camera, each with its own state of capacity `config`, over every
@@ -228,7 +301,7 @@ fn compact_now(n: usize, every: usize) -> bool {
 /// `in_flight` lists per camera in turn (frames in flight, see `gate`), and with `threads`
 /// a camera's thread runs at most `in_flight - 1` frames ahead of the slowest, pinned to a
 /// core when `pin_by` gives the cameras' costs to balance the cores by (see `placement`);
-/// each state compacts every `compact_every` of its frames (0: never).
+/// each state compacts as `compaction` says.
 #[allow(clippy::too_many_arguments)]
 pub fn fly_per_camera(
     h: &Hierarchy<'_>,
@@ -239,7 +312,7 @@ pub fn fly_per_camera(
     emit: bool,
     threads: bool,
     in_flight: usize,
-    compact_every: usize,
+    compaction: Compaction,
     pin_by: Option<&[f64]>,
 ) -> Result<Flight, String> {
     let in_flight = in_flight.max(1);
@@ -284,7 +357,7 @@ pub fn fly_per_camera(
                                     params,
                                     out.get_mut(n % in_flight),
                                     &mut rec,
-                                    compact_now(n, compact_every),
+                                    compact_now(n, compaction),
                                 );
                             }
                             gate.leave(c);
@@ -315,7 +388,7 @@ pub fn fly_per_camera(
                     params,
                     outs[c].get_mut(n % in_flight),
                     &mut records[c],
-                    compact_now(n, compact_every),
+                    compact_now(n, compaction),
                 )?;
             }
         }
@@ -330,14 +403,14 @@ pub fn fly_per_camera(
 }
 
 /// The paper's baseline: one state of capacity `config`, re-refined to each camera's view in
-/// turn every frame; it compacts every `compact_every` frames too (before the first camera's
+/// turn every frame; it compacts as `compaction` says too (before the first camera's
 /// turn).
 pub fn fly_shared(
     h: &Hierarchy<'_>,
     views: &[Vec<View>],
     params: &RefineParams,
     config: &CameraConfig,
-    compact_every: usize,
+    compaction: Compaction,
 ) -> Result<Flight, String> {
     let start = Instant::now();
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), 1);
@@ -358,7 +431,11 @@ pub fn fly_shared(
                 params,
                 Some(&mut out),
                 &mut records[c],
-                c == 0 && compact_now(f, compact_every),
+                if c == 0 {
+                    compact_now(f, compaction)
+                } else {
+                    CompactNow::NONE
+                },
             )?;
         }
     }
@@ -384,8 +461,8 @@ pub struct Group<'v> {
     pub in_flight: usize,
     /// Refinement knobs.
     pub params: RefineParams,
-    /// Each state compacts every this many of its frames (0: never).
-    pub compact_every: usize,
+    /// How each state compacts.
+    pub compaction: Compaction,
     /// With threads, pin each camera's thread to a core, the cameras shared out by their
     /// cost over the previous segment (see `placement`), or in the first segment by these
     /// costs (from a sizing flight; equal costs without).
@@ -411,7 +488,7 @@ fn fly_segment(
     group: &Group<'_>,
     frames: std::ops::Range<usize>,
 ) -> Result<(), String> {
-    let (views, params, compact_every) = (group.views, &group.params, group.compact_every);
+    let (views, params, compaction) = (group.views, &group.params, group.compaction);
     let in_flight = group.in_flight.max(1);
     if !group.threads {
         for f in frames {
@@ -423,7 +500,7 @@ fn fly_segment(
                     params,
                     g.outs[c].get_mut(f % in_flight),
                     &mut g.records[c],
-                    compact_now(f, compact_every),
+                    compact_now(f, compaction),
                 )?;
             }
         }
@@ -459,7 +536,7 @@ fn fly_segment(
                                 params,
                                 out.get_mut(f % in_flight),
                                 rec,
-                                compact_now(f, compact_every),
+                                compact_now(f, compaction),
                             );
                         }
                         gate.leave(c);

@@ -9,6 +9,14 @@
 //! front plus 10%, which is what a runtime with fixed memory would allocate. Capacity refusals
 //! are counted. Memory is reported for both capacities against the paper's equation 1.
 //! Views are computed before the flight, so it times only the runtime (refine and emit).
+//!
+//! Per-camera refinement is amortised by default (a third of the active list per frame,
+//! [`FlyoverOptions::visit_fraction`]) and compaction incremental
+//! ([`FlyoverOptions::compact_step`]), both inside the timed refinement. After each frame,
+//! outside the timed work, [`CameraState::lag`] measures how far the front lags its view:
+//! the share of active nodes whose error projects over the tolerance (the nodes a full pass
+//! would split) and their excess in pixels; a flight with `visit_fraction` 1 is the baseline
+//! to compare it with.
 
 pub mod fly;
 pub mod gate;
@@ -18,13 +26,18 @@ pub mod routes;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, MemoryReport, RefineParams, View};
 
-pub use fly::{fly_per_camera, fly_shared, summarise, Flight, Record, Summary};
+pub use fly::{fly_per_camera, fly_shared, summarise, Compaction, Flight, Record, Summary};
 pub use routes::{clip, eye_at, routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
 
 /// Headroom over the sizing flight's largest front when budgeting cameras.
 const BUDGET_HEADROOM: f64 = 1.10;
 /// The sizing flight refines every this many frames.
 const SIZING_STRIDE: usize = 3;
+
+/// The fly-over's default work per frame of an incremental compaction.
+pub const COMPACT_STEP: u32 = 4_096;
+/// The fly-over's default share of the active list a refinement visits per frame.
+pub const VISIT_FRACTION: f32 = 1.0 / 3.0;
 
 /// How the cameras share state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,6 +82,15 @@ pub struct FlyoverOptions {
     /// together no longer fit the caches one camera alone fits, so their refinement costs
     /// far more than four times one camera's.
     pub compact_every: usize,
+    /// Work per frame of an incremental compaction ([`CameraState::compact_step`]): a
+    /// compaction due starts a cycle that each frame of the state advances by this much until
+    /// it ends, inside the timed refinement; 0 compacts whole when due
+    /// ([`CameraState::compact`]), a spike of several milliseconds on a large front.
+    pub compact_step: u32,
+    /// Share of its active list a camera's refinement visits per frame
+    /// ([`RefineParams::visit_fraction`]; Hoppe's demos visit a third); 1 visits it all, as
+    /// the shared state always does.
+    pub visit_fraction: f32,
     /// Frames in flight (at least 1): each camera emits into this many index lists in turn,
     /// and with a thread per camera a camera may run this many frames less one ahead of the
     /// slowest (see [`gate`]); 1 is a barrier every frame.
@@ -95,10 +117,22 @@ impl Default for FlyoverOptions {
             full_capacity: false,
             first_route: 0,
             compact_every: 30,
+            compact_step: COMPACT_STEP,
+            visit_fraction: VISIT_FRACTION,
             frames_in_flight: gate::FRAMES_IN_FLIGHT,
             index_cache: true,
             pin_threads: true,
             hashed_pair_map: false,
+        }
+    }
+}
+
+impl FlyoverOptions {
+    /// How the flight's states compact.
+    pub fn compaction(&self) -> Compaction {
+        Compaction {
+            every: self.compact_every,
+            step: self.compact_step,
         }
     }
 }
@@ -166,9 +200,18 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     if options.frames < 2 || !options.tolerance.is_finite() || options.tolerance <= 0.0 {
         return Err("need at least 2 frames and a positive tolerance".into());
     }
+    if !(options.visit_fraction > 0.0 && options.visit_fraction <= 1.0) {
+        return Err("the visit fraction must be above 0 and at most 1".into());
+    }
     let (names, views) = views(h, options);
     let params = RefineParams {
         tolerance_px: options.tolerance,
+        // The shared state's baseline re-refines to each camera's view in full.
+        visit_fraction: if options.mode == Mode::Shared {
+            1.0
+        } else {
+            options.visit_fraction
+        },
         ..RefineParams::default()
     };
     let full_config = CameraConfig {
@@ -195,7 +238,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         false,
         options.mode == Mode::Threads,
         options.frames_in_flight,
-        options.compact_every,
+        options.compaction(),
         None,
     )?;
     let largest = summarise(&s.records).active_max;
@@ -231,7 +274,7 @@ fn pin_costs(options: &FlyoverOptions, p: &Prepared) -> Option<Vec<f64>> {
 pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
     let p = prepare(h, options)?;
     let flight = if options.mode == Mode::Shared {
-        fly_shared(h, &p.views, &p.params, &p.config, options.compact_every)?
+        fly_shared(h, &p.views, &p.params, &p.config, options.compaction())?
     } else {
         fly_per_camera(
             h,
@@ -242,7 +285,7 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
             true,
             options.mode == Mode::Threads,
             options.frames_in_flight,
-            options.compact_every,
+            options.compaction(),
             pin_costs(options, &p).as_deref(),
         )?
     };
@@ -305,7 +348,7 @@ pub fn fly_interleaved_sharing(
                 threads: o.mode == Mode::Threads,
                 in_flight: o.frames_in_flight,
                 params: p.params,
-                compact_every: o.compact_every,
+                compaction: o.compaction(),
                 pin: o.pin_threads,
                 first_costs: first.as_deref(),
             }

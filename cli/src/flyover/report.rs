@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use serde_json::{json, Value};
 
-use super::{Flyover, Mode, BUDGET_HEADROOM, FOV_Y_DEG, HEIGHT, SIZING_STRIDE, WIDTH};
+use super::{Flyover, Mode, Record, BUDGET_HEADROOM, FOV_Y_DEG, HEIGHT, SIZING_STRIDE, WIDTH};
 
 fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1024.0 * 1024.0)
@@ -76,7 +76,47 @@ impl Flyover {
             "flight_s": secs(self.flight.wall),
             "sizing_s": self.sizing.as_ref().map(|f| secs(f.wall)),
             "per_camera": per_camera,
+            "budget": self.budget_json(),
         })
+    }
+
+    /// How refinement and compaction were bounded, and how far the fronts lagged their views
+    /// for it: per frame, the share of active nodes whose error projects over the tolerance
+    /// (nodes a full pass would split; measured outside the timed work) and their excess in
+    /// pixels per active node, over all cameras' frames after the first.
+    fn budget_json(&self) -> Value {
+        let o = &self.options;
+        let lag = Lag::of(&self.flight.records);
+        json!({
+            "visit_fraction": o.visit_fraction,
+            "compact_every": o.compact_every,
+            "compact_step": o.compact_step,
+            "lag_share": { "mean": lag.share_mean, "p99": lag.share_p99 },
+            "lag_px_per_node_mean": lag.px_mean,
+            "lag_worst_px": lag.worst_px,
+            "per_camera_lag_share": self.flight.records.iter().map(Record::lag_share_mean)
+                .collect::<Vec<_>>(),
+        })
+    }
+
+    /// The budget line of the report for people.
+    fn human_budget(&self, o: &mut String) {
+        let lag = Lag::of(&self.flight.records);
+        let compaction = match (self.options.compact_every, self.options.compact_step) {
+            (0, _) => "never".to_string(),
+            (every, 0) => format!("whole every {every} frames"),
+            (every, step) => format!("a cycle every {every} frames, {step} work per frame"),
+        };
+        let _ = writeln!(
+            o,
+            "budget: refinement visits {:.0}% of the active list per frame; compaction {};              fronts over the tolerance: {:.2}% of active nodes mean, {:.2}% p99, {:.4} px              excess per active node, worst node {:.2} px",
+            100.0 * self.options.visit_fraction,
+            compaction,
+            100.0 * lag.share_mean,
+            100.0 * lag.share_p99,
+            lag.px_mean,
+            lag.worst_px
+        );
     }
 
     /// The report for people: the set-up, the sizing flight, a table of the cameras and the
@@ -85,6 +125,7 @@ impl Flyover {
         let mut o = String::new();
         self.human_setup(&mut o);
         self.human_cameras(&mut o);
+        self.human_budget(&mut o);
         self.human_memory(&mut o);
         o
     }
@@ -241,5 +282,37 @@ impl Flyover {
                 ", computed, not flown"
             }
         );
+    }
+}
+
+/// How far a flight's fronts lagged their views, over all cameras' frames after the first.
+struct Lag {
+    share_mean: f64,
+    share_p99: f64,
+    px_mean: f64,
+    worst_px: f64,
+}
+
+impl Lag {
+    fn of(records: &[Record]) -> Self {
+        let mut shares: Vec<f64> = records
+            .iter()
+            .flat_map(|r| Record::steady(&r.lag_share).iter().map(|&x| f64::from(x)))
+            .collect();
+        shares.sort_by(f64::total_cmp);
+        let p99 = shares
+            .get(((shares.len() as f64 * 0.99).ceil() as usize).saturating_sub(1))
+            .copied()
+            .unwrap_or(0.0);
+        let n = records.len().max(1) as f64;
+        Self {
+            share_mean: records.iter().map(Record::lag_share_mean).sum::<f64>() / n,
+            share_p99: p99,
+            px_mean: records.iter().map(Record::lag_px_mean).sum::<f64>() / n,
+            worst_px: records
+                .iter()
+                .map(|r| f64::from(r.lag_worst_px))
+                .fold(0.0, f64::max),
+        }
     }
 }

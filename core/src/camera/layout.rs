@@ -2,6 +2,7 @@
 //! view the same words as the same camera again.
 
 use super::certificate::Odometer;
+use super::compact_step::Progress;
 use super::morph_map::MorphMap;
 use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
@@ -87,6 +88,8 @@ pub(crate) struct Scalars {
     churn: u32,
     odometer: Odometer,
     morphs: MorphScalars,
+    visit_cursor: u32,
+    compaction: Progress,
 }
 
 impl Scalars {
@@ -103,6 +106,8 @@ impl Scalars {
             churn: 0,
             odometer: Odometer::new(),
             morphs: MorphScalars::EMPTY,
+            visit_cursor: 0,
+            compaction: Progress::IDLE,
         }
     }
 }
@@ -155,6 +160,8 @@ impl<'m> CameraState<'m> {
                     free: morph_free,
                     scalars: scalars.morphs,
                 },
+                visit_cursor: scalars.visit_cursor,
+                compaction: scalars.compaction,
             },
             stack: bytemuck::cast_slice_mut(stack),
         }
@@ -175,6 +182,8 @@ impl<'m> CameraState<'m> {
             churn: f.churn,
             odometer: f.odometer,
             morphs: f.morphs.scalars,
+            visit_cursor: f.visit_cursor,
+            compaction: f.compaction,
         }
     }
 }

@@ -3,8 +3,10 @@
 
 mod certificate;
 mod compact;
+mod compact_step;
 mod emit;
 mod index_cache;
+mod lag;
 mod layout;
 mod morph;
 mod morph_map;
@@ -13,7 +15,9 @@ mod ops;
 mod pair_map;
 mod refine;
 
+pub use compact_step::CompactProgress;
 pub use emit::EmitError;
+pub use lag::FrontLag;
 pub use morph::MorphVertex;
 pub use ops::OpError;
 pub use refine::{RefineParams, RefineStats};
@@ -354,6 +358,10 @@ pub(crate) struct Front<'m> {
     pub odometer: Odometer,
     /// The geomorphs in progress (empty arrays without morph memory).
     pub morphs: Morphs<'m>,
+    /// Where the next amortised refinement pass starts in `active`.
+    pub visit_cursor: u32,
+    /// How far an incremental compaction has come (see `compact_step`).
+    pub compaction: compact_step::Progress,
 }
 
 impl<'m> CameraState<'m> {
@@ -448,6 +456,8 @@ impl<'m> CameraState<'m> {
         }
         f.active_polygons = f.base;
         f.churn = 0;
+        f.visit_cursor = 0;
+        f.compaction = compact_step::Progress::IDLE;
         f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);
     }

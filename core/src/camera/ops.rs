@@ -522,11 +522,20 @@ impl Front<'_> {
     }
 
     fn alloc_record(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Option<u32> {
-        let r = if self.free_head != NONE {
+        // A free record at or past the high-water mark was dropped by an incremental
+        // compaction (see `compact_step`): it is taken off the list and not used.
+        let mut reused = NONE;
+        while self.free_head != NONE {
             let r = self.free_head;
             let link = self.active.get(r as usize)?.node & !FREE;
             self.free_head = if link == FREE - 1 { NONE } else { link };
-            r
+            if r < self.active_len {
+                reused = r;
+                break;
+            }
+        }
+        let r = if reused != NONE {
+            reused
         } else {
             let r = self.active_len;
             if r as usize >= self.active.len() {

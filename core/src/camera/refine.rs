@@ -6,7 +6,9 @@
 //! active and whose parent no longer needs its split is collapsed when legal. A node changed
 //! by an operation is looked at again at once, so one pass settles refinement however deep;
 //! coarsening can take a few passes, because a collapse waits while a child is still split
-//! (as in Hoppe's). All other work is proportional to the front, not the hierarchy (temporal
+//! (as in Hoppe's). A pass may also be amortised ([`RefineParams::visit_fraction`],
+//! [`RefineParams::max_visits`]): it looks at part of the list and the next one resumes where
+//! it stopped, so a call's work is bounded by the caller. All other work is proportional to the front, not the hierarchy (temporal
 //! coherence).
 
 use glam::{Vec3, Vec4};
@@ -29,6 +31,23 @@ pub struct RefineParams {
     pub tolerance_px: f32,
     /// Most splits + collapses in one call (amortisation over frames); `u32::MAX` for none.
     pub max_ops: u32,
+    /// Share of the active list one call visits (Hoppe's amortised `adapt_refinement`, whose
+    /// demos visit a third per frame). At 1, the default, a call walks the whole list from its
+    /// start, so one call settles refinement. Below 1, a call looks at that share of the
+    /// list's records (at least one) from where the camera's previous amortised call stopped,
+    /// wrapping round at the end; the camera remembers the place in its own state. A camera
+    /// visited so converges, while the view holds still, to the front full passes settle at;
+    /// a moving view is followed a share per call, so parts of the front lag by up to
+    /// `1 / visit_fraction` calls.
+    pub visit_fraction: f32,
+    /// Most records of the active list one call looks at (a record looked at again after an
+    /// operation counts again, and a call looks at no record twice but so), however large
+    /// the share: a work budget per call; any cap makes calls resume where the last stopped. `u32::MAX`,
+    /// the default, sets none. A time budget can be built on it by the caller: measure a
+    /// call's time per [`RefineStats::nodes_visited`] and set this to the budget over that
+    /// cost (the cost per visit is steady for a given hierarchy and machine). Operations are
+    /// bounded separately by `max_ops`.
+    pub max_visits: u32,
     /// Coarsen outside the view frustum.
     pub frustum_culling: bool,
     /// Coarsen where the normal cone faces away from the eye.
@@ -56,6 +75,8 @@ impl Default for RefineParams {
         Self {
             tolerance_px: 1.0,
             max_ops: u32::MAX,
+            visit_fraction: 1.0,
+            max_visits: u32::MAX,
             frustum_culling: true,
             backface_culling: true,
             dt_s: 1.0 / 60.0,
@@ -66,6 +87,30 @@ impl Default for RefineParams {
 }
 
 impl RefineParams {
+    /// These parameters visiting `fraction` of the active list per call (see
+    /// [`visit_fraction`](Self::visit_fraction)).
+    pub fn amortised(self, fraction: f32) -> Self {
+        Self {
+            visit_fraction: fraction,
+            ..self
+        }
+    }
+
+    /// Records of an active list of `len` records one call may look at, or `None` for a full
+    /// pass from the list's start (a share of 1 and no visit cap).
+    fn visit_cap(&self, len: u32) -> Option<u32> {
+        let share = if self.visit_fraction.is_nan() {
+            1.0
+        } else {
+            self.visit_fraction.clamp(0.0, 1.0)
+        };
+        if share >= 1.0 && self.max_visits == u32::MAX {
+            return None;
+        }
+        let by_share = libm::ceilf(share * len as f32) as u32;
+        Some(by_share.min(self.max_visits).max(1))
+    }
+
     /// These parameters with morphs off: every split and collapse at once (what a camera
     /// without morph memory always does).
     pub fn without_morphs(self) -> Self {
@@ -153,7 +198,7 @@ pub(super) struct Criterion {
 }
 
 impl Criterion {
-    fn new(view: &View, tz2: f32, params: &RefineParams) -> Self {
+    pub(super) fn new(view: &View, tz2: f32, params: &RefineParams) -> Self {
         let mut planes = [[Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, Vec4::INFINITY]; 2];
         let used = (view.plane_count as usize).min(view.planes.len());
         for (k, p) in view.planes[..used].iter().enumerate() {
@@ -271,8 +316,33 @@ impl CameraState<'_> {
         if f.morphs.scalars.live > 0 {
             f.sweep_morphs(h, &c, params, &mut st, max_ops)?;
         }
-        let mut i = 0usize;
-        while i < f.active_len as usize && st.operations() < max_ops {
+        // A full pass walks the list from its start; an amortised one looks at `cap` records
+        // from where the previous one stopped, wrapping round once at the end.
+        let cap = params.visit_cap(f.active_len);
+        let mut i = if cap.is_some() {
+            f.visit_cursor as usize
+        } else {
+            0
+        };
+        let start = i;
+        let mut wrapped = false;
+        let mut looked = 0u32;
+        loop {
+            if st.operations() >= max_ops {
+                break;
+            }
+            if i >= f.active_len as usize {
+                if cap.is_none() || wrapped {
+                    break;
+                }
+                (i, wrapped) = (0, true);
+            }
+            if let Some(cap) = cap {
+                if looked >= cap || (wrapped && i >= start) {
+                    break;
+                }
+            }
+            looked += 1;
             let a = f.active[i];
             if a.node & FREE != 0 {
                 i += 1;
@@ -397,6 +467,10 @@ impl CameraState<'_> {
             }
             i += 1;
         }
+        f.visit_cursor = match cap {
+            Some(_) if i < f.active_len as usize => i as u32,
+            _ => 0,
+        };
         st.active_nodes = f.active_nodes;
         st.active_polygons = f.active_polygons;
         st.morphing = f.morphs.scalars.live;
