@@ -86,9 +86,9 @@ pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
 pub use octree::model::{Octree, OctreeFormatError};
 pub use octree::select::{CutError, OctreeCut, SelectStats};
-pub use regulator::Regulator;
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
+pub use regulator::Regulator;
 pub use view::{LookAt, View};
 
 // The committed SPIR-V (vulkan/spirv/) is keyed to the exact bytes of `gpu.rs` and of the

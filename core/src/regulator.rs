@@ -12,9 +12,10 @@
 //!
 //! A front's polygon count falls roughly as `tolerance^-2` (the area each polygon covers on
 //! the screen grows with the square of the error it may have), so Hoppe's rule with gain `g`
-//! shrinks the count's error, in logarithms, by the factor `1 - 2g` per frame. The regulator
-//! takes that step with three guards, each against one way such a loop oscillates:
-//! - a **gain** well below one half ([`Regulator::DEFAULT_GAIN`]): every step undershoots, so
+//! shrinks the count's error, in logarithms, by the factor `1 - 2g` per frame (a real front
+//! often responds less: near full resolution a finer tolerance adds few polygons). The
+//! regulator takes that step with three guards, each against one way such a loop oscillates:
+//! - a **gain** below one half ([`Regulator::DEFAULT_GAIN`]): every step undershoots, so
 //!   the count approaches the target from one side instead of jumping across it;
 //! - a **dead band** ([`Regulator::DEFAULT_DEAD_BAND`]): within it the tolerance stays as it
 //!   is, so the small changes of a moving view do not make it chatter;
@@ -22,11 +23,10 @@
 //!   at most this ratio, so a frame with a wild count (the first, from the base mesh; a cut
 //!   to the view) cannot throw it far.
 //!
-//! Coarsening can lag the tolerance: a camera with geomorphs collapses only after a coarsen
-//! morph. Give [`Regulator::update`] the count the camera is heading for (active polygons
-//! less those whose collapse is pending,
-//! [`CameraState::pending_collapse_polygons`](crate::CameraState::pending_collapse_polygons)),
-//! so that the loop sees the effect of its step at once and does not keep stepping.
+//! Give [`Regulator::update`] the camera's active polygons
+//! ([`RefineStats::active_polygons`](crate::RefineStats)). A camera at its budget refuses
+//! splits ([`RefineStats::capacity_refusals`](crate::RefineStats)); adding two polygons per
+//! refusal tells the regulator how far beyond its budget the front wants to grow.
 //!
 //! The tolerance stays within a floor and a ceiling ([`Regulator::with_limits`]); every input
 //! (zero polygons included) gives a finite positive tolerance.
@@ -42,7 +42,7 @@ use crate::camera::RefineParams;
 /// for _frame in 0..3 {
 ///     params.tolerance_px = r.tolerance();
 ///     // cam.refine(&h, &view, &params)?; then:
-///     let active = 30_000; // cam.active_polygon_count() - cam.pending_collapse_polygons(&h)
+///     let active = 30_000; // stats.active_polygons + 2 * stats.capacity_refusals
 ///     r.update(active);
 /// }
 /// assert!(r.tolerance() > 1.0); // too many polygons: coarser
@@ -61,12 +61,13 @@ pub struct Regulator {
 
 impl Regulator {
     /// The exponent of Hoppe's rule: with a count falling as `tolerance^-2` the count's error
-    /// shrinks by `1 - 2 * 0.2 = 0.6` per frame, without overshoot.
-    pub const DEFAULT_GAIN: f32 = 0.2;
+    /// shrinks by `1 - 2 * 0.4 = 0.2` per frame, without overshoot (tuned on the fly-over's
+    /// flights over St. Helens, whose fronts respond more weakly).
+    pub const DEFAULT_GAIN: f32 = 0.4;
     /// Relative error of the count within which the tolerance holds: 1%.
     pub const DEFAULT_DEAD_BAND: f32 = 0.01;
-    /// Largest change of the tolerance in one frame, as a ratio: 10%.
-    pub const DEFAULT_MAX_STEP: f32 = 1.1;
+    /// Largest change of the tolerance in one frame, as a ratio: 15%.
+    pub const DEFAULT_MAX_STEP: f32 = 1.15;
     /// The default floor of the tolerance, in pixels.
     pub const DEFAULT_MIN_TOLERANCE: f32 = 0.1;
     /// The default ceiling of the tolerance, in pixels.
@@ -163,8 +164,8 @@ impl Regulator {
         self.last_step
     }
 
-    /// Takes the frame's count of active polygons (the count the camera is heading for; see
-    /// the module docs) and returns the tolerance for the next frame.
+    /// Takes the frame's count of active polygons (see the module docs) and returns the
+    /// tolerance for the next frame.
     pub fn update(&mut self, active_polygons: u32) -> f32 {
         let before = self.tolerance;
         // One polygon at least: the logarithm of zero would be a step of infinite size.
@@ -235,7 +236,11 @@ mod tests {
             }
         }
         assert_eq!(signs, 0, "the step never changes direction on a still view");
-        assert!((r.tolerance() / 3.0 - 1.0).abs() < 0.01, "{}", r.tolerance());
+        assert!(
+            (r.tolerance() / 3.0 - 1.0).abs() < 0.01,
+            "{}",
+            r.tolerance()
+        );
     }
 
     #[test]
@@ -262,12 +267,24 @@ mod tests {
         }
         assert_eq!(r.tolerance(), 4.0);
         let r = Regulator::new(1).with_limits(8.0, 2.0);
-        assert_eq!(r.tolerance(), 8.0, "a ceiling below the floor is raised to it");
+        assert_eq!(
+            r.tolerance(),
+            8.0,
+            "a ceiling below the floor is raised to it"
+        );
     }
 
     #[test]
     fn never_gives_a_tolerance_that_is_not_a_positive_number() {
-        let odd = [0.0f32, -1.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-30, 1e30];
+        let odd = [
+            0.0f32,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            1e-30,
+            1e30,
+        ];
         let counts = [0u32, 1, 7, 20_000, u32::MAX];
         for &a in &odd {
             for &b in &odd {

@@ -24,6 +24,8 @@ pub struct Record {
     pub indices: Vec<u32>,
     pub refusals: u64,
     pub overflows: u64,
+    pub morphs_started: u64,
+    pub morphs_dropped: u64,
 }
 
 impl Record {
@@ -50,6 +52,8 @@ impl Record {
         self.indices.push(indices as u32);
         self.refusals += u64::from(st.capacity_refusals);
         self.overflows += u64::from(st.stack_overflows);
+        self.morphs_started += u64::from(st.morphs_started);
+        self.morphs_dropped += u64::from(st.morphs_dropped);
     }
 
     /// Frames after the first: the first frame refines from the base mesh.
@@ -169,6 +173,9 @@ pub fn frame(
     rec: &mut Record,
     compact: bool,
 ) -> Result<(), String> {
+    // The first frame refines from the base mesh: there is no picture before it to morph from.
+    let first = params.without_morphs();
+    let params = if rec.ops.is_empty() { &first } else { params };
     let t0 = Instant::now();
     // Compaction counts as refinement time: it is what keeps the next passes local.
     if compact {
@@ -180,9 +187,13 @@ pub fn frame(
     let t1 = Instant::now();
     let n = match out {
         Some(out) => {
-            let n = cam
-                .emit_indices_packed(h, &mut out.indices, &mut out.offsets)
-                .map_err(|e| format!("emit: {e}"))?;
+            // A camera with morph memory points its morphing corners at their slots.
+            let n = if cam.max_morphs() > 0 {
+                cam.emit_indices_packed_morphed(h, &mut out.indices, &mut out.offsets)
+            } else {
+                cam.emit_indices_packed(h, &mut out.indices, &mut out.offsets)
+            }
+            .map_err(|e| format!("emit: {e}"))?;
             std::hint::black_box(&out.indices);
             n
         }

@@ -421,19 +421,6 @@ impl CameraState<'_> {
         self.front.morphs.capacity() as u32
     }
 
-    /// Polygons that the collapses of this camera's coarsen morphs will remove when they end
-    /// (one or two per morph): the active polygon count less this is the count the camera
-    /// is heading for, which a [`Regulator`](crate::Regulator) should hold. O(morphs).
-    pub fn pending_collapse_polygons(&self, h: &Hierarchy<'_>) -> u32 {
-        let m = &self.front.morphs;
-        let len = (m.scalars.len as usize).min(m.capacity()) as u32;
-        (0..len)
-            .filter_map(|k| m.state(k).filter(|s| s.phase == COARSENING))
-            .filter_map(|s| h.split(NodeId(s.parent)))
-            .map(|s| if s.f_r.is_none() { 1 } else { 2 })
-            .sum()
-    }
-
     /// Ends every morph at once: refine morphs snap to the fine position, coarsen morphs back
     /// to it too (their collapses wait for refinement to want them again). The front is
     /// unchanged.
