@@ -60,7 +60,10 @@ impl Pilot {
         if let Some(r) = &mut self.regulator {
             // A camera at its budget refuses splits: each refused split is up to two
             // polygons the front wants and cannot hold.
-            r.update(cam.active_polygon_count().saturating_add(2 * refused));
+            r.update(
+                cam.active_polygon_count()
+                    .saturating_add(refused.saturating_mul(2)),
+            );
         }
     }
 
