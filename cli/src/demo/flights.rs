@@ -32,7 +32,7 @@ pub struct Flights {
     pub morphed: Flyover,
     /// The same without geomorphs.
     pub unmorphed: Flyover,
-    /// Four cameras regulated to [`REGULATED_TARGET`] polygons, with geomorphs.
+    /// Four cameras regulated to 20,000 polygons, with geomorphs.
     pub regulated: Flyover,
 }
 

@@ -53,7 +53,8 @@ pub fn morphs_for_budget(budget: u32) -> u32 {
 /// Morph memory for the cameras of a sizing flight flown every `stride` frames with
 /// `params`' morph durations: the most operations of any camera within one refine morph's
 /// duration (each operation may start a morph that lasts at most that long, at 60 frames
-/// per second), times [`MORPH_HEADROOM`].
+/// per second), times three quarters (about half the operations are of nodes outside the
+/// view, which split and collapse at once).
 pub fn morphs_for_sizing(sizing: &Flight, stride: usize, params: &RefineParams) -> u32 {
     let frames = (params.refine_morph_s.max(params.coarsen_morph_s) / params.dt_s.max(1e-6))
         .ceil()
