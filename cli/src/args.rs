@@ -155,6 +155,14 @@ pub struct FlyoverArgs {
     /// array over the hierarchy (less memory, slower refinement).
     #[arg(long)]
     pub hashed_pair_map: bool,
+    /// Split and collapse at once instead of geomorphing visible vertices (on by default:
+    /// cameras hold up to 4096 morphs).
+    #[arg(long)]
+    pub no_geomorphs: bool,
+    /// Regulate each camera's tolerance to hold this many active polygons (starting at
+    /// --tolerance; a state per camera on one thread).
+    #[arg(long, conflicts_with_all = ["shared_state", "threads"])]
+    pub target_polygons: Option<u32>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,

@@ -24,6 +24,8 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         index_cache: true,
         pin_threads: true,
         hashed_pair_map: false,
+        geomorphs: true,
+        target_polygons: None,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(

@@ -20,6 +20,8 @@
 //!   ([`CameraConfig::with_morphs`]) lists its morphing vertices
 //!   ([`CameraState::morph_vertices`]) for the GPU to blend, and its morphed emission points
 //!   at them.
+//! - A [`Regulator`] adapts a camera's pixel tolerance each frame to hold a number of active
+//!   polygons (Hoppe's regulation, damped).
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {
@@ -70,6 +72,7 @@ mod outputs;
 #[cfg(feature = "alloc")]
 mod owned;
 mod prefetch;
+mod regulator;
 mod view;
 
 pub use camera::{
@@ -85,4 +88,5 @@ pub use octree::model::{Octree, OctreeFormatError};
 pub use octree::select::{CutError, OctreeCut, SelectStats};
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
+pub use regulator::Regulator;
 pub use view::{LookAt, View};

@@ -55,5 +55,7 @@ fn options(a: &FlyoverArgs) -> FlyoverOptions {
         index_cache: !a.no_index_cache,
         pin_threads: !a.no_pin,
         hashed_pair_map: a.hashed_pair_map,
+        geomorphs: !a.no_geomorphs,
+        target_polygons: a.target_polygons,
     }
 }

@@ -3,6 +3,7 @@
 
 use caveclod_core::Hierarchy;
 
+use super::smooth::REGULATED_TARGET;
 use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};
 
 /// The measured flights.
@@ -27,6 +28,12 @@ pub struct Flights {
     /// Four cameras as lean in memory as the library allows: no index cache, and the
     /// split-to-pair map hashed (`CameraConfig::hashed_pair_map`).
     pub lean: Flyover,
+    /// Four cameras, a state each on one thread, with geomorphs and the popping meter.
+    pub morphed: Flyover,
+    /// The same without geomorphs.
+    pub unmorphed: Flyover,
+    /// Four cameras regulated to 20,000 polygons, with geomorphs.
+    pub regulated: Flyover,
 }
 
 /// The display rate the report converts per-frame figures at, for comparison with the CAVECLOD
@@ -56,7 +63,8 @@ pub const THREADS_ROUNDS: usize = 5;
 /// flights (four cameras on one thread, two and three cameras, each camera alone, four
 /// cameras without the index cache, four without it and with hashed pair maps) interleaved
 /// in segments of [`SEGMENT`] frames, so that the ratios compare flights measured under the
-/// same load.
+/// same load; then four cameras with and without geomorphs and regulated, for popping and
+/// regulation.
 pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let base = FlyoverOptions {
         cameras: 4,
@@ -109,6 +117,23 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     let alone = (0..4).map(|_| next()).collect::<Result<Vec<_>, _>>()?;
     let uncached = next()?;
     let lean = next()?;
+    // Popping and regulation are measured on flights of their own (one thread, a pilot per
+    // camera), after the timed comparisons.
+    let morphed = fly(h, &base)?;
+    let unmorphed = fly(
+        h,
+        &FlyoverOptions {
+            geomorphs: false,
+            ..base
+        },
+    )?;
+    let regulated = fly(
+        h,
+        &FlyoverOptions {
+            target_polygons: Some(REGULATED_TARGET),
+            ..base
+        },
+    )?;
     Ok(Flights {
         per_camera,
         shared,
@@ -118,6 +143,9 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         alone,
         uncached,
         lean,
+        morphed,
+        unmorphed,
+        regulated,
     })
 }
 

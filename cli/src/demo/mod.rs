@@ -12,6 +12,7 @@ mod flights;
 mod plots;
 pub mod render;
 mod report;
+mod smooth;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -159,8 +160,8 @@ pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutco
     let h = terrain.hierarchy()?;
     say(&format!(
         "flying 4 cameras over {} polygons: a state per camera, one shared state, a thread per \
-         camera, 2 and 3 cameras, each camera alone, 4 without the index cache and 4 lean in \
-         memory ({} frames each)",
+         camera, 2 and 3 cameras, each camera alone, 4 without the index cache, 4 lean in \
+         memory, 4 with and without geomorphs and 4 regulated ({} frames each)",
         h.polygon_count(),
         options.frames
     ));

@@ -51,7 +51,7 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
-/// The table of the five measures against their targets: the head of `report.md`, and
+/// The table of the measures against their targets: the head of `report.md`, and
 /// `results.md`, which `cargo xtask demo` puts into the README.
 pub fn results_table(f: &Flights, r: &Ratios) -> String {
     let mut s = String::new();
@@ -93,6 +93,7 @@ pub fn results_table(f: &Flights, r: &Ratios) -> String {
         pc.memory_budgeted.paper_camera_bytes,
         verdict(r.memory <= 0.5)
     );
+    s.push_str(&super::smooth::rows(f));
     s
 }
 
@@ -113,6 +114,7 @@ pub(super) fn report(
     huge_pages(&mut s, terrain);
     paper_unit(&mut s, f);
     index_cache(&mut s, f);
+    super::smooth::section(&mut s, f);
     flight_reports(&mut s, f);
     figures_list(&mut s);
     s

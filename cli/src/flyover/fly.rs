@@ -32,6 +32,8 @@ pub struct Record {
     pub lag_px: Vec<f32>,
     /// The largest excess of any node in any frame, in pixels.
     pub lag_worst_px: f32,
+    pub morphs_started: u64,
+    pub morphs_dropped: u64,
 }
 
 impl Record {
@@ -60,6 +62,8 @@ impl Record {
         self.indices.push(indices as u32);
         self.refusals += u64::from(st.capacity_refusals);
         self.overflows += u64::from(st.stack_overflows);
+        self.morphs_started += u64::from(st.morphs_started);
+        self.morphs_dropped += u64::from(st.morphs_dropped);
     }
 
     /// Records how far the front lags its view (measured outside the timed work).
@@ -224,13 +228,19 @@ pub fn frame(
     compact: CompactNow,
 ) -> Result<(), String> {
     // A camera at its base mesh (new, or with nothing in view) refines in one full pass, as
-    // an engine settles a new camera: amortisation spreads coherent motion over frames.
+    // an engine settles a new camera: amortisation spreads coherent motion over frames. The
+    // first frame also refines without morphs: there is no picture before it to morph from.
     let first = RefineParams {
         visit_fraction: 1.0,
         max_visits: u32::MAX,
         ..*params
     };
-    let params = if cam.split_count() == 0 {
+    let first = if rec.ops.is_empty() {
+        first.without_morphs()
+    } else {
+        first
+    };
+    let params = if cam.split_count() == 0 || rec.ops.is_empty() {
         &first
     } else {
         params
@@ -248,9 +258,13 @@ pub fn frame(
     let t1 = Instant::now();
     let n = match out {
         Some(out) => {
-            let n = cam
-                .emit_indices_packed(h, &mut out.indices, &mut out.offsets)
-                .map_err(|e| format!("emit: {e}"))?;
+            // A camera with morph memory points its morphing corners at their slots.
+            let n = if cam.max_morphs() > 0 {
+                cam.emit_indices_packed_morphed(h, &mut out.indices, &mut out.offsets)
+            } else {
+                cam.emit_indices_packed(h, &mut out.indices, &mut out.offsets)
+            }
+            .map_err(|e| format!("emit: {e}"))?;
             std::hint::black_box(&out.indices);
             n
         }
@@ -289,7 +303,7 @@ fn camera_order(n: usize, cameras: usize) -> impl Iterator<Item = usize> {
 
 /// Whether a state starts a compaction before its `n`-th refinement (every `c.every`,
 /// 0 = never), and how.
-fn compact_now(n: usize, c: Compaction) -> CompactNow {
+pub(super) fn compact_now(n: usize, c: Compaction) -> CompactNow {
     CompactNow {
         due: c.every > 0 && n % c.every == c.every - 1,
         step: c.step,

@@ -20,19 +20,69 @@
 
 pub mod fly;
 pub mod gate;
+pub mod pilot;
 pub mod placement;
+pub mod popping;
 mod report;
 pub mod routes;
 
+use std::sync::Arc;
+
+use caveclod_core::glam::Mat4;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, MemoryReport, RefineParams, View};
 
 pub use fly::{fly_per_camera, fly_shared, summarise, Compaction, Flight, Record, Summary};
-pub use routes::{clip, eye_at, routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
+pub use pilot::{fly_piloted, Pilot};
+pub use popping::{PopMeter, PopTables};
+pub use routes::{clip, eye_at, look_at, routes, view_at, Ground, FOV_Y_DEG, HEIGHT, WIDTH};
 
 /// Headroom over the sizing flight's largest front when budgeting cameras.
 const BUDGET_HEADROOM: f64 = 1.10;
 /// The sizing flight refines every this many frames.
 const SIZING_STRIDE: usize = 3;
+/// Headroom of a regulated camera's polygon budget over its target.
+const REGULATED_HEADROOM: f64 = 1.25;
+/// Geomorphs a full-capacity camera holds at once when the fly-over morphs
+/// ([`FlyoverOptions::geomorphs`]); budgeted cameras hold [`morphs_for_budget`] or, sized by a
+/// sizing flight, [`morphs_for_sizing`].
+pub const MAX_MORPHS: u32 = 4096;
+/// A sized camera's morph memory over the operations of its sizing flight within one
+/// morph's duration: about half the operations are of nodes outside the view, which split and
+/// collapse at once, and the other half then has half again as much room.
+const MORPH_HEADROOM: f64 = 0.75;
+
+/// Morph memory for a camera of `budget` polygons flown without a sizing flight: a quarter
+/// of its budget (a regulated camera at its target starts and collapses about that many
+/// visible vertices within one refine morph's duration over St. Helens).
+pub fn morphs_for_budget(budget: u32) -> u32 {
+    (budget / 4).max(256)
+}
+
+/// Morph memory for the cameras of a sizing flight flown every `stride` frames with
+/// `params`' morph durations: the most operations of any camera within one refine morph's
+/// duration (each operation may start a morph that lasts at most that long, at 60 frames
+/// per second), times three quarters (about half the operations are of nodes outside the
+/// view, which split and collapse at once).
+pub fn morphs_for_sizing(sizing: &Flight, stride: usize, params: &RefineParams) -> u32 {
+    let frames = (params.refine_morph_s.max(params.coarsen_morph_s) / params.dt_s.max(1e-6))
+        .ceil()
+        .max(1.0) as usize;
+    let window = frames.div_ceil(stride.max(1)).max(1);
+    let most = sizing
+        .records
+        .iter()
+        .map(|r| {
+            let steady = Record::steady(&r.ops);
+            steady
+                .windows(window.min(steady.len()).max(1))
+                .map(|w| w.iter().map(|&x| u64::from(x)).sum::<u64>())
+                .max()
+                .unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0);
+    ((most as f64 * MORPH_HEADROOM).ceil() as u32).max(256)
+}
 
 /// The fly-over's default work per frame of an incremental compaction.
 pub const COMPACT_STEP: u32 = 4_096;
@@ -105,6 +155,15 @@ pub struct FlyoverOptions {
     /// Keep each budgeted camera's split-to-pair map hashed where that is smaller
     /// ([`CameraConfig::hashed_pair_map`]): less memory, slower refinement.
     pub hashed_pair_map: bool,
+    /// Geomorph splits and collapses of visible nodes ([`RefineParams`]' default durations
+    /// at 60 frames per second; morph memory from [`morphs_for_sizing`], [`morphs_for_budget`]
+    /// or [`MAX_MORPHS`]); the shared state never morphs (its front is re-refined for another
+    /// camera every turn).
+    pub geomorphs: bool,
+    /// Fly every camera with a [`caveclod_core::Regulator`] holding this many active
+    /// polygons, starting at `tolerance` (a state per camera on one thread only). The
+    /// cameras are budgeted to the target plus 25%, without a sizing flight.
+    pub target_polygons: Option<u32>,
 }
 
 impl Default for FlyoverOptions {
@@ -123,6 +182,8 @@ impl Default for FlyoverOptions {
             index_cache: true,
             pin_threads: true,
             hashed_pair_map: false,
+            geomorphs: true,
+            target_polygons: None,
         }
     }
 }
@@ -159,6 +220,11 @@ pub struct Flyover {
     pub budget_polygons: u32,
     /// Vertex-table cells and filled cells.
     pub vertex_table_fill: (u64, u64),
+    /// Per camera, its pilot (regulator and popping meter): per-camera states on one thread
+    /// only ([`fly()`]); empty otherwise.
+    pub pilots: Vec<Pilot>,
+    /// Morphs each camera could hold at once (0: no geomorphs).
+    pub max_morphs: u32,
 }
 
 /// Every camera's views for `options`, computed up front.
@@ -179,6 +245,21 @@ pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>,
         })
         .collect();
     (names, views)
+}
+
+/// Every camera's view-projection matrices for `options` (those of [`views`]).
+pub fn view_projections(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Vec<Vec<Mat4>> {
+    let ground = Ground::new(h);
+    let speed = ground.size / 600.0;
+    let all = routes();
+    (0..options.cameras.clamp(1, 4))
+        .map(|i| &all[(options.first_route + i) % all.len()])
+        .map(|r| {
+            (0..options.frames)
+                .map(|f| look_at(r, f, speed, &ground).view_projection(WIDTH / HEIGHT))
+                .collect()
+        })
+        .collect()
 }
 
 /// A flight's views and cameras, sized, before the measured flight.
@@ -203,7 +284,11 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     if !(options.visit_fraction > 0.0 && options.visit_fraction <= 1.0) {
         return Err("the visit fraction must be above 0 and at most 1".into());
     }
+    if options.target_polygons.is_some() && options.mode != Mode::PerCamera {
+        return Err("a polygon target flies a state per camera on one thread".into());
+    }
     let (names, views) = views(h, options);
+    let morphing = options.geomorphs && options.mode != Mode::Shared;
     let params = RefineParams {
         tolerance_px: options.tolerance,
         // The shared state's baseline re-refines to each camera's view in full.
@@ -214,6 +299,12 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         },
         ..RefineParams::default()
     };
+    let params = if morphing {
+        params
+    } else {
+        params.without_morphs()
+    };
+    let morphs = |n: u32| if morphing { n } else { 0 };
     let full_config = CameraConfig {
         index_cache: options.index_cache,
         hashed_pair_map: options.hashed_pair_map,
@@ -224,15 +315,33 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
             names,
             views,
             params,
-            config: full_config,
+            config: full_config.with_morphs(morphs(MAX_MORPHS)),
             sizing: None,
             budget: None,
         });
     }
+    if let Some(target) = options.target_polygons {
+        let budget = ((f64::from(target) * REGULATED_HEADROOM).ceil() as u32)
+            .max(h.base_polygon_count() as u32);
+        return Ok(Prepared {
+            names,
+            views,
+            params,
+            config: CameraConfig {
+                index_cache: options.index_cache,
+                hashed_pair_map: options.hashed_pair_map,
+                ..CameraConfig::with_polygon_budget(h, budget)
+                    .with_morphs(morphs(morphs_for_budget(budget)))
+            },
+            sizing: None,
+            budget: Some(budget),
+        });
+    }
+    // The sizing flight refines every third frame: it finds fronts, without morphs.
     let s = fly_per_camera(
         h,
         &views,
-        &params,
+        &params.without_morphs(),
         &full_config,
         SIZING_STRIDE,
         false,
@@ -251,7 +360,11 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         config: CameraConfig {
             index_cache: options.index_cache,
             hashed_pair_map: options.hashed_pair_map,
-            ..CameraConfig::with_polygon_budget(h, budget)
+            ..CameraConfig::with_polygon_budget(h, budget).with_morphs(morphs(morphs_for_sizing(
+                &s,
+                SIZING_STRIDE,
+                &params,
+            )))
         },
         sizing: Some(s),
         budget: Some(budget),
@@ -273,8 +386,26 @@ fn pin_costs(options: &FlyoverOptions, p: &Prepared) -> Option<Vec<f64>> {
 /// Flies `options` over `h`.
 pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
     let p = prepare(h, options)?;
+    let mut pilots = Vec::new();
     let flight = if options.mode == Mode::Shared {
         fly_shared(h, &p.views, &p.params, &p.config, options.compaction())?
+    } else if options.mode == Mode::PerCamera {
+        let tables = Arc::new(PopTables::new(h));
+        pilots = p
+            .views
+            .iter()
+            .map(|_| Pilot::new(tables.clone(), options.target_polygons, options.tolerance))
+            .collect();
+        fly_piloted(
+            h,
+            &p.views,
+            &view_projections(h, options),
+            &p.params,
+            &p.config,
+            options.frames_in_flight,
+            options.compaction(),
+            &mut pilots,
+        )?
     } else {
         fly_per_camera(
             h,
@@ -289,7 +420,9 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
             pin_costs(options, &p).as_deref(),
         )?
     };
-    Ok(finish(h, options, &p, flight))
+    let mut flyover = finish(h, options, &p, flight);
+    flyover.pilots = pilots;
+    Ok(flyover)
 }
 
 /// Sizing flights already flown, by the options they were flown for: flights given the same
@@ -401,6 +534,8 @@ fn finish(h: &Hierarchy<'_>, options: &FlyoverOptions, p: &Prepared, flight: Fli
         memory_budgeted: MemoryReport::new(h, budget_bytes, na, pa),
         budget_polygons,
         vertex_table_fill: h.vertex_table_fill(),
+        pilots: Vec::new(),
+        max_morphs: p.config.max_morphs,
     }
 }
 

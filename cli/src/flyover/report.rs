@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use serde_json::{json, Value};
 
+use super::pilot::{HELD_WITHIN, SETTLING_FRAMES};
 use super::{Flyover, Mode, Record, BUDGET_HEADROOM, FOV_Y_DEG, HEIGHT, SIZING_STRIDE, WIDTH};
 
 fn mib(bytes: u64) -> f64 {
@@ -19,7 +20,11 @@ impl Flyover {
     /// The report as JSON, with the stable keys `cameras`, `frames`, `ops_per_camera_per_frame`
     /// (mean, max, first frame), `refine_ms_per_frame` (mean, p99), `active_polygons` (mean and
     /// max per camera), `static_bytes`, `camera_bytes`, `paper_camera_bytes` (for the camera
-    /// actually flown: budgeted when sized, full otherwise), and more.
+    /// actually flown: budgeted when sized, full otherwise), and more. Per camera of a
+    /// per-camera flight on one thread: `max_jump_px` and `p99_jump_px` (popping, see
+    /// `popping`), and with a polygon target `regulation` (the share of frames after the
+    /// first 30 within 5% of the target, the tolerance step's sign changes, the tolerance's
+    /// mean, min and max).
     pub fn json(&self) -> Value {
         let s = &self.summary;
         let flown = if self.budget.is_some() {
@@ -31,7 +36,20 @@ impl Flyover {
             .names
             .iter()
             .zip(&self.flight.records)
-            .map(|(name, r)| {
+            .enumerate()
+            .map(|(c, (name, r))| {
+                let pilot = self.pilots.get(c);
+                let regulation = pilot.and_then(|p| {
+                    let (mean, min, max) = p.tolerance_range();
+                    Some(json!({
+                        "target_polygons": p.regulator?.target(),
+                        "held_share": p.held_share(r)?,
+                        "sign_changes": p.sign_changes(),
+                        "tolerance_mean_px": mean,
+                        "tolerance_min_px": min,
+                        "tolerance_max_px": max,
+                    }))
+                });
                 json!({
                     "name": name,
                     "ops_mean": r.ops_mean(),
@@ -43,6 +61,15 @@ impl Flyover {
                     "active_polygons_mean": r.active_mean(),
                     "active_polygons_max": r.active_max(),
                     "indices_total": r.indices_total(),
+                    "morphs_started": r.morphs_started,
+                    "morphs_dropped": r.morphs_dropped,
+                    "max_morphing": pilot.map(|p| p.max_morphing),
+                    "max_jump_px": pilot.map(|p| p.meter.max_px()),
+                    "p99_jump_px": pilot.map(|p| p.meter.p99_px()),
+                    "surface_max_jump_px": pilot.map(|p| p.meter.surface_max_px()),
+                    "surface_p99_jump_px": pilot.map(|p| p.meter.surface_p99_px()),
+                    "moved_vertices": pilot.map(|p| p.meter.jumps.len()),
+                    "regulation": regulation,
                 })
             })
             .collect();
@@ -57,6 +84,9 @@ impl Flyover {
             "index_cache": self.options.index_cache,
             "hashed_pair_map": self.options.hashed_pair_map,
             "pinned": (self.options.mode == Mode::Threads).then_some(self.options.pin_threads),
+            "geomorphs": self.morphing(),
+            "max_morphs": self.morphing().then_some(self.max_morphs),
+            "target_polygons": self.options.target_polygons,
             "ops_per_camera_per_frame": {
                 "mean": s.ops_mean, "max": s.ops_max, "first_frame": s.first_frame_ops
             },
@@ -126,8 +156,90 @@ impl Flyover {
         self.human_setup(&mut o);
         self.human_cameras(&mut o);
         self.human_budget(&mut o);
+        self.human_smoothness(&mut o);
         self.human_memory(&mut o);
         o
+    }
+
+    /// Whether the flight's cameras geomorph.
+    pub fn morphing(&self) -> bool {
+        self.options.geomorphs && self.options.mode != Mode::Shared
+    }
+
+    /// Per camera: popping, morphs and, with a polygon target, the regulation.
+    fn human_smoothness(&self, o: &mut String) {
+        if self.pilots.is_empty() {
+            return;
+        }
+        let _ = writeln!(
+            o,
+            "popping (on-screen move per frame of each vertex refinement moves, in view and \
+             facing the eye; surface: its part along the vertex normal; {}):",
+            if self.morphing() {
+                format!("geomorphs, up to {} per camera", self.max_morphs)
+            } else {
+                "no geomorphs".to_string()
+            }
+        );
+        let _ = writeln!(
+            o,
+            "  {:<14} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9} {:>8} {:>9}",
+            "camera",
+            "max-jump",
+            "p99-jump",
+            "max-surf",
+            "p99-surf",
+            "moved",
+            "morphs",
+            "dropped",
+            "max-live"
+        );
+        for (name, (r, p)) in self
+            .names
+            .iter()
+            .zip(self.flight.records.iter().zip(&self.pilots))
+        {
+            let _ = writeln!(
+                o,
+                "  {:<14} {:>7.3} px {:>7.3} px {:>7.3} px {:>7.3} px {:>9} {:>9} {:>8} {:>9}",
+                name,
+                p.meter.max_px(),
+                p.meter.p99_px(),
+                p.meter.surface_max_px(),
+                p.meter.surface_p99_px(),
+                p.meter.jumps.len(),
+                r.morphs_started,
+                r.morphs_dropped,
+                p.max_morphing
+            );
+        }
+        let Some(target) = self.options.target_polygons else {
+            return;
+        };
+        let _ = writeln!(
+            o,
+            "regulation to {target} polygons (frames after the first {SETTLING_FRAMES} within \
+             {:.0}%; sign changes of the tolerance's step):",
+            HELD_WITHIN * 100.0
+        );
+        for (name, (r, p)) in self
+            .names
+            .iter()
+            .zip(self.flight.records.iter().zip(&self.pilots))
+        {
+            let (mean, min, max) = p.tolerance_range();
+            let _ = writeln!(
+                o,
+                "  {:<14} held {:>5.1}%  sign changes {:>3}  tolerance {:.3} px mean \
+                 ({:.3}..{:.3})",
+                name,
+                100.0 * p.held_share(r).unwrap_or(0.0),
+                p.sign_changes(),
+                mean,
+                min,
+                max
+            );
+        }
     }
 
     /// How the cameras fly: their count, the tolerance, the mode and the sizing flight.

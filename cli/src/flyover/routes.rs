@@ -221,15 +221,20 @@ pub fn clip(ground: &Ground) -> (f32, f32) {
 /// The view of `route` at frame `frame` (1280 x 720, 60 degrees), flying `speed` world units
 /// per frame.
 pub fn view_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> View {
+    look_at(route, frame, speed, ground).view(WIDTH as u32, HEIGHT as u32)
+}
+
+/// The camera of `route` at frame `frame`, flying `speed` world units per frame: its view
+/// is [`view_at`], and its view-projection `look_at(..).view_projection(WIDTH / HEIGHT)`.
+pub fn look_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> LookAt {
     let (eye, dir) = eye_at(route, frame, speed, ground);
     let (near, far) = clip(ground);
-    let look = LookAt {
+    LookAt {
         eye,
         target: eye + dir,
         up: Vec3::Y,
         fov_y: FOV_Y_DEG.to_radians(),
         near,
         far,
-    };
-    look.view(WIDTH as u32, HEIGHT as u32)
+    }
 }
