@@ -10,19 +10,19 @@ use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::mesh::upload;
-use crate::pipeline::{GeomorphPipeline, GEOMORPH_LOCAL_SIZE};
+use crate::pipeline::{ComputePipeline, GEOMORPH_LOCAL_SIZE};
 
 /// The geomorph compute pipeline with a descriptor pool for its dispatches.
 #[derive(Debug)]
 pub struct Geomorph {
-    pipeline: GeomorphPipeline,
+    pipeline: ComputePipeline,
     pool: vk::DescriptorPool,
 }
 
 impl Geomorph {
     /// Creates the pipeline and a descriptor pool.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let pipeline = GeomorphPipeline::new(ctx)?;
+        let pipeline = ComputePipeline::geomorph(ctx)?;
         let sizes = [vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
             descriptor_count: 3,

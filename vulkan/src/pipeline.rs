@@ -307,69 +307,53 @@ impl DrawPipeline {
     }
 }
 
-/// The geomorph compute pipeline (`geomorph_cs`), its descriptor set layout and layout.
+/// A compute pipeline over one set of storage buffers, with that set's layout and its own
+/// layout: `geomorph_cs` ([`ComputePipeline::geomorph`]) or `morphing_cs`
+/// ([`ComputePipeline::morphing`]).
 #[derive(Debug)]
-pub(crate) struct GeomorphPipeline {
+pub(crate) struct ComputePipeline {
     /// The pipeline.
     pub(crate) raw: vk::Pipeline,
     /// Its layout (one set, push constants).
     pub(crate) layout: vk::PipelineLayout,
-    /// Set 0: bindings 0 (a), 1 (b), 2 (output), storage buffers.
+    /// The set's layout.
     pub(crate) set_layout: vk::DescriptorSetLayout,
 }
 
-impl GeomorphPipeline {
-    /// Creates the compute pipeline.
-    pub(crate) fn new(ctx: &Context) -> Result<Self> {
-        let set_layout = storage_set_layout(ctx, 3, vk::ShaderStageFlags::COMPUTE)?;
+impl ComputePipeline {
+    /// `geomorph_cs`: set 0 holds bindings 0 (a), 1 (b), 2 (output), storage buffers.
+    pub(crate) fn geomorph(ctx: &Context) -> Result<Self> {
         let push = std::mem::size_of::<MorphPush>() as u32;
-        match compute_pipeline(ctx, set_layout, entry::GEOMORPH_CS, push) {
-            Ok((raw, layout)) => Ok(Self {
-                raw,
-                layout,
-                set_layout,
-            }),
-            Err(e) => {
-                // SAFETY: unused.
-                unsafe { ctx.device.destroy_descriptor_set_layout(set_layout, None) };
-                Err(e)
-            }
-        }
+        Self::new(
+            ctx,
+            3,
+            vk::ShaderStageFlags::COMPUTE,
+            entry::GEOMORPH_CS,
+            push,
+        )
     }
 
-    /// Destroys pipeline and layouts. The GPU must be done with them.
-    pub(crate) fn destroy(self, ctx: &Context) {
-        // SAFETY: the caller guarantees no pending work uses them.
-        unsafe {
-            ctx.device.destroy_pipeline(self.raw, None);
-            ctx.device.destroy_pipeline_layout(self.layout, None);
-            ctx.device
-                .destroy_descriptor_set_layout(self.set_layout, None);
-        }
-    }
-}
-
-/// The refinement-geomorph compute pipeline (`morphing_cs`) and the set layout of a
-/// camera's morph buffers, which the morphing vertex stage binds as set 1 and the compute
-/// stage as set 0: bindings 0 (persistent vertices), 1 (morph slots), 2 (blended vertices),
-/// 3 (vertex colours), storage buffers, vertex and compute stages.
-#[derive(Debug)]
-pub(crate) struct MorphingPipeline {
-    /// The compute pipeline.
-    pub(crate) raw: vk::Pipeline,
-    /// Its layout (the morph set, push constants).
-    pub(crate) layout: vk::PipelineLayout,
-    /// The morph set's layout.
-    pub(crate) set_layout: vk::DescriptorSetLayout,
-}
-
-impl MorphingPipeline {
-    /// Creates the set layout and the compute pipeline.
-    pub(crate) fn new(ctx: &Context) -> Result<Self> {
+    /// `morphing_cs`, and the set layout of a camera's morph buffers, which the morphing
+    /// vertex stage binds as set 1 and the compute stage as set 0: bindings 0 (persistent
+    /// vertices), 1 (morph slots), 2 (blended vertices), 3 (vertex colours), storage
+    /// buffers, vertex and compute stages.
+    pub(crate) fn morphing(ctx: &Context) -> Result<Self> {
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::COMPUTE;
-        let set_layout = storage_set_layout(ctx, 4, stages)?;
         let push = std::mem::size_of::<MorphSlotsPush>() as u32;
-        match compute_pipeline(ctx, set_layout, entry::MORPHING_CS, push) {
+        Self::new(ctx, 4, stages, entry::MORPHING_CS, push)
+    }
+
+    /// Entry point `name` over a set of `bindings` storage buffers visible to `stages`, with
+    /// `push` bytes of push constants.
+    fn new(
+        ctx: &Context,
+        bindings: u32,
+        stages: vk::ShaderStageFlags,
+        name: &CStr,
+        push: u32,
+    ) -> Result<Self> {
+        let set_layout = storage_set_layout(ctx, bindings, stages)?;
+        match compute_pipeline(ctx, set_layout, name, push) {
             Ok((raw, layout)) => Ok(Self {
                 raw,
                 layout,

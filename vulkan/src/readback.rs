@@ -169,53 +169,7 @@ impl ImageReadback {
             "image read-back",
             BufferDesc::gpu_to_cpu(size, vk::BufferUsageFlags::TRANSFER_DST),
         )?;
-        let copy_layout = match layout {
-            vk::ImageLayout::GENERAL => vk::ImageLayout::GENERAL,
-            _ => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-        };
-        let to_copy = [vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
-            .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
-            .old_layout(layout)
-            .new_layout(copy_layout)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image)
-            .subresource_range(
-                vk::ImageSubresourceRange::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .level_count(1)
-                    .layer_count(1),
-            )];
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(1),
-            )
-            .image_extent(extent.into())];
-        let to_host = [vk::BufferMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-            .dst_access_mask(vk::AccessFlags2::HOST_READ)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .buffer(buffer.raw)
-            .size(vk::WHOLE_SIZE)];
-        let before = vk::DependencyInfo::default().image_memory_barriers(&to_copy);
-        let after = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
-        let d = &ctx.device;
-        // SAFETY: `cmd` is recording outside rendering and `image` is a live single-sample
-        // colour image in `layout` (the caller's contract); the buffer holds `extent` texels
-        // of 4 bytes.
-        unsafe {
-            d.cmd_pipeline_barrier2(cmd, &before);
-            d.cmd_copy_image_to_buffer(cmd, image, copy_layout, buffer.raw, &region);
-            d.cmd_pipeline_barrier2(cmd, &after);
-        }
+        record_copy_out(&ctx.device, cmd, image, layout, extent, buffer.raw);
         Ok(Self {
             buffer,
             extent,
@@ -251,6 +205,66 @@ impl ImageReadback {
     /// it.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
         self.buffer.destroy(ctx)
+    }
+}
+
+/// Records the copy of colour `image` (single-sample, in `layout` after colour-attachment
+/// writes) into `buffer` (tightly packed 4-byte texels of `extent`): a barrier from the
+/// attachment writes into a copy source layout, the copy, and a barrier making it visible
+/// to host reads once the submission completed. `cmd` must be recording outside rendering.
+pub(crate) fn record_copy_out(
+    d: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    layout: vk::ImageLayout,
+    extent: vk::Extent2D,
+    buffer: vk::Buffer,
+) {
+    let copy_layout = match layout {
+        vk::ImageLayout::GENERAL => vk::ImageLayout::GENERAL,
+        _ => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+    };
+    let to_copy = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+        .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+        .old_layout(layout)
+        .new_layout(copy_layout)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .level_count(1)
+                .layer_count(1),
+        )];
+    let region = [vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .layer_count(1),
+        )
+        .image_extent(extent.into())];
+    let to_host = [vk::BufferMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(buffer)
+        .size(vk::WHOLE_SIZE)];
+    let before = vk::DependencyInfo::default().image_memory_barriers(&to_copy);
+    let after = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
+    // SAFETY: `cmd` is recording outside rendering and `image` is a live single-sample
+    // colour image in `layout` (the callers' contract); the buffer holds `extent` texels
+    // of 4 bytes.
+    unsafe {
+        d.cmd_pipeline_barrier2(cmd, &before);
+        d.cmd_copy_image_to_buffer(cmd, image, copy_layout, buffer, &region);
+        d.cmd_pipeline_barrier2(cmd, &after);
     }
 }
 

@@ -14,6 +14,7 @@ use super::{Renderer, Target};
 use crate::buffer::Buffer;
 use crate::device::Context;
 use crate::image::Image;
+use crate::readback::record_copy_out;
 use crate::record::RecordCamera;
 
 impl Renderer {
@@ -136,53 +137,7 @@ fn begin_rendering(
 /// Copies the colour target into `buffer` (tightly packed RGBA8 rows) and makes the copy
 /// visible to host reads once the frame's fence signals.
 fn copy_to_readback(d: &ash::Device, cmd: vk::CommandBuffer, target: &Target, buffer: &Buffer) {
-    let to_src = [vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
-        .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
-        .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-        .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(target.colour.raw)
-        .subresource_range(Image::range(vk::ImageAspectFlags::COLOR))];
-    let dep = vk::DependencyInfo::default().image_memory_barriers(&to_src);
-    let region = [vk::BufferImageCopy {
-        buffer_offset: 0,
-        buffer_row_length: 0,
-        buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        },
-        image_offset: vk::Offset3D::default(),
-        image_extent: target.colour.desc.extent.into(),
-    }];
-    let to_host = [vk::BufferMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COPY)
-        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-        .dst_access_mask(vk::AccessFlags2::HOST_READ)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .buffer(buffer.raw)
-        .offset(0)
-        .size(vk::WHOLE_SIZE)];
-    let host_dep = vk::DependencyInfo::default().buffer_memory_barriers(&to_host);
-    // SAFETY: `cmd` is recording outside rendering; image and buffer are alive and the
-    // buffer holds `width * height * 4` bytes (made so by `Renderer::create_resources`).
-    unsafe {
-        d.cmd_pipeline_barrier2(cmd, &dep);
-        d.cmd_copy_image_to_buffer(
-            cmd,
-            target.colour.raw,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            buffer.raw,
-            &region,
-        );
-        d.cmd_pipeline_barrier2(cmd, &host_dep);
-    }
+    let layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+    let extent = target.colour.desc.extent;
+    record_copy_out(d, cmd, target.colour.raw, layout, extent, buffer.raw);
 }

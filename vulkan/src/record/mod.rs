@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::indices::CameraIndices;
 use crate::material::{Bindings, MaterialSet};
 use crate::mesh::{MorphInstances, VertexBuffer};
-use crate::pipeline::{DrawPipeline, MorphingPipeline, PipelineTarget, VertexStage};
+use crate::pipeline::{ComputePipeline, DrawPipeline, PipelineTarget, VertexStage};
 
 /// One camera's draws in a recorded frame.
 #[derive(Clone, Copy, Debug)]
@@ -180,7 +180,7 @@ pub struct Recorder {
     desc: RecorderDesc,
     bindings: Bindings,
     /// The refinement-geomorph compute stage and the morph set layout.
-    morphing: Option<MorphingPipeline>,
+    morphing: Option<ComputePipeline>,
     fill: Pipelines,
     wireframe: Option<Pipelines>,
 }
@@ -199,7 +199,7 @@ impl Recorder {
         }
         let bindings = Bindings::new(ctx)?;
         let morphing = if desc.refine_morphs {
-            match MorphingPipeline::new(ctx) {
+            match ComputePipeline::morphing(ctx) {
                 Ok(m) => Some(m),
                 Err(e) => {
                     let _ = bindings.destroy(ctx);
