@@ -5,6 +5,7 @@
 //! `cargo run --release -p caveclod-examples --example embed` bakes Spot and draws it
 //! textured into an sRGB target, read back into `out/embed.png`.
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 use caveclod_bake::{import::ImportOptions, pipeline::bake_file};
 use caveclod_core::{CameraState, LookAt, RefineParams};
@@ -29,13 +30,12 @@ const COLOUR_LAYOUT: vk::ImageLayout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
 const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
 
 /// A target image of `EXTENT` (colour or depth, by `format`) with its memory and view.
-fn target_image(d: &ash::Device, a: &mut Allocator, format: vk::Format) -> Fallible<HostImage> {
+fn target_image(d: &ash::Device, a: &SharedAllocator, format: vk::Format) -> Fallible<HostImage> {
+    use vk::{ImageAspectFlags as Aspect, ImageUsageFlags as Usage};
     let (usage, aspect) = if format == FORMATS.depth {
-        let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
-        (usage, vk::ImageAspectFlags::DEPTH)
+        (Usage::DEPTH_STENCIL_ATTACHMENT, Aspect::DEPTH)
     } else {
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
-        (usage, vk::ImageAspectFlags::COLOR)
+        (Usage::COLOR_ATTACHMENT | Usage::TRANSFER_SRC, Aspect::COLOR)
     };
     let info = vk::ImageCreateInfo::default()
         .image_type(vk::ImageType::TYPE_2D)
@@ -47,6 +47,7 @@ fn target_image(d: &ash::Device, a: &mut Allocator, format: vk::Format) -> Falli
         .usage(usage);
     // SAFETY: valid create info.
     let image = unsafe { d.create_image(&info, None) }?;
+    let mut a = a.lock().map_err(|_| "allocator poisoned")?;
     let memory = a.allocate(&alloc::AllocationCreateDesc {
         name: "host target",
         // SAFETY: `image` is alive.
@@ -100,7 +101,6 @@ fn render_pass(d: &ash::Device) -> Fallible<vk::RenderPass> {
 }
 
 fn main() -> Fallible<()> {
-    let out = Path::new("out/embed.png");
     let spot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/spot");
     let obj = spot.join("spot_triangulated.obj");
     let (baked, _) = bake_file(&obj, &ImportOptions::default(), &mut |_| {})?;
@@ -131,18 +131,18 @@ fn main() -> Fallible<()> {
     let d = unsafe { instance.create_device(physical_device, &info, None) }?;
     // SAFETY: queue 0 of `family` was created with the device.
     let queue = unsafe { d.get_device_queue(family, 0) };
-    let mut allocator = Allocator::new(&alloc::AllocatorCreateDesc {
+    let allocator = Arc::new(Mutex::new(Allocator::new(&alloc::AllocatorCreateDesc {
         instance: instance.clone(),
         device: d.clone(),
         physical_device,
         debug_settings: Default::default(),
         buffer_device_address: false,
         allocation_sizes: Default::default(),
-    })?;
+    })?)); // the host's, shared with caveclod below
 
     // The host's target: colour and depth images, render pass, framebuffer; a command buffer.
-    let colour = target_image(&d, &mut allocator, FORMATS.colour)?;
-    let depth = target_image(&d, &mut allocator, FORMATS.depth)?;
+    let colour = target_image(&d, &allocator, FORMATS.colour)?;
+    let depth = target_image(&d, &allocator, FORMATS.depth)?;
     let pass = render_pass(&d)?;
     let views = [colour.1, depth.1];
     let info = vk::FramebufferCreateInfo::default()
@@ -165,7 +165,7 @@ fn main() -> Fallible<()> {
     // caveclod over the host's device: a recorder for its render pass, one refined camera.
     let host = HostDevice::new(&instance, &d, physical_device, family, queue);
     // SAFETY: the host's live handles, outliving the context, with the features it enabled.
-    let ctx = unsafe { Context::from_raw(host) }?;
+    let ctx = unsafe { Context::from_raw(host.allocator(allocator.clone())) }?;
     let recorder = Recorder::new(&ctx, RecorderDesc::render_pass(FORMATS, pass, 0))?;
     let look = LookAt {
         eye: Vec3::new(2.3, 0.8, -1.2),
@@ -218,8 +218,7 @@ fn main() -> Fallible<()> {
         d.queue_wait_idle(queue)?;
     }
     std::fs::create_dir_all("out")?;
-    caveclod_cli::snapshot::write_png(&shot.image()?, out)?;
-    println!("{} polygons drawn", camera.active_polygon_count());
+    caveclod_cli::snapshot::write_png(&shot.image()?, Path::new("out/embed.png"))?;
 
     // Teardown: caveclod's objects, then the host's, in reverse order of creation.
     materials.destroy(&ctx);
@@ -239,7 +238,7 @@ fn main() -> Fallible<()> {
         for (image, view, memory) in [depth, colour] {
             d.destroy_image_view(view, None);
             d.destroy_image(image, None);
-            allocator.free(memory)?;
+            allocator.lock().map_err(|_| "poisoned")?.free(memory)?;
         }
         drop(allocator);
         d.destroy_device(None);
