@@ -243,7 +243,8 @@ proptest! {
              prop::sample::select(vec![1.0 / 3.0, 1.0f32]),
              prop::sample::select(vec![0u32, 1, 3, 17, 200, 100_000])),
             flight_len(40)),
-        budget in prop::sample::select(vec![1u32, 7, 300]),
+        // A cycle in steps of 1 takes thousands of calls: too slow for miri.
+        budget in prop::sample::select(if cfg!(miri) { vec![300u32] } else { vec![1u32, 7, 300] }),
     ) {
         let file = golden();
         let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
