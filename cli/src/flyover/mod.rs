@@ -11,8 +11,8 @@
 //! Views are computed before the flight, so it times only the runtime (refine and emit).
 //!
 //! Per-camera refinement is amortised by default (a third of the active list per frame,
-//! [`FlyoverOptions::visit_fraction`]) and compaction incremental
-//! ([`FlyoverOptions::compact_step`]), both inside the timed refinement. After each frame,
+//! [`FlyoverOptions::visit_fraction`]); compaction is whole, or incremental with
+//! [`FlyoverOptions::compact_step`], both inside the timed refinement. After each frame,
 //! outside the timed work, [`CameraState::lag`] measures how far the front lags its view:
 //! the share of active nodes whose error projects over the tolerance (the nodes a full pass
 //! would split) and their excess in pixels; a flight with `visit_fraction` 1 is the baseline
