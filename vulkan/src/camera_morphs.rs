@@ -215,12 +215,9 @@ impl CameraMorphs {
         (self.vertex_count, self.count(frame), self.has_colours)
     }
 
-    /// The compute dispatch's push block and the blended buffer it writes, when this camera
-    /// blends in the compute stage and has slots in `frame`.
-    pub(crate) fn dispatch(
-        &self,
-        frame: usize,
-    ) -> Option<(vk::DescriptorSet, MorphSlotsPush, vk::Buffer)> {
+    /// The compute dispatch's set and push block, when this camera blends in the compute
+    /// stage and has slots in `frame`.
+    pub(crate) fn dispatch(&self, frame: usize) -> Option<(vk::DescriptorSet, MorphSlotsPush)> {
         let slot = self.ring.get(frame)?;
         (self.stage == MorphStage::Compute && slot.count > 0).then_some((
             slot.set,
@@ -228,7 +225,6 @@ impl CameraMorphs {
                 slot_count: slot.count,
                 _pad: [0; 3],
             },
-            slot.blended.raw,
         ))
     }
 

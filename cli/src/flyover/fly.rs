@@ -185,9 +185,24 @@ impl IndexBuffers {
 }
 
 /// A camera's index lists: one per frame in flight (`count`, 0 when it does not emit).
-fn index_lists(h: &Hierarchy<'_>, config: &CameraConfig, count: usize) -> Vec<IndexBuffers> {
+pub(super) fn index_lists(
+    h: &Hierarchy<'_>,
+    config: &CameraConfig,
+    count: usize,
+) -> Vec<IndexBuffers> {
     (0..count)
         .map(|_| IndexBuffers::new(h, config.max_pairs))
+        .collect()
+}
+
+/// A camera of capacity `config` in each of `pool`'s memories.
+pub(super) fn cameras<'p>(
+    h: &Hierarchy<'_>,
+    pool: &'p mut CameraPool,
+    config: &CameraConfig,
+) -> Result<Vec<CameraState<'p>>, String> {
+    pool.memories()
+        .map(|m| CameraState::with_config(h, m, config).map_err(|e| e.to_string()))
         .collect()
 }
 
@@ -332,10 +347,7 @@ pub fn fly_per_camera(
     let in_flight = in_flight.max(1);
     let start = Instant::now();
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
-    let mut cams = Vec::with_capacity(views.len());
-    for m in pool.memories() {
-        cams.push(CameraState::with_config(h, m, config).map_err(|e| e.to_string())?);
-    }
+    let mut cams = cameras(h, &mut pool, config)?;
     let camera_bytes = cams.first().map_or(0, CameraState::bytes);
     let mut outs: Vec<Vec<IndexBuffers>> = views
         .iter()

@@ -122,18 +122,11 @@ pub fn fly_piloted(
     let start = Instant::now();
     let mut measuring = Duration::ZERO;
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
-    let mut cams = Vec::with_capacity(views.len());
-    for m in pool.memories() {
-        cams.push(CameraState::with_config(h, m, config).map_err(|e| e.to_string())?);
-    }
+    let mut cams = fly::cameras(h, &mut pool, config)?;
     let camera_bytes = cams.first().map_or(0, CameraState::bytes);
     let mut outs: Vec<Vec<IndexBuffers>> = views
         .iter()
-        .map(|_| {
-            (0..in_flight)
-                .map(|_| IndexBuffers::new(h, config.max_pairs))
-                .collect()
-        })
+        .map(|_| fly::index_lists(h, config, in_flight))
         .collect();
     let frames = views.first().map_or(0, Vec::len);
     let mut records: Vec<Record> = views

@@ -418,7 +418,8 @@ impl Recorder {
     /// blends there ([`MorphStage::Compute`](crate::MorphStage)) for frame slot `slot`: one
     /// dispatch per camera with morphing vertices, then one barrier from those compute
     /// writes (`COMPUTE_SHADER`, `SHADER_STORAGE_WRITE`) to the morphing vertex stage's
-    /// reads (`VERTEX_SHADER`, `SHADER_STORAGE_READ`), so the draws recorded after it in
+    /// reads (`VERTEX_SHADER`, `SHADER_STORAGE_READ`), a memory barrier covering every
+    /// camera's blended buffer, so the draws recorded after it in
     /// submission order see the blended vertices. Cameras blending elsewhere are skipped;
     /// with nothing to dispatch nothing is recorded. Returns the dispatches recorded.
     ///
@@ -436,25 +437,22 @@ impl Recorder {
                 "morph blends, but the recorder was made without refine_morphs".into(),
             ));
         };
-        let dispatches: Vec<_> = cameras.iter().filter_map(|c| c.dispatch(slot)).collect();
-        if dispatches.is_empty() {
-            return Ok(0);
-        }
         let d = &ctx.device;
-        let mut barriers = Vec::with_capacity(dispatches.len());
-        // SAFETY: `cmd` is recording outside rendering (the caller's contract); pipeline
-        // and sets are alive, and each set was written for this recorder's morph layout
-        // with buffers the camera keeps alive.
-        unsafe { d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw) };
-        for (set, push, blended) in &dispatches {
-            // SAFETY: as above.
+        let mut dispatches = 0;
+        for (set, push) in cameras.iter().filter_map(|c| c.dispatch(slot)) {
+            // SAFETY: `cmd` is recording outside rendering (the caller's contract); pipeline
+            // and sets are alive, and each set was written for this recorder's morph layout
+            // with buffers the camera keeps alive.
             unsafe {
+                if dispatches == 0 {
+                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+                }
                 d.cmd_bind_descriptor_sets(
                     cmd,
                     vk::PipelineBindPoint::COMPUTE,
                     pipeline.layout,
                     0,
-                    &[*set],
+                    &[set],
                     &[],
                 );
                 d.cmd_push_constants(
@@ -462,27 +460,25 @@ impl Recorder {
                     pipeline.layout,
                     vk::ShaderStageFlags::COMPUTE,
                     0,
-                    bytemuck::bytes_of(push),
+                    bytemuck::bytes_of(&push),
                 );
                 d.cmd_dispatch(cmd, workgroups(push.slot_count), 1, 1);
             }
-            barriers.push(
-                vk::BufferMemoryBarrier2::default()
-                    .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-                    .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::VERTEX_SHADER)
-                    .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
-                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .buffer(*blended)
-                    .offset(0)
-                    .size(vk::WHOLE_SIZE),
-            );
+            dispatches += 1;
         }
-        let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barriers);
-        // SAFETY: `cmd` is recording outside rendering; the buffers are alive.
-        unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
-        Ok(dispatches.len() as u32)
+        if dispatches > 0 {
+            // One barrier for every camera's blended buffer: what the dispatches wrote is what
+            // the morphing vertex stage reads.
+            let barrier = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::VERTEX_SHADER)
+                .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)];
+            let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+            // SAFETY: `cmd` is recording outside rendering.
+            unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
+        }
+        Ok(dispatches)
     }
 
     /// Destroys the pipelines, the set layouts, the sampler and the white texture. The GPU
