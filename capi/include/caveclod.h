@@ -224,18 +224,20 @@ typedef struct CaveclodCameraCounts {
     uint64_t total_indices;
 } CaveclodCameraCounts;
 
-// One morphing vertex as the GPU reads it: blend persistent vertex `from` and `to` at `t`
-// and write the result where morphed emission points, `vertex_count + slot`. An idle slot
-// has `from == to == UINT32_MAX`: nothing points at it.
+// One morphing vertex as the GPU reads it: blend from `from` towards persistent vertex
+// `to` at `t` and write the result where morphed emission points, `vertex_count + slot`.
+// An idle slot has `from == to == UINT32_MAX`: nothing points at it.
 typedef struct CaveclodMorphVertex {
-    // The coarse vertex (the parent's).
+    // Where the blend starts: the persistent vertex `coarse` (below `vertex_count`), or,
+    // while `coarse` itself morphs, `vertex_count + s`: the blend of slot `s` (a chain of at
+    // most 8 slots; the vertex split again while it morphed).
     uint32_t from;
     // The fine vertex (the floating child's own).
     uint32_t to;
     // 0 gives `from`, 1 gives `to`.
     float t;
-    // Zero; pads the record to 16 bytes.
-    uint32_t pad;
+    // The coarse persistent vertex (the parent's).
+    uint32_t coarse;
 } CaveclodMorphVertex;
 
 // The counts of a hierarchy: what a runtime sizes its buffers from.

@@ -8,20 +8,22 @@ use crate::ffi::{self, guarded};
 use crate::hierarchy::{hierarchy, CaveclodHierarchy};
 use crate::status::CaveclodStatus;
 
-/// One morphing vertex as the GPU reads it: blend persistent vertex `from` and `to` at `t`
-/// and write the result where morphed emission points, `vertex_count + slot`. An idle slot
-/// has `from == to == UINT32_MAX`: nothing points at it.
+/// One morphing vertex as the GPU reads it: blend from `from` towards persistent vertex
+/// `to` at `t` and write the result where morphed emission points, `vertex_count + slot`.
+/// An idle slot has `from == to == UINT32_MAX`: nothing points at it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CaveclodMorphVertex {
-    /// The coarse vertex (the parent's).
+    /// Where the blend starts: the persistent vertex `coarse` (below `vertex_count`), or,
+    /// while `coarse` itself morphs, `vertex_count + s`: the blend of slot `s` (a chain of at
+    /// most 8 slots; the vertex split again while it morphed).
     pub from: u32,
     /// The fine vertex (the floating child's own).
     pub to: u32,
     /// 0 gives `from`, 1 gives `to`.
     pub t: f32,
-    /// Zero; pads the record to 16 bytes.
-    pub pad: u32,
+    /// The coarse persistent vertex (the parent's).
+    pub coarse: u32,
 }
 
 const _: () = assert!(

@@ -133,8 +133,11 @@ pub const MORPH_BLENDED: u32 = 1;
 pub struct MorphSlotsPush {
     /// Slots to blend: invocation `s < slot_count` writes slot `s`.
     pub slot_count: u32,
+    /// Vertices in the persistent vertex buffer: a slot's `from` at or past it names
+    /// another slot ([`MorphVertex::from`]).
+    pub vertex_count: u32,
     /// Zero; pads the block to 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 
 /// The sizes the shader interface declares; the shaders and the Vulkan host rely on them.
@@ -179,15 +182,128 @@ pub fn morph_vertex(a: Vertex, b: Vertex, t: f32) -> Vertex {
     }
 }
 
-/// The vertex a refinement geomorph's slot stands for: [`morph_vertex`] of the persistent
-/// vertices `from` and `to` of `vertices` at the slot's `t`; `None` for an idle slot or one
-/// naming a vertex past the end of `vertices`. What the compute stage writes per slot and
-/// the vertex stage computes per morphing corner.
+/// Most slots one morph chain blends (see [`MorphVertex::from`]): a slot whose chain runs
+/// longer starts, at the last slot within the limit, from that slot's persistent
+/// [`coarse`](MorphVertex::coarse) vertex. Refinement keeps its chains within it.
+pub const MAX_MORPH_CHAIN: u32 = 8;
+
+/// What a morph slot's blend reads: the camera's slots and the persistent vertices, as the
+/// CPU holds them (slices) or a shader reads them (storage buffers).
+pub trait MorphInputs {
+    /// Vertices in the persistent vertex buffer.
+    fn vertex_count(&self) -> u32;
+    /// Slot `s`; `None` for an idle slot or one past the end.
+    fn slot(&self, s: u32) -> Option<MorphVertex>;
+    /// Persistent vertex `index`; `None` past the end.
+    fn vertex(&self, index: u32) -> Option<Vertex>;
+}
+
+/// The CPU's morph inputs: a camera's [`morph_vertices`](crate::CameraState::morph_vertices)
+/// and the hierarchy's vertices.
+#[derive(Clone, Copy, Debug)]
+pub struct MorphSlices<'a> {
+    /// The persistent vertices.
+    pub vertices: &'a [Vertex],
+    /// The camera's morph slots.
+    pub slots: &'a [MorphVertex],
+}
+
+impl MorphInputs for MorphSlices<'_> {
+    #[inline]
+    fn vertex_count(&self) -> u32 {
+        self.vertices.len() as u32
+    }
+
+    #[inline]
+    fn slot(&self, s: u32) -> Option<MorphVertex> {
+        self.slots.get(s as usize).copied().filter(|m| !m.is_idle())
+    }
+
+    #[inline]
+    fn vertex(&self, index: u32) -> Option<Vertex> {
+        self.vertices.get(index as usize).copied()
+    }
+}
+
+/// The chain of slot `s`: how many slots its blend passes through (at least 1) and the
+/// persistent vertex it starts from. A `from` naming an idle slot, or a chain longer than
+/// [`MAX_MORPH_CHAIN`], starts from the last slot's `coarse` vertex.
 #[inline]
-pub fn morph_slot_vertex(vertices: &[Vertex], slot: MorphVertex) -> Option<Vertex> {
-    let from = *vertices.get(slot.from as usize)?;
-    let to = *vertices.get(slot.to as usize)?;
-    Some(morph_vertex(from, to, slot.t))
+pub fn morph_chain<I: MorphInputs + ?Sized>(inputs: &I, s: u32) -> Option<(u32, u32)> {
+    let vertex_count = inputs.vertex_count();
+    let mut m = inputs.slot(s)?;
+    let mut len = 1;
+    loop {
+        if m.from < vertex_count {
+            return Some((len, m.from));
+        }
+        if len >= MAX_MORPH_CHAIN {
+            return Some((len, m.coarse));
+        }
+        match inputs.slot(m.from - vertex_count) {
+            Some(next) => {
+                m = next;
+                len += 1;
+            }
+            None => return Some((len, m.coarse)),
+        }
+    }
+}
+
+/// The slot `k` links along slot `s`'s chain (`k` below the chain's length).
+#[inline]
+fn chain_link<I: MorphInputs + ?Sized>(inputs: &I, s: u32, k: u32) -> Option<MorphVertex> {
+    let vertex_count = inputs.vertex_count();
+    let mut m = inputs.slot(s)?;
+    let mut i = 0;
+    while i < k {
+        m = inputs.slot(m.from.checked_sub(vertex_count)?)?;
+        i += 1;
+    }
+    Some(m)
+}
+
+/// The vertex refinement-geomorph slot `s` stands for: its chain's persistent start, then
+/// [`morph_vertex`] towards each slot's `to` at its `t`, from the chain's far end back to
+/// `s` (for a slot whose `from` is persistent, `morph_vertex(from, to, t)`). `None` for an
+/// idle slot or one whose chain names a vertex past the end. What the compute stage writes
+/// per slot and the vertex stage computes per morphing corner.
+#[inline]
+pub fn morph_slot_vertex<I: MorphInputs + ?Sized>(inputs: &I, s: u32) -> Option<Vertex> {
+    let (len, base) = morph_chain(inputs, s)?;
+    let mut v = inputs.vertex(base)?;
+    let mut k = len;
+    while k > 0 {
+        k -= 1;
+        let m = chain_link(inputs, s, k)?;
+        v = morph_vertex(v, inputs.vertex(m.to)?, m.t);
+    }
+    Some(v)
+}
+
+/// The linear colour of morph slot `s`, blended along its chain as
+/// [`morph_slot_vertex`] blends its vertex: `colour(i)` is persistent vertex `i`'s stored
+/// (sRGB-encoded) colour, decoded by [`vertex_colour`]; each step is `a + (b - a) * t`.
+/// White for an idle slot.
+#[inline]
+pub fn morph_slot_colour<I, C>(inputs: &I, s: u32, colour: C) -> Vec4
+where
+    I: MorphInputs + ?Sized,
+    C: Fn(u32) -> Vec4,
+{
+    let Some((len, base)) = morph_chain(inputs, s) else {
+        return Vec4::ONE;
+    };
+    let mut c = vertex_colour(colour(base));
+    let mut k = len;
+    while k > 0 {
+        k -= 1;
+        if let Some(m) = chain_link(inputs, s, k) {
+            let b = vertex_colour(colour(m.to));
+            c = c + (b - c) * m.t;
+        }
+    }
+    c
 }
 
 /// The linear colour of a morphing vertex: the stored (sRGB-encoded) colours `from` and `to`
@@ -358,27 +474,97 @@ mod tests {
         assert!(!cut(base_colour(Vec4::ZERO, Vec4::ONE, &palette), &palette));
     }
 
-    #[test]
-    fn a_morph_slot_blends_its_two_persistent_vertices() {
-        let v = |x: f32| Vertex {
+    fn v(x: f32) -> Vertex {
+        Vertex {
             position: [x, 2.0 * x, 0.0],
             normal: [0.0, 0.0, 1.0],
             uv: [x, 0.0],
-        };
+        }
+    }
+
+    fn slot(from: u32, to: u32, t: f32, coarse: u32) -> MorphVertex {
+        MorphVertex {
+            from,
+            to,
+            t,
+            coarse,
+        }
+    }
+
+    #[test]
+    fn a_morph_slot_blends_its_two_persistent_vertices() {
         let vertices = [v(0.0), v(1.0), v(4.0)];
-        let slot = MorphVertex {
-            from: 0,
-            to: 2,
-            t: 0.25,
-            _pad: 0,
+        let slots = [slot(0, 2, 0.25, 0), MorphVertex::IDLE, slot(0, 3, 0.5, 0)];
+        let inputs = MorphSlices {
+            vertices: &vertices,
+            slots: &slots,
         };
         assert_eq!(
-            morph_slot_vertex(&vertices, slot),
+            morph_slot_vertex(&inputs, 0),
             Some(morph_vertex(v(0.0), v(4.0), 0.25))
         );
-        assert_eq!(morph_slot_vertex(&vertices, MorphVertex::IDLE), None);
-        let past = MorphVertex { to: 3, ..slot };
-        assert_eq!(morph_slot_vertex(&vertices, past), None);
+        assert_eq!(morph_slot_vertex(&inputs, 1), None);
+        assert_eq!(morph_slot_vertex(&inputs, 2), None, "a vertex past the end");
+        assert_eq!(morph_slot_vertex(&inputs, 3), None, "a slot past the end");
+    }
+
+    /// A slot whose `from` names another slot starts from that slot's blend: the vertex
+    /// stands where its parent is drawn at `t = 0`, and blends on from there.
+    #[test]
+    fn a_chained_slot_starts_from_the_slot_it_names() {
+        let vertices = [v(0.0), v(1.0), v(4.0), v(9.0)];
+        let n = vertices.len() as u32;
+        // Slot 0: vertex 1 morphing from 0; slot 1: vertex 2 from slot 0 (coarse 1);
+        // slot 2: vertex 3 from slot 1 (coarse 2).
+        let slots = [
+            slot(0, 1, 0.5, 0),
+            slot(n, 2, 0.25, 1),
+            slot(n + 1, 3, 0.0, 2),
+        ];
+        let inputs = MorphSlices {
+            vertices: &vertices,
+            slots: &slots,
+        };
+        let parent = morph_vertex(v(0.0), v(1.0), 0.5);
+        let child = morph_vertex(parent, v(4.0), 0.25);
+        assert_eq!(morph_chain(&inputs, 2), Some((3, 0)));
+        assert_eq!(morph_slot_vertex(&inputs, 0), Some(parent));
+        assert_eq!(morph_slot_vertex(&inputs, 1), Some(child));
+        assert_eq!(
+            morph_slot_vertex(&inputs, 2),
+            Some(child),
+            "t = 0: where it starts"
+        );
+        // Colours blend along the chain in linear light.
+        let colour = |i: u32| Vec4::splat(i as f32 / 4.0);
+        let c0 = morph_colour(colour(0), colour(1), 0.5);
+        assert_eq!(morph_slot_colour(&inputs, 0, colour), c0);
+        let c1 = c0 + (vertex_colour(colour(2)) - c0) * 0.25;
+        assert_eq!(morph_slot_colour(&inputs, 1, colour), c1);
+        // A `from` naming an idle slot starts from the slot's coarse vertex.
+        let broken = [MorphVertex::IDLE, slot(n, 2, 0.25, 1)];
+        let inputs = MorphSlices {
+            vertices: &vertices,
+            slots: &broken,
+        };
+        assert_eq!(
+            morph_slot_vertex(&inputs, 1),
+            Some(morph_vertex(v(1.0), v(4.0), 0.25))
+        );
+    }
+
+    /// A cycle of slots (which refinement never makes) ends at the chain limit.
+    #[test]
+    fn a_chain_ends_at_its_limit() {
+        let vertices = [v(0.0), v(1.0)];
+        let n = vertices.len() as u32;
+        let slots = [slot(n + 1, 1, 0.5, 0), slot(n, 1, 0.5, 0)];
+        let inputs = MorphSlices {
+            vertices: &vertices,
+            slots: &slots,
+        };
+        assert_eq!(morph_chain(&inputs, 0), Some((MAX_MORPH_CHAIN, 0)));
+        assert!(morph_slot_vertex(&inputs, 0).is_some());
     }
 
     #[test]

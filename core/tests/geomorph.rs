@@ -1,5 +1,6 @@
 //! Geomorphs of view-dependent refinement on the golden hierarchy: every morphing vertex lies
-//! between the two persistent vertices it names, morphed emission points exactly the
+//! between where its start is drawn and its own vertex, a split of a morphing vertex starts
+//! its child where it is drawn, no vertex glides faster than the speed limit, morphed emission points exactly the
 //! morphing corners at their slots, morphs last their duration in seconds whatever the frame
 //! rate, aborted coarsen morphs return to the fine state, a camera whose morphs have all
 //! finished emits what a camera without morphs emits, zero durations decide exactly as a
@@ -9,7 +10,8 @@ mod common;
 
 use std::collections::HashMap;
 
-use caveclod_core::glam::Vec3;
+use caveclod_core::glam::{Vec3, Vec4Swizzles};
+use caveclod_core::gpu::{morph_slot_vertex, MorphSlices};
 use caveclod_core::{
     CameraConfig, CameraError, CameraState, Hierarchy, LookAt, NodeId, RefineParams, RefineStats,
 };
@@ -367,8 +369,8 @@ fn a_full_morph_memory_drops_morphs_and_counts_them() {
     check_morphs(&h, &cam, &position_of_vertex(&h));
 }
 
-/// Splits and collapses outside the view happen at once: with the terrain behind the eye
-/// nothing morphs, and morphs that were running when it turned away end with their pairs.
+/// Splits and collapses outside the view (of positions that do not morph) happen at once:
+/// with the terrain behind the eye nothing morphs.
 #[test]
 fn nodes_outside_the_view_split_and_collapse_at_once() {
     let file = golden();
@@ -381,6 +383,9 @@ fn nodes_outside_the_view_split_and_collapse_at_once() {
     let view = approach(&h, 0.3);
     let st = cam.refine(&h, &view, &p).expect("refine");
     assert!(st.morphs_started > 0 && st.splits > 0, "{st:?}");
+    // A position still morphing is drawn away from its node's bounds, so its operations
+    // morph wherever the node is: end the morphs, then no position morphs.
+    cam.finish_morphs();
     // The same eye looking the other way: everything leaves the frustum.
     let m = h.meta();
     let centre = (Vec3::from_array(m.bounds_min) + Vec3::from_array(m.bounds_max)) * 0.5;
@@ -407,7 +412,7 @@ fn nodes_outside_the_view_split_and_collapse_at_once() {
     }
     assert!(passes > 0);
     assert_eq!(cam.split_count(), 0, "nothing visible stays refined");
-    assert_eq!(cam.morph_count(), 0, "the morphs ended with their pairs");
+    assert_eq!(cam.morph_count(), 0);
 }
 
 /// Turning morphs off ends them in one pass: refine morphs snap to the fine position,
@@ -438,6 +443,121 @@ fn durations_set_to_zero_end_every_morph() {
 }
 
 /// 64 cases; under miri 2, and no regression file (miri isolates the file system).
+/// Where each morphing vertex (by its `to`) is drawn.
+fn drawn(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> HashMap<u32, Vec3> {
+    let inputs = MorphSlices {
+        vertices: h.vertices(),
+        slots: cam.morph_vertices(),
+    };
+    inputs
+        .slots
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| !m.is_idle())
+        .map(|(s, m)| {
+            let v = morph_slot_vertex(&inputs, s as u32).expect("a live slot");
+            (m.to, Vec3::from_array(v.position))
+        })
+        .collect()
+}
+
+/// Views along one approach, nearer each frame.
+fn closing_in(h: &Hierarchy<'_>, frames: usize) -> Vec<LookAt> {
+    let m = h.meta();
+    let lo = Vec3::from_array(m.bounds_min);
+    let hi = Vec3::from_array(m.bounds_max);
+    let centre = (lo + hi) * 0.5;
+    let size = (hi - lo).length().max(1e-3);
+    let dir = Vec3::new(0.3, 0.8, 0.6).normalize();
+    (0..frames)
+        .map(|f| LookAt {
+            eye: centre + dir * size * (3.0 - 2.6 * f as f32 / frames as f32),
+            target: centre,
+            up: Vec3::Y,
+            fov_y: 1.2,
+            near: size * 1e-3,
+            far: size * 100.0,
+        })
+        .collect()
+}
+
+/// A split of a vertex that still morphs starts its floating child where that vertex is
+/// drawn (its slot's `from` names the parent's slot), so the child appears without a jump.
+#[test]
+fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let config = morph_config(&h, 512);
+    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
+    let pos = position_of_vertex(&h);
+    let vc = h.vertices().len() as u32;
+    let p = fine();
+    let mut chained = 0;
+    let mut before = drawn(&h, &cam);
+    for look in closing_in(&h, 120) {
+        cam.refine(&h, &look.view(1280, 720), &p).expect("refine");
+        check_morphs(&h, &cam, &pos);
+        let now = drawn(&h, &cam);
+        for m in cam.morph_vertices().iter().filter(|m| !m.is_idle() && m.t == 0.0) {
+            if before.contains_key(&m.to) || m.from < vc {
+                continue;
+            }
+            // Started this pass from a morphing vertex: it stands where that one stands.
+            let parent = now[&m.coarse];
+            assert!((now[&m.to] - parent).length() <= 1e-5 * (1.0 + parent.length()));
+            chained += 1;
+        }
+        before = now;
+    }
+    assert!(chained > 0, "no split of a morphing vertex");
+}
+
+/// However far a floating child lies from its parent on the screen, its vertex moves no
+/// more than the speed limit allows per pass (twice that for chains, whose links each take
+/// half their parent's share), measured in the view's own pixels.
+#[test]
+fn morphs_glide_no_faster_than_the_speed_limit() {
+    let file = golden();
+    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let config = morph_config(&h, 512);
+    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
+    let speed = 30.0;
+    let p = RefineParams {
+        morph_speed_px_s: speed,
+        ..fine()
+    };
+    let looks = closing_in(&h, 60);
+    let (w, hgt) = (1280u32, 720u32);
+    let pixel = |look: &LookAt, x: Vec3| {
+        let c = look.view_projection(w as f32 / hgt as f32) * x.extend(1.0);
+        (c.xy() / c.w) * caveclod_core::glam::Vec2::new(w as f32, hgt as f32) * 0.5
+    };
+    let mut slowed = false;
+    let mut before = HashMap::new();
+    for (f, look) in looks.iter().enumerate() {
+        // Hold every other view for a few passes so morphs run under a still view.
+        for _ in 0..if f % 2 == 0 { 1 } else { 8 } {
+            cam.refine(&h, &look.view(w, hgt), &p).expect("refine");
+            let now = drawn(&h, &cam);
+            for (to, &b) in &now {
+                if let Some(&a) = before.get(to) {
+                    let moved = (pixel(look, b) - pixel(look, a)).length();
+                    assert!(moved <= 2.0 * speed * p.dt_s * 1.01, "{moved} px");
+                }
+            }
+            before = now;
+        }
+        // A morph slower than its duration: the limit bites somewhere.
+        slowed |= cam
+            .morph_vertices()
+            .iter()
+            .any(|m| !m.is_idle() && m.t > 0.0 && m.t < 0.5 * p.dt_s / p.refine_morph_s);
+    }
+    assert!(slowed, "the speed limit never slowed a morph");
+}
+
 fn config() -> ProptestConfig {
     if cfg!(miri) {
         ProptestConfig {
@@ -497,7 +617,8 @@ proptest! {
             last = Some((v, p));
         }
         let (v, p) = last.expect("a frame");
-        let p = RefineParams { dt_s: 1.0 / 60.0, max_ops: u32::MAX, ..p };
+        // Without the speed limit, so morphs near the eye end within the settling passes.
+        let p = RefineParams { dt_s: 1.0 / 60.0, max_ops: u32::MAX, morph_speed_px_s: 0.0, ..p };
         settle(&h, &mut cam, &all[v], &p);
         settle(&h, &mut plain, &all[v], &p);
         prop_assert!(cam.morph_vertices().is_empty());

@@ -3,7 +3,7 @@
 
 use ash::vk;
 use caveclod_core::format::Vertex;
-use caveclod_core::gpu::{morph_slot_vertex, MorphSlotsPush};
+use caveclod_core::gpu::{morph_slot_vertex, MorphSlices, MorphSlotsPush};
 use caveclod_core::{CameraState, MorphVertex};
 
 use crate::buffer::{Buffer, BufferDesc};
@@ -177,8 +177,12 @@ impl CameraMorphs {
             let out = slot.blended.mapped_mut().ok_or_else(not_mapped)?;
             let out: &mut [Vertex] = bytemuck::try_cast_slice_mut(out)
                 .map_err(|e| Error::InvalidArgument(format!("blended mapping: {e}")))?;
-            for (o, &m) in out.iter_mut().zip(live) {
-                if let Some(v) = morph_slot_vertex(vertices, m) {
+            let inputs = MorphSlices {
+                vertices,
+                slots: live,
+            };
+            for (s, o) in (0..live.len() as u32).zip(out.iter_mut()) {
+                if let Some(v) = morph_slot_vertex(&inputs, s) {
                     *o = v;
                 }
             }
@@ -223,7 +227,8 @@ impl CameraMorphs {
             slot.set,
             MorphSlotsPush {
                 slot_count: slot.count,
-                _pad: [0; 3],
+                vertex_count: self.vertex_count,
+                _pad: [0; 2],
             },
         ))
     }

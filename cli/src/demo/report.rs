@@ -87,10 +87,11 @@ pub fn results_table(f: &Flights, r: &Ratios) -> String {
     );
     let _ = writeln!(
         s,
-        "| per-camera memory / the paper's c(4n + 4p + 16) + 12n_a + 36p_a | {:.2} ({} B vs {} B) | <= 0.5 (goal 0.25) | {} |",
+        "| per-camera memory / the paper's c(4n + 4p + 16) + 12n_a + 36p_a (the state; its geomorph memory, which the paper's cameras lack, beside) | {:.2} ({} B vs {} B; morphs {} B) | <= 0.5 (goal 0.25) | {} |",
         r.memory,
         pc.memory_budgeted.camera_bytes,
         pc.memory_budgeted.paper_camera_bytes,
+        pc.flight.morph_bytes,
         verdict(r.memory <= 0.5)
     );
     s.push_str(&super::smooth::rows(f));

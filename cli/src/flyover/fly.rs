@@ -292,12 +292,19 @@ pub fn frame(
 }
 
 /// What one flight of several cameras measured.
+/// A camera's bytes without its morph memory, and its morph memory (0, 0 for none).
+pub fn state_bytes(cam: Option<&CameraState<'_>>) -> (usize, usize) {
+    cam.map_or((0, 0), |c| (c.bytes() - c.morph_bytes(), c.morph_bytes()))
+}
+
 #[derive(Clone)]
 pub struct Flight {
     /// Per camera.
     pub records: Vec<Record>,
-    /// Bytes of one camera state.
+    /// Bytes of one camera state, without its morph memory (the paper's cameras have none).
     pub camera_bytes: usize,
+    /// Bytes of one camera's morph memory.
+    pub morph_bytes: usize,
     /// Wall time of the whole flight (of its segments, when flown interleaved).
     pub wall: Duration,
     /// Wall time of each segment when flown interleaved with other flights
@@ -348,7 +355,7 @@ pub fn fly_per_camera(
     let start = Instant::now();
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
     let mut cams = cameras(h, &mut pool, config)?;
-    let camera_bytes = cams.first().map_or(0, CameraState::bytes);
+    let (camera_bytes, morph_bytes) = state_bytes(cams.first());
     let mut outs: Vec<Vec<IndexBuffers>> = views
         .iter()
         .map(|_| index_lists(h, config, if emit { in_flight } else { 0 }))
@@ -423,6 +430,7 @@ pub fn fly_per_camera(
     Ok(Flight {
         records,
         camera_bytes,
+        morph_bytes,
         wall: start.elapsed(),
         segment_walls: Vec::new(),
     })
@@ -467,7 +475,8 @@ pub fn fly_shared(
     }
     Ok(Flight {
         records,
-        camera_bytes: cam.bytes(),
+        camera_bytes: cam.bytes() - cam.morph_bytes(),
+        morph_bytes: cam.morph_bytes(),
         wall: start.elapsed(),
         segment_walls: Vec::new(),
     })
@@ -681,7 +690,8 @@ pub fn fly_interleaved(
     Ok(flying
         .into_iter()
         .map(|fl| Flight {
-            camera_bytes: fl.cams.first().map_or(0, CameraState::bytes),
+            camera_bytes: state_bytes(fl.cams.first()).0,
+            morph_bytes: state_bytes(fl.cams.first()).1,
             records: fl.records,
             wall: fl.walls.iter().sum(),
             segment_walls: fl.walls,

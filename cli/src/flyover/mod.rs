@@ -44,18 +44,19 @@ const SIZING_STRIDE: usize = 3;
 const REGULATED_HEADROOM: f64 = 1.25;
 /// Geomorphs a full-capacity camera holds at once when the fly-over morphs
 /// ([`FlyoverOptions::geomorphs`]); budgeted cameras hold [`morphs_for_budget`] or, sized by a
-/// sizing flight, [`morphs_for_sizing`].
-pub const MAX_MORPHS: u32 = 4096;
+/// sizing flight, the larger of that and [`morphs_for_sizing`].
+pub const MAX_MORPHS: u32 = 16384;
 /// A sized camera's morph memory over the operations of its sizing flight within one
 /// morph's duration: about half the operations are of nodes outside the view, which split and
 /// collapse at once, and the other half then has half again as much room.
 const MORPH_HEADROOM: f64 = 0.75;
 
-/// Morph memory for a camera of `budget` polygons flown without a sizing flight: a quarter
-/// of its budget (a regulated camera at its target starts and collapses about that many
-/// visible vertices within one refine morph's duration over St. Helens).
+/// Morph memory for a camera of `budget` polygons: half its budget. Morphs slowed by the
+/// screen speed limit ([`RefineParams::morph_speed_px_s`]) near the eye outlast their
+/// durations, so the operations of one duration underestimate them; over St. Helens at
+/// 1 px the cameras hold up to about a third of their active polygons in morphs at once.
 pub fn morphs_for_budget(budget: u32) -> u32 {
-    (budget / 4).max(256)
+    (budget / 2).max(256)
 }
 
 /// Morph memory for the cameras of a sizing flight flown every `stride` frames with
@@ -363,11 +364,9 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         config: CameraConfig {
             index_cache: options.index_cache,
             hashed_pair_map: options.hashed_pair_map,
-            ..CameraConfig::with_polygon_budget(h, budget).with_morphs(morphs(morphs_for_sizing(
-                &s,
-                SIZING_STRIDE,
-                &params,
-            )))
+            ..CameraConfig::with_polygon_budget(h, budget).with_morphs(morphs(
+                morphs_for_sizing(&s, SIZING_STRIDE, &params).max(morphs_for_budget(budget)),
+            ))
         },
         sizing: Some(s),
         budget: Some(budget),

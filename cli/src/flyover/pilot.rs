@@ -123,7 +123,7 @@ pub fn fly_piloted(
     let mut measuring = Duration::ZERO;
     let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
     let mut cams = fly::cameras(h, &mut pool, config)?;
-    let camera_bytes = cams.first().map_or(0, CameraState::bytes);
+    let (camera_bytes, morph_bytes) = fly::state_bytes(cams.first());
     let mut outs: Vec<Vec<IndexBuffers>> = views
         .iter()
         .map(|_| fly::index_lists(h, config, in_flight))
@@ -157,6 +157,7 @@ pub fn fly_piloted(
     Ok(Flight {
         records,
         camera_bytes,
+        morph_bytes,
         wall: start.elapsed().saturating_sub(measuring),
         segment_walls: Vec::new(),
     })

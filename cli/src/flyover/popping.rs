@@ -4,7 +4,7 @@
 //! A position of the hierarchy is drawn where its vertices stand: its own point while its
 //! node is active (a position is held by the chain of stationary children below the node
 //! that introduced it, so the created positions are exactly those of the active nodes), the
-//! blend of a geomorph while its floating child morphs, and, once collapsed, where the
+//! blend of a geomorph (along its chain) while its floating child morphs, and, once collapsed, where the
 //! position it collapsed into is drawn. Without geomorphs a split moves the floating child
 //! from its parent's point to its own in one frame, and a collapse moves it back in one
 //! frame; with geomorphs a morphing vertex moves by the blend's step. Every position drawn
@@ -14,7 +14,9 @@
 
 use std::sync::Arc;
 
+use caveclod_core::format::Vertex;
 use caveclod_core::glam::{Mat4, Vec2, Vec3, Vec4};
+use caveclod_core::gpu::{morph_slot_vertex, MorphSlices};
 use caveclod_core::{CameraState, Hierarchy};
 
 use super::routes::{HEIGHT, WIDTH};
@@ -31,8 +33,8 @@ pub struct PopTables {
     normal: Vec<Vec3>,
     /// Per vertex, its position.
     position_of_vertex: Vec<u32>,
-    /// Per vertex, its point.
-    vertex_point: Vec<Vec3>,
+    /// The persistent vertices (morph slots blend them).
+    vertices: Vec<Vertex>,
     /// Per node, its position.
     position_of_node: Vec<u32>,
 }
@@ -61,11 +63,7 @@ impl PopTables {
                 }
             }
         }
-        let vertex_point = h
-            .vertices()
-            .iter()
-            .map(|v| Vec3::from(v.position))
-            .collect();
+        let vertices = h.vertices().to_vec();
         let mut normal = vec![Vec3::ZERO; point.len()];
         for (v, &p) in h.vertices().iter().zip(&position_of_vertex) {
             if let Some(n) = normal.get_mut(p as usize) {
@@ -77,7 +75,7 @@ impl PopTables {
             point,
             parent,
             position_of_vertex,
-            vertex_point,
+            vertices,
             position_of_node,
         }
     }
@@ -197,16 +195,19 @@ impl PopMeter {
                 }
             }
         }
-        for m in cam.morph_vertices().iter().filter(|m| !m.is_idle()) {
-            let (Some(&p), Some(&a), Some(&b)) = (
-                t.position_of_vertex.get(m.to as usize),
-                t.vertex_point.get(m.from as usize),
-                t.vertex_point.get(m.to as usize),
-            ) else {
+        let inputs = MorphSlices {
+            vertices: &t.vertices,
+            slots: cam.morph_vertices(),
+        };
+        for (s, m) in inputs.slots.iter().enumerate() {
+            let Some(&p) = t.position_of_vertex.get(m.to as usize) else {
+                continue; // idle
+            };
+            let Some(v) = morph_slot_vertex(&inputs, s as u32) else {
                 continue;
             };
             if d.stamp.get(p as usize) == Some(&frame) {
-                d.at[p as usize] = a + (b - a) * m.t;
+                d.at[p as usize] = Vec3::from(v.position);
             }
         }
     }

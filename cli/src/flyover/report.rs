@@ -97,6 +97,7 @@ impl Flyover {
             "static_bytes": flown.static_bytes,
             "paper_static_bytes": flown.paper_static_bytes,
             "camera_bytes": flown.camera_bytes,
+            "morph_bytes": self.flight.morph_bytes,
             "paper_camera_bytes": flown.paper_camera_bytes,
             "camera_ratio": flown.camera_ratio(),
             "camera_bytes_full": self.memory_full.camera_bytes,

@@ -508,6 +508,17 @@ impl<'m> CameraState<'m> {
             + core::mem::size_of::<Self>()
     }
 
+    /// Bytes of this camera's morph memory (part of [`bytes`](Self::bytes)): 0 without
+    /// morphs ([`CameraConfig::max_morphs`]).
+    pub fn morph_bytes(&self) -> usize {
+        let m = &self.front.morphs;
+        core::mem::size_of_val(&*m.vertices)
+            + core::mem::size_of_val(&*m.states)
+            + m.map.bytes()
+            + core::mem::size_of_val(&*m.coarsening)
+            + core::mem::size_of_val(&*m.free)
+    }
+
     /// `true` if `node` is on this camera's active front (O(1)).
     pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
         self.front.is_node_active(h, node)

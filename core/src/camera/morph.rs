@@ -15,7 +15,7 @@
 //!   from where it stands, back to the fine position, and then ends.
 //!
 //! A split or collapse of a node outside the view (the frustum and the normal cone, as
-//! refinement tests them) happens at once, and a collapse that happens at once ends its
+//! refinement tests them), whose position does not morph, happens at once, and a collapse that happens at once ends its
 //! floating child's morph. `t` moves at a constant speed (a full morph takes its duration;
 //! Hoppe's morphs take the whole duration again from wherever the vertex stands).
 //!
@@ -41,9 +41,16 @@
 //! buffer is never written.
 //!
 //! A split of a vertex that is still morphing leaves its morph running (the stationary child
-//! keeps the position, so the vertex keeps its morph); the new floating child starts from
-//! the parent's persistent vertex, not from where the parent's morph has it (the GPU blends
-//! every slot from persistent vertices, in any order).
+//! keeps the position, so the vertex keeps its morph), and the new floating child starts
+//! where that vertex is drawn, as Hoppe's do: its slot's `from` names the slot of the
+//! vertex it leaves (`vertex_count + slot`), so it moves with it until that morph ends, and
+//! from then on blends from the persistent vertex (see [`MorphVertex::from`]). The GPU still
+//! blends every slot from persistent vertices, in any order: a slot's blend walks its chain
+//! ([`gpu::morph_slot_vertex`](crate::gpu::morph_slot_vertex)).
+//!
+//! A morph also glides no faster than [`RefineParams::morph_speed_px_s`] across the screen:
+//! a floating child far from its parent on the screen takes longer than the duration, so
+//! no vertex jumps however coarse the node that splits.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -53,23 +60,27 @@ use super::refine::{Criterion, RefineParams, RefineStats};
 use super::{CameraState, Front, OpError, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
+use glam::Vec3;
 
-/// One morphing vertex as the GPU reads it: blend persistent vertex `from` (the coarse
-/// vertex, at the parent's position) and `to` (the fine one) at `t`
-/// ([`gpu::morph_vertex`](crate::gpu::morph_vertex)`(vertices[from], vertices[to], t)`), and
-/// write the result where morphed emission points, `vertex_count + slot`. An idle slot has
+/// One morphing vertex as the GPU reads it: blend from `from` towards persistent vertex `to`
+/// at `t` ([`gpu::morph_slot_vertex`](crate::gpu::morph_slot_vertex)) and write the result
+/// where morphed emission points, `vertex_count + slot`. An idle slot has
 /// `from == to == u32::MAX` ([`MorphVertex::IDLE`]): nothing points at it and it is skipped.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MorphVertex {
-    /// The coarse vertex: the parent's, in the same surface group where it has one.
+    /// Where the blend starts: the persistent vertex `coarse` (`< vertex_count`), or, while
+    /// `coarse` itself morphs, `vertex_count + s`: the blend of slot `s`, so a vertex that
+    /// splits again while it morphs starts its child where it is drawn (chains span at most
+    /// [`gpu::MAX_MORPH_CHAIN`](crate::gpu::MAX_MORPH_CHAIN) slots).
     pub from: u32,
     /// The fine vertex: the floating child's own.
     pub to: u32,
     /// 0 gives `from`, 1 gives `to`.
     pub t: f32,
-    /// Zero; pads the record to 16 bytes.
-    pub _pad: u32,
+    /// The coarse persistent vertex: the parent's, in the same surface group where it has
+    /// one. `from` once `coarse` no longer morphs.
+    pub coarse: u32,
 }
 
 const _: () = assert!(core::mem::size_of::<MorphVertex>() == 16);
@@ -80,7 +91,7 @@ impl MorphVertex {
         from: NONE,
         to: NONE,
         t: 0.0,
-        _pad: 0,
+        coarse: NONE,
     };
 
     /// `true` for a slot without a morphing vertex.
@@ -179,11 +190,12 @@ impl Front<'_> {
             let v = match fine.get(k) {
                 Some(key) => {
                     mapped &= self.morphs.map.insert(key.vertex, slot).is_some();
+                    let coarse = h.vertex_index(key.group, at).unwrap_or(any_coarse.vertex);
                     MorphVertex {
-                        from: h.vertex_index(key.group, at).unwrap_or(any_coarse.vertex),
+                        from: coarse,
                         to: key.vertex,
                         t,
-                        _pad: 0,
+                        coarse,
                     }
                 }
                 None => MorphVertex::IDLE,
@@ -210,6 +222,23 @@ impl Front<'_> {
         true
     }
 
+    /// Whether `node`'s position is drawn elsewhere than at its point: its vertex morphs.
+    #[inline]
+    fn position_morphs(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+        h.vertex_keys(Self::position_of(h, node))
+            .first()
+            .is_some_and(|k| self.morphs.map.bit(k.vertex) != 0)
+    }
+
+    /// Whether a split or collapse of `node` may show: its bounds are visible, or its
+    /// position morphs. A morphing position is drawn on its way from another place, which
+    /// the bounds (of the hierarchy's geometry) do not hold and which may be in view (a
+    /// chain of slow morphs near the eye can stand far from the node's sphere), so its
+    /// operations morph too.
+    fn drawn_visible(&self, h: &Hierarchy<'_>, c: &Criterion, node: NodeId) -> bool {
+        h.split_bounds(node).is_some_and(|b| c.visible(b)) || self.position_morphs(h, node)
+    }
+
     /// Ends the morph of the vertices at `floating`'s position, if any (its pair collapsed).
     pub fn end_morph_of(&mut self, h: &Hierarchy<'_>, floating: NodeId) {
         if let Some(m) = self.morph_of(h, floating) {
@@ -229,7 +258,7 @@ impl Front<'_> {
     ) {
         // Zero, negative and NaN durations all mean "at once".
         let on = p.refine_morph_s > 0.0;
-        if !on || !h.split_bounds(node).is_some_and(|b| c.visible(b)) {
+        if !on || !self.drawn_visible(h, c, node) {
             return;
         }
         if self.start_morph(h, node, 0.0, REFINING) {
@@ -255,7 +284,7 @@ impl Front<'_> {
             return false;
         };
         let running = self.morph_of(h, s.floating);
-        if p.coarsen_morph_s > 0.0 && c.visible(b) {
+        if p.coarsen_morph_s > 0.0 && (c.visible(b) || self.position_morphs(h, parent)) {
             if let Some(m) = running {
                 if self.morphs.state(m).is_some_and(|s| s.phase != COARSENING) {
                     st.morphs_started += 1;
@@ -295,6 +324,72 @@ impl Front<'_> {
         legal
     }
 
+    /// The largest step of morph `m`'s `t` that keeps its vertex within `max_px` pixels
+    /// of screen motion per pass, as a share of that bound: a vertex whose morph starts
+    /// from another morphing vertex (a chain, see [`MorphVertex::from`]) moves with it too,
+    /// so each link further down a chain takes half its parent's share (a chain's moves
+    /// then sum to less than twice the first link's), and the path it may cover is the sum
+    /// of the chain's paths, each at the larger magnification of its two ends. 1 (no limit)
+    /// for paths of no length, wholly behind the eye, or a morph without vertices.
+    fn screen_limit(&self, h: &Hierarchy<'_>, c: &Criterion, m: u32, max_px: f32) -> f32 {
+        let vertices = h.vertices();
+        let base = vertices.len() as u32;
+        let mut slot = self
+            .morphs
+            .vertices
+            .get(m as usize * VERTICES_PER_MORPH)
+            .copied();
+        let (mut px, mut share) = (0.0f32, max_px);
+        let mut links = 0;
+        while let Some(v) = slot.filter(|v| !v.is_idle()) {
+            if let (Some(a), Some(b)) =
+                (vertices.get(v.coarse as usize), vertices.get(v.to as usize))
+            {
+                let (pa, pb) = (Vec3::from_array(a.position), Vec3::from_array(b.position));
+                px += (pb - pa).length() * c.magnification(pa).max(c.magnification(pb));
+            }
+            links += 1;
+            if v.from < base || links >= crate::gpu::MAX_MORPH_CHAIN {
+                break;
+            }
+            share *= 0.5;
+            slot = self.morphs.vertices.get((v.from - base) as usize).copied();
+        }
+        if px > 0.0 && px.is_finite() {
+            (share / px).min(1.0)
+        } else if px > 0.0 {
+            0.0 // the eye stands on the path: hold the vertex until it moves on
+        } else {
+            1.0 // a path of no length, or wholly behind the eye
+        }
+    }
+
+    /// Points every morphing vertex's `from` at the slot of its `coarse` vertex while that
+    /// vertex morphs too, and at `coarse` itself otherwise (see [`MorphVertex::from`]):
+    /// run after every pass that started or ended morphs, before the GPU reads the slots.
+    pub(super) fn link_morph_chains(&mut self, h: &Hierarchy<'_>) {
+        let base = h.vertices().len() as u32;
+        let n = self.morphs.live_vertices().len();
+        for s in 0..n {
+            let Some(v) = self
+                .morphs
+                .vertices
+                .get(s)
+                .copied()
+                .filter(|v| !v.is_idle())
+            else {
+                continue;
+            };
+            let from = match self.morphs.map.get(v.coarse) {
+                Some(k) if k as usize != s => base.saturating_add(k),
+                _ => v.coarse,
+            };
+            if let Some(slot) = self.morphs.vertices.get_mut(s) {
+                slot.from = from;
+            }
+        }
+    }
+
     /// Steps every morph by `p.dt_s` (see the module docs): a coarsen morph whose parent's
     /// split is wanted again or whose collapse is illegal turns back; one whose parent left
     /// the view, or that reached 0, collapses (while the pass has operations left); a refine
@@ -313,10 +408,18 @@ impl Front<'_> {
             0.0
         };
         let (up, down) = (step(dt, p.refine_morph_s), step(dt, p.coarsen_morph_s));
+        let max_px = p.morph_speed_px_s * dt;
+        let limited = p.morph_speed_px_s > 0.0 && p.morph_speed_px_s.is_finite();
         let len = (self.morphs.scalars.len as usize).min(self.morphs.capacity()) as u32;
         for m in 0..len {
             let Some(state) = self.morphs.state(m) else {
                 continue;
+            };
+            let (up, down) = if limited {
+                let most = self.screen_limit(h, c, m, max_px);
+                (up.min(most), down.min(most))
+            } else {
+                (up, down)
             };
             // A collapse ends its floating child's morph, so the parent is split (and were it
             // not, a coarsen morph would find the collapse illegal and turn back).
@@ -327,7 +430,7 @@ impl Front<'_> {
                 let wanted = bounds.is_some_and(|b| c.wants_split(b));
                 let legal = !wanted && self.coarsening_legal(h, parent);
                 if legal {
-                    let visible = bounds.is_some_and(|b| c.visible(b));
+                    let visible = self.drawn_visible(h, c, parent);
                     let t = if visible { (t - down).max(0.0) } else { 0.0 };
                     if t <= 0.0 && st.operations() < max_ops {
                         if let Some(slots) = self.collapse_slots(h, parent) {

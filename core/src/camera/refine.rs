@@ -64,11 +64,22 @@ pub struct RefineParams {
     /// Seconds a coarsen morph takes (the floating child gliding back before its collapse);
     /// 0 collapses at once.
     pub coarsen_morph_s: f32,
+    /// Fastest a morphing vertex glides across the screen, in pixels per second of the
+    /// caller's clock (the view's pixels): a morph whose path is long on the screen takes
+    /// longer than its duration, so no vertex slides further per frame than this speed
+    /// allows, however far its floating child lies from its parent. The path's screen
+    /// length is taken at the nearer end's distance each pass, so a morph slows as the eye
+    /// comes closer. The default, 9 px/s, moves a vertex at most 0.15 px per frame at 60
+    /// frames per second; 0, a negative value or infinity set no limit (the durations alone,
+    /// as Hoppe's morphs).
+    pub morph_speed_px_s: f32,
 }
 
 /// Hoppe's viewer defaults at 60 frames per second: 32 frames to refine, 16 to coarsen.
 const REFINE_MORPH_S: f32 = 32.0 / 60.0;
 const COARSEN_MORPH_S: f32 = 16.0 / 60.0;
+/// The default screen speed limit of a morphing vertex: 0.15 px per frame at 60 Hz.
+const MORPH_SPEED_PX_S: f32 = 9.0;
 
 impl Default for RefineParams {
     fn default() -> Self {
@@ -82,6 +93,7 @@ impl Default for RefineParams {
             dt_s: 1.0 / 60.0,
             refine_morph_s: REFINE_MORPH_S,
             coarsen_morph_s: COARSEN_MORPH_S,
+            morph_speed_px_s: MORPH_SPEED_PX_S,
         }
     }
 }
@@ -189,6 +201,10 @@ const SHY: f32 = 1.0 - 1.0 / (1u32 << 20) as f32;
 /// the same order, and an early "no" only where the full test cannot say "yes".
 pub(super) struct Criterion {
     eye: Vec3,
+    /// The view's pixels per radian (0 for a view without a screen).
+    pub(super) pixels_per_radian: f32,
+    /// The view direction (the near plane's normal), or zero for a view without one.
+    forward: Vec3,
     tz2: f32,
     /// Plane `k`'s `x`, `y`, `z`, `w` in lane `k % 4` of `planes[k / 4][0..4]`; the lanes of
     /// planes the view does not use always pass (`0 · p + ∞`).
@@ -208,6 +224,11 @@ impl Criterion {
         }
         Self {
             eye: view.eye,
+            pixels_per_radian: view.pixels_per_radian,
+            forward: match view.planes.get(4) {
+                Some(near) if view.plane_count > 4 => near.truncate(),
+                _ => Vec3::ZERO,
+            },
             tz2,
             planes,
             frustum: params.frustum_culling,
@@ -223,6 +244,25 @@ impl Criterion {
             let s = *x * c.x + *y * c.y + *z * c.z + *w;
             s.cmpge(low).all()
         })
+    }
+
+    /// Most pixels a short move of a point at `p` covers per unit of its length: the
+    /// perspective's magnification `pixels_per_radian · distance / depth²`, which grows
+    /// towards the screen's edges (at the centre, `pixels_per_radian / distance`). Zero
+    /// behind the eye; without a view direction, the centre's figure.
+    #[inline]
+    pub(super) fn magnification(&self, p: Vec3) -> f32 {
+        let pe = p - self.eye;
+        let distance = pe.length();
+        if self.forward == Vec3::ZERO {
+            return self.pixels_per_radian / distance;
+        }
+        let depth = pe.dot(self.forward);
+        if depth > 0.0 {
+            self.pixels_per_radian * distance / (depth * depth)
+        } else {
+            0.0
+        }
     }
 
     /// Refinement's visibility of a node: its sphere inside the frustum and its normal cone
@@ -471,6 +511,9 @@ impl CameraState<'_> {
             Some(_) if i < f.active_len as usize => i as u32,
             _ => 0,
         };
+        if f.morphs.scalars.live > 0 {
+            f.link_morph_chains(h);
+        }
         st.active_nodes = f.active_nodes;
         st.active_polygons = f.active_polygons;
         st.morphing = f.morphs.scalars.live;

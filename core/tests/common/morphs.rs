@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::gpu::morph_vertex;
+use caveclod_core::gpu::{morph_chain, morph_slot_vertex, MorphSlices, MAX_MORPH_CHAIN};
 use caveclod_core::{
     CameraConfig, CameraState, Hierarchy, LookAt, MorphVertex, NodeId, RefineParams, RefineStats,
     View,
@@ -39,6 +39,7 @@ pub fn fine() -> RefineParams {
     RefineParams {
         tolerance_px: 0.05,
         backface_culling: false,
+        morph_speed_px_s: 0.0,
         ..RefineParams::default()
     }
 }
@@ -88,9 +89,10 @@ pub fn position_of_vertex(h: &Hierarchy<'_>) -> Vec<u32> {
 }
 
 /// What must hold of a camera's morphs after any pass:
-/// - every live slot has `t` in [0, 1], its blend at `t` on the segment between its two
-///   vertices, `to` at the position of an active node and `from` at the position of the
-///   parent whose split made that position's floating child;
+/// - every live slot has `t` in [0, 1], its blend at `t` on the segment between where its
+///   `from` is drawn and its `to`, `to` at the position of an active node, `coarse` at the
+///   position of the parent whose split made that position's floating child, and `from`
+///   naming `coarse`'s slot while `coarse` morphs (a chain within the limit), else `coarse`;
 /// - morphed emission is the plain emission with exactly the morphing corners replaced by
 ///   `vertex_count + slot`.
 ///
@@ -113,19 +115,38 @@ pub fn check_morphs(h: &Hierarchy<'_>, cam: &CameraState<'_>, pos: &[u32]) -> us
         .collect();
     let mut slot_of = HashMap::new();
     for &(s, m) in &live {
-        assert!((0.0..=1.0).contains(&m.t), "slot {s}: t {}", m.t);
-        assert!(
-            (m.from as usize) < vc && (m.to as usize) < vc,
-            "slot {s}: {m:?}"
-        );
         assert!(
             slot_of.insert(m.to, s).is_none(),
             "vertex {} in two slots",
             m.to
         );
-        let (a, b) = (h.vertices()[m.from as usize], h.vertices()[m.to as usize]);
-        let p = Vec3::from_array(morph_vertex(a, b, m.t).position);
-        let (pa, pb) = (Vec3::from_array(a.position), Vec3::from_array(b.position));
+    }
+    let inputs = MorphSlices {
+        vertices: h.vertices(),
+        slots,
+    };
+    for &(s, m) in &live {
+        assert!((0.0..=1.0).contains(&m.t), "slot {s}: t {}", m.t);
+        assert!(
+            (m.coarse as usize) < vc && (m.to as usize) < vc,
+            "slot {s}: {m:?}"
+        );
+        // `from` is `coarse`, or the slot of `coarse` while that vertex morphs too.
+        match slot_of.get(&m.coarse) {
+            Some(&k) => assert_eq!(m.from as usize, vc + k, "slot {s}: {m:?}"),
+            None => assert_eq!(m.from, m.coarse, "slot {s}: {m:?}"),
+        }
+        let chain = morph_chain(&inputs, s as u32).expect("a live slot").0;
+        assert!(chain <= MAX_MORPH_CHAIN, "slot {s}: a chain of {chain}");
+        // The blend lies on the segment from where `from` is drawn to `to`, at `t`.
+        let start = if (m.from as usize) < vc {
+            h.vertices()[m.from as usize]
+        } else {
+            morph_slot_vertex(&inputs, m.from - vc as u32).expect("a live slot")
+        };
+        let b = h.vertices()[m.to as usize];
+        let p = Vec3::from_array(morph_slot_vertex(&inputs, s as u32).expect("live").position);
+        let (pa, pb) = (Vec3::from_array(start.position), Vec3::from_array(b.position));
         let ab = pb - pa;
         let along = if ab.length_squared() > 0.0 {
             ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
@@ -137,7 +158,7 @@ pub fn check_morphs(h: &Hierarchy<'_>, cam: &CameraState<'_>, pos: &[u32]) -> us
             off <= 1e-5 * (1.0 + pa.length().max(pb.length())),
             "slot {s}: {off}"
         );
-        assert!((along - m.t).abs() <= 1e-4 || ab.length_squared() == 0.0);
+        assert!((along - m.t).abs() <= 1e-4 || ab.length_squared() <= 1e-12);
         // `to` stands where an active node stands; walking up that node's stationary
         // ancestors (which share the position) reaches the floating child, whose parent
         // stands at `from`.
@@ -154,7 +175,7 @@ pub fn check_morphs(h: &Hierarchy<'_>, cam: &CameraState<'_>, pos: &[u32]) -> us
             child = p;
         };
         assert_eq!(h.split(parent).map(|sp| sp.floating), Some(child));
-        assert_eq!(pos[m.from as usize], h.nodes()[parent.index()].position.0);
+        assert_eq!(pos[m.coarse as usize], h.nodes()[parent.index()].position.0);
         assert!(cam.is_split(parent));
     }
     let (plain, offsets) = packed(h, cam, false);

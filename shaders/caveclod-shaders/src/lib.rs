@@ -24,8 +24,9 @@
 use caveclod_core::MorphVertex;
 use caveclod_core::format::Vertex;
 use caveclod_core::gpu::{
-    base_colour, cut, fragment, morph_colour, morph_vertex, unpack_colour, vertex_colour,
-    DrawPush, MorphPush, MorphSlotsPush, MorphingPush, MORPH_BLENDED,
+    base_colour, cut, fragment, morph_slot_colour, morph_slot_vertex, morph_vertex,
+    unpack_colour, vertex_colour, DrawPush, MorphInputs, MorphPush, MorphSlotsPush, MorphingPush,
+    MORPH_BLENDED,
 };
 use spirv_std::glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use spirv_std::image::Image2d;
@@ -186,7 +187,8 @@ pub fn geomorph_cs(
     write_vertex(out, so, v);
 }
 
-/// Words per morph slot in a slot buffer: a [`MorphVertex`] (`from`, `to`, `t`'s bits, 0).
+/// Words per morph slot in a slot buffer: a [`MorphVertex`] (`from`, `to`, `t`'s bits,
+/// `coarse`).
 const SLOT_WORDS: usize = 4;
 
 /// Morph slot `slot` of a slot buffer, if it lies wholly inside it and is not idle.
@@ -200,12 +202,39 @@ fn read_slot(slots: &[u32], slot: u32) -> Option<MorphVertex> {
         from: slots[w],
         to: slots[w + 1],
         t: f32::from_bits(slots[w + 2]),
-        _pad: 0,
+        coarse: slots[w + 3],
     };
     if m.is_idle() {
         None
     } else {
         Some(m)
+    }
+}
+
+/// What a slot's blend reads in the shaders: the slot buffer (the first `slot_count`
+/// slots) and the persistent vertices.
+struct SlotBuffers<'a> {
+    vertices: &'a [f32],
+    slots: &'a [u32],
+    slot_count: u32,
+    vertex_count: u32,
+}
+
+impl MorphInputs for SlotBuffers<'_> {
+    fn vertex_count(&self) -> u32 {
+        self.vertex_count
+    }
+
+    fn slot(&self, s: u32) -> Option<MorphVertex> {
+        if s < self.slot_count {
+            read_slot(self.slots, s)
+        } else {
+            None
+        }
+    }
+
+    fn vertex(&self, index: u32) -> Option<Vertex> {
+        vertex_start(self.vertices.len(), index).map(|start| read_vertex(self.vertices, start))
     }
 }
 
@@ -229,9 +258,10 @@ fn colour_at(colours: &[u32], on: bool, index: u32) -> Vec4 {
 }
 
 /// The vertex and linear colour `morphing_vs` draws for index `index` (see [`MorphingPush`]):
-/// a persistent vertex as stored, or a morph slot's blend of its two persistent vertices
-/// (computed here, or read from `blended`), with the blend of their colours. An index past
-/// the slots, or an idle slot, gives the zero vertex.
+/// a persistent vertex as stored, or a morph slot's blend along its chain
+/// ([`morph_slot_vertex`], computed here, or read from `blended`), with its colours blended
+/// alike ([`morph_slot_colour`]). An index past the slots, or an idle slot, gives the zero
+/// vertex.
 fn pulled_vertex(
     index: u32,
     vertices: &[f32],
@@ -246,24 +276,24 @@ fn pulled_vertex(
         return (vertex_at(vertices, index), colour);
     }
     let slot = index - push.vertex_count;
-    let morph = if slot < push.slot_count {
-        read_slot(slots, slot)
-    } else {
-        None
+    let inputs = SlotBuffers {
+        vertices,
+        slots,
+        slot_count: push.slot_count,
+        vertex_count: push.vertex_count,
     };
-    let Some(m) = morph else {
+    if inputs.slot(slot).is_none() {
         return (vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO), Vec4::ONE);
-    };
+    }
     let v = if push.source == MORPH_BLENDED {
         vertex_at(blended, slot)
     } else {
-        morph_vertex(vertex_at(vertices, m.from), vertex_at(vertices, m.to), m.t)
+        match morph_slot_vertex(&inputs, slot) {
+            Some(v) => v,
+            None => vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO),
+        }
     };
-    let colour = morph_colour(
-        colour_at(colours, has_colours, m.from),
-        colour_at(colours, has_colours, m.to),
-        m.t,
-    );
+    let colour = morph_slot_colour(&inputs, slot, |i| colour_at(colours, has_colours, i));
     (v, colour)
 }
 
@@ -295,9 +325,9 @@ pub fn morphing_vs(
 }
 
 /// Compute stage for refinement geomorphs (64 invocations per workgroup): invocation
-/// `s < slot_count` writes morph slot `s`'s vertex, [`morph_vertex`] of its two persistent
-/// vertices at its `t`, to `blended[s]`. Idle slots, and slots or vertices not wholly
-/// inside their buffers, are skipped.
+/// `s < slot_count` writes morph slot `s`'s vertex, [`morph_slot_vertex`] (its chain's
+/// persistent start blended towards each slot's `to`), to `blended[s]`. Idle slots, and
+/// slots or vertices not wholly inside their buffers, are skipped.
 #[spirv(compute(threads(64)))]
 pub fn morphing_cs(
     #[spirv(global_invocation_id)] id: UVec3,
@@ -307,20 +337,18 @@ pub fn morphing_cs(
     #[spirv(push_constant)] push: &MorphSlotsPush,
 ) {
     let s = id.x;
-    if s >= push.slot_count {
-        return;
-    }
-    let Some(m) = read_slot(slots, s) else {
-        return;
+    let inputs = SlotBuffers {
+        vertices,
+        slots,
+        slot_count: push.slot_count,
+        vertex_count: push.vertex_count,
     };
-    let (Some(a), Some(b), Some(out)) = (
-        vertex_start(vertices.len(), m.from),
-        vertex_start(vertices.len(), m.to),
+    let (Some(v), Some(out)) = (
+        morph_slot_vertex(&inputs, s),
         vertex_start(blended.len(), s),
     ) else {
         return;
     };
-    let v = morph_vertex(read_vertex(vertices, a), read_vertex(vertices, b), m.t);
     write_vertex(blended, out, v);
 }
 
@@ -419,18 +447,33 @@ mod tests {
     fn slot_words(slots: &[MorphVertex]) -> Vec<u32> {
         slots
             .iter()
-            .flat_map(|m| [m.from, m.to, m.t.to_bits(), 0])
+            .flat_map(|m| [m.from, m.to, m.t.to_bits(), m.coarse])
             .collect()
     }
 
     fn morph_slots() -> Vec<MorphVertex> {
-        let slot = |from, to, t| MorphVertex {
+        let slot = |from, to, t, coarse| MorphVertex {
             from,
             to,
             t,
-            _pad: 0,
+            coarse,
         };
-        vec![slot(0, 3, 0.25), MorphVertex::IDLE, slot(4, 1, 0.75), slot(2, 9, 0.5)]
+        // Slot 4 starts from slot 0's blend (index 5 + 0 of 5 vertices).
+        vec![
+            slot(0, 3, 0.25, 0),
+            MorphVertex::IDLE,
+            slot(4, 1, 0.75, 4),
+            slot(2, 9, 0.5, 2),
+            slot(5, 2, 0.5, 3),
+        ]
+    }
+
+    fn cpu(vs: &[Vertex], m: &[MorphVertex], s: u32) -> Option<Vertex> {
+        let inputs = caveclod_core::gpu::MorphSlices {
+            vertices: vs,
+            slots: m,
+        };
+        morph_slot_vertex(&inputs, s)
     }
 
     #[test]
@@ -438,27 +481,29 @@ mod tests {
         let vs = vertices(0.5, 5);
         let (v, m) = (floats(&vs), morph_slots());
         let words = slot_words(&m);
-        let mut out = vec![-7.0f32; 8 * 4];
+        let mut out = vec![-7.0f32; 8 * 5];
         let push = MorphSlotsPush {
-            slot_count: 4,
-            _pad: [0; 3],
+            slot_count: 5,
+            vertex_count: 5,
+            _pad: [0; 2],
         };
         for x in 0..64 {
             morphing_cs(UVec3::new(x, 0, 0), &v, &words, &mut out, &push);
         }
         for (s, slot) in m.iter().enumerate() {
             let got = &out[8 * s..8 * s + 8];
-            match caveclod_core::gpu::morph_slot_vertex(&vs, *slot) {
-                Some(want) => assert_eq!(got, &floats(&[want])[..], "slot {s}"),
+            match cpu(&vs, &m, s as u32) {
+                Some(want) => assert_eq!(got, &floats(&[want])[..], "slot {s}: {slot:?}"),
                 // Idle, or naming vertex 9 of 5: untouched.
                 None => assert!(got.iter().all(|&f| f == -7.0), "slot {s}"),
             }
         }
         // A count below the slots leaves the rest alone.
-        let mut out = vec![-7.0f32; 8 * 4];
+        let mut out = vec![-7.0f32; 8 * 5];
         let push = MorphSlotsPush {
             slot_count: 1,
-            _pad: [0; 3],
+            vertex_count: 5,
+            _pad: [0; 2],
         };
         for x in 0..64 {
             morphing_cs(UVec3::new(x, 0, 0), &v, &words, &mut out, &push);
@@ -473,10 +518,9 @@ mod tests {
         let words = slot_words(&m);
         let colours: Vec<u32> = (0..5u32).map(|i| 0x8000_0000 | (i * 40)).collect();
         // What the compute stage would have written.
-        let blended: Vec<f32> = m
-            .iter()
-            .flat_map(|&slot| {
-                let b = caveclod_core::gpu::morph_slot_vertex(&vs, slot);
+        let blended: Vec<f32> = (0..m.len() as u32)
+            .flat_map(|s| {
+                let b = cpu(&vs, &m, s);
                 floats(&[b.unwrap_or(vertex(Vec3::ZERO, Vec3::ZERO, Vec2::ZERO))])
             })
             .collect();
@@ -485,7 +529,7 @@ mod tests {
             let push = MorphingPush {
                 draw,
                 vertex_count: 5,
-                slot_count: 4,
+                slot_count: 5,
                 source,
                 colours: 1,
             };
@@ -506,11 +550,25 @@ mod tests {
             let (pos, n, uv, c) = run(7);
             assert_eq!(pos, Vec3::from_array(want.position).extend(1.0), "source {source}");
             assert_eq!((n, uv), (Vec3::from_array(want.normal), Vec2::from_array(want.uv)));
-            let want_colour =
-                morph_colour(unpack_colour(colours[4]), unpack_colour(colours[1]), 0.75);
+            let want_colour = caveclod_core::gpu::morph_colour(
+                unpack_colour(colours[4]),
+                unpack_colour(colours[1]),
+                0.75,
+            );
             assert_eq!(c, want_colour);
+            // Slot 4 (index 9): from slot 0's blend towards vertex 2.
+            let want = morph_vertex(morph_vertex(vs[0], vs[3], 0.25), vs[2], 0.5);
+            let (pos, _, _, c) = run(9);
+            assert_eq!(pos, Vec3::from_array(want.position).extend(1.0), "source {source}");
+            let start = caveclod_core::gpu::morph_colour(
+                unpack_colour(colours[0]),
+                unpack_colour(colours[3]),
+                0.25,
+            );
+            let end = vertex_colour(unpack_colour(colours[2]));
+            assert_eq!(c, start + (end - start) * 0.5);
             // An idle slot and an index past the slots: the zero vertex.
-            for idle in [6, 9] {
+            for idle in [6, 10] {
                 assert_eq!(run(idle).0, Vec4::new(0.0, 0.0, 0.0, 1.0), "index {idle}");
             }
         }
