@@ -22,8 +22,8 @@ fn collapse_reports(reports: &mut Reports) -> impl FnMut(Stage) + '_ {
 }
 
 /// One report per pass, the collapses never fewer, the bound fixed, and no more passes than
-/// the collapses allow (each pass but the last applies one, or hands over to a full pass
-/// that does).
+/// the collapses allow: each pass applies a collapse, or stopped at its share and hands over
+/// to a full pass, which applies one or is the last.
 fn check_reports(reports: &Reports, info: &BakeInfo) {
     assert_eq!(reports.len(), info.passes as usize);
     let &(done, most) = reports.last().expect("a pass");
@@ -32,7 +32,7 @@ fn check_reports(reports: &Reports, info: &BakeInfo) {
         .all(|w| w[0].0 <= w[1].0 && w[0].1 == w[1].1));
     assert!(done <= most, "{done} > {most}");
     assert!(
-        u64::from(info.passes) <= 2 * done + 1,
+        u64::from(info.passes) <= 2 * done + 2,
         "{} passes",
         info.passes
     );
@@ -72,7 +72,7 @@ fn a_cad_assembly_written_as_gltf_bakes_to_the_end() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
     /// Random small soups: the bake ends, with a hierarchy the loader accepts.
     #[test]
