@@ -27,6 +27,14 @@ pub enum BakeError {
     /// The out-of-core simplification failed.
     #[error(transparent)]
     OutOfCore(#[from] crate::ooc::OocError),
+    /// The hierarchy build broke an invariant its termination rests on (a baker bug).
+    #[error("{path}: {source}")]
+    Hierarchy {
+        /// The input.
+        path: String,
+        /// The stage and the invariant.
+        source: hierarchy::BuildError,
+    },
     /// The baked arrays did not validate (a baker bug).
     #[error("internal error: the baked hierarchy does not validate: {0}")]
     Invalid(caveclod_core::FormatError),
@@ -67,7 +75,11 @@ pub fn bake_mesh(
     })?;
     let h = hierarchy::build(&w, &AttributeWeights::default(), &mut |done, most| {
         progress(Stage::Collapse(done, most))
-    });
+    })
+    .map_err(|source| BakeError::Hierarchy {
+        path: name.to_string(),
+        source,
+    })?;
     progress(Stage::Assemble);
     let baked = Baked::new(&w, &h).with_materials(&mesh.surfaces, Path::new(""));
     baked.hierarchy().map_err(BakeError::Invalid)?;

@@ -10,7 +10,7 @@ use caveclod_tests::{meshes, to_mesh, TestMesh};
 
 fn bake(t: &TestMesh) -> Baked {
     let w = weld(&to_mesh(t)).expect("weld");
-    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {});
+    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
     Baked::new(&w, &h)
 }
 

@@ -222,7 +222,7 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
     let w2 = weld::weld(&mesh).expect("weld");
     let t_weld = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let hier = hierarchy::build(&w2, &AttributeWeights::default(), &mut |_, _| {});
+    let hier = hierarchy::build(&w2, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
     let t_build = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let b2 = Baked::new(&w2, &hier);

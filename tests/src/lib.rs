@@ -6,6 +6,7 @@ pub mod bake;
 pub mod check;
 pub mod generate;
 pub mod meshes;
+pub mod parts;
 pub mod rng;
 
 pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};

@@ -15,7 +15,8 @@
 //! 1. set up the work (`setup`): positions centred on their bounding box, a wedge per
 //!    surface group at each position with the quadrics of its triangles and boundary
 //!    planes, the triangles with their neighbours, the leaves' bounds;
-//! 2. collapse in passes (`pass`) until one finds nothing to apply: rank every edge
+//! 2. collapse in passes (`pass`) until one finds nothing to apply (after one that stopped
+//!    at its share, a full pass, which cuts nothing, must find nothing): rank every edge
 //!    (`rank`), check the collapses the pass reaches (`legality`), apply them
 //!    (`collapse`), then hand the moved input points to their nearest triangles
 //!    (`bounds`);
@@ -153,12 +154,58 @@ const MAX_THREADS: usize = 8;
 /// Triangles below which work stays on one thread.
 const PARALLEL_MIN: usize = 4096;
 
+/// The step of a build in which an invariant broke.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildStage {
+    /// The sequence of passes: one that applies nothing ends it, every other removes a node.
+    Passes,
+    /// A full pass (after one that applied nothing of its share): it goes through every
+    /// ranked collapse.
+    FullPass,
+    /// One pass's collapses: each ranked one is tried once, with at most one other direction.
+    Pass,
+}
+
+impl std::fmt::Display for BuildStage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Passes => "the collapse passes",
+            Self::FullPass => "a full collapse pass",
+            Self::Pass => "a collapse pass",
+        })
+    }
+}
+
+/// A build that broke an invariant its termination rests on (a baker bug): it stops with
+/// this error instead of looping.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "internal error: the hierarchy build broke an invariant in {stage} (pass {pass}, \
+     {collapses} of at most {most} collapses): {invariant}"
+)]
+pub struct BuildError {
+    /// Where.
+    pub stage: BuildStage,
+    /// The pass (from 1).
+    pub pass: u32,
+    /// Collapses applied so far.
+    pub collapses: u64,
+    /// Collapses the mesh allows at most (its positions less one).
+    pub most: u64,
+    /// The invariant that broke.
+    pub invariant: &'static str,
+}
+
 /// Builds the hierarchy of a welded mesh.
-pub fn build(w: &Welded, weights: &AttributeWeights, progress: Progress<'_>) -> Hierarchy {
+pub fn build(
+    w: &Welded,
+    weights: &AttributeWeights,
+    progress: Progress<'_>,
+) -> Result<Hierarchy, BuildError> {
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(MAX_THREADS);
     let mut work = setup::work(w, weights, threads);
-    pass::collapse_all(&mut work, threads, progress);
-    work.into_hierarchy()
+    pass::collapse_all(&mut work, threads, progress)?;
+    Ok(work.into_hierarchy())
 }

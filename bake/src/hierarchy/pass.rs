@@ -8,23 +8,54 @@ use super::geometry::corner_of;
 use super::legality::Verdict;
 use super::rank::{order_key, rank_all, Candidate, Ranked, Slot};
 use super::work::Work;
-use super::{Progress, NONE, PASS_SHARE};
+use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 
 /// Runs passes until one finds nothing to apply, reporting progress after each.
-pub(super) fn collapse_all(work: &mut Work<'_>, threads: usize, progress: Progress<'_>) {
+///
+/// The loop ends: a pass that applies nothing ends it unless it stopped at its share, and
+/// then the next pass goes through every ranked collapse (a full pass cuts nothing), so
+/// that one applying nothing ends it too. Every other pass removes a node, so there are at
+/// most `2 × positions` passes. A pass that breaks either invariant (a full pass cut
+/// short, more passes than that) is a [`BuildError`] naming it, never a loop.
+pub(super) fn collapse_all(
+    work: &mut Work<'_>,
+    threads: usize,
+    progress: Progress<'_>,
+) -> Result<(), BuildError> {
     let mut passes = Passes::new(work.tris.len());
     let most = work.p.len().saturating_sub(1) as u64;
+    let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
     // its cheapest share).
     let mut full = false;
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        let (applied, cut) = passes.run(work, pass, full, threads);
+        let (applied, cut) = passes.run(work, pass, full, threads)?;
         work.settle(threads);
-        progress(work.h.collapses.len() as u64, most);
-        if applied == 0 && !cut {
-            break;
+        let done = work.h.collapses.len() as u64;
+        progress(done, most);
+        let broken = |stage, invariant| BuildError {
+            stage,
+            pass,
+            collapses: done,
+            most,
+            invariant,
+        };
+        if full && cut {
+            return Err(broken(
+                BuildStage::FullPass,
+                "a pass over every ranked collapse stopped at a share",
+            ));
+        }
+        if applied == 0 && (full || !cut) {
+            return Ok(());
+        }
+        if u64::from(pass) >= max_passes || done > most {
+            return Err(broken(
+                BuildStage::Passes,
+                "more passes or collapses than the mesh has nodes to remove",
+            ));
         }
         full = applied == 0;
     }
@@ -75,7 +106,17 @@ impl Passes {
     /// both ends free; when it was illegal at the start of the pass, the edge's other
     /// direction queues at its own cost (in the same order as if it had been ranked with
     /// the others).
-    fn run(&mut self, work: &mut Work<'_>, pass: u32, full: bool, threads: usize) -> (u64, bool) {
+    ///
+    /// Each ranked collapse is tried at most once and queues at most one other direction,
+    /// so a pass tries at most twice as many collapses as it ranked; trying more is a
+    /// [`BuildError`].
+    fn run(
+        &mut self,
+        work: &mut Work<'_>,
+        pass: u32,
+        full: bool,
+        threads: usize,
+    ) -> Result<(u64, bool), BuildError> {
         // Drop the triangles the last pass removed (keeping the order).
         self.live.retain(|&f| work.alive[f as usize]);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
@@ -87,12 +128,24 @@ impl Passes {
             .start(&self.cands, if full { 1.0 } else { PASS_SHARE });
         let mut applied = 0u64;
         self.later.clear();
+        let max_tries = 2 * self.cands.len() as u64;
+        let mut tries = 0u64;
         loop {
             let (t, u, from_later) = match self.next(work, pass, limit) {
-                Next::Done => return (applied, false),
-                Next::Cut => return (applied, true),
+                Next::Done => return Ok((applied, false)),
+                Next::Cut => return Ok((applied, true)),
                 Next::Try { t, u, from_later } => (t, u, from_later),
             };
+            tries += 1;
+            if tries > max_tries {
+                return Err(BuildError {
+                    stage: BuildStage::Pass,
+                    pass,
+                    collapses: work.h.collapses.len() as u64,
+                    most: work.p.len().saturating_sub(1) as u64,
+                    invariant: "a pass tried more collapses than it ranked and queued",
+                });
+            }
             if stamped(work, pass, t, u) {
                 continue;
             }

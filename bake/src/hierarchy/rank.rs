@@ -77,17 +77,20 @@ const BUCKET_MIN: usize = 4096;
 impl Ranked {
     /// Takes a pass's candidates, of which the pass means to apply the cheapest `share`;
     /// returns the [`order_key`] of the dearest cost in that share (for many candidates,
-    /// rounded up to the end of its bucket). Only candidates up to it are handed out.
+    /// rounded up to the end of its bucket), or `u64::MAX` when the share is every
+    /// candidate. Only candidates up to it are handed out, and the pass cuts what is dearer,
+    /// the other directions it queues included: a share of everything cuts nothing.
     pub(super) fn start(&mut self, cands: &[Candidate], share: f64) -> u64 {
         self.chunk.clear();
         self.pos = 0;
         let want = ((cands.len() as f64 * share).ceil() as usize).clamp(1, cands.len().max(1));
+        let everything = want >= cands.len();
         if cands.len() < BUCKET_MIN {
             self.chunk.extend_from_slice(cands);
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
             return match self.chunk.get(want - 1) {
-                Some(c) if want < cands.len() => order_key(c.0),
+                Some(c) if !everything => order_key(c.0),
                 _ => u64::MAX,
             };
         }
@@ -102,7 +105,7 @@ impl Ranked {
         }
         // The bucket holding the `want`-th cheapest; those after it are left out.
         let last = self.bounds[1..].partition_point(|&n| (n as usize) < want);
-        let limit = if last + 1 >= 1 << BUCKET_BITS {
+        let limit = if everything || last + 1 >= 1 << BUCKET_BITS {
             u64::MAX
         } else {
             (((last + 1) as u64) << (64 - BUCKET_BITS)) - 1

@@ -51,7 +51,7 @@ fn terrain(n: u32) -> Mesh {
 #[test]
 fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
     let w = crate::weld::weld(&terrain(24)).expect("weld");
-    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {});
+    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
     let point = |node: u32| w.positions[h.node_position[node as usize] as usize].map(f64::from);
     let base: Vec<[V3; 3]> = h
         .corners
@@ -90,5 +90,23 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
         if p != NONE {
             assert!(h.error[p as usize] >= h.error[v]);
         }
+    }
+}
+
+/// A pass over every ranked collapse has no limit, with few candidates (sorted at once) and
+/// with many (bucketed): an edge's other direction, queued during the pass, may be dearer
+/// than every ranked collapse and must not be cut (a full pass that applied nothing while
+/// cutting one was repeated forever).
+#[test]
+fn a_full_share_cuts_nothing() {
+    use super::rank::{order_key, Ranked};
+    for n in [100usize, 10_000] {
+        let cands: Vec<_> = (0..n).map(|i| (1.0 + i as f64, 0, 1)).collect();
+        let mut ranked = Ranked::default();
+        assert_eq!(ranked.start(&cands, 1.0), u64::MAX, "{n} candidates");
+        // Half: the limit covers the cheapest half and leaves out the dearest.
+        let half = ranked.start(&cands, PASS_SHARE);
+        assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
+        assert!(half < order_key(n as f64), "{n} candidates");
     }
 }

@@ -9,10 +9,10 @@ use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
 use caveclod_bake::report::BakeInfo;
 use caveclod_cli::info as report;
 use caveclod_core::Hierarchy;
-use indicatif::ProgressBar;
 use serde_json::{json, Map, Value};
 
-use super::{progress_bar, with_hierarchy};
+use super::progress::Progress;
+use super::with_hierarchy;
 use crate::args::BakeArgs;
 
 /// What a bake made, in core or out of core.
@@ -25,9 +25,15 @@ struct Made {
     octree: Option<MultiresOctree>,
 }
 
-/// Bakes the input, writes the .clod file, reads it back and prints its report.
+/// Bakes the input, writes the .clod file, reads it back and prints its report. Progress
+/// goes to stderr: a bar on a terminal, otherwise (or with `--json`) a line every few
+/// seconds.
 pub fn bake(a: &BakeArgs) -> Result<(), String> {
-    let bar = progress_bar("{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})")?;
+    let bar = Progress::new(
+        "{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})",
+        "collapses",
+        a.json,
+    )?;
     let mut on_stage = |s: Stage| show_stage(&bar, s);
     let made = if a.out_of_core {
         bake_streamed(a, &mut on_stage)
@@ -45,10 +51,10 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
         })
         .map_err(|e| e.to_string())
     };
-    bar.finish_and_clear();
+    bar.finish();
     let made = made?;
     let levels = if a.gmesh {
-        bar.set_message("building g-mesh levels");
+        bar.show("building g-mesh levels", None);
         Some(gmesh_levels(&made.baked, a.gmesh_min_polygons)?)
     } else {
         None
@@ -70,17 +76,13 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
     })
 }
 
-/// Shows the in-core bake's stage (and the collapses done) on the bar.
-fn show_stage(bar: &ProgressBar, s: Stage) {
+/// Shows the in-core bake's stage (and the collapses done).
+fn show_stage(bar: &Progress, s: Stage) {
     match s {
-        Stage::Import => bar.set_message("importing"),
-        Stage::Weld => bar.set_message("welding"),
-        Stage::Collapse(done, most) => {
-            bar.set_message("collapsing");
-            bar.set_length(most);
-            bar.set_position(done);
-        }
-        Stage::Assemble => bar.set_message("assembling"),
+        Stage::Import => bar.show("importing", None),
+        Stage::Weld => bar.show("welding", None),
+        Stage::Collapse(done, most) => bar.show("hierarchy", Some((done, most))),
+        Stage::Assemble => bar.show("assembling", None),
     }
 }
 
@@ -93,22 +95,24 @@ fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, 
         leaf_triangles: a.leaf_triangles,
         ..OocOptions::with_budget(a.memory_budget)
     };
-    let ooc_bar = progress_bar("{spinner} {msg} [{bar:30}] {pos}/{len} triangles ({elapsed})")?;
+    let ooc_bar = Progress::new(
+        "{spinner} {msg} [{bar:30}] {pos}/{len} triangles ({elapsed})",
+        "triangles",
+        a.json,
+    )?;
     let mut on_ooc = |s: OocStage| {
         let (msg, done, total) = match s {
             OocStage::Read(d, t) => ("reading and sorting".to_string(), d, t),
             OocStage::Merge(d, t) => ("merging sorted runs".to_string(), d, t),
             OocStage::Cluster(r, d, t) => (format!("clustering on a {r}^3 grid"), d, t),
         };
-        ooc_bar.set_message(msg);
-        ooc_bar.set_length(total);
-        ooc_bar.set_position(done);
+        ooc_bar.show(&msg, Some((done, total)));
     };
     let r = bake_out_of_core(&a.input, &options, &mut on_ooc, &mut |s| {
-        ooc_bar.finish_and_clear();
+        ooc_bar.finish();
         on_stage(s)
     });
-    ooc_bar.finish_and_clear();
+    ooc_bar.finish();
     let o = r.map_err(|e| e.to_string())?;
     Ok(Made {
         baked: o.baked,

@@ -6,6 +6,7 @@ mod export;
 mod flyover;
 mod generate;
 mod info;
+mod progress;
 mod refine;
 mod render;
 
