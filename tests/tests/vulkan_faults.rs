@@ -1,0 +1,257 @@
+//! GPU faults on lavapipe, injected through the context's fault seams ([`Faults`]), each
+//! case ending with zero validation messages, nothing left alive and the allocator empty:
+//! - device memory exhausted at every allocation of a first frame (vertex upload, texture,
+//!   renderer, index buffers, read-back) gives [`Error::OutOfMemory`]; once memory is back
+//!   the same objects draw the frame, equal to the reference image;
+//! - the device lost at every checkpoint of that frame (submissions and waits) gives
+//!   [`Error::DeviceLost`], stays lost, and every object and the context are still
+//!   destroyed cleanly.
+//!
+//! [`Faults`]: caveclod_vulkan::Faults
+
+mod vulkan_support;
+
+use caveclod_core::{CameraState, Hierarchy, LookAt};
+use caveclod_tests::meshes;
+use caveclod_vulkan::{
+    CameraDraw, CameraIndices, Context, Error, IndexSource, MaterialSet, Renderer, RendererDesc,
+    RgbaImage, SurfaceMaterial, Texture, TextureDesc, VertexBuffer, Viewport,
+};
+use vulkan_support::*;
+
+const SIZE: u32 = 96;
+const TEXTURE: u32 = 16;
+
+/// What a first frame makes, kept across a failed attempt so the next attempt (memory
+/// back) reuses what was made before the fault, as an application retrying would.
+#[derive(Default)]
+struct Parts {
+    vertices: Option<VertexBuffer>,
+    texture: Option<Texture>,
+    renderer: Option<Renderer>,
+    materials: Option<MaterialSet>,
+    indices: Option<CameraIndices>,
+}
+
+impl Parts {
+    /// Destroys whatever was made, renderer first (it waits for the frames).
+    fn destroy(self, ctx: &Context) {
+        if let Some(r) = self.renderer {
+            ok(r.destroy(ctx), "destroy renderer");
+        }
+        if let Some(m) = self.materials {
+            m.destroy(ctx);
+        }
+        if let Some(i) = self.indices {
+            ok(i.destroy(ctx), "destroy indices");
+        }
+        if let Some(t) = self.texture {
+            ok(t.destroy(ctx), "destroy texture");
+        }
+        if let Some(v) = self.vertices {
+            ok(v.destroy(ctx), "destroy vertices");
+        }
+    }
+}
+
+/// A checkerboard, so the texture's upload and mips show in the image.
+fn checkerboard() -> Vec<u8> {
+    (0..TEXTURE * TEXTURE)
+        .flat_map(|i| {
+            let (x, y) = (i % TEXTURE, i / TEXTURE);
+            if (x / 4 + y / 4) % 2 == 0 {
+                [230, 200, 60, 255]
+            } else {
+                [40, 90, 200, 255]
+            }
+        })
+        .collect()
+}
+
+/// The frame's inputs: a refined camera over a small terrain.
+struct Scene<'h> {
+    h: &'h Hierarchy<'h>,
+    cam: CameraState<'h>,
+    look: LookAt,
+}
+
+/// Makes what is still missing in `parts`, draws the first frame and reads it back.
+fn first_frame(ctx: &Context, scene: &Scene<'_>, parts: &mut Parts) -> Result<RgbaImage, Error> {
+    let h = scene.h;
+    if parts.vertices.is_none() {
+        parts.vertices = Some(VertexBuffer::from_hierarchy(ctx, "terrain", h)?);
+    }
+    if parts.texture.is_none() {
+        let desc = TextureDesc::srgb(TEXTURE, TEXTURE);
+        parts.texture = Some(Texture::new(ctx, "checkerboard", desc, &checkerboard())?);
+    }
+    if parts.renderer.is_none() {
+        parts.renderer = Some(Renderer::new(ctx, RendererDesc::single(SIZE, SIZE))?);
+    }
+    let (Some(vertices), Some(texture), Some(renderer)) =
+        (&parts.vertices, &parts.texture, &mut parts.renderer)
+    else {
+        return Err(Error::InvalidArgument("parts missing".into()));
+    };
+    if parts.materials.is_none() {
+        let surfaces = [
+            SurfaceMaterial::textured(texture),
+            SurfaceMaterial::textured(texture),
+        ];
+        parts.materials = Some(MaterialSet::new(ctx, renderer.recorder(), &surfaces)?);
+    }
+    let indices = parts
+        .indices
+        .get_or_insert_with(|| CameraIndices::new("camera", h.surface_count(), 2));
+    let viewport = Viewport::full(SIZE, SIZE);
+    renderer.render(
+        ctx,
+        &mut [CameraDraw {
+            target: 0,
+            viewport,
+            view_proj: scene.look.view_projection(viewport.aspect()),
+            vertices,
+            indices,
+            source: IndexSource::Camera {
+                hierarchy: h,
+                camera: &scene.cam,
+            },
+            colours: &COLOURS,
+            materials: parts.materials.as_ref(),
+            refine_morphs: None,
+            morph: None,
+        }],
+    )?;
+    renderer.read_target(ctx, 0)
+}
+
+/// Fails unless nothing made through `ctx` is alive and its allocator holds nothing.
+fn assert_nothing_left(ctx: &Context, when: &str) {
+    let live = ctx.live_resources();
+    assert!(live.is_empty(), "{when}: still alive: {live:?}");
+    let report = ok(ctx.allocator_report(), "allocator report");
+    assert!(
+        report.allocations.is_empty() && report.total_allocated_bytes == 0,
+        "{when}: the allocator still holds {} allocation(s), {} bytes",
+        report.allocations.len(),
+        report.total_allocated_bytes
+    );
+}
+
+/// The reference frame drawn without faults, with the allocations and checkpoints it
+/// counted.
+fn reference(ctx: &Context, scene: &Scene<'_>) -> (RgbaImage, u64, u64) {
+    let (a0, c0) = (ctx.faults().allocations(), ctx.faults().checkpoints());
+    let mut parts = Parts::default();
+    let image = ok(first_frame(ctx, scene, &mut parts), "the reference frame");
+    let counts = (
+        ctx.faults().allocations() - a0,
+        ctx.faults().checkpoints() - c0,
+    );
+    parts.destroy(ctx);
+    assert!(image.covered(BACKGROUND) > u64::from(SIZE * SIZE) / 8);
+    save(&image, "faults_reference.png");
+    (image, counts.0, counts.1)
+}
+
+fn with_scene(f: impl FnOnce(&Scene<'_>)) {
+    let baked = caveclod_tests::bake(&meshes::terrain(10, 10, 5));
+    let h = baked.hierarchy();
+    let mut memory = camera_memory(&h);
+    let mut cam = ok(CameraState::new(&h, &mut memory), "camera");
+    let look = terrain_camera(10.0, 0.6, 0.8, 0.6);
+    refine(&h, &mut cam, &look, Viewport::full(SIZE, SIZE), 1.0);
+    f(&Scene { h: &h, cam, look });
+}
+
+#[test]
+fn memory_exhausted_at_every_allocation_of_the_first_frame() {
+    with_scene(|scene| {
+        let ctx = context();
+        let log = ctx.validation_log();
+        let (expected, allocations, _) = reference(&ctx, scene);
+        assert!(allocations >= 8, "{allocations} allocations");
+        println!("the first frame makes {allocations} device allocations");
+        for n in 0..allocations {
+            ctx.faults().exhaust_memory_after(n);
+            let mut parts = Parts::default();
+            let failed = first_frame(&ctx, scene, &mut parts);
+            assert!(
+                matches!(failed, Err(Error::OutOfMemory { device: true, .. })),
+                "allocation {n}: {:?}",
+                failed.map(|_| "a frame")
+            );
+            ctx.faults().restore_memory();
+            let image = ok(first_frame(&ctx, scene, &mut parts), "the frame after");
+            assert!(
+                image.pixels == expected.pixels,
+                "allocation {n}: the frame after differs: {:?}",
+                image.diff(&expected)
+            );
+            parts.destroy(&ctx);
+            assert_nothing_left(&ctx, &format!("allocation {n}"));
+            assert_clean(&ctx, &format!("with allocation {n} failing"));
+        }
+        // Memory that runs out just after the frame leaves it alone: the count is exact.
+        ctx.faults().exhaust_memory_after(allocations);
+        let mut parts = Parts::default();
+        let image = ok(
+            first_frame(&ctx, scene, &mut parts),
+            "a frame within memory",
+        );
+        assert!(image.pixels == expected.pixels);
+        ctx.faults().restore_memory();
+        parts.destroy(&ctx);
+        assert_nothing_left(&ctx, "the frame within memory");
+        assert_clean(&ctx, "the frame within memory");
+        ok(ctx.destroy(), "destroy context");
+        let messages = log.take();
+        assert!(messages.is_empty(), "destroying the context: {messages:?}");
+    });
+}
+
+#[test]
+fn device_lost_at_every_checkpoint_of_the_first_frame() {
+    with_scene(|scene| {
+        let checkpoints = {
+            let ctx = context();
+            let (_, _, checkpoints) = reference(&ctx, scene);
+            assert_clean(&ctx, "the reference frame");
+            ok(ctx.destroy(), "destroy context");
+            checkpoints
+        };
+        assert!(checkpoints >= 4, "{checkpoints} checkpoints");
+        println!("the first frame passes {checkpoints} device checkpoints");
+        for n in 0..checkpoints {
+            let ctx = context();
+            let log = ctx.validation_log();
+            ctx.faults().lose_device_after(n);
+            let mut parts = Parts::default();
+            let lost = first_frame(&ctx, scene, &mut parts);
+            assert!(
+                matches!(lost, Err(Error::DeviceLost { .. })),
+                "checkpoint {n}: {:?}",
+                lost.map(|_| "a frame")
+            );
+            assert!(ctx.faults().device_lost());
+            // A lost device stays lost.
+            assert!(matches!(ctx.wait_idle(), Err(Error::DeviceLost { .. })));
+            let again = first_frame(&ctx, scene, &mut parts);
+            assert!(
+                matches!(again, Err(Error::DeviceLost { .. })),
+                "checkpoint {n}, again: {:?}",
+                again.map(|_| "a frame")
+            );
+            parts.destroy(&ctx);
+            assert_nothing_left(&ctx, &format!("checkpoint {n}"));
+            ok(ctx.destroy(), "destroy context after a lost device");
+            let messages = log.take();
+            assert!(
+                messages.is_empty(),
+                "checkpoint {n}: {} validation message(s):\n{}",
+                messages.len(),
+                messages.join("\n")
+            );
+        }
+    });
+}
