@@ -3,7 +3,8 @@
 //! - device memory exhausted at every allocation of a first frame (vertex upload, texture,
 //!   renderer, index buffers, read-back) gives [`Error::OutOfMemory`]; once memory is back
 //!   the same objects draw the frame, equal to the reference image;
-//! - the device lost at every checkpoint of that frame (submissions and waits) gives
+//! - the device lost at every checkpoint of the first three frames (uploads, submissions,
+//!   the wait for a reused frame slot, the read-back's wait) gives
 //!   [`Error::DeviceLost`], stays lost, and every object and the context are still
 //!   destroyed cleanly.
 //!
@@ -21,6 +22,9 @@ use vulkan_support::*;
 
 const SIZE: u32 = 96;
 const TEXTURE: u32 = 16;
+/// Frames of the device-lost test: the third reuses the first's slot, so it waits for
+/// the first's fence.
+const FRAMES: usize = 3;
 
 /// What a first frame makes, kept across a failed attempt so the next attempt (memory
 /// back) reuses what was made before the fault, as an application retrying would.
@@ -75,8 +79,13 @@ struct Scene<'h> {
     look: LookAt,
 }
 
-/// Makes what is still missing in `parts`, draws the first frame and reads it back.
-fn first_frame(ctx: &Context, scene: &Scene<'_>, parts: &mut Parts) -> Result<RgbaImage, Error> {
+/// Makes what is still missing in `parts`, draws `count` frames and reads the last back.
+fn frames(
+    ctx: &Context,
+    scene: &Scene<'_>,
+    parts: &mut Parts,
+    count: usize,
+) -> Result<RgbaImage, Error> {
     let h = scene.h;
     if parts.vertices.is_none() {
         parts.vertices = Some(VertexBuffer::from_hierarchy(ctx, "terrain", h)?);
@@ -104,24 +113,26 @@ fn first_frame(ctx: &Context, scene: &Scene<'_>, parts: &mut Parts) -> Result<Rg
         .indices
         .get_or_insert_with(|| CameraIndices::new("camera", h.surface_count(), 2));
     let viewport = Viewport::full(SIZE, SIZE);
-    renderer.render(
-        ctx,
-        &mut [CameraDraw {
-            target: 0,
-            viewport,
-            view_proj: scene.look.view_projection(viewport.aspect()),
-            vertices,
-            indices,
-            source: IndexSource::Camera {
-                hierarchy: h,
-                camera: &scene.cam,
-            },
-            colours: &COLOURS,
-            materials: parts.materials.as_ref(),
-            refine_morphs: None,
-            morph: None,
-        }],
-    )?;
+    for _ in 0..count {
+        renderer.render(
+            ctx,
+            &mut [CameraDraw {
+                target: 0,
+                viewport,
+                view_proj: scene.look.view_projection(viewport.aspect()),
+                vertices,
+                indices,
+                source: IndexSource::Camera {
+                    hierarchy: h,
+                    camera: &scene.cam,
+                },
+                colours: &COLOURS,
+                materials: parts.materials.as_ref(),
+                refine_morphs: None,
+                morph: None,
+            }],
+        )?;
+    }
     renderer.read_target(ctx, 0)
 }
 
@@ -138,12 +149,15 @@ fn assert_nothing_left(ctx: &Context, when: &str) {
     );
 }
 
-/// The reference frame drawn without faults, with the allocations and checkpoints it
-/// counted.
-fn reference(ctx: &Context, scene: &Scene<'_>) -> (RgbaImage, u64, u64) {
+/// The reference image of `count` frames drawn without faults, with the allocations and
+/// checkpoints they counted.
+fn reference(ctx: &Context, scene: &Scene<'_>, count: usize) -> (RgbaImage, u64, u64) {
     let (a0, c0) = (ctx.faults().allocations(), ctx.faults().checkpoints());
     let mut parts = Parts::default();
-    let image = ok(first_frame(ctx, scene, &mut parts), "the reference frame");
+    let image = ok(
+        frames(ctx, scene, &mut parts, count),
+        "the reference frames",
+    );
     let counts = (
         ctx.faults().allocations() - a0,
         ctx.faults().checkpoints() - c0,
@@ -169,20 +183,20 @@ fn memory_exhausted_at_every_allocation_of_the_first_frame() {
     with_scene(|scene| {
         let ctx = context();
         let log = ctx.validation_log();
-        let (expected, allocations, _) = reference(&ctx, scene);
+        let (expected, allocations, _) = reference(&ctx, scene, 1);
         assert!(allocations >= 8, "{allocations} allocations");
         println!("the first frame makes {allocations} device allocations");
         for n in 0..allocations {
             ctx.faults().exhaust_memory_after(n);
             let mut parts = Parts::default();
-            let failed = first_frame(&ctx, scene, &mut parts);
+            let failed = frames(&ctx, scene, &mut parts, 1);
             assert!(
                 matches!(failed, Err(Error::OutOfMemory { device: true, .. })),
                 "allocation {n}: {:?}",
                 failed.map(|_| "a frame")
             );
             ctx.faults().restore_memory();
-            let image = ok(first_frame(&ctx, scene, &mut parts), "the frame after");
+            let image = ok(frames(&ctx, scene, &mut parts, 1), "the frame after");
             assert!(
                 image.pixels == expected.pixels,
                 "allocation {n}: the frame after differs: {:?}",
@@ -195,10 +209,7 @@ fn memory_exhausted_at_every_allocation_of_the_first_frame() {
         // Memory that runs out just after the frame leaves it alone: the count is exact.
         ctx.faults().exhaust_memory_after(allocations);
         let mut parts = Parts::default();
-        let image = ok(
-            first_frame(&ctx, scene, &mut parts),
-            "a frame within memory",
-        );
+        let image = ok(frames(&ctx, scene, &mut parts, 1), "a frame within memory");
         assert!(image.pixels == expected.pixels);
         ctx.faults().restore_memory();
         parts.destroy(&ctx);
@@ -211,23 +222,23 @@ fn memory_exhausted_at_every_allocation_of_the_first_frame() {
 }
 
 #[test]
-fn device_lost_at_every_checkpoint_of_the_first_frame() {
+fn device_lost_at_every_checkpoint_of_the_first_frames() {
     with_scene(|scene| {
         let checkpoints = {
             let ctx = context();
-            let (_, _, checkpoints) = reference(&ctx, scene);
+            let (_, _, checkpoints) = reference(&ctx, scene, FRAMES);
             assert_clean(&ctx, "the reference frame");
             ok(ctx.destroy(), "destroy context");
             checkpoints
         };
         assert!(checkpoints >= 4, "{checkpoints} checkpoints");
-        println!("the first frame passes {checkpoints} device checkpoints");
+        println!("the first {FRAMES} frames pass {checkpoints} device checkpoints");
         for n in 0..checkpoints {
             let ctx = context();
             let log = ctx.validation_log();
             ctx.faults().lose_device_after(n);
             let mut parts = Parts::default();
-            let lost = first_frame(&ctx, scene, &mut parts);
+            let lost = frames(&ctx, scene, &mut parts, FRAMES);
             assert!(
                 matches!(lost, Err(Error::DeviceLost { .. })),
                 "checkpoint {n}: {:?}",
@@ -236,7 +247,7 @@ fn device_lost_at_every_checkpoint_of_the_first_frame() {
             assert!(ctx.faults().device_lost());
             // A lost device stays lost.
             assert!(matches!(ctx.wait_idle(), Err(Error::DeviceLost { .. })));
-            let again = first_frame(&ctx, scene, &mut parts);
+            let again = frames(&ctx, scene, &mut parts, FRAMES);
             assert!(
                 matches!(again, Err(Error::DeviceLost { .. })),
                 "checkpoint {n}, again: {:?}",
