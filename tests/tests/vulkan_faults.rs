@@ -1,8 +1,9 @@
 //! GPU faults on lavapipe, injected through the context's fault seams ([`Faults`]), each
 //! case ending with zero validation messages, nothing left alive and the allocator empty:
 //! - device memory exhausted at every allocation of a first frame (vertex upload, texture,
-//!   renderer, index buffers, read-back) gives [`Error::OutOfMemory`]; once memory is back
-//!   the same objects draw the frame, equal to the reference image;
+//!   renderer, index buffers, read-back; and a second time with the camera's refinement
+//!   geomorphs blended by the compute stage) gives [`Error::OutOfMemory`]; once memory is
+//!   back the same objects draw the frame, equal to the reference image;
 //! - the device lost at every checkpoint of the first three frames (uploads, submissions,
 //!   the wait for a reused frame slot, the read-back's wait) gives
 //!   [`Error::DeviceLost`], stays lost, and every object and the context are still
@@ -12,11 +13,12 @@
 
 mod vulkan_support;
 
-use caveclod_core::{CameraState, Hierarchy, LookAt};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
 use caveclod_tests::meshes;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, Error, IndexSource, MaterialSet, Renderer, RendererDesc,
-    RgbaImage, SurfaceMaterial, Texture, TextureDesc, VertexBuffer, Viewport,
+    CameraDraw, CameraIndices, CameraMorphs, Context, Error, IndexSource, MaterialSet, MorphStage,
+    Renderer, RendererDesc, RgbaImage, SurfaceMaterial, Texture, TextureDesc, VertexBuffer,
+    Viewport,
 };
 use vulkan_support::*;
 
@@ -35,6 +37,7 @@ struct Parts {
     renderer: Option<Renderer>,
     materials: Option<MaterialSet>,
     indices: Option<CameraIndices>,
+    morphs: Option<CameraMorphs>,
 }
 
 impl Parts {
@@ -48,6 +51,9 @@ impl Parts {
         }
         if let Some(i) = self.indices {
             ok(i.destroy(ctx), "destroy indices");
+        }
+        if let Some(m) = self.morphs {
+            ok(m.destroy(ctx), "destroy morphs");
         }
         if let Some(t) = self.texture {
             ok(t.destroy(ctx), "destroy texture");
@@ -72,11 +78,13 @@ fn checkerboard() -> Vec<u8> {
         .collect()
 }
 
-/// The frame's inputs: a refined camera over a small terrain.
+/// The frame's inputs: a refined camera over a small terrain, drawn with its refinement
+/// geomorphs blended by `morphs` or without them.
 struct Scene<'h> {
     h: &'h Hierarchy<'h>,
     cam: CameraState<'h>,
     look: LookAt,
+    morphs: Option<MorphStage>,
 }
 
 /// Makes what is still missing in `parts`, draws `count` frames and reads the last back.
@@ -95,7 +103,11 @@ fn frames(
         parts.texture = Some(Texture::new(ctx, "checkerboard", desc, &checkerboard())?);
     }
     if parts.renderer.is_none() {
-        parts.renderer = Some(Renderer::new(ctx, RendererDesc::single(SIZE, SIZE))?);
+        let desc = RendererDesc {
+            refine_morphs: scene.morphs.is_some(),
+            ..RendererDesc::single(SIZE, SIZE)
+        };
+        parts.renderer = Some(Renderer::new(ctx, desc)?);
     }
     let (Some(vertices), Some(texture), Some(renderer)) =
         (&parts.vertices, &parts.texture, &mut parts.renderer)
@@ -108,6 +120,12 @@ fn frames(
             SurfaceMaterial::textured(texture),
         ];
         parts.materials = Some(MaterialSet::new(ctx, renderer.recorder(), &surfaces)?);
+    }
+    if let (Some(stage), None) = (scene.morphs, &parts.morphs) {
+        let max = scene.cam.max_morphs();
+        let recorder = renderer.recorder();
+        let morphs = CameraMorphs::new(ctx, recorder, "camera", vertices, stage, max, 2)?;
+        parts.morphs = Some(morphs);
     }
     let indices = parts
         .indices
@@ -122,13 +140,16 @@ fn frames(
                 view_proj: scene.look.view_projection(viewport.aspect()),
                 vertices,
                 indices,
-                source: IndexSource::Camera {
-                    hierarchy: h,
-                    camera: &scene.cam,
+                source: match parts.morphs {
+                    Some(_) => IndexSource::MorphedCamera {
+                        hierarchy: h,
+                        camera: &scene.cam,
+                    },
+                    None => IndexSource::camera(h, &scene.cam),
                 },
                 colours: &COLOURS,
                 materials: parts.materials.as_ref(),
-                refine_morphs: None,
+                refine_morphs: parts.morphs.as_mut(),
                 morph: None,
             }],
         )?;
@@ -168,19 +189,53 @@ fn reference(ctx: &Context, scene: &Scene<'_>, count: usize) -> (RgbaImage, u64,
     (image, counts.0, counts.1)
 }
 
-fn with_scene(f: impl FnOnce(&Scene<'_>)) {
+/// Runs `f` on the scene, with geomorphs blended by `morphs` (the camera caught mid-morph)
+/// or without them.
+fn with_scene(morphs: Option<MorphStage>, f: impl FnOnce(&Scene<'_>)) {
     let baked = caveclod_tests::bake(&meshes::terrain(10, 10, 5));
     let h = baked.hierarchy();
-    let mut memory = camera_memory(&h);
-    let mut cam = ok(CameraState::new(&h, &mut memory), "camera");
+    let config = match morphs {
+        Some(_) => CameraConfig::full(&h).with_morphs(64),
+        None => CameraConfig::full(&h),
+    };
+    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let mut cam = ok(CameraState::with_config(&h, &mut memory, &config), "camera");
     let look = terrain_camera(10.0, 0.6, 0.8, 0.6);
-    refine(&h, &mut cam, &look, Viewport::full(SIZE, SIZE), 1.0);
-    f(&Scene { h: &h, cam, look });
+    let viewport = Viewport::full(SIZE, SIZE);
+    refine(&h, &mut cam, &look, viewport, 1.0);
+    if morphs.is_some() {
+        // Closer, a tenth of a second later: new splits are mid-morph.
+        let closer = terrain_camera(10.0, 0.6, 0.5, 0.4);
+        let params = RefineParams {
+            dt_s: 0.1,
+            ..RefineParams::default()
+        };
+        let view = closer.view(viewport.width, viewport.height);
+        ok(cam.refine(&h, &view, &params), "refine mid-morph");
+        let moving = cam.morph_vertices().iter().filter(|m| !m.is_idle()).count();
+        println!("{moving} vertices mid-morph");
+    }
+    f(&Scene {
+        h: &h,
+        cam,
+        look,
+        morphs,
+    });
 }
 
 #[test]
 fn memory_exhausted_at_every_allocation_of_the_first_frame() {
-    with_scene(|scene| {
+    exhaust_at_every_allocation(None);
+}
+
+#[test]
+fn memory_exhausted_at_every_allocation_of_a_first_frame_with_compute_geomorphs() {
+    exhaust_at_every_allocation(Some(MorphStage::Compute));
+}
+
+/// Exhausts device memory at each allocation of the scene's first frame in turn.
+fn exhaust_at_every_allocation(morphs: Option<MorphStage>) {
+    with_scene(morphs, |scene| {
         let ctx = context();
         let log = ctx.validation_log();
         let (expected, allocations, _) = reference(&ctx, scene, 1);
@@ -223,7 +278,7 @@ fn memory_exhausted_at_every_allocation_of_the_first_frame() {
 
 #[test]
 fn device_lost_at_every_checkpoint_of_the_first_frames() {
-    with_scene(|scene| {
+    with_scene(Some(MorphStage::Compute), |scene| {
         let checkpoints = {
             let ctx = context();
             let (_, _, checkpoints) = reference(&ctx, scene, FRAMES);
