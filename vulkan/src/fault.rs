@@ -34,7 +34,7 @@ const NEVER: u64 = u64::MAX;
 ///   a lost device, since the specification lets a lost device's objects be destroyed.
 /// - **Always compiled and public**: integration tests are another crate (a `cfg(test)`
 ///   seam would not reach them), hosts can test their own recovery with it, and an unplanned
-///   check is two relaxed atomic loads per allocation or submission.
+///   check is a relaxed atomic increment and a load or two per allocation or submission.
 #[derive(Debug)]
 pub struct Faults {
     allocations: AtomicU64,
