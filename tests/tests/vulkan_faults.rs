@@ -3,7 +3,8 @@
 //! - device memory exhausted at every allocation of a first frame (vertex upload, texture,
 //!   renderer, index buffers, read-back; and a second time with the camera's refinement
 //!   geomorphs blended by the compute stage) gives [`Error::OutOfMemory`]; once memory is
-//!   back the same objects draw the frame, equal to the reference image;
+//!   back the same objects draw the frame, equal to the reference image; and the same in a
+//!   host engine's frame, through the record path with the host's shared allocator;
 //! - the device lost at every checkpoint of the first three frames (uploads, submissions,
 //!   the wait for a reused frame slot, the read-back's wait) gives
 //!   [`Error::DeviceLost`], stays lost, and every object and the context are still
@@ -15,11 +16,13 @@ mod vulkan_support;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
 use caveclod_tests::meshes;
+use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, CameraMorphs, Context, Error, IndexSource, MaterialSet, MorphStage,
-    Renderer, RendererDesc, RgbaImage, SurfaceMaterial, Texture, TextureDesc, VertexBuffer,
-    Viewport,
+    CameraDraw, CameraIndices, CameraMorphs, Context, DeviceFeatures, Error, IndexSource,
+    MaterialSet, MorphStage, RecordCamera, Recorder, RecorderDesc, Renderer, RendererDesc,
+    RgbaImage, SurfaceMaterial, TargetFormats, Texture, TextureDesc, VertexBuffer, Viewport,
 };
+use vulkan_support::host::{Host, HostRendering, HostTarget};
 use vulkan_support::*;
 
 const SIZE: u32 = 96;
@@ -319,5 +322,124 @@ fn device_lost_at_every_checkpoint_of_the_first_frames() {
                 messages.join("\n")
             );
         }
+    });
+}
+
+/// What an embedded first frame makes; the host owns the rest.
+#[derive(Default)]
+struct Embedded {
+    recorder: Option<Recorder>,
+    vertices: Option<VertexBuffer>,
+    indices: Option<CameraIndices>,
+}
+
+impl Embedded {
+    fn destroy(self, ctx: &Context) {
+        if let Some(i) = self.indices {
+            ok(i.destroy(ctx), "destroy indices");
+        }
+        if let Some(v) = self.vertices {
+            ok(v.destroy(ctx), "destroy vertices");
+        }
+        if let Some(r) = self.recorder {
+            ok(r.destroy(ctx), "destroy recorder");
+        }
+    }
+}
+
+/// A host's first frame with caveclod embedded: what is missing in `parts` is made (the
+/// vertex upload recorded into the host's command buffer), the camera's indices filled and
+/// its draws recorded into the host's rendering.
+fn embedded_frame(
+    host: &Host,
+    ctx: &Context,
+    target: &mut HostTarget,
+    scene: &Scene<'_>,
+    parts: &mut Embedded,
+) -> Result<RgbaImage, Error> {
+    let h = scene.h;
+    if parts.recorder.is_none() {
+        let desc = RecorderDesc::render_pass(target.formats, target.render_pass, 0);
+        parts.recorder = Some(Recorder::new(ctx, desc)?);
+    }
+    if parts.vertices.is_none() {
+        let mut uploaded = None;
+        target.submit(host, |cmd| {
+            let (v, c) = (h.vertices(), h.vertex_colours());
+            uploaded = Some(VertexBuffer::record_upload(ctx, cmd, "terrain", v, c));
+        });
+        let missing = || Err(Error::InvalidArgument("no upload recorded".into()));
+        let (vertices, staging) = uploaded.unwrap_or_else(missing)?;
+        parts.vertices = Some(vertices);
+        staging.destroy(ctx)?;
+    }
+    let (Some(recorder), Some(vertices)) = (&parts.recorder, &parts.vertices) else {
+        return Err(Error::InvalidArgument("parts missing".into()));
+    };
+    let indices = parts
+        .indices
+        .get_or_insert_with(|| CameraIndices::new("camera", h.surface_count(), 2));
+    indices.fill(ctx, 1, IndexSource::camera(h, &scene.cam))?;
+    let viewport = Viewport::full(SIZE, SIZE);
+    let view_proj = scene.look.view_projection(viewport.aspect());
+    let camera = RecordCamera::new(viewport, view_proj, vertices, indices).colours(&COLOURS);
+    let mut recorded = None;
+    let image = target.frame(host, |cmd| {
+        recorded = Some(recorder.record(ctx, cmd, 1, &[camera]));
+    });
+    let missing = || Err(Error::InvalidArgument("nothing recorded".into()));
+    recorded.unwrap_or_else(missing)?;
+    Ok(image)
+}
+
+#[test]
+fn memory_exhausted_at_every_allocation_of_an_embedded_first_frame() {
+    with_scene(None, |scene| {
+        let host = Host::new(DeviceFeatures::REQUIRED);
+        let ctx = host.context(DeviceFeatures::REQUIRED);
+        let formats = TargetFormats {
+            colour: vk::Format::B8G8R8A8_SRGB,
+            ..TargetFormats::HEADLESS
+        };
+        let mut target = HostTarget::new(&host, formats, HostRendering::RenderPass, SIZE, SIZE);
+        // The host's own allocations (its target) share the allocator and stay.
+        let host_allocations = ok(ctx.allocator_report(), "report").allocations.len();
+        let before = ctx.faults().allocations();
+        let mut parts = Embedded::default();
+        let frame = embedded_frame(&host, &ctx, &mut target, scene, &mut parts);
+        let expected = ok(frame, "the reference frame");
+        let allocations = ctx.faults().allocations() - before;
+        parts.destroy(&ctx);
+        assert!(expected.covered(BACKGROUND) > u64::from(SIZE * SIZE) / 8);
+        assert!(allocations >= 3, "{allocations} allocations");
+        println!("the embedded first frame makes {allocations} device allocations");
+        for n in 0..allocations {
+            ctx.faults().exhaust_memory_after(n);
+            let mut parts = Embedded::default();
+            let failed = embedded_frame(&host, &ctx, &mut target, scene, &mut parts);
+            assert!(
+                matches!(failed, Err(Error::OutOfMemory { device: true, .. })),
+                "allocation {n}: {:?}",
+                failed.map(|_| "a frame")
+            );
+            ctx.faults().restore_memory();
+            let frame = embedded_frame(&host, &ctx, &mut target, scene, &mut parts);
+            let image = ok(frame, "the frame after");
+            assert!(
+                image.pixels == expected.pixels,
+                "allocation {n}: the frame after differs: {:?}",
+                image.diff(&expected)
+            );
+            parts.destroy(&ctx);
+            let live = ctx.live_resources();
+            assert!(live.is_empty(), "allocation {n}: still alive: {live:?}");
+            let left = ok(ctx.allocator_report(), "report").allocations.len();
+            assert_eq!(left, host_allocations, "allocation {n}: allocations left");
+            assert_clean(&ctx, &format!("embedded, with allocation {n} failing"));
+        }
+        ok(ctx.destroy(), "destroy context");
+        target.destroy(&host);
+        // Checks that the allocator is empty and no validation message came.
+        host.destroy();
     });
 }
