@@ -6,7 +6,7 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
 use crate::device::Context;
-use crate::error::{from_allocation, Error, Result, VkResultExt};
+use crate::error::{Error, Result, VkResultExt};
 
 /// What a buffer is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,15 +74,12 @@ impl Buffer {
         let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: `raw` is alive.
         let requirements = unsafe { d.get_buffer_memory_requirements(raw) };
-        let allocated = ctx.allocator().and_then(|mut a| {
-            a.allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: desc.location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| from_allocation(name, e))
+        let allocated = ctx.allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: desc.location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
         });
         let allocation = match allocated {
             Ok(a) => a,
@@ -98,9 +95,7 @@ impl Buffer {
         if let Err(e) = bound {
             // SAFETY: `raw` is unused.
             unsafe { d.destroy_buffer(raw, None) };
-            if let Ok(mut a) = ctx.allocator() {
-                let _ = a.free(allocation);
-            }
+            let _ = ctx.free(name, allocation);
             return Err(e);
         }
         let id = ctx.track(name);
@@ -133,8 +128,6 @@ impl Buffer {
         // SAFETY: the caller guarantees no pending GPU work uses the buffer.
         unsafe { ctx.device.destroy_buffer(self.raw, None) };
         ctx.untrack(self.id);
-        ctx.allocator()?
-            .free(self.allocation)
-            .map_err(|e| from_allocation("buffer free", e))
+        ctx.free("buffer free", self.allocation)
     }
 }

@@ -6,10 +6,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, Allocator, AllocatorCreateDesc};
 use gpu_allocator::{AllocationSizes, AllocatorDebugSettings};
 
-use crate::error::{Error, Result, VkResultExt};
+use crate::error::{from_allocation, Error, Result, VkResultExt};
+use crate::fault::Faults;
 use crate::instance::{self, OwnedInstance};
 use crate::requirements::{self, DeviceFeatures};
 use crate::validation::ValidationLog;
@@ -108,6 +109,9 @@ pub type SharedAllocator = Arc<Mutex<Allocator>>;
 ///   by name until destroyed; [`Context::destroy`] reports what is still alive as
 ///   [`Error::Leaked`] (gpu-allocator would only log it), then frees the allocator before
 ///   the device, as gpu-allocator requires.
+/// - **Faults can be injected** ([`Context::faults`]): every device allocation and every
+///   call that can report a lost device passes one seam, so tests run out of memory or lose
+///   the device at any of them (the decisions are on [`Faults`]).
 /// - One queue, used under a mutex, for graphics, compute and transfer.
 pub struct Context {
     /// The instance.
@@ -128,6 +132,7 @@ pub struct Context {
     live: Mutex<BTreeMap<u64, String>>,
     next_id: AtomicU64,
     vertex_uploads: AtomicU64,
+    faults: Faults,
     destroyed: bool,
 }
 
@@ -371,6 +376,7 @@ impl Context {
             live: Mutex::new(BTreeMap::new()),
             next_id: AtomicU64::new(0),
             vertex_uploads: AtomicU64::new(0),
+            faults: Faults::default(),
             destroyed: false,
         })
     }
@@ -408,7 +414,64 @@ impl Context {
         })
     }
 
-    /// The queue, locked for submission.
+    /// The allocator's report: its live allocations and memory blocks (a host's too, when
+    /// the allocator is shared). After every resource is destroyed, a context's own
+    /// allocator reports no allocation.
+    pub fn allocator_report(&self) -> Result<gpu_allocator::AllocatorReport> {
+        Ok(self.allocator()?.generate_report())
+    }
+
+    /// The fault plan: out-of-memory and device-loss injection for tests, and the counts
+    /// of allocations and device checkpoints.
+    pub fn faults(&self) -> &Faults {
+        &self.faults
+    }
+
+    /// Allocates device memory for `desc` through the fault seam and the allocator.
+    pub(crate) fn allocate(&self, desc: &AllocationCreateDesc<'_>) -> Result<Allocation> {
+        self.faults.allocation(desc.name)?;
+        self.allocator()?
+            .allocate(desc)
+            .map_err(|e| from_allocation(desc.name, e))
+    }
+
+    /// Frees an allocation made by [`allocate`](Self::allocate).
+    pub(crate) fn free(&self, what: &str, allocation: Allocation) -> Result<()> {
+        self.allocator()?
+            .free(allocation)
+            .map_err(|e| from_allocation(what, e))
+    }
+
+    /// The device checkpoint before `call` (one that can report a lost device): an
+    /// injected loss is reported here.
+    pub(crate) fn checkpoint(&self, call: &'static str) -> Result<()> {
+        self.faults.checkpoint(call)
+    }
+
+    /// Waits for `fences` before destroying what their work uses: no checkpoint, and a
+    /// lost device counts as done (its objects may be destroyed).
+    pub(crate) fn wait_for_teardown(&self, fences: &[vk::Fence]) -> Result<()> {
+        if fences.is_empty() {
+            return Ok(());
+        }
+        // SAFETY: the caller passes live fences of this device.
+        match unsafe { self.device.wait_for_fences(fences, true, u64::MAX) } {
+            Ok(()) | Err(vk::Result::ERROR_DEVICE_LOST) => Ok(()),
+            Err(e) => Err(crate::error::from_vk("vkWaitForFences", e)),
+        }
+    }
+
+    /// Waits for the device before tearing down: no checkpoint, and a lost device counts
+    /// as idle.
+    pub(crate) fn idle_for_teardown(&self) -> Result<()> {
+        let _q = self.queue();
+        // SAFETY: the queue lock is held, so no submission races the wait.
+        match unsafe { self.device.device_wait_idle() } {
+            Ok(()) | Err(vk::Result::ERROR_DEVICE_LOST) => Ok(()),
+            Err(e) => Err(crate::error::from_vk("vkDeviceWaitIdle", e)),
+        }
+    }
+
     /// One primary command buffer from `pool`, which must be a live pool of this device.
     pub(crate) fn allocate_command_buffer(
         &self,
@@ -426,6 +489,7 @@ impl Context {
             .ok_or_else(|| Error::InvalidArgument("no command buffer allocated".into()))
     }
 
+    /// The queue, locked for submission.
     pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
         match self.queue.lock() {
             Ok(g) => g,
@@ -486,6 +550,7 @@ impl Context {
 
     /// Waits until the device is idle.
     pub fn wait_idle(&self) -> Result<()> {
+        self.checkpoint("vkDeviceWaitIdle")?;
         let _q = self.queue();
         // SAFETY: the queue lock is held, so no submission races the wait.
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")
@@ -514,23 +579,26 @@ impl Context {
                 .vk("vkCreateFence")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-            let waited = {
-                let q = self.queue();
-                // SAFETY: `cmd` is executable; the queue lock serialises submissions.
-                unsafe { d.queue_submit2(*q, &submit, fence) }.vk("vkQueueSubmit2")
+            let waited = self
+                .checkpoint("vkQueueSubmit2")
+                .and_then(|()| {
+                    let q = self.queue();
+                    // SAFETY: `cmd` is executable; the queue lock serialises submissions.
+                    unsafe { d.queue_submit2(*q, &submit, fence) }.vk("vkQueueSubmit2")
+                })
+                .and_then(|()| self.checkpoint("vkWaitForFences"))
+                .and_then(|()| {
+                    // SAFETY: `fence` was just submitted.
+                    unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+                });
+            if waited.is_err() {
+                // Neither the fence nor the pool may be destroyed while its commands run.
+                let _ = self.idle_for_teardown();
             }
-            .and_then(|()| {
-                // SAFETY: `fence` was just submitted.
-                unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
-            });
-            // SAFETY: the fence is signalled or was never submitted.
+            // SAFETY: the fence is signalled, was never submitted, or the device is idle.
             unsafe { d.destroy_fence(fence, None) };
             waited
         })();
-        if result.is_err() {
-            // Do not free a pool whose commands may still run.
-            let _ = self.wait_idle();
-        }
         // SAFETY: its command buffer has completed (or the device is idle).
         unsafe { d.destroy_command_pool(pool, None) };
         result
@@ -549,7 +617,7 @@ impl Context {
             return Ok(());
         }
         self.destroyed = true;
-        let idle = self.wait_idle();
+        let idle = self.idle_for_teardown();
         let leaked = self.live_resources();
         if let Some(a) = self.allocator.take() {
             // Our own allocator: drop it now, before the device. A host's: just our clone.

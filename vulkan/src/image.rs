@@ -5,7 +5,7 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
 use crate::device::Context;
-use crate::error::{from_allocation, Error, Result, VkResultExt};
+use crate::error::{Error, Result, VkResultExt};
 use crate::record::TargetFormats;
 
 /// What an image is.
@@ -85,15 +85,12 @@ impl Image {
         let raw = unsafe { d.create_image(&info, None) }.vk("vkCreateImage")?;
         // SAFETY: `raw` is alive.
         let requirements = unsafe { d.get_image_memory_requirements(raw) };
-        let allocated = ctx.allocator().and_then(|mut a| {
-            a.allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| from_allocation(name, e))
+        let allocated = ctx.allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
         });
         let allocation = match allocated {
             Ok(a) => a,
@@ -106,9 +103,7 @@ impl Image {
         let free = |allocation: Allocation| {
             // SAFETY: `raw` is unused.
             unsafe { d.destroy_image(raw, None) };
-            if let Ok(mut a) = ctx.allocator() {
-                let _ = a.free(allocation);
-            }
+            let _ = ctx.free(name, allocation);
         };
         // SAFETY: the allocation satisfies `requirements`.
         let bound = unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
@@ -161,8 +156,6 @@ impl Image {
             ctx.device.destroy_image(self.raw, None);
         }
         ctx.untrack(self.id);
-        ctx.allocator()?
-            .free(self.allocation)
-            .map_err(|e| from_allocation("image free", e))
+        ctx.free("image free", self.allocation)
     }
 }

@@ -31,6 +31,12 @@
 //! Everything is destroyed explicitly (`destroy(self, &Context)`); [`Context::destroy`]
 //! reports resources still alive as [`Error::Leaked`].
 //!
+//! Faults are typed ([`Error::OutOfMemory`], [`Error::DeviceLost`]) and can be injected for
+//! tests through [`Context::faults`]: [`Faults::exhaust_memory_after`] fails the n-th device
+//! allocation this crate makes (and every later one until restored), and
+//! [`Faults::lose_device_after`] loses the device at the n-th submission or wait. A lost
+//! device's objects are still destroyed cleanly.
+//!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> caveclod_vulkan::Result<()> {
 //! use caveclod_core::{CameraState, Hierarchy, RefineParams};
@@ -83,6 +89,7 @@ mod buffer;
 mod camera_morphs;
 mod device;
 mod error;
+mod fault;
 mod frame;
 mod geomorph;
 mod image;
@@ -102,6 +109,7 @@ pub use camera_morphs::{CameraMorphs, MorphStage};
 pub use caveclod_core::LookAt;
 pub use device::{Context, HeadlessDesc, HostDevice, SharedAllocator};
 pub use error::{Error, Result};
+pub use fault::Faults;
 pub use frame::{CameraDraw, FrameStats, Renderer, RendererDesc};
 pub use geomorph::Geomorph;
 pub use indices::{CameraIndices, IndexSource};

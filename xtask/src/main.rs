@@ -5,8 +5,8 @@
 //!   `spirv-val`, and for the viewer's window Xvfb, xauth and the X client libraries), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
 //! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
-//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (its
-//!   screenshot's coverage and no validation message), clippy on the core crate without its
+//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (a resize storm,
+//!   its screenshot's coverage and no validation message), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
 //!   the C interface (`capi`): the C examples and the C++ test built with the system's
 //!   compilers, run, and compared with the Rust API's numbers.
@@ -429,7 +429,7 @@ fn test_steps() -> Vec<(String, Step)> {
             &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
         ),
         (
-            "viewer under Xvfb (4 cameras, 300 frames, screenshot coverage, no validation messages)"
+            "viewer under Xvfb (4 cameras, 300 frames, resize storm, screenshot coverage, no validation messages)"
                 .to_string(),
             Box::new(viewer_check),
         ),
@@ -510,9 +510,11 @@ fn secs(d: Duration) -> String {
 // viewer
 
 /// Runs the interactive viewer in a virtual X server on lavapipe: 4 cameras, 300 animated
-/// frames, validation on. The viewer itself writes the last frame, checks that every
-/// camera's viewport is at least 10% non-background outside its panel, and exits non-zero
-/// on a validation message (this tool stays std-only, so it cannot decode the PNG).
+/// frames, validation on, and a resize storm (the window resizes itself every 12 frames,
+/// back to its size before the end). The viewer itself writes the last frame, checks that
+/// every camera's viewport is at least 10% non-background outside its panel and that every
+/// size asked for got a swapchain, and exits non-zero on a validation message (this tool
+/// stays std-only, so it cannot decode the PNG).
 fn viewer_check() -> Result<(), String> {
     let shot = env::temp_dir().join(VIEWER_SCREENSHOT);
     let shot = shot.to_string_lossy();
@@ -540,6 +542,8 @@ fn viewer_check() -> Result<(), String> {
             &shot,
             "--min-coverage",
             "0.1",
+            "--resize-every",
+            "12",
         ],
     ))?;
     println!("viewer screenshot: {shot}");

@@ -111,10 +111,12 @@ impl Viewer {
         match chain.acquire(self.res.slots[slot].image_available)? {
             Acquired::OutOfDate => {
                 self.stale = true;
+                self.swapchain_reports += 1;
                 Ok(None)
             }
             Acquired::Image { index, suboptimal } => {
                 self.stale |= suboptimal;
+                self.swapchain_reports += u64::from(suboptimal);
                 Ok(Some(index))
             }
         }
@@ -322,7 +324,9 @@ impl Viewer {
             .swapchain
             .as_ref()
             .ok_or("no swapchain to present")?;
-        self.stale |= chain.present(self.gpu.queue, image)?;
+        let recreate = chain.present(self.gpu.queue, image)?;
+        self.stale |= recreate;
+        self.swapchain_reports += u64::from(recreate);
         Ok(())
     }
 }

@@ -21,6 +21,8 @@
 //!   --min-coverage F    with --screenshot: fail unless every camera's viewport is at
 //!                       least F (0 to 1) non-background outside the panel
 //!   --spacing M         metres per grid cell for .npy heightfields (and .dem override)
+//!   --resize-every N    with --frames: a resize storm, a new window size every N frames
+//!                       (see the `storm` module); fails unless each got a swapchain
 //! ```
 //!
 //! Keys are listed in the panel ([`controls::KEY_HELP`]). With `--frames`, validation
@@ -33,6 +35,7 @@ mod gpu;
 mod render;
 mod scene;
 mod screenshot;
+mod storm;
 mod swapchain;
 mod ui;
 mod viewer;
@@ -53,6 +56,7 @@ use winit::window::WindowId;
 use controls::{Action, Input};
 use frame::{Capture, Outcome};
 use scene::Scene;
+use storm::ResizeStorm;
 use ui::PanelInfo;
 use viewer::{Viewer, WindowDesc};
 
@@ -93,6 +97,9 @@ struct Args {
     /// Metres per grid cell (.npy heightfields; overrides a .dem header's spacing).
     #[arg(long)]
     spacing: Option<f32>,
+    /// With --frames: ask for a new window size every N frames (a resize storm).
+    #[arg(long, requires = "frames")]
+    resize_every: Option<u64>,
 }
 
 fn main() -> ExitCode {
@@ -166,6 +173,7 @@ struct App<'a, 'h> {
     last: Instant,
     fps: FpsMeter,
     capture: Option<Capture>,
+    storm: Option<ResizeStorm>,
 }
 
 impl<'a, 'h> App<'a, 'h> {
@@ -185,6 +193,10 @@ impl<'a, 'h> App<'a, 'h> {
                 fps: 0.0,
             },
             capture: None,
+            storm: args.resize_every.zip(args.frames).map(|(every, frames)| {
+                let base = winit::dpi::PhysicalSize::new(args.width, args.height);
+                ResizeStorm::new(every, frames, base)
+            }),
         }
     }
 
@@ -239,6 +251,11 @@ impl<'a, 'h> App<'a, 'h> {
         let Some(viewer) = self.viewer.as_mut() else {
             return;
         };
+        if let Some(size) = self.storm.as_mut().and_then(|s| s.next(self.drawn)) {
+            // Applied by the window system while this frame is in flight; the frame or the
+            // next finds the swapchain out of date or suboptimal.
+            let _ = viewer.window.request_inner_size(size);
+        }
         let device = viewer.gpu.device_name.clone();
         let info = PanelInfo {
             device: &device,
@@ -287,6 +304,10 @@ impl<'a, 'h> App<'a, 'h> {
     /// Tears down the window and GPU, writes and checks the screenshot, reports the
     /// validation messages; the exit status.
     fn finish(mut self, looped: Result<(), String>) -> Result<ExitCode, String> {
+        let (swapchains, reports) = self
+            .viewer
+            .as_ref()
+            .map_or((0, 0), |v| (v.swapchains_made, v.swapchain_reports));
         let (messages, destroyed) = match self.viewer.take() {
             Some(v) => v.destroy(),
             None => (Vec::new(), Ok(())),
@@ -302,6 +323,14 @@ impl<'a, 'h> App<'a, 'h> {
         let mut ok = true;
         if let Some(path) = &self.args.screenshot {
             ok &= self.check_screenshot(path)?;
+        }
+        if let Some(storm) = &self.storm {
+            eprintln!(
+                "resize storm: {} sizes asked for, {swapchains} swapchains made, {reports} \
+                 out of date or suboptimal at acquire or present",
+                storm.requested
+            );
+            ok &= storm.requested > 0 && swapchains > storm.requested;
         }
         if self.args.frames.is_some() {
             eprintln!("{} validation messages", messages.len());

@@ -88,6 +88,10 @@ pub struct Viewer {
     pub egui_state: egui_winit::State,
     /// The swapchain no longer matches the window.
     pub stale: bool,
+    /// Swapchains made so far (the first included).
+    pub swapchains_made: u64,
+    /// Times acquire or present reported the swapchain out of date or suboptimal.
+    pub swapchain_reports: u64,
     /// Frames recorded so far (frame `n` uses slot `n % FRAMES_IN_FLIGHT`).
     pub frame: u64,
     /// egui textures to free once the GPU is done with the frames that drew them.
@@ -145,6 +149,7 @@ impl Viewer {
             .map(caveclod_cli::snapshot::palette)
             .collect();
         let band_colours = bands.colours();
+        let swapchains_made = u64::from(res.swapchain.is_some());
         Ok(Self {
             gpu,
             ctx,
@@ -156,6 +161,8 @@ impl Viewer {
             egui_ctx,
             egui_state,
             stale: false,
+            swapchains_made,
+            swapchain_reports: 0,
             frame: 0,
             pending_free: Vec::new(),
             window,
@@ -194,6 +201,7 @@ impl Viewer {
             old.destroy(&self.gpu);
         }
         self.res.swapchain = made?;
+        self.swapchains_made += u64::from(self.res.swapchain.is_some());
         self.stale = false;
         Ok(())
     }

@@ -132,6 +132,9 @@ struct Target {
 struct FrameSlot {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
+    /// The fence belongs to a submission (else it may be unsignalled for good: a frame
+    /// whose submission failed after the fence was reset).
+    pending: bool,
     readback: Vec<Buffer>,
 }
 
@@ -239,6 +242,7 @@ impl Renderer {
             self.slots.push(FrameSlot {
                 cmd,
                 fence,
+                pending: false,
                 readback: Vec::new(),
             });
             if self.desc.readback {
@@ -285,12 +289,16 @@ impl Renderer {
         let slot_index = (self.frame % self.slots.len() as u64) as usize;
         self.check(cameras)?;
         let d = &ctx.device;
-        let (cmd, fence) = {
+        let (cmd, fence, pending) = {
             let s = &self.slots[slot_index];
-            (s.cmd, s.fence)
+            (s.cmd, s.fence, s.pending)
         };
-        // SAFETY: the fence is alive; waiting makes the slot's buffers free to write.
-        unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        if pending {
+            ctx.checkpoint("vkWaitForFences")?;
+            // SAFETY: the fence is alive; waiting makes the slot's buffers free to write.
+            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+            self.slots[slot_index].pending = false;
+        }
 
         let mut stats = FrameStats {
             frame: self.frame,
@@ -334,15 +342,17 @@ impl Renderer {
         // SAFETY: `cmd` is recording.
         unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
 
-        // SAFETY: the fence is signalled and unused by pending work.
+        // SAFETY: no pending work uses the fence (waited for above, or never submitted).
         unsafe { d.reset_fences(&[fence]) }.vk("vkResetFences")?;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        ctx.checkpoint("vkQueueSubmit2")?;
         {
             let q = ctx.queue();
             // SAFETY: `cmd` is executable and references live objects; the queue is locked.
             unsafe { d.queue_submit2(*q, &submit, fence) }.vk("vkQueueSubmit2")?;
         }
+        self.slots[slot_index].pending = true;
         self.last_slot = Some(slot_index);
         self.frame += 1;
         Ok(stats)
@@ -378,12 +388,22 @@ impl Renderer {
         Ok(())
     }
 
+    /// The fences of submitted frames.
+    fn pending_fences(&self) -> Vec<vk::Fence> {
+        self.slots
+            .iter()
+            .filter(|s| s.pending)
+            .map(|s| s.fence)
+            .collect()
+    }
+
     /// Waits for every submitted frame.
     pub fn wait(&self, ctx: &Context) -> Result<()> {
-        let fences: Vec<vk::Fence> = self.slots.iter().map(|s| s.fence).collect();
+        let fences = self.pending_fences();
         if fences.is_empty() {
             return Ok(());
         }
+        ctx.checkpoint("vkWaitForFences")?;
         // SAFETY: the fences are alive.
         unsafe { ctx.device.wait_for_fences(&fences, true, u64::MAX) }.vk("vkWaitForFences")
     }
@@ -400,8 +420,12 @@ impl Renderer {
                 "target {t}: no read-back buffer (read-back disabled or no such target)"
             ))
         })?;
-        // SAFETY: the fence is alive.
-        unsafe { ctx.device.wait_for_fences(&[s.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        if s.pending {
+            ctx.checkpoint("vkWaitForFences")?;
+            // SAFETY: the fence is alive.
+            unsafe { ctx.device.wait_for_fences(&[s.fence], true, u64::MAX) }
+                .vk("vkWaitForFences")?;
+        }
         let (w, h) = self.desc.targets[t];
         let bytes = buffer
             .mapped()
@@ -414,9 +438,10 @@ impl Renderer {
         })
     }
 
-    /// Waits for pending frames and destroys everything the renderer made.
+    /// Waits for pending frames and destroys everything the renderer made (after a lost
+    /// device too, whose objects may be destroyed).
     pub fn destroy(self, ctx: &Context) -> Result<()> {
-        let waited = self.wait(ctx);
+        let waited = ctx.wait_for_teardown(&self.pending_fences());
         let d = &ctx.device;
         let mut first_err = waited.err();
         for s in self.slots {
