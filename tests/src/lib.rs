@@ -7,6 +7,7 @@ pub mod check;
 pub mod generate;
 pub mod meshes;
 pub mod rng;
+pub mod soak;
 
 pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};
 pub use meshes::{TestMesh, Tri};
