@@ -80,16 +80,16 @@ fn pick<T: Copy>(rng: &mut SplitMix64, options: &[T]) -> T {
     options[rng.below(options.len())]
 }
 
-/// A camera configuration: full or a polygon budget, with or without morph memory (from
+/// A camera configuration: full or a polygon budget (from a fiftieth of the hierarchy's
+/// polygons to all), with or without morph memory (from
 /// one morph to [`MAX_MORPHS`]), the pair map hashed or not, the index cache on or off, and
 /// now and then a forced-split stack too small for deep forced splits.
 pub fn draw_config(rng: &mut SplitMix64, h: &Hierarchy<'_>) -> CameraConfig {
     let mut c = if one_in(rng, 3) {
         CameraConfig::full(h)
     } else {
-        let base = h.base_polygon_count() as f32;
         let all = h.polygon_count() as f32;
-        CameraConfig::with_polygon_budget(h, log_uniform(rng, base.max(1.0), all.max(2.0)) as u32)
+        CameraConfig::with_polygon_budget(h, log_uniform(rng, all / 50.0 + 1.0, all + 2.0) as u32)
     };
     if !one_in(rng, 3) {
         c = c.with_morphs(pick(rng, &[1, 16, 256, MAX_MORPHS]));
@@ -147,7 +147,7 @@ impl Pilot {
         self.turn = (rng.unit() - 0.5) * pick(rng, &[0.0, 0.2, 2.0]);
     }
 
-    /// A fixed tolerance from a quarter pixel to 16, or a regulator towards a polygon count
+    /// A fixed tolerance from a fifth of a pixel to 8, or a regulator towards a polygon count
     /// from twice the base mesh to the whole hierarchy (starting at `from_px`).
     pub fn draw_tolerance(&mut self, rng: &mut SplitMix64, from_px: f32, polygons: usize) {
         self.tolerance = if one_in(rng, 3) {
@@ -155,7 +155,7 @@ impl Pilot {
             let target = log_uniform(rng, lo.max(2.0), (polygons as f32).max(lo + 1.0));
             Tolerance::Regulated(Regulator::new(target as u32).with_tolerance(from_px))
         } else {
-            Tolerance::Fixed(log_uniform(rng, 0.25, 16.0))
+            Tolerance::Fixed(log_uniform(rng, 0.2, 8.0))
         };
     }
 
