@@ -4,10 +4,10 @@
 //! Each frame, each camera flies a step ([`pilot`]) and may be teleported, change speed,
 //! tolerance (fixed or regulated), viewport, the bounds of a refinement call (whole passes,
 //! amortised shares, visit and operation caps), culling and the morph clock; be reset,
-//! compacted whole, or take a step of an incremental compaction; have a random node
-//! force-split or collapsed through the operations API, or its morphs finished. Then it is
-//! refined and its indices are emitted into the caller's buffers in one of the four forms
-//! (packed or per-surface lists, plain or morphed). Now and then every camera is made again
+//! compacted whole, or take a step of an incremental compaction; have a random active node
+//! force-split or its parent collapsed through the operations API, or its morphs finished.
+//! Then it is refined and its indices are emitted into the caller's buffers in one of the
+//! four forms (packed or per-surface lists, plain or morphed). Now and then every camera is made again
 //! in its own memory with a new capacity ([`pilot::draw_config`]: full or a polygon budget,
 //! morph memory or none, hashed pair map, index cache, small forced-split stacks).
 //!
@@ -350,19 +350,30 @@ fn maintain(
     }
 }
 
-/// Now and then a forced split of a random active node or a collapse of a random split,
-/// through the operations API (refinement may undo them on its next pass).
+/// Now and then, through the operations API, a forced split of a random active node or a
+/// collapse of its parent when legal (refinement may undo either on its next pass).
 fn operate(
     h: &Hierarchy<'_>,
     cam: &mut CameraState<'_>,
     rng: &mut SplitMix64,
     report: &mut SoakReport,
 ) -> Result<(), String> {
-    if h.splits().is_empty() || !one_in(rng, 50) {
+    if !one_in(rng, 50) {
         return Ok(());
     }
-    let v = NodeId(rng.below(h.splits().len()) as u32);
-    if cam.is_node_active(h, v) {
+    let k = rng.below(cam.active_node_count().max(1) as usize);
+    let Some(v) = cam.active_nodes().nth(k) else {
+        return Err(format!(
+            "active node {k} of {} missing",
+            cam.active_node_count()
+        ));
+    };
+    let parent = h.node(v).map_or(NodeId::NONE, |n| n.parent);
+    if one_in(rng, 2) && parent.is_some() && cam.can_collapse(h, parent) {
+        cam.collapse(h, parent)
+            .map_err(|e| format!("collapse({parent}) after can_collapse: {e}"))?;
+        report.api_collapses += 1;
+    } else if h.split(v).is_some() {
         match cam.force_split_own_stack(h, v) {
             Ok(n) => report.api_splits += u64::from(n),
             Err(OpError::CapacityFull { .. } | OpError::StackFull { .. }) => {
@@ -370,10 +381,6 @@ fn operate(
             }
             Err(e) => return Err(format!("force_split({v}): {e}")),
         }
-    } else if cam.can_collapse(h, v) {
-        cam.collapse(h, v)
-            .map_err(|e| format!("collapse({v}) after can_collapse: {e}"))?;
-        report.api_collapses += 1;
     }
     Ok(())
 }
