@@ -1,5 +1,6 @@
 //! Test support for caveclod: generated meshes, baked in memory by `caveclod-bake`, and
-//! checks of a camera's front against a from-scratch derivation.
+//! checks of a camera's front against a from-scratch derivation, and the runtime's soak
+//! ([`soak`]).
 
 pub mod aligned;
 pub mod bake;

@@ -4,7 +4,8 @@
 //!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
 //!   `spirv-val`, and for the viewer's window Xvfb, xauth and the X client libraries), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
-//! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
+//! - `test`: setup, then the shader check, formatting, clippy, the workspace tests (the
+//!   runtime's 5,000-frame soak among them: `tests/tests/soak.rs`), the
 //!   no_std build for a microcontroller target, the interactive viewer under Xvfb (its
 //!   screenshot's coverage and no validation message), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
