@@ -70,3 +70,24 @@ fn the_same_seed_runs_the_same_soak() {
     assert_eq!(a, b);
     assert_ne!(a.fingerprint, c.fingerprint);
 }
+
+#[test]
+fn the_checker_refuses_a_front_that_is_not_of_its_hierarchy() {
+    use caveclod_core::CameraState;
+    use caveclod_tests::check::split_all;
+    use caveclod_tests::soak::FrontChecker;
+    use caveclod_tests::{bake, meshes};
+
+    let (a, b) = (
+        bake(&meshes::terrain(10, 8, 5)),
+        bake(&meshes::terrain(12, 12, 9)),
+    );
+    let (ha, hb) = (a.hierarchy(), b.hierarchy());
+    let mut memory = vec![0u32; CameraState::words_needed(&ha)];
+    let mut cam = CameraState::new(&ha, &mut memory).expect("sized");
+    split_all(&ha, &mut cam);
+    let mut checker = FrontChecker::new(&ha);
+    assert!(checker.check(&ha, &cam).is_ok());
+    let mut other = FrontChecker::new(&hb);
+    assert!(other.check(&hb, &cam).is_err());
+}
