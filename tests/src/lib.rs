@@ -1,5 +1,6 @@
 //! Test support for caveclod: generated meshes, baked in memory by `caveclod-bake`, and
-//! checks of a camera's front against a from-scratch derivation.
+//! checks of a camera's front against a from-scratch derivation, and the runtime's soak
+//! ([`soak`]).
 
 pub mod aligned;
 pub mod bake;
@@ -8,6 +9,7 @@ pub mod generate;
 pub mod meshes;
 pub mod parts;
 pub mod rng;
+pub mod soak;
 
 pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};
 pub use meshes::{TestMesh, Tri};

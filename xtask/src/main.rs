@@ -4,9 +4,10 @@
 //!   and the Vulkan side need (lavapipe, the Vulkan loader, the validation layers,
 //!   `spirv-val`, and for the viewer's window Xvfb, xauth and the X client libraries), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
-//! - `test`: setup, then the shader check, formatting, clippy, the workspace tests, the
-//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (a resize storm,
-//!   its screenshot's coverage and no validation message), clippy on the core crate without its
+//! - `test`: setup, then the shader check, formatting, clippy, the workspace tests (the
+//!   runtime's 5,000-frame soak among them: `tests/tests/soak.rs`), the
+//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (a resize
+//!   storm, its screenshot's coverage and no validation message), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
 //!   the C interface (`capi`): the C examples and the C++ test built with the system's
 //!   compilers, run, and compared with the Rust API's numbers.
