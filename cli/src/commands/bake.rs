@@ -8,6 +8,7 @@ use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
 use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
 use caveclod_bake::report::BakeInfo;
 use caveclod_cli::info as report;
+use caveclod_cli::outputs;
 use caveclod_core::Hierarchy;
 use indicatif::ProgressBar;
 use serde_json::{json, Map, Value};
@@ -25,8 +26,10 @@ struct Made {
     octree: Option<MultiresOctree>,
 }
 
-/// Bakes the input, writes the .clod file, reads it back and prints its report.
+/// Bakes the input, writes the .clod file, reads it back and prints its report. The output
+/// is checked before any work (a `.clod` name, not the input, in a writable directory).
 pub fn bake(a: &BakeArgs) -> Result<(), String> {
+    check_paths(a)?;
     let bar = progress_bar("{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})")?;
     let mut on_stage = |s: Stage| show_stage(&bar, s);
     let made = if a.out_of_core {
@@ -68,6 +71,21 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
         }
         Ok(())
     })
+}
+
+/// The output and the out-of-core temporary directory checked before the bake starts.
+fn check_paths(a: &BakeArgs) -> Result<(), String> {
+    outputs::check_file_output(&a.output, &["clod"], "a .clod hierarchy", &[&a.input])?;
+    if let Some(dir) = &a.temp_dir {
+        if !dir.is_dir() {
+            return Err(format!(
+                "{}: --temp-dir: does not exist or is not a directory; expected an existing \
+                 directory",
+                dir.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Shows the in-core bake's stage (and the collapses done) on the bar.
