@@ -342,3 +342,53 @@ fn generate_and_render_check_their_outputs_first() {
     let e = fails(&["render", s(&clod), "--out", s(d.dir.path())], &[&clod]);
     says(&e, &["split1.png: output: is the input"]);
 }
+
+#[test]
+fn the_out_of_core_readers_name_the_same_elements() {
+    let d = Dir::new();
+    let out = d.path("o.clod");
+    let ooc = |input: &Path| {
+        fails(
+            &["bake", "--out-of-core", s(input), "-o", s(&out)],
+            &[input],
+        )
+    };
+    let cut = d.file("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\nf 1 2");
+    says(
+        &ooc(&cut),
+        &["cut.obj: line 5: the file ends in the middle of it (a face with fewer than 3 corners)"],
+    );
+    let noise = d.file("noise.obj", random_bytes(4096));
+    says(
+        &ooc(&noise),
+        &["noise.obj: line ", "is not text; expected a Wavefront OBJ"],
+    );
+    let nan = d.file(
+        "nan.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+         end_header\n0 0 0\n1 0 0\nnan 0 1\n3 0 1 2\n",
+    );
+    says(&ooc(&nan), &["nan.ply: vertex 2: coordinate x is NaN"]);
+    let noise = d.file("noise.ply", random_bytes(4096));
+    says(
+        &ooc(&noise),
+        &[
+            "noise.ply: header: not a PLY file",
+            "expected the first line 'ply'",
+        ],
+    );
+    assert!(!out.exists());
+    // A two-corner face inside the file is skipped and counted.
+    let mut text = grid_obj(6);
+    text.push_str("f 1 2\n");
+    let obj = d.file("skips.obj", &text);
+    let run = caveclod(&["bake", "--out-of-core", s(&obj), "-o", s(&out), "--json"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(r["repairs"]["skipped_primitives"], 1, "{r}");
+}
