@@ -111,6 +111,9 @@ fn parse_obj(
         ignored,
         ..
     } = obj;
+    if faces.is_empty() && !ignored.is_empty() {
+        return Err(no_faces(source, &ignored));
+    }
     check_indices(source, &mesh, &faces, &corners)?;
     let materials = load_materials(source, &libraries, load, report)?;
     let defined = MaterialLibraries {
@@ -132,6 +135,23 @@ fn parse_obj(
         ));
     }
     Ok(mesh)
+}
+
+/// A file without faces whose statements include unknown ones: likely not an OBJ file.
+fn no_faces(source: &Source, ignored: &[(String, usize)]) -> ImportError {
+    let shown: Vec<String> = ignored
+        .iter()
+        .take(3)
+        .map(|(k, n)| format!("{n} x '{k}'"))
+        .collect();
+    let more = if ignored.len() > 3 { ", ..." } else { "" };
+    ImportError::Empty {
+        file: source.name.clone(),
+        detail: format!(
+            ": no face, and unknown statements ({}{more}); expected 'v' and 'f' statements",
+            shown.join(", ")
+        ),
+    }
 }
 
 /// The file is text: no control byte other than tab, line feed, vertical tab, form feed or

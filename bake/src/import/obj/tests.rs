@@ -208,3 +208,15 @@ fn binary_data_is_not_an_obj_file() {
     // Tabs, form feeds and carriage returns are text.
     assert!(parse("v 0 0 0\r\nv\t1 0 0\x0c\r\nv 0 0 1\r\nf 1 2 3\r\n").is_ok());
 }
+
+#[test]
+fn text_that_is_not_obj_names_its_statements() {
+    let err = parse("Dear reader,\nthis is a letter.\nDear me.\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "m.obj: no triangles: no face, and unknown statements (2 x 'Dear', 1 x 'this'); \
+         expected 'v' and 'f' statements"
+    );
+}
