@@ -178,11 +178,15 @@ fn material_line(m: &Value) -> String {
     )
 }
 
-/// The report as aligned `key: value` lines for people; a material, and a note, per line.
+/// The report as aligned `key: value` lines for people; a material, and a note, per line
+/// (no `notes` line when there are none).
 pub fn human(o: &Map<String, Value>) -> String {
     let mut s = String::new();
     for (k, v) in o {
         if let (true, Value::Array(list)) = (k == "notes", v) {
+            if list.is_empty() {
+                continue;
+            }
             s.push_str(&format!("{k:>20}: {}\n", list.len()));
             for n in list {
                 s.push_str(&format!("{:>20}  {}\n", "", n.as_str().unwrap_or("")));
