@@ -111,27 +111,30 @@ fn read_instance<E: PropertyAccess>(
     let mut tokens = line.split_ascii_whitespace();
     let mut element = E::new();
     let mut used = 0usize;
+    let mut values = Vec::new();
     for (name, property) in &def.properties {
-        let mut next = |what: &str| {
+        // `what` is only worded when the line is short.
+        let mut next = |what: &dyn Fn() -> String| {
             used += 1;
             tokens.next().ok_or_else(|| {
                 source.malformed(
                     at(),
                     format!(
-                        "property '{name}': the line ends after {} values; expected {what}",
-                        used - 1
+                        "property '{name}': the line ends after {} values; expected {}",
+                        used - 1,
+                        what()
                     ),
                 )
             })
         };
         let result = match &property.data_type {
             PropertyType::Scalar(t) => {
-                let token = next(&format!("a {}", type_name(t)))?;
+                let token = next(&|| format!("a {}", type_name(t)))?;
                 let value = Value::parse(source, at, name, t, token)?;
                 set_scalar(&mut element, name, t, value)
             }
             PropertyType::List(count_type, t) => {
-                let token = next(&format!("a list length ({})", type_name(count_type)))?;
+                let token = next(&|| format!("a list length ({})", type_name(count_type)))?;
                 let count = match Value::parse(source, at, name, count_type, token)? {
                     Value::Int(n) if n >= 0 => n as usize,
                     _ => {
@@ -144,9 +147,9 @@ fn read_instance<E: PropertyAccess>(
                         ))
                     }
                 };
-                let mut values = Vec::with_capacity(count.min(1 << 10));
+                values.clear();
                 for _ in 0..count {
-                    let token = next(&format!("{count} list values"))?;
+                    let token = next(&|| format!("{count} list values"))?;
                     values.push(Value::parse(source, at, name, t, token)?);
                 }
                 set_list(&mut element, name, t, &values)
