@@ -132,8 +132,17 @@ fn parse_document(
     json_bytes: &[u8],
     report: &mut ImportReport,
 ) -> Result<::gltf::Document, ImportError> {
-    let mut root =
-        json::Root::from_slice(json_bytes).map_err(|e| source.malformed("JSON", e.to_string()))?;
+    let mut root = json::Root::from_slice(json_bytes).map_err(|e| {
+        if e.is_eof() {
+            source.truncated(format!(
+                "JSON: the document ends at line {} column {}; expected the rest of it",
+                e.line(),
+                e.column()
+            ))
+        } else {
+            source.malformed("JSON", e.to_string())
+        }
+    })?;
     prepare_root(source, &mut root, report)?;
     ::gltf::Document::from_json(root).map_err(|e| match e {
         ::gltf::Error::Validation(errors) => validation_error(source, &errors),

@@ -495,3 +495,12 @@ fn files_are_sniffed_by_their_first_bytes() {
          or the magic 'glTF'"
     );
 }
+
+#[test]
+fn json_cut_off_is_truncated() {
+    let e = err("{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [", &[]);
+    assert_eq!(
+        e,
+        "x.gltf: truncated: JSON: the document ends at line 1 column 41; expected the rest of it"
+    );
+}
