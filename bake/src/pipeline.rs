@@ -89,12 +89,14 @@ pub fn bake_mesh(
         repairs: w.repairs,
         bake_seconds: start.elapsed().as_secs_f64(),
         passes: h.passes,
+        notes: Vec::new(),
     };
     Ok((baked, info))
 }
 
 /// Imports and bakes a file; `bake_seconds` includes the import. Texture files are relative
-/// to the file's directory.
+/// to the file's directory. The primitives the import skipped are counted in the repairs
+/// (`skipped_primitives`), its notes kept in [`BakeInfo::notes`].
 pub fn bake_file(
     path: &Path,
     options: &ImportOptions,
@@ -102,9 +104,11 @@ pub fn bake_file(
 ) -> Result<(Baked, BakeInfo), BakeError> {
     let start = Instant::now();
     progress(Stage::Import);
-    let mesh = import::import(path, options)?;
+    let (mesh, report) = import::import_with_report(path, options)?;
     let (mut baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
     baked.texture_dir = source_dir(path);
+    info.repairs.skipped_primitives = report.skipped_primitives as u64;
+    info.notes = report.notes;
     info.bake_seconds = start.elapsed().as_secs_f64();
     Ok((baked, info))
 }
@@ -142,6 +146,14 @@ pub fn bake_out_of_core(
         o.surface_count = baked.surface_count;
     }
     info.input_triangles = s.stats.input_triangles;
+    info.repairs.skipped_primitives = s.stats.skipped_primitives;
+    if s.stats.skipped_primitives > 0 {
+        info.notes.push(format!(
+            "{}: {} faces with fewer than 3 corners skipped",
+            path.display(),
+            s.stats.skipped_primitives
+        ));
+    }
     info.bake_seconds = start.elapsed().as_secs_f64();
     Ok(OutOfCoreBake {
         baked,

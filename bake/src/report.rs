@@ -26,6 +26,9 @@ pub struct BakeInfo {
     pub bake_seconds: f64,
     /// Independent-set passes of the hierarchy build.
     pub passes: u32,
+    /// What the import wants the user to know (skipped statements, a missing MTL file, ...),
+    /// a sentence each.
+    pub notes: Vec<String>,
 }
 
 impl BakeInfo {
@@ -37,6 +40,7 @@ impl BakeInfo {
             "repairs": repairs_json(&self.repairs),
             "bake_seconds": self.bake_seconds,
             "passes": self.passes,
+            "notes": self.notes,
         })
         .to_string()
     }
@@ -70,7 +74,17 @@ impl BakeInfo {
                 non_manifold_edges: r("non_manifold_edges"),
                 non_manifold_vertices: r("non_manifold_vertices"),
                 computed_normals: r("computed_normals"),
+                skipped_primitives: r("skipped_primitives"),
             },
+            notes: v
+                .get("notes")
+                .and_then(Value::as_array)
+                .map(|n| {
+                    n.iter()
+                        .filter_map(|s| s.as_str().map(str::to_owned))
+                        .collect()
+                })
+                .unwrap_or_default(),
             bake_seconds: v.get("bake_seconds").and_then(Value::as_f64).unwrap_or(0.0),
             passes: u("passes") as u32,
         })

@@ -47,6 +47,10 @@ pub fn report(h: &Hierarchy<'_>, info: Option<&BakeInfo>) -> Map<String, Value> 
         info.as_ref()
             .map_or(Value::Null, |i| repairs_json(&i.repairs)),
     );
+    o.insert(
+        "notes".into(),
+        json!(info.as_ref().map_or(&[][..], |i| &i.notes[..])),
+    );
     let (cells, filled) = h.vertex_table_fill();
     o.insert(
         "vertex_table_fill".into(),
@@ -174,10 +178,21 @@ fn material_line(m: &Value) -> String {
     )
 }
 
-/// The report as aligned `key: value` lines for people; a material per line.
+/// The report as aligned `key: value` lines for people; a material, and a note, per line
+/// (no `notes` line when there are none).
 pub fn human(o: &Map<String, Value>) -> String {
     let mut s = String::new();
     for (k, v) in o {
+        if let (true, Value::Array(list)) = (k == "notes", v) {
+            if list.is_empty() {
+                continue;
+            }
+            s.push_str(&format!("{k:>20}: {}\n", list.len()));
+            for n in list {
+                s.push_str(&format!("{:>20}  {}\n", "", n.as_str().unwrap_or("")));
+            }
+            continue;
+        }
         if let (true, Value::Array(list)) = (k == "materials", v) {
             s.push_str(&format!("{k:>20}: {}\n", list.len()));
             for (i, m) in list.iter().enumerate() {

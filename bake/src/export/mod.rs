@@ -138,8 +138,18 @@ impl ObjExport {
     }
 }
 
-/// Whether `a` and `b` name the same existing file.
+/// Whether `a` and `b` name the same existing file: the same device and inode where the
+/// system says (a hard link or a symbolic link to it counts), else the same canonical path.
 fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(ma), Ok(mb)) => ma.dev() == mb.dev() && ma.ino() == mb.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
     match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,

@@ -213,6 +213,8 @@ pub struct OocStats {
     pub lod_nodes: u64,
     /// Seconds building it (included in the clustering seconds).
     pub lod_seconds: f64,
+    /// Faces with fewer than three corners, skipped while reading.
+    pub skipped_primitives: u64,
 }
 
 /// What [`simplify`] makes.
@@ -377,6 +379,7 @@ fn sort_input(
     }
     stats.input_triangles = sorted.triangles;
     stats.input_vertices = report.vertices;
+    stats.skipped_primitives = report.skipped_faces;
     stats.runs = sorted.runs.len() as u64;
     Ok((report, sorted))
 }

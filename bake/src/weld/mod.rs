@@ -59,11 +59,14 @@ pub struct Repairs {
     pub non_manifold_vertices: u64,
     /// Corners without a normal that got a computed one.
     pub computed_normals: u64,
+    /// Primitives the importer skipped: points, lines, faces with fewer than three corners
+    /// (counted by the import, not the weld).
+    pub skipped_primitives: u64,
 }
 
 impl Repairs {
     /// `(name, count)` pairs, for reports.
-    pub fn entries(&self) -> [(&'static str, u64); 6] {
+    pub fn entries(&self) -> [(&'static str, u64); 7] {
         [
             ("welded_positions", self.welded_positions),
             ("degenerate_triangles", self.degenerate_triangles),
@@ -71,6 +74,7 @@ impl Repairs {
             ("non_manifold_edges", self.non_manifold_edges),
             ("non_manifold_vertices", self.non_manifold_vertices),
             ("computed_normals", self.computed_normals),
+            ("skipped_primitives", self.skipped_primitives),
         ]
     }
 }

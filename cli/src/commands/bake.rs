@@ -8,6 +8,7 @@ use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
 use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
 use caveclod_bake::report::BakeInfo;
 use caveclod_cli::info as report;
+use caveclod_cli::outputs;
 use caveclod_core::Hierarchy;
 use serde_json::{json, Map, Value};
 
@@ -25,10 +26,12 @@ struct Made {
     octree: Option<MultiresOctree>,
 }
 
-/// Bakes the input, writes the .clod file, reads it back and prints its report. Progress
-/// goes to stderr: a bar on a terminal, otherwise (or with `--json`) a line every few
-/// seconds.
+/// Bakes the input, writes the .clod file, reads it back and prints its report. The output
+/// is checked before any work (a `.clod` name, not the input, in a writable directory).
+/// Progress goes to stderr: a bar on a terminal, otherwise (or with `--json`) a line every
+/// few seconds.
 pub fn bake(a: &BakeArgs) -> Result<(), String> {
+    check_paths(a)?;
     let bar = Progress::new(
         "{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})",
         "collapses",
@@ -74,6 +77,21 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
         }
         Ok(())
     })
+}
+
+/// The output and the out-of-core temporary directory checked before the bake starts.
+fn check_paths(a: &BakeArgs) -> Result<(), String> {
+    outputs::check_file_output(&a.output, &["clod"], "a .clod hierarchy", &[&a.input])?;
+    if let Some(dir) = &a.temp_dir {
+        if !dir.is_dir() {
+            return Err(format!(
+                "{}: --temp-dir: does not exist or is not a directory; expected an existing \
+                 directory",
+                dir.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Shows the in-core bake's stage (and the collapses done).

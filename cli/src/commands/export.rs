@@ -3,12 +3,15 @@
 
 use caveclod_bake::export::{obj_export, Level};
 
+use caveclod_cli::outputs;
+
 use super::with_hierarchy;
 use crate::args::{ExportArgs, LevelArg};
 
 /// Writes the chosen level as OBJ (and its MTL and images), each file replaced only once
 /// complete and none over an input.
 pub fn export(a: &ExportArgs) -> Result<(), String> {
+    outputs::check_file_output(&a.output, &["obj"], "Wavefront OBJ", &[&a.file])?;
     with_hierarchy(&a.file, |h| {
         let level = match a.level {
             LevelArg::Full => Level::Full,

@@ -6,9 +6,10 @@ use caveclod_cli::info as report;
 use super::with_hierarchy;
 use crate::args::InfoArgs;
 
-/// Validates the file and prints its report.
+/// Validates the file and prints its report; with `--json`, a file that does not load prints
+/// `{"valid": false, "error": …}` (and the command still fails).
 pub fn info(a: &InfoArgs) -> Result<(), String> {
-    with_hierarchy(&a.file, |h| {
+    let result = with_hierarchy(&a.file, |h| {
         let info = BakeInfo::read(h);
         let mut r = report::report(h, info.as_ref());
         r.insert("valid".into(), serde_json::json!(true));
@@ -21,5 +22,9 @@ pub fn info(a: &InfoArgs) -> Result<(), String> {
             println!("{}: valid\n{}", a.file.display(), report::human(&r));
         }
         Ok(())
-    })
+    });
+    if let (Err(e), true) = (&result, a.json) {
+        println!("{}", serde_json::json!({ "valid": false, "error": e }));
+    }
+    result
 }

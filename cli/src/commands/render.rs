@@ -1,8 +1,10 @@
 //! `caveclod render`: one frame of orbiting cameras, read back and written as PNG.
 
+use caveclod_cli::outputs;
 use caveclod_cli::snapshot::{
     render_octree_snapshot, render_snapshot, Layout, Snapshot, SnapshotDesc,
 };
+use caveclod_core::format::materials::TextureRef;
 use caveclod_core::{Hierarchy, Octree};
 use caveclod_vulkan::{Context, HeadlessDesc};
 
@@ -15,6 +17,7 @@ pub fn render(a: &RenderArgs) -> Result<(), String> {
     with_hierarchy(&a.file, |h| {
         let octree = if a.octree { Some(octree_of(h)?) } else { None };
         check_size(a)?;
+        check_out(h, a)?;
         let (snapshot, messages) = render_frame(h, octree.as_ref(), a)?;
         let written = write_images(&snapshot, a)?;
         print_stats(&snapshot, &written);
@@ -52,6 +55,37 @@ fn check_size(a: &RenderArgs) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The PNG files' names, one per camera or the split-screen image.
+fn image_names(a: &RenderArgs) -> Vec<String> {
+    if a.separate {
+        (0..a.cameras).map(|i| format!("camera{i}.png")).collect()
+    } else {
+        vec![format!("split{}.png", a.cameras)]
+    }
+}
+
+/// The output directory made and probed before rendering; no image may replace the file or a
+/// texture it names.
+fn check_out(h: &Hierarchy<'_>, a: &RenderArgs) -> Result<(), String> {
+    let dir = a.file.parent().unwrap_or(std::path::Path::new(""));
+    let textures: Vec<std::path::PathBuf> = h
+        .materials()
+        .map(|ms| {
+            ms.iter()
+                .filter_map(|m| match m.texture {
+                    Some(TextureRef::Path(p)) => Some(dir.join(p)),
+                    _ => None,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut inputs: Vec<&std::path::Path> = vec![&a.file];
+    inputs.extend(textures.iter().map(std::path::PathBuf::as_path));
+    let names = image_names(a);
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    outputs::prepare_output_dir(&a.out, &names, &inputs)
 }
 
 /// Draws the frame on a headless device; returns it with the validation layer's messages.
@@ -92,14 +126,8 @@ fn render_frame(
 
 /// Writes one PNG per camera, or the split-screen image; returns the paths written.
 fn write_images(snapshot: &Snapshot, a: &RenderArgs) -> Result<Vec<String>, String> {
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let mut written = Vec::new();
-    for (i, image) in snapshot.images.iter().enumerate() {
-        let name = if a.separate {
-            format!("camera{i}.png")
-        } else {
-            format!("split{}.png", a.cameras)
-        };
+    for (image, name) in snapshot.images.iter().zip(image_names(a)) {
         let path = a.out.join(name);
         caveclod_cli::snapshot::write_png(image, &path).map_err(|e| e.to_string())?;
         written.push(path.display().to_string());

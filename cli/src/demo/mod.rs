@@ -155,7 +155,7 @@ pub struct DemoOutcome {
 /// Runs the demo; `say` receives progress lines.
 pub fn run(options: &DemoOptions, say: &mut dyn FnMut(&str)) -> Result<DemoOutcome, String> {
     let start = Instant::now();
-    std::fs::create_dir_all(&options.out).map_err(|e| format!("{}: {e}", options.out.display()))?;
+    crate::outputs::prepare_output_dir(&options.out, &["report.md", "results.md"], &[])?;
     let (terrain, model) = bake_inputs(options, say)?;
     let h = terrain.hierarchy()?;
     say(&format!(

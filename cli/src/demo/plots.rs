@@ -41,6 +41,7 @@ pub struct SecondAxis<'a> {
 
 /// A line chart with axis labels and a legend; `log_y` for quantities over decades; `right`
 /// for a second `y` axis in another unit.
+/// The file is written through a temporary file and a rename.
 pub fn lines(
     file: &Path,
     title: &str,
@@ -50,7 +51,23 @@ pub fn lines(
     log_y: bool,
     right: Option<SecondAxis<'_>>,
 ) -> PlotResult {
-    let root = SVGBackend::new(file, (1000, 600)).into_drawing_area();
+    let mut svg = String::new();
+    draw_lines(&mut svg, title, x_desc, y_desc, series, log_y, right)?;
+    caveclod_bake::baked::write_atomically(file, svg.as_bytes())?;
+    Ok(())
+}
+
+/// The chart of [`lines`] as SVG text.
+fn draw_lines(
+    svg: &mut String,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[Series<'_>],
+    log_y: bool,
+    right: Option<SecondAxis<'_>>,
+) -> PlotResult {
+    let root = SVGBackend::with_string(svg, (1000, 600)).into_drawing_area();
     root.fill(&WHITE)?;
     let pts = || series.iter().flat_map(|s| s.points.iter());
     let x_max = pts().map(|p| p.0).fold(1.0f64, f64::max);

@@ -53,9 +53,43 @@ pub(crate) fn import_gltf(
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
     let bytes = read_file(source, path)?;
+    let glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    sniff(source, &bytes, glb)?;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mut load = |uri: &str| std::fs::read(base.join(uri));
     import_bytes(source, &bytes, &mut load, report)
+}
+
+/// The file's first bytes checked against its extension: a `.glb` starts with the magic
+/// `glTF`; a `.gltf` with a JSON object (or, binary under the other name, the magic).
+fn sniff(source: &Source, bytes: &[u8], glb: bool) -> Result<(), ImportError> {
+    if bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let start: Vec<String> = bytes.iter().take(4).map(|b| format!("{b:02x}")).collect();
+    let start = if start.is_empty() {
+        "the file is empty".to_owned()
+    } else {
+        format!("it starts with bytes {}", start.join(" "))
+    };
+    if glb {
+        return Err(source.malformed(
+            "header",
+            format!("not a binary glTF file ({start}); expected the magic 'glTF'"),
+        ));
+    }
+    let text = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{') => Ok(()),
+        _ => Err(source.malformed(
+            "header",
+            format!(
+                "not a glTF JSON file ({start}); expected a JSON object '{{' or the magic 'glTF'"
+            ),
+        )),
+    }
 }
 
 /// Loads a file a URI names, relative to the glTF file.
@@ -98,8 +132,17 @@ fn parse_document(
     json_bytes: &[u8],
     report: &mut ImportReport,
 ) -> Result<::gltf::Document, ImportError> {
-    let mut root =
-        json::Root::from_slice(json_bytes).map_err(|e| source.malformed("JSON", e.to_string()))?;
+    let mut root = json::Root::from_slice(json_bytes).map_err(|e| {
+        if e.is_eof() {
+            source.truncated(format!(
+                "JSON: the document ends at line {} column {}; expected the rest of it",
+                e.line(),
+                e.column()
+            ))
+        } else {
+            source.malformed("JSON", e.to_string())
+        }
+    })?;
     prepare_root(source, &mut root, report)?;
     ::gltf::Document::from_json(root).map_err(|e| match e {
         ::gltf::Error::Validation(errors) => validation_error(source, &errors),

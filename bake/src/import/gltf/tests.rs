@@ -475,3 +475,32 @@ fn structural_errors() {
     let json = SAMPLE_JSON.replace("tri.bin", "https://example.invalid/tri.bin");
     assert!(err(&json, &bin).contains("URI scheme 'https:'"));
 }
+
+#[test]
+fn files_are_sniffed_by_their_first_bytes() {
+    let src = src();
+    assert!(sniff(&src, b"glTF\x02\0\0\0", true).is_ok());
+    assert!(sniff(&src, b"glTF\x02\0\0\0", false).is_ok());
+    assert!(sniff(&src, b"\xef\xbb\xbf \n{\"asset\":{}}", false).is_ok());
+    let err = sniff(&src, b"\x89PNG\r\n", true).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "x.gltf: header: not a binary glTF file (it starts with bytes 89 50 4e 47); expected \
+         the magic 'glTF'"
+    );
+    let err = sniff(&src, b"", false).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "x.gltf: header: not a glTF JSON file (the file is empty); expected a JSON object '{' \
+         or the magic 'glTF'"
+    );
+}
+
+#[test]
+fn json_cut_off_is_truncated() {
+    let e = err("{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [", &[]);
+    assert_eq!(
+        e,
+        "x.gltf: truncated: JSON: the document ends at line 1 column 41; expected the rest of it"
+    );
+}

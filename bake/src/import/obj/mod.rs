@@ -22,7 +22,10 @@
 //! note says so. A malformed MTL is an error naming its line.
 //!
 //! Errors name the line: malformed numbers, index 0 or out of range, NaN or infinite numbers,
-//! `w = 0`.
+//! `w = 0`, a control byte (binary data is not an OBJ file). A file that does not end with a
+//! line break and whose last line does not parse, or is a face with fewer than three
+//! corners, is reported as cut off there. Faces with fewer than three corners elsewhere are
+//! skipped and counted (the bake reports them as `skipped_primitives`).
 
 mod mtl;
 #[cfg(test)]
@@ -87,9 +90,16 @@ fn parse_obj(
     load: &mut Loader<'_>,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
+    check_text(source, bytes)?;
     let mut obj = Statements::new(source);
-    for (line_no, line) in logical_lines(bytes) {
-        obj.read(line_no, &line, report)?;
+    let mut lines = logical_lines(bytes).peekable();
+    let ends_mid_line = !bytes.is_empty() && !bytes.ends_with(b"\n");
+    while let Some((line_no, line)) = lines.next() {
+        if ends_mid_line && lines.peek().is_none() {
+            read_last_line(&mut obj, line_no, &line, report)?;
+        } else {
+            obj.read(line_no, &line, report)?;
+        }
     }
     let Statements {
         mut mesh,
@@ -101,6 +111,9 @@ fn parse_obj(
         ignored,
         ..
     } = obj;
+    if faces.is_empty() && !ignored.is_empty() {
+        return Err(no_faces(source, &ignored));
+    }
     check_indices(source, &mesh, &faces, &corners)?;
     let materials = load_materials(source, &libraries, load, report)?;
     let defined = MaterialLibraries {
@@ -122,6 +135,81 @@ fn parse_obj(
         ));
     }
     Ok(mesh)
+}
+
+/// A file without faces whose statements include unknown ones: likely not an OBJ file.
+fn no_faces(source: &Source, ignored: &[(String, usize)]) -> ImportError {
+    let shown: Vec<String> = ignored
+        .iter()
+        .take(3)
+        .map(|(k, n)| format!("{n} x '{k}'"))
+        .collect();
+    let more = if ignored.len() > 3 { ", ..." } else { "" };
+    ImportError::Empty {
+        file: source.name.clone(),
+        detail: format!(
+            ": no face, and unknown statements ({}{more}); expected 'v' and 'f' statements",
+            shown.join(", ")
+        ),
+    }
+}
+
+/// The file is text: no control byte other than tab, line feed, vertical tab, form feed or
+/// carriage return (binary data, or another format, under an `.obj` name).
+fn check_text(source: &Source, bytes: &[u8]) -> Result<(), ImportError> {
+    let text = |b: u8| b >= 0x20 || matches!(b, b'\t' | b'\n' | 0x0b | 0x0c | b'\r');
+    match bytes.iter().position(|&b| !text(b)) {
+        None => Ok(()),
+        Some(offset) => {
+            let line = 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count();
+            Err(source.malformed(
+                format!("line {line}"),
+                format!(
+                    "byte 0x{:02x} at offset {offset} is not text; expected a Wavefront OBJ \
+                     text file",
+                    bytes[offset]
+                ),
+            ))
+        }
+    }
+}
+
+/// The last line of a file that does not end with a line break: a statement that does not
+/// parse, or a face left with fewer than three corners, is taken as the file cut off there.
+fn read_last_line(
+    obj: &mut Statements<'_>,
+    line_no: usize,
+    line: &str,
+    report: &mut ImportReport,
+) -> Result<(), ImportError> {
+    let source = obj.source;
+    let cut = |what: String| {
+        source.truncated(format!(
+            "line {line_no}: the file ends in the middle of it ({what}); expected a complete \
+             last line"
+        ))
+    };
+    let skipped = report.skipped_primitives;
+    match obj.read(line_no, line, report) {
+        Err(e) => {
+            let message = e.to_string();
+            let message = message
+                .strip_prefix(&format!("{}: line {line_no}: ", source.name))
+                .or_else(|| message.strip_prefix(&format!("{}: ", source.name)))
+                .unwrap_or(&message)
+                .to_owned();
+            Err(cut(message))
+        }
+        Ok(()) if report.skipped_primitives > skipped && is_face(line) => {
+            Err(cut("a face with fewer than 3 corners".to_owned()))
+        }
+        Ok(()) => Ok(()),
+    }
+}
+
+/// Whether a line is an `f` (or `fo`) statement.
+fn is_face(line: &str) -> bool {
+    matches!(line.split_ascii_whitespace().next(), Some("f" | "fo"))
 }
 
 /// What the statements build: vertex data straight into the mesh, faces as corner ranges

@@ -161,3 +161,62 @@ fn malformed_mtl_names_its_line() {
         .to_string();
     assert!(err.starts_with("m.obj: m.mtl line 3: "), "{err}");
 }
+
+#[test]
+fn a_last_line_cut_off_is_an_error_naming_it() {
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 0 1\n";
+    // A complete last statement without a line break is fine.
+    assert_eq!(parse(&format!("{tri}f 1 2 3")).unwrap().triangles.len(), 1);
+    let err = parse(&format!("{tri}f 1 2 3\nf 1 2"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "m.obj: truncated: line 5: the file ends in the middle of it (a face with fewer than \
+         3 corners); expected a complete last line"
+    );
+    let err = parse(&format!("{tri}f 1 2 3\nv 1 0"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "m.obj: truncated: line 5: the file ends in the middle of it (v needs 3, 4, 6 or 7 \
+         numbers, found 2); expected a complete last line"
+    );
+    let err = parse(&format!("{tri}f 1 2 3\nusemtl"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("m.obj: truncated: line 5: the file ends in the middle of it (usemtl"),
+        "{err}"
+    );
+    // The same face with its line break is a skipped face, counted.
+    let mut report = ImportReport::default();
+    let mesh = parse_with(&format!("{tri}f 1 2 3\nf 1 2\n"), &[], &mut report).unwrap();
+    assert_eq!((mesh.triangles.len(), report.skipped_primitives), (1, 1));
+}
+
+#[test]
+fn binary_data_is_not_an_obj_file() {
+    let err = parse("v 0 0 0\nv 1 0 0\n\u{1}\u{2}garbage\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "m.obj: line 3: byte 0x01 at offset 16 is not text; expected a Wavefront OBJ text file"
+    );
+    // Tabs, form feeds and carriage returns are text.
+    assert!(parse("v 0 0 0\r\nv\t1 0 0\x0c\r\nv 0 0 1\r\nf 1 2 3\r\n").is_ok());
+}
+
+#[test]
+fn text_that_is_not_obj_names_its_statements() {
+    let err = parse("Dear reader,\nthis is a letter.\nDear me.\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "m.obj: no triangles: no face, and unknown statements (2 x 'Dear', 1 x 'this'); \
+         expected 'v' and 'f' statements"
+    );
+}

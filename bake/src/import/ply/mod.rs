@@ -1,4 +1,6 @@
-//! Stanford PLY meshes, read with `ply-rs-bw`.
+//! Stanford PLY meshes: the header and binary element data read with `ply-rs-bw`, ASCII
+//! element data read line by line here (`ascii.rs`), so that an ASCII file's errors name the
+//! element, its index, line and property, and `nan` is reported as in a binary file.
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`, any scalar types.
 //! Element `vertex`: `x y z` (required), `nx ny nz`, colours `red green blue [alpha]` (or
@@ -15,11 +17,14 @@
 //! taken as they are; all are taken as sRGB and converted to linear (alpha stays linear).
 //! UV `v` is flipped (`1 - v`).
 //!
-//! Rejected with an error naming the element: a missing `x`/`y`/`z`, a vertex index out of
-//! range (or negative), NaN or infinite numbers, a file shorter than its header requires
-//! (binary files are checked against the header before parsing), elements with no properties.
+//! Rejected with an error naming the element: a file without the `ply` magic line, a missing
+//! `x`/`y`/`z`, a vertex index out of range (or negative), NaN or infinite numbers, a file
+//! shorter than its header requires (binary files are checked against the header before
+//! parsing; an ASCII file's message says in which element and after how many lines it ends),
+//! an ASCII line with too few or too many values, elements with no properties.
 //! Faces with fewer than three vertices are skipped and counted.
 
+mod ascii;
 mod properties;
 #[cfg(test)]
 mod tests;
@@ -112,7 +117,24 @@ fn parse_ply(
     let (mut reader, header) = read_header(source, bytes)?;
     check_binary_size(source, bytes, &reader, &header)?;
     let present = Present::check(source, &header)?;
-    let elements = read_elements(source, &mut reader, &header)?;
+    let elements = if header.encoding == Encoding::Ascii {
+        let start = reader.get_ref().position() as usize;
+        let first_line = 1 + bytes[..start].iter().filter(|&&b| b == b'\n').count();
+        let text = std::str::from_utf8(&bytes[start..]).map_err(|e| {
+            let line = first_line
+                + bytes[start..start + e.valid_up_to()]
+                    .iter()
+                    .filter(|&&b| b == b'\n')
+                    .count();
+            source.malformed(
+                format!("line {line}"),
+                "not text (invalid UTF-8) in an ascii file; expected numbers",
+            )
+        })?;
+        ascii::read_elements(source, &mut ascii::Lines::new(text, first_line), &header)?
+    } else {
+        read_elements(source, &mut reader, &header)?
+    };
 
     let mut mesh = Mesh::default();
     let surface = push_texture_surface(source, &mut mesh, &header)?;
@@ -148,10 +170,15 @@ fn read_header<'a>(
     bytes: &'a [u8],
 ) -> Result<(ByteReader<'a>, Header), ImportError> {
     if !bytes.starts_with(b"ply") && !b"ply".starts_with(bytes) {
-        return Err(source.malformed("header", "not a PLY file (no 'ply' magic line)"));
+        return Err(source.malformed(
+            "header",
+            "not a PLY file (no 'ply' magic line); expected the first line 'ply'",
+        ));
     }
     if !bytes.windows(10).any(|w| w == b"end_header") {
-        return Err(source.truncated("the header has no end_header line"));
+        return Err(
+            source.truncated("header: no end_header line; expected the header to end with one")
+        );
     }
     let mut reader = Reader::new(Cursor::new(bytes));
     let header = Parser::<Skip>::new()

@@ -205,12 +205,61 @@ fn non_finite_coordinates_are_named() {
         .unwrap_err()
         .to_string();
     assert_eq!(err, "t.ply: vertex 1: coordinate y is -inf");
-    // ply-rs-bw's ascii grammar has no NaN: the line is rejected as malformed.
+    // An ascii file says the same as the binary one.
     let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
                 property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
                 end_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n";
     let err = parse(text.as_bytes()).unwrap_err().to_string();
-    assert!(err.starts_with("t.ply: element 'vertex': Line 11"), "{err}");
+    assert_eq!(err, "t.ply: vertex 1: coordinate y is NaN");
+    let err = parse(text.replace("nan", "-inf").as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "t.ply: vertex 1: coordinate y is -inf");
+}
+
+/// The ascii triangle of `non_finite_coordinates_are_named` with its data lines replaced.
+fn ascii_triangle(data: &str) -> Vec<u8> {
+    format!(
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+         end_header\n{data}"
+    )
+    .into_bytes()
+}
+
+#[test]
+fn ascii_errors_name_element_line_and_property() {
+    let ok = parse(&ascii_triangle("0 0 0\n1. 0 .5\n\n0 1 0\n3 0 1 2\n")).unwrap();
+    assert_eq!(ok.positions[1], [1.0, 0.0, 0.5]);
+    let err = |data: &str| parse(&ascii_triangle(data)).unwrap_err().to_string();
+    assert_eq!(
+        err("0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"),
+        "t.ply: vertex 1 (line 11): property 'y': 'x'; expected a float"
+    );
+    assert_eq!(
+        err("0 0 0\n1 0\n0 1 0\n3 0 1 2\n"),
+        "t.ply: vertex 1 (line 11): property 'z': the line ends after 2 values; expected a float"
+    );
+    assert_eq!(
+        err("0 0 0\n1 0 0 0 1 0\n3 0 1 2\n"),
+        "t.ply: vertex 1 (line 11): 3 values after the last property; expected 3 (two lines \
+         run together?)"
+    );
+    assert_eq!(
+        err("0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"),
+        "t.ply: face 0 (line 13): property 'vertex_indices': '300'; expected a uchar (0 to 255)"
+    );
+    assert_eq!(
+        err("0 0 0\n1 0 0\n0 1 0\n"),
+        "t.ply: truncated: face 0: the file ends after 0 of the 1 'face' lines the header \
+         declares; expected 1 more"
+    );
+    assert_eq!(
+        err("0 0 0\n1 0 0\n0 1 0\n3 0 1"),
+        "t.ply: truncated: face 0 (line 13): the file ends in the middle of it (property \
+         'vertex_indices': the line ends after 3 values; expected 3 list values); expected a \
+         complete last line"
+    );
 }
 
 #[test]

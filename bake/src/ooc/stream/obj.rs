@@ -70,25 +70,58 @@ fn bad(name: &str, line: u64, message: String) -> OocError {
     }
 }
 
-/// Calls `pass(line number, trimmed line)` on every line of the file.
+/// Calls `pass(line number, trimmed line)` on every line of the file, refusing control bytes
+/// (binary data is not an OBJ file). A last line without a
+/// line break that does not parse, or is a face with fewer than three corners, is reported
+/// as the file cut off there.
 fn read_lines(
     name: &str,
     open: &impl Fn() -> Result<File, OocError>,
     pass: &mut dyn FnMut(u64, &str) -> Result<(), OocError>,
 ) -> Result<(), OocError> {
     let mut r = BufReader::with_capacity(1 << 20, open()?);
-    let mut s = String::new();
+    let mut bytes = Vec::new();
     let mut n = 0u64;
+    let text = |b: u8| b >= 0x20 || matches!(b, b'\t' | b'\n' | 0x0b | 0x0c | b'\r');
     loop {
-        s.clear();
+        bytes.clear();
         let k = r
-            .read_line(&mut s)
+            .read_until(b'\n', &mut bytes)
             .map_err(|e| OocError::io(name, "cannot read", e))?;
         if k == 0 {
             return Ok(());
         }
         n += 1;
-        pass(n, s.trim())?;
+        if let Some(&b) = bytes.iter().find(|&&b| !text(b)) {
+            return Err(bad(
+                name,
+                n,
+                format!("byte 0x{b:02x} is not text; expected a Wavefront OBJ text file"),
+            ));
+        }
+        let s = String::from_utf8_lossy(&bytes);
+        let line = s.trim();
+        if s.ends_with('\n') {
+            pass(n, line)?;
+            continue;
+        }
+        let cut = |what: String| {
+            bad(
+                name,
+                n,
+                format!(
+                    "the file ends in the middle of it ({what}); expected a complete last line"
+                ),
+            )
+        };
+        let mut words = line.split_ascii_whitespace();
+        if matches!(words.next(), Some("f" | "fo")) && words.count() < 3 {
+            return Err(cut("a face with fewer than 3 corners".to_owned()));
+        }
+        return pass(n, line).map_err(|e| match e {
+            OocError::Input { message, .. } => cut(message),
+            e => e,
+        });
     }
 }
 

@@ -63,6 +63,22 @@ pub(super) fn ply(
     Ok(report)
 }
 
+/// What each vertex slot holds, as errors name it (as the in-core importer does).
+const SLOT_NAMES: [&str; 12] = [
+    "coordinate x",
+    "coordinate y",
+    "coordinate z",
+    "normal x",
+    "normal y",
+    "normal z",
+    "texture coordinate u",
+    "texture coordinate v",
+    "red",
+    "green",
+    "blue",
+    "alpha",
+];
+
 /// An error in the file `name` at `at`.
 fn bad(name: &str, at: &str, message: String) -> OocError {
     OocError::Input {
@@ -103,7 +119,11 @@ impl Header {
             match words.as_slice() {
                 ["ply"] if lines == 1 => {}
                 _ if lines == 1 => {
-                    return Err(bad("header", "not a PLY file (no 'ply' line)".into()))
+                    return Err(bad(
+                        "header",
+                        "not a PLY file (no 'ply' magic line); expected the first line 'ply'"
+                            .into(),
+                    ))
                 }
                 ["format", f, _] => {
                     format = Some(match *f {
@@ -334,8 +354,11 @@ impl Reader<'_> {
                     })
                     .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?,
             }
-            if v.iter().any(|x| !x.is_finite()) {
-                return Err(self.bad(&format!("vertex {i}"), "a number is not finite".into()));
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(self.bad(
+                    &format!("vertex {i}"),
+                    format!("{} is {}", SLOT_NAMES[k], v[k]),
+                ));
             }
             let p = [v[0] as f32, v[1] as f32, v[2] as f32];
             for k in 0..3 {
