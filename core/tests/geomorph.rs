@@ -499,7 +499,11 @@ fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
         cam.refine(&h, &look.view(1280, 720), &p).expect("refine");
         check_morphs(&h, &cam, &pos);
         let now = drawn(&h, &cam);
-        for m in cam.morph_vertices().iter().filter(|m| !m.is_idle() && m.t == 0.0) {
+        for m in cam
+            .morph_vertices()
+            .iter()
+            .filter(|m| !m.is_idle() && m.t == 0.0)
+        {
             if before.contains_key(&m.to) || m.from < vc {
                 continue;
             }

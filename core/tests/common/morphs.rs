@@ -146,7 +146,10 @@ pub fn check_morphs(h: &Hierarchy<'_>, cam: &CameraState<'_>, pos: &[u32]) -> us
         };
         let b = h.vertices()[m.to as usize];
         let p = Vec3::from_array(morph_slot_vertex(&inputs, s as u32).expect("live").position);
-        let (pa, pb) = (Vec3::from_array(start.position), Vec3::from_array(b.position));
+        let (pa, pb) = (
+            Vec3::from_array(start.position),
+            Vec3::from_array(b.position),
+        );
         let ab = pb - pa;
         let along = if ab.length_squared() > 0.0 {
             ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)

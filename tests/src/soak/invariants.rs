@@ -11,8 +11,9 @@
 //! - every neighbour link is symmetric across the shared edge;
 //! - emission writes per surface, in slot order, for each corner the vertex of the polygon's
 //!   surface group at the corner's position;
-//! - every live morph slot has `t` in `[0, 1]`, `to` at an active node's position, `from` at
-//!   the position of the split parent whose floating child that is, no vertex in two slots;
+//! - every live morph slot has `t` in `[0, 1]`, `to` at an active node's position, `coarse`
+//!   at the position of the split parent whose floating child that is, `from` naming
+//!   `coarse`'s slot while `coarse` morphs and `coarse` otherwise, no vertex in two slots;
 //!   and morphed emission is the plain one with exactly the morphing vertices replaced by
 //!   `vertex_count + slot`.
 
@@ -351,7 +352,7 @@ impl FrontChecker {
             if !(0.0..=1.0).contains(&m.t) {
                 return Err(format!("morph slot {s}: t {}", m.t));
             }
-            if m.from as usize >= vc || m.to as usize >= vc {
+            if m.coarse as usize >= vc || m.to as usize >= vc {
                 return Err(format!("morph slot {s}: {m:?} out of range"));
             }
             if self.vertex_slot[m.to as usize] != 0 {
@@ -387,11 +388,27 @@ impl FrontChecker {
                     "morph slot {s}: {child} is not {parent}'s floating child"
                 ));
             }
-            if self.vertex_position[m.from as usize] != h.nodes()[parent.index()].position.0 {
-                return Err(format!("morph slot {s}: from {} not at {parent}", m.from));
+            if self.vertex_position[m.coarse as usize] != h.nodes()[parent.index()].position.0 {
+                return Err(format!(
+                    "morph slot {s}: coarse {} not at {parent}",
+                    m.coarse
+                ));
             }
             if !cam.is_split(parent) {
                 return Err(format!("morph slot {s}: {parent} is not split"));
+            }
+        }
+        // `from` is `coarse`, or the slot of `coarse` while that vertex morphs too.
+        for (s, m) in cam.morph_vertices().iter().enumerate() {
+            if m.is_idle() {
+                continue;
+            }
+            let want = match self.vertex_slot[m.coarse as usize] {
+                0 => m.coarse as usize,
+                k => vc + k as usize - 1,
+            };
+            if m.from as usize != want {
+                return Err(format!("morph slot {s}: from {} for {want}", m.from));
             }
         }
         Ok(())
