@@ -30,6 +30,15 @@
 //! [`Regulator::PRIOR_RESPONSE`] and the drift zero, which is Hoppe's rule with exponent
 //! `gain / PRIOR_RESPONSE`.
 //!
+//! # The camera's own lags
+//!
+//! An amortised camera ([`RefineParams::visit_fraction`]) visits its front once in
+//! `1 / visit_fraction` frames, so its count follows the mean tolerance of that many frames;
+//! told so ([`Regulator::with_response_frames`]), the regulator regresses on that mean and
+//! regulates the count the current tolerance will settle at. A camera with geomorphs shows a
+//! split at once but a collapse only when its coarsen morph ends; it gives the settled count
+//! too ([`Regulator::update_settling`]).
+//!
 //! # Damping
 //!
 //! Three guards, each against one way such a loop oscillates:
