@@ -180,8 +180,8 @@ impl Model {
         // Bounded variances, and a covariance that stays positive semi-definite.
         let p00 = p[0].clamp(0.0, Self::P_RESPONSE_MAX);
         let p11 = p[2].clamp(0.0, Self::P0[2].max(Self::Q_DRIFT));
-        let bound = libm::sqrtf(p00 * p11);
-        self.p = [p00, p[1].clamp(-bound, bound), p11];
+        let p01 = if p[1] * p[1] <= p00 * p11 { p[1] } else { 0.0 };
+        self.p = [p00, p01, p11];
     }
 }
 
