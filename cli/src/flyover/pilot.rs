@@ -95,6 +95,25 @@ impl Pilot {
         Some(held as f64 / after.len().max(1) as f64)
     }
 
+    /// The share of frames after [`SETTLING_FRAMES`] that refined at the regulator's floor
+    /// ([`Regulator::DEFAULT_MIN_TOLERANCE`]) and still drew fewer polygons than the target
+    /// less [`HELD_WITHIN`]: frames whose view holds too few polygons for any tolerance down
+    /// to the floor to reach the target, which [`held_share`](Self::held_share) can therefore
+    /// not count (`None` without a regulator).
+    pub fn out_of_reach_share(&self, rec: &Record) -> Option<f64> {
+        let target = f64::from(self.regulator?.target());
+        let counts = rec.active_polygons.get(SETTLING_FRAMES..).unwrap_or(&[]);
+        let used = self.tolerance.get(SETTLING_FRAMES..).unwrap_or(&[]);
+        let out = counts
+            .iter()
+            .zip(used)
+            .filter(|&(&p, &t)| {
+                t <= Regulator::DEFAULT_MIN_TOLERANCE && f64::from(p) < target * (1.0 - HELD_WITHIN)
+            })
+            .count();
+        Some(out as f64 / counts.len().max(1) as f64)
+    }
+
     /// How many times the tolerance's step changed direction (frames that held it left
     /// out): the regulator's oscillations, which a moving view also causes a few of.
     pub fn sign_changes(&self) -> u32 {
