@@ -155,6 +155,7 @@ fn a_regulated_flyover_holds_its_target_and_reports_popping() {
         assert_eq!(r["target_polygons"], 1500, "{cam}");
         let held = r["held_share"].as_f64().expect("held share");
         assert!(held >= 0.9, "{cam}");
+        assert_eq!(r["out_of_reach_share"].as_f64(), Some(0.0), "{cam}");
         assert!(r["tolerance_mean_px"].as_f64().unwrap() > 0.0);
         for key in ["max_jump_px", "p99_jump_px", "surface_p99_jump_px"] {
             let v = cam[key].as_f64().expect(key);
@@ -166,4 +167,29 @@ fn a_regulated_flyover_holds_its_target_and_reports_popping() {
         ..options
     };
     assert!(fly(&h, &threads).is_err(), "a target flies on one thread");
+}
+
+/// A target above what the whole mesh holds at full resolution: the tolerance sinks to its
+/// floor and stays there, and every frame after the settling ones counts as out of reach,
+/// none as held.
+#[test]
+fn a_target_beyond_the_mesh_is_reported_out_of_reach() {
+    let baked = bake(&meshes::terrain(32, 32, 3));
+    let h = baked.hierarchy();
+    let options = FlyoverOptions {
+        cameras: 1,
+        frames: 90,
+        target_polygons: Some(50_000),
+        ..FlyoverOptions::default()
+    };
+    let f = fly(&h, &options).expect("regulated flight");
+    let j = f.json();
+    let r = &j["per_camera"][0]["regulation"];
+    assert_eq!(r["held_share"].as_f64(), Some(0.0), "{r}");
+    assert_eq!(r["out_of_reach_share"].as_f64(), Some(1.0), "{r}");
+    assert_eq!(
+        r["tolerance_min_px"].as_f64(),
+        Some(f64::from(caveclod_core::Regulator::DEFAULT_MIN_TOLERANCE)),
+        "{r}"
+    );
 }

@@ -21,7 +21,8 @@
 //!   ([`CameraState::morph_vertices`]) for the GPU to blend, and its morphed emission points
 //!   at them.
 //! - A [`Regulator`] adapts a camera's pixel tolerance each frame to hold a number of active
-//!   polygons (Hoppe's regulation, damped).
+//!   polygons (Hoppe's regulation, predicting the count from the front's estimated response
+//!   and the view's drift, damped).
 //!
 //! ```no_run
 //! # fn demo(bytes: &[u8]) -> Result<(), Box<dyn core::error::Error>> {

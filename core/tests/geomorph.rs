@@ -202,6 +202,13 @@ fn aborted_coarsen_morphs_return_to_the_fine_state() {
         .collect();
     assert!(!coarsening.is_empty());
     assert!(coarsening.values().all(|&t| t < 1.0), "{coarsening:?}");
+    // Every morph coarsens, and its collapse still waits: the settled count leaves out
+    // both polygons of each.
+    assert_eq!(cam.coarsening_count(), cam.morph_count());
+    assert_eq!(
+        cam.settled_polygon_count(),
+        cam.active_polygon_count() - 2 * cam.coarsening_count()
+    );
     // Back: every coarsen morph aborts, rises, and ends at the fine position.
     let st = cam.refine(&h, &near, &p).expect("refine");
     assert_eq!(
@@ -209,6 +216,8 @@ fn aborted_coarsen_morphs_return_to_the_fine_state() {
         cam.morph_count() as usize + st.morphs_finished as usize
     );
     assert!(st.morphs_aborted > 0, "{st:?}");
+    assert_eq!(cam.coarsening_count(), 0, "every coarsen morph turned back");
+    assert_eq!(cam.settled_polygon_count(), cam.active_polygon_count());
     let mut last = coarsening.clone();
     while cam.morph_count() > 0 {
         let st = cam.refine(&h, &near, &p).expect("refine");
@@ -332,7 +341,11 @@ fn coarsen_morphs_collapse_when_they_end() {
     settle(&h, &mut plain, &far, &p);
     let mut total = RefineStats::default();
     for _ in 0..2000 {
+        let before = cam.active_polygon_count();
         let st = cam.refine(&h, &far, &p).expect("refine");
+        assert!(cam.coarsening_count() <= cam.morph_count());
+        // Moving away only collapses: the polygons on the screen never grow.
+        assert!(cam.active_polygon_count() <= before);
         total.collapses += st.collapses;
         total.morphs_started += st.morphs_started;
         total.morphs_finished += st.morphs_finished;
@@ -341,6 +354,8 @@ fn coarsen_morphs_collapse_when_they_end() {
         }
     }
     assert!(total.collapses > 0);
+    assert_eq!(cam.coarsening_count(), 0);
+    assert_eq!(cam.settled_polygon_count(), cam.active_polygon_count());
     // The view is in the frustum, so every collapse waited for its coarsen morph.
     assert_eq!(total.morphs_finished, total.collapses, "{total:?}");
     assert_eq!(sorted_front(&cam), sorted_front(&plain));
@@ -613,6 +628,8 @@ proptest! {
             let st = cam.refine(&h, &all[v], &p).expect("refine");
             prop_assert_eq!(st.morphing, cam.morph_count());
             prop_assert!(cam.morph_count() <= max_morphs);
+            prop_assert!(cam.coarsening_count() <= cam.morph_count());
+            prop_assert!(cam.settled_polygon_count() <= cam.active_polygon_count());
             check_morphs(&h, &cam, &pos);
             if i % 7 == 6 {
                 cam.compact(&h);
@@ -626,6 +643,7 @@ proptest! {
         settle(&h, &mut cam, &all[v], &p);
         settle(&h, &mut plain, &all[v], &p);
         prop_assert!(cam.morph_vertices().is_empty());
+        prop_assert_eq!(cam.coarsening_count(), 0);
         prop_assert_eq!(packed(&h, &cam, true), packed(&h, &cam, false));
         prop_assert_eq!(sorted_front(&cam), sorted_front(&plain));
         prop_assert_eq!(triangles(&h, &cam), triangles(&h, &plain));

@@ -79,7 +79,15 @@ fn per_camera_held(f: &Flyover) -> String {
     f.names
         .iter()
         .zip(f.pilots.iter().zip(&f.flight.records))
-        .map(|(n, (p, r))| format!("{n} {:.1}%", 100.0 * p.held_share(r).unwrap_or(0.0)))
+        .map(|(n, (p, r))| {
+            let out = p.out_of_reach_share(r).unwrap_or(0.0);
+            let held = format!("{n} {:.1}%", 100.0 * p.held_share(r).unwrap_or(0.0));
+            if out > 0.0 {
+                format!("{held}, out of reach at the floor {:.1}%", 100.0 * out)
+            } else {
+                held
+            }
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -103,8 +111,8 @@ pub(super) fn section(s: &mut String, f: &Flights) {
     );
     let _ = writeln!(
         s,
-        "| camera | max / p99 move, geomorphs | without | max / p99 surface move, geomorphs | without | morphs dropped | refine p99 | held ±5% | sign changes | tolerance mean (min..max) |\n\
-         |---|---|---|---|---|---|---|---|---|---|"
+        "| camera | max / p99 move, geomorphs | without | max / p99 surface move, geomorphs | without | morphs dropped | refine p99 | held ±5% | out of reach at the floor | sign changes | tolerance mean (min..max) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
     );
     for (c, name) in m.names.iter().enumerate() {
         let (Some(pm), Some(pu), Some(pg)) = (m.pilots.get(c), u.pilots.get(c), g.pilots.get(c))
@@ -115,7 +123,7 @@ pub(super) fn section(s: &mut String, f: &Flights) {
         let (mean, min, max) = pg.tolerance_range();
         let _ = writeln!(
             s,
-            "| {name} | {:.2} / {:.3} px | {:.1} / {:.2} px | {:.2} / {:.3} px | {:.1} / {:.2} px | {} of {} | {:.3} ms | {:.1}% | {} | {mean:.3} px ({min:.3}..{max:.3}) |",
+            "| {name} | {:.2} / {:.3} px | {:.1} / {:.2} px | {:.2} / {:.3} px | {:.1} / {:.2} px | {} of {} | {:.3} ms | {:.1}% | {:.1}% | {} | {mean:.3} px ({min:.3}..{max:.3}) |",
             pm.meter.max_px(),
             pm.meter.p99_px(),
             pu.meter.max_px(),
@@ -128,6 +136,7 @@ pub(super) fn section(s: &mut String, f: &Flights) {
             rm.morphs_started + rm.morphs_dropped,
             rm.refine_ms_p99(),
             100.0 * pg.held_share(rg).unwrap_or(0.0),
+            100.0 * pg.out_of_reach_share(rg).unwrap_or(0.0),
             pg.sign_changes(),
         );
     }

@@ -396,7 +396,14 @@ pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, Strin
         pilots = p
             .views
             .iter()
-            .map(|_| Pilot::new(tables.clone(), options.target_polygons, options.tolerance))
+            .map(|_| {
+                Pilot::new(
+                    tables.clone(),
+                    options.target_polygons,
+                    options.tolerance,
+                    p.params.visit_fraction,
+                )
+            })
             .collect();
         fly_piloted(
             h,

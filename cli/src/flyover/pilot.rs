@@ -34,10 +34,24 @@ pub struct Pilot {
 
 impl Pilot {
     /// A pilot with a regulator for `target` polygons (none: the flight's tolerance),
-    /// starting at `tolerance_px`.
-    pub fn new(tables: Arc<PopTables>, target: Option<u32>, tolerance_px: f32) -> Self {
+    /// starting at `tolerance_px`, for a camera whose refinement visits `visit_fraction` of
+    /// its front per frame (its count shows a change of tolerance over `1 / visit_fraction`
+    /// frames).
+    pub fn new(
+        tables: Arc<PopTables>,
+        target: Option<u32>,
+        tolerance_px: f32,
+        visit_fraction: f32,
+    ) -> Self {
+        // A share that is a third up to rounding visits the front in three frames.
+        let frames = (1.0 / visit_fraction.clamp(1e-3, 1.0) - 1e-3).ceil();
+        let frames = frames.min(f32::from(Regulator::MAX_RESPONSE_FRAMES)) as u8;
         Self {
-            regulator: target.map(|t| Regulator::new(t).with_tolerance(tolerance_px)),
+            regulator: target.map(|t| {
+                Regulator::new(t)
+                    .with_tolerance(tolerance_px)
+                    .with_response_frames(frames)
+            }),
             meter: PopMeter::new(tables),
             tolerance: Vec::new(),
             max_morphing: 0,
@@ -59,10 +73,12 @@ impl Pilot {
         self.meter.observe(cam, screen);
         if let Some(r) = &mut self.regulator {
             // A camera at its budget refuses splits: each refused split is up to two
-            // polygons the front wants and cannot hold.
-            r.update(
-                cam.active_polygon_count()
-                    .saturating_add(refused.saturating_mul(2)),
+            // polygons the front wants and cannot hold. Collapses waiting for their coarsen
+            // morphs still show, and the regulator tells them apart (`update_settling`).
+            let wanted = refused.saturating_mul(2);
+            r.update_settling(
+                cam.active_polygon_count().saturating_add(wanted),
+                cam.settled_polygon_count().saturating_add(wanted),
             );
         }
     }
@@ -77,6 +93,25 @@ impl Pilot {
             .filter(|&&p| (f64::from(p) / target - 1.0).abs() <= HELD_WITHIN)
             .count();
         Some(held as f64 / after.len().max(1) as f64)
+    }
+
+    /// The share of frames after [`SETTLING_FRAMES`] that refined at the regulator's floor
+    /// ([`Regulator::DEFAULT_MIN_TOLERANCE`]) and still drew fewer polygons than the target
+    /// less [`HELD_WITHIN`]: frames whose view holds too few polygons for any tolerance down
+    /// to the floor to reach the target, which [`held_share`](Self::held_share) can therefore
+    /// not count (`None` without a regulator).
+    pub fn out_of_reach_share(&self, rec: &Record) -> Option<f64> {
+        let target = f64::from(self.regulator?.target());
+        let counts = rec.active_polygons.get(SETTLING_FRAMES..).unwrap_or(&[]);
+        let used = self.tolerance.get(SETTLING_FRAMES..).unwrap_or(&[]);
+        let out = counts
+            .iter()
+            .zip(used)
+            .filter(|&(&p, &t)| {
+                t <= Regulator::DEFAULT_MIN_TOLERANCE && f64::from(p) < target * (1.0 - HELD_WITHIN)
+            })
+            .count();
+        Some(out as f64 / counts.len().max(1) as f64)
     }
 
     /// How many times the tolerance's step changed direction (frames that held it left

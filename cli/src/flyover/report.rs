@@ -23,8 +23,8 @@ impl Flyover {
     /// actually flown: budgeted when sized, full otherwise), and more. Per camera of a
     /// per-camera flight on one thread: `max_jump_px` and `p99_jump_px` (popping, see
     /// `popping`), and with a polygon target `regulation` (the share of frames after the
-    /// first 30 within 5% of the target, the tolerance step's sign changes, the tolerance's
-    /// mean, min and max).
+    /// first 30 within 5% of the target, the share of them at the tolerance's floor and still
+    /// short of it, the tolerance step's sign changes, the tolerance's mean, min and max).
     pub fn json(&self) -> Value {
         let s = &self.summary;
         let flown = if self.budget.is_some() {
@@ -44,6 +44,7 @@ impl Flyover {
                     Some(json!({
                         "target_polygons": p.regulator?.target(),
                         "held_share": p.held_share(r)?,
+                        "out_of_reach_share": p.out_of_reach_share(r)?,
                         "sign_changes": p.sign_changes(),
                         "tolerance_mean_px": mean,
                         "tolerance_min_px": min,
@@ -220,7 +221,8 @@ impl Flyover {
         let _ = writeln!(
             o,
             "regulation to {target} polygons (frames after the first {SETTLING_FRAMES} within \
-             {:.0}%; sign changes of the tolerance's step):",
+             {:.0}%; out of reach: at the tolerance's floor and still short of the target; \
+             sign changes of the tolerance's step):",
             HELD_WITHIN * 100.0
         );
         for (name, (r, p)) in self
@@ -231,10 +233,11 @@ impl Flyover {
             let (mean, min, max) = p.tolerance_range();
             let _ = writeln!(
                 o,
-                "  {:<14} held {:>5.1}%  sign changes {:>3}  tolerance {:.3} px mean \
-                 ({:.3}..{:.3})",
+                "  {:<14} held {:>5.1}%  out of reach {:>5.1}%  sign changes {:>3}  tolerance \
+                 {:.3} px mean ({:.3}..{:.3})",
                 name,
                 100.0 * p.held_share(r).unwrap_or(0.0),
+                100.0 * p.out_of_reach_share(r).unwrap_or(0.0),
                 p.sign_changes(),
                 mean,
                 min,

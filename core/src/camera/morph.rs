@@ -118,7 +118,14 @@ impl Front<'_> {
     /// for any reason but an illegal collapse forgets it.
     fn set_phase(&mut self, m: u32, parent: NodeId, phase: u32) {
         if let Some(state) = self.morphs.states.get_mut(m as usize) {
+            let was = state.phase;
             state.phase = phase;
+            let s = &mut self.morphs.scalars;
+            if was != COARSENING && phase == COARSENING {
+                s.coarsening += 1;
+            } else if was == COARSENING && phase != COARSENING {
+                s.coarsening = s.coarsening.saturating_sub(1);
+            }
         }
         if let Some(pair) = self.pair_of.get(parent.index()).filter(|&p| p != NONE) {
             let on = phase == COARSENING;
@@ -516,6 +523,24 @@ impl CameraState<'_> {
     /// Morphs in progress (each moves one or two of [`morph_vertices`](Self::morph_vertices)).
     pub fn morph_count(&self) -> u32 {
         self.front.morphs.scalars.live
+    }
+
+    /// Coarsen morphs in progress: visible collapses refinement wants that wait for their
+    /// floating child to glide back. Each holds the pair's polygons on the screen until it
+    /// ends, so a front that coarsens shows its count that many collapses late; a
+    /// [`Regulator`](crate::Regulator) is given the count the front settles at,
+    /// [`settled_polygon_count`](Self::settled_polygon_count).
+    pub fn coarsening_count(&self) -> u32 {
+        self.front.morphs.scalars.coarsening
+    }
+
+    /// The active polygons once the coarsen morphs in progress have collapsed: two fewer
+    /// for each (see [`coarsening_count`](Self::coarsening_count); a collapse on the mesh's
+    /// border removes one, so there the figure is one low).
+    pub fn settled_polygon_count(&self) -> u32 {
+        self.front
+            .active_polygons
+            .saturating_sub(self.coarsening_count().saturating_mul(2))
     }
 
     /// Most morphs this camera holds at once ([`CameraConfig::max_morphs`](super::CameraConfig));

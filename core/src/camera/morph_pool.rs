@@ -55,6 +55,8 @@ pub(crate) struct MorphScalars {
     pub low: u32,
     /// Morphs in progress.
     pub live: u32,
+    /// Of them, coarsen morphs: collapses that wait for their morph.
+    pub coarsening: u32,
 }
 
 impl MorphScalars {
@@ -62,6 +64,7 @@ impl MorphScalars {
         len: 0,
         low: 0,
         live: 0,
+        coarsening: 0,
     };
 }
 
