@@ -91,6 +91,10 @@ pub struct CaveclodRefineParams {
     pub refine_morph_s: f32,
     /// Seconds a coarsen morph takes; 0 collapses at once (default 16/60).
     pub coarsen_morph_s: f32,
+    /// Fastest a morphing vertex glides across the screen, pixels per second: a morph whose
+    /// path is long on the screen takes longer than its duration (default 9, 0.15 px per
+    /// frame at 60 Hz; 0 or infinity: no limit).
+    pub morph_speed_px_s: f32,
     /// Coarsen outside the view frustum (default true).
     pub frustum_culling: bool,
     /// Coarsen where the surface faces away from the eye (default true).
@@ -105,6 +109,7 @@ impl From<RefineParams> for CaveclodRefineParams {
             dt_s: p.dt_s,
             refine_morph_s: p.refine_morph_s,
             coarsen_morph_s: p.coarsen_morph_s,
+            morph_speed_px_s: p.morph_speed_px_s,
             frustum_culling: p.frustum_culling,
             backface_culling: p.backface_culling,
         }
@@ -117,7 +122,8 @@ impl CaveclodRefineParams {
         let times = [self.dt_s, self.refine_morph_s, self.coarsen_morph_s];
         let sane = self.tolerance_px >= 0.0
             && !self.tolerance_px.is_nan()
-            && times.iter().all(|t| t.is_finite() && *t >= 0.0);
+            && times.iter().all(|t| t.is_finite() && *t >= 0.0)
+            && self.morph_speed_px_s >= 0.0;
         if !sane {
             return Err(CaveclodStatus::InvalidArgument);
         }
@@ -131,6 +137,7 @@ impl CaveclodRefineParams {
             dt_s: self.dt_s,
             refine_morph_s: self.refine_morph_s,
             coarsen_morph_s: self.coarsen_morph_s,
+            morph_speed_px_s: self.morph_speed_px_s,
             ..RefineParams::default()
         })
     }

@@ -155,10 +155,14 @@ pub struct FlyoverArgs {
     /// array over the hierarchy (less memory, slower refinement).
     #[arg(long)]
     pub hashed_pair_map: bool,
-    /// Split and collapse at once instead of geomorphing visible vertices (on by default:
-    /// cameras hold up to 4096 morphs).
+    /// Split and collapse at once instead of geomorphing visible vertices (on by default: a
+    /// camera holds up to half its polygon budget in morphs, 16,384 at full capacity).
     #[arg(long)]
     pub no_geomorphs: bool,
+    /// Fastest a morphing vertex glides across the screen, in pixels per second (a morph
+    /// long on the screen takes longer than its duration); 0 for no limit
+    #[arg(long, default_value_t = 9.0, value_parser = non_negative)]
+    pub morph_speed: f32,
     /// Regulate each camera's tolerance to hold this many active polygons (starting at
     /// --tolerance; a state per camera on one thread).
     #[arg(long, conflicts_with_all = ["shared_state", "threads"])]
@@ -268,4 +272,12 @@ pub struct RenderArgs {
 pub enum LevelArg {
     Full,
     Base,
+}
+
+/// A finite number of zero or more.
+fn non_negative(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{s}`: expected a finite number of zero or more")),
+    }
 }

@@ -25,6 +25,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         pin_threads: true,
         hashed_pair_map: false,
         geomorphs: true,
+        morph_speed_px_s: 9.0,
         target_polygons: None,
     };
     let per = fly(&h, &options).expect("per-camera flight");

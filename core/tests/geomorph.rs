@@ -510,7 +510,9 @@ fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
     let p = fine();
     let mut chained = 0;
     let mut before = drawn(&h, &cam);
-    for look in closing_in(&h, 120) {
+    // Miri runs a few frames of the approach: the invariants, not the occurrence.
+    let frames = if cfg!(miri) { 6 } else { 120 };
+    for look in closing_in(&h, frames) {
         cam.refine(&h, &look.view(1280, 720), &p).expect("refine");
         check_morphs(&h, &cam, &pos);
         let now = drawn(&h, &cam);
@@ -529,7 +531,7 @@ fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
         }
         before = now;
     }
-    assert!(chained > 0, "no split of a morphing vertex");
+    assert!(chained > 0 || cfg!(miri), "no split of a morphing vertex");
 }
 
 /// However far a floating child lies from its parent on the screen, its vertex moves no
@@ -547,7 +549,7 @@ fn morphs_glide_no_faster_than_the_speed_limit() {
         morph_speed_px_s: speed,
         ..fine()
     };
-    let looks = closing_in(&h, 60);
+    let looks = closing_in(&h, if cfg!(miri) { 4 } else { 60 });
     let (w, hgt) = (1280u32, 720u32);
     let pixel = |look: &LookAt, x: Vec3| {
         let c = look.view_projection(w as f32 / hgt as f32) * x.extend(1.0);
@@ -574,7 +576,7 @@ fn morphs_glide_no_faster_than_the_speed_limit() {
             .iter()
             .any(|m| !m.is_idle() && m.t > 0.0 && m.t < 0.5 * p.dt_s / p.refine_morph_s);
     }
-    assert!(slowed, "the speed limit never slowed a morph");
+    assert!(slowed || cfg!(miri), "the speed limit never slowed a morph");
 }
 
 fn config() -> ProptestConfig {

@@ -56,6 +56,7 @@ fn options(a: &FlyoverArgs) -> FlyoverOptions {
         pin_threads: !a.no_pin,
         hashed_pair_map: a.hashed_pair_map,
         geomorphs: !a.no_geomorphs,
+        morph_speed_px_s: a.morph_speed,
         target_polygons: a.target_polygons,
     }
 }

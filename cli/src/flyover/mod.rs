@@ -164,6 +164,9 @@ pub struct FlyoverOptions {
     /// or [`MAX_MORPHS`]); the shared state never morphs (its front is re-refined for another
     /// camera every turn).
     pub geomorphs: bool,
+    /// The fastest a morphing vertex glides across the screen, in pixels per second
+    /// ([`RefineParams::morph_speed_px_s`]; 0 for no limit).
+    pub morph_speed_px_s: f32,
     /// Fly every camera with a [`caveclod_core::Regulator`] holding this many active
     /// polygons, starting at `tolerance` (a state per camera on one thread only). The
     /// cameras are budgeted to the target plus 25%, without a sizing flight.
@@ -187,6 +190,7 @@ impl Default for FlyoverOptions {
             pin_threads: true,
             hashed_pair_map: false,
             geomorphs: true,
+            morph_speed_px_s: RefineParams::default().morph_speed_px_s,
             target_polygons: None,
         }
     }
@@ -301,6 +305,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         } else {
             options.visit_fraction
         },
+        morph_speed_px_s: options.morph_speed_px_s,
         ..RefineParams::default()
     };
     let params = if morphing {
