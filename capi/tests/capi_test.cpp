@@ -455,7 +455,12 @@ int main(int argc, char **argv) {
     CHECK(slot_count > 0 && slot_count <= 2 * morphing.max_morphs);
     for (std::size_t i = 0; i < slot_count; ++i) {
         const CaveclodMorphVertex &m = slots[i];
-        CHECK((m.from == UINT32_MAX && m.to == UINT32_MAX) || (m.from < hc.vertices && m.to < hc.vertices));
+        // Idle; or a persistent `to` and `coarse`, and `from` either `coarse` or another
+        // slot (the vertex split again while it morphed: it starts where that one is drawn).
+        const bool idle = m.from == UINT32_MAX && m.to == UINT32_MAX;
+        const bool from_ok = m.from == m.coarse
+            || (m.from >= hc.vertices && m.from - hc.vertices < slot_count && m.from - hc.vertices != i);
+        CHECK(idle || (m.to < hc.vertices && m.coarse < hc.vertices && from_ok));
     }
     emit_and_check(&morph_cam, &h, hc, true, hc.vertices + static_cast<std::uint32_t>(slot_count));
 
