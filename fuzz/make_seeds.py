@@ -176,7 +176,7 @@ def npy(descr, fortran_order, shape, data):
 
 
 write("npy", "f4.npy", npy("<f4", "False", "(3, 4)", struct.pack("<12f", *[i * 0.5 for i in range(12)])))
-write("npy", "be_i2.npy", npy(">i2", "True", "(4, 3)", struct.pack(">12h", *range(-6, 6))))
+write("npy", "be_i2.npy", npy(">i2", "False", "(4, 3)", struct.pack(">12h", *range(-6, 6))))
 write("npy", "u1.npy", npy("|u1", "False", "(3, 3)", bytes(range(9))))
 write("npy", "f8_nan.npy", npy("<f8", "False", "(3, 3)", struct.pack("<9d", 1, 2, float("nan"), 4, 5, 6, 7, 8, 9)))
 
