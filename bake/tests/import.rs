@@ -6,9 +6,7 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use caveclod_bake::import::{
-    import, import_bytes, import_with_report, ImportError, ImportOptions,
-};
+use caveclod_bake::import::{import, import_bytes, import_with_report, ImportError, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {

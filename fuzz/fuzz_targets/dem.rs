@@ -9,5 +9,11 @@ use caveclod_bake::import::ImportOptions;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = readers::import("fuzz.dem", data, &ImportOptions { spacing: (data.first().is_some_and(|b| b & 1 == 1)).then_some(30.0) });
+    let _ = readers::import(
+        "fuzz.dem",
+        data,
+        &ImportOptions {
+            spacing: (data.first().is_some_and(|b| b & 1 == 1)).then_some(30.0),
+        },
+    );
 });

@@ -10,7 +10,10 @@ use libfuzzer_sys::fuzz_target;
 
 /// A file of this process's own under the temporary directory, rewritten for each input.
 fn input_path(extension: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("caveclod-fuzz-ooc-{}.{extension}", std::process::id()))
+    std::env::temp_dir().join(format!(
+        "caveclod-fuzz-ooc-{}.{extension}",
+        std::process::id()
+    ))
 }
 
 fuzz_target!(|data: &[u8]| {

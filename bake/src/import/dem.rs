@@ -21,9 +21,8 @@
 //! feet are converted; arc-seconds and radians need [`ImportOptions::spacing`], which, when
 //! given, also overrides the spacing of metre and foot grids.
 
-
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{Loader, ImportError, ImportOptions, ImportReport, Source};
+use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
 use crate::mesh::Mesh;
 
 const BLOCK: usize = 1024;

@@ -10,9 +10,8 @@
 //! SRTM void), become holes. Rejected with an error: Fortran order, other ranks, structured
 //! or other dtypes, ±inf heights, a data section of the wrong length.
 
-
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{Loader, ImportError, ImportOptions, ImportReport, Source};
+use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
 use crate::mesh::Mesh;
 
 pub(crate) fn import_npy(

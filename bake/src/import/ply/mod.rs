@@ -31,7 +31,7 @@ use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType,
 use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
 use properties::{A, NX, R, U, VERTEX_NAMES, X};
 
-use super::{next_index, push_surface, Loader, srgb_to_linear, ImportError};
+use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
 use crate::mesh::{Mesh, Surface, Texture, Triangle, NO_ATTRIBUTE};
 
