@@ -253,3 +253,26 @@ def real_seeds(data, corpus="corpus"):
 
 if __name__ == "__main__" and len(os.sys.argv) > 1:
     real_seeds(os.sys.argv[1])
+
+
+# bake_mesh: a closed cube (8 positions on the 1/8 grid, normals and UVs, two surfaces) and a
+# grid with a duplicated, a flipped and a degenerate triangle
+def grid_byte(v):
+    return int(round(v * 8 + 64)) & 0x7F
+
+
+cube = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+         (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+seed = bytes([8 - 3, 0x13])
+for p in cube:
+    seed += bytes(grid_byte(c) for c in p) + bytes(grid_byte(c) for c in p) + bytes(grid_byte(c) for c in p[:2])
+seed += b"".join(bytes([a, b, c, k % 2]) for k, (a, b, c) in enumerate(faces))
+write("bake_mesh", "cube.bin", seed)
+pos, _, tris = grid(3)
+seed = bytes([len(pos) - 3, 0x04])
+for p in pos:
+    seed += bytes(grid_byte(c) for c in p) + bytes([grid_byte(p[1])])
+tris = tris + [tris[0], tris[1][::-1], (0, 0, 1)]
+seed += b"".join(bytes([a, b, c, 0]) for a, b, c in tris)
+write("bake_mesh", "grid_extra.bin", seed)
