@@ -1,6 +1,8 @@
-//! Importers: files on disk to a [`Mesh`].
+//! Importers: files on disk, or bytes in memory, to a [`Mesh`].
 //!
-//! [`import`] picks the importer from the file's extension (case-insensitive):
+//! [`import`] picks the importer from the file's extension (case-insensitive);
+//! [`import_bytes`] does the same for bytes held in memory under a file name, a [`Loader`] the
+//! caller passes serving the files they refer to (MTL libraries, glTF buffers):
 //!
 //! | extension | format | source file |
 //! |---|---|---|
