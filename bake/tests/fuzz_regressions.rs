@@ -34,3 +34,22 @@ fn npy_heights_near_f32_max_give_finite_normals() {
         }
     }
 }
+
+/// Found while reading the heightfield code after the `npy` finding (the `dem` target did not
+/// reach them): a DEM whose header gives a resolution of 3e301 m (infinite as `f32`, so the
+/// positions came out NaN) and one of 2e38 m over three profiles (an extent past `f32::MAX`,
+/// so the last column's positions were infinite). Both are typed errors naming the grid.
+#[test]
+fn dem_spacing_outside_f32_is_a_typed_error() {
+    for name in ["dem_resolution_past_f32.dem", "dem_extent_past_f32.dem"] {
+        let err = import_artifact(name, &ImportOptions::default()).expect_err(name);
+        assert!(
+            matches!(err, ImportError::Unsupported { .. }),
+            "{name}: {err}"
+        );
+        assert!(
+            err.to_string().contains("32-bit coordinates"),
+            "{name}: {err}"
+        );
+    }
+}

@@ -102,8 +102,25 @@ pub(crate) fn heightfield_to_mesh(
 }
 
 /// The post count, which must match the heights; no height infinite (NaN marks a missing
-/// post).
+/// post); a spacing that is a positive `f32` over a grid whose extent is one too (a header's
+/// resolution can be anything an `f64` holds).
 fn check_grid(source: &Source, grid: &Heightfield) -> Result<usize, ImportError> {
+    let [sx, sz] = grid.spacing;
+    let extent = [
+        grid.width.saturating_sub(1) as f32 * sx,
+        grid.depth.saturating_sub(1) as f32 * sz,
+    ];
+    let positive = |v: f32| v.is_finite() && v > 0.0;
+    if !(positive(sx) && positive(sz) && extent.iter().all(|e| e.is_finite())) {
+        return Err(source.unsupported(
+            "grid",
+            format!(
+                "a spacing of {sx} x {sz} m over {} x {} posts is outside the range of 32-bit \
+                 coordinates",
+                grid.width, grid.depth
+            ),
+        ));
+    }
     let posts = grid
         .width
         .checked_mul(grid.depth)
@@ -317,6 +334,27 @@ mod tests {
         // normal leans west, almost level.
         let n = mesh.normals[3];
         assert!(n[0] < -0.999 && n[1] > 0.0, "{n:?}");
+    }
+
+    /// A DEM header's resolution can round to 0 or infinity in `f32`, or give an extent
+    /// past `f32::MAX`: typed errors, not NaN or infinite positions.
+    #[test]
+    fn spacing_outside_f32_is_an_error() {
+        for spacing in [
+            [0.0, 3.0],
+            [f32::INFINITY, 3.0],
+            [2.0, f32::NAN],
+            [2e38, 2e38],
+        ] {
+            let g = Heightfield {
+                spacing,
+                ..grid(3, 2, vec![0.0; 6])
+            };
+            let err =
+                heightfield_to_mesh(&source(), &g, "t", &mut ImportReport::default()).unwrap_err();
+            assert!(matches!(err, ImportError::Unsupported { .. }), "{err}");
+            assert!(err.to_string().contains("3 x 2 posts"), "{err}");
+        }
     }
 
     #[test]
