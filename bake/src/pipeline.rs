@@ -113,6 +113,24 @@ pub fn bake_file(
     Ok((baked, info))
 }
 
+/// Imports a mesh from bytes in memory ([`import::import_bytes`]: `name`'s extension picks
+/// the importer, `load` reads the files the input names) and bakes it; `bake_seconds`
+/// includes the import. Texture paths stay as the input gives them.
+pub fn bake_bytes(
+    name: &str,
+    bytes: &[u8],
+    load: &mut import::Loader<'_>,
+    options: &ImportOptions,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo), BakeError> {
+    let start = Instant::now();
+    progress(Stage::Import);
+    let (mesh, _) = import::import_bytes(name, bytes, load, options)?;
+    let (baked, mut info) = bake_mesh(&mesh, name, progress)?;
+    info.bake_seconds = start.elapsed().as_secs_f64();
+    Ok((baked, info))
+}
+
 /// What [`bake_out_of_core`] makes.
 #[derive(Debug)]
 pub struct OutOfCoreBake {

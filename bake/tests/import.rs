@@ -6,7 +6,7 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use caveclod_bake::import::{import, import_with_report, ImportError, ImportOptions};
+use caveclod_bake::import::{import, import_bytes, import_with_report, ImportError, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
@@ -112,6 +112,40 @@ fn obj_with_seam_and_two_materials() {
     assert_eq!(uvs_at(2), HashSet::from([2, 4]));
     assert_eq!(uvs_at(3), HashSet::from([3, 5]));
     assert!(mesh.triangles.iter().all(|t| t.normal == [0, 0, 0]));
+}
+
+/// `import_bytes` reads what `import` reads, asking its loader for the files the input names
+/// (here an MTL library and a glTF buffer), and picks the importer by the name's extension.
+#[test]
+fn import_bytes_reads_as_import_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtl = b"newmtl red\nKd 1 0 0\nd 0.5\n";
+    write(dir.path(), "m.mtl", mtl);
+    let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+    let path = write(dir.path(), "m.obj", obj);
+    let mut asked = Vec::new();
+    let mut load = |name: &str| {
+        asked.push(name.to_owned());
+        std::fs::read(dir.path().join(name))
+    };
+    let (from_bytes, _) = import_bytes("m.obj", obj, &mut load, &no_options()).unwrap();
+    assert_eq!(asked, ["m.mtl"]);
+    assert_eq!(from_bytes, import(&path, &no_options()).unwrap());
+    assert_eq!(from_bytes.surfaces[0].base_color, [1.0, 0.0, 0.0, 0.5]);
+
+    let gltf = gltf_files(dir.path(), 3);
+    let json = std::fs::read(&gltf).unwrap();
+    let mut load = |name: &str| std::fs::read(dir.path().join(name));
+    let (from_bytes, _) = import_bytes("scene.gltf", &json, &mut load, &no_options()).unwrap();
+    assert_eq!(from_bytes, import(&gltf, &no_options()).unwrap());
+
+    // Without the files it names, the import says which one it could not read.
+    let mut missing = |_: &str| Err(std::io::Error::from(std::io::ErrorKind::NotFound));
+    let err = import_bytes("scene.gltf", &json, &mut missing, &no_options()).unwrap_err();
+    assert!(matches!(err, ImportError::Io { .. }), "{err}");
+    assert_eq!(err.file(), "scene.gltf");
+    let err = import_bytes("x.stl", obj, &mut missing, &no_options()).unwrap_err();
+    assert!(matches!(err, ImportError::UnknownFormat { .. }), "{err}");
 }
 
 #[test]

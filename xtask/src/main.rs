@@ -5,9 +5,10 @@
 //!   `spirv-val`, and for the viewer's window Xvfb, xauth and the X client libraries), adds the `thumbv7em-none-eabihf` target, and with `--with-miri` installs
 //!   the pinned nightly with miri.
 //! - `test`: setup, then the shader check, formatting, clippy, the workspace tests (the
-//!   runtime's 5,000-frame soak among them: `tests/tests/soak.rs`), the
-//!   no_std build for a microcontroller target, the interactive viewer under Xvfb (a resize
-//!   storm, its screenshot's coverage and no validation message), clippy on the core crate without its
+//!   runtime's 5,000-frame soak among them: `tests/tests/soak.rs`), the reader sweep
+//!   (truncations and byte flips of the shared real inputs through the in-memory bake, in
+//!   release), the no_std build for a microcontroller target, the interactive viewer under
+//!   Xvfb (a resize storm, its screenshot's coverage and no validation message), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
 //!   the C interface (`capi`): the C examples and the C++ test built with the system's
 //!   compilers, run, and compared with the Rust API's numbers.
@@ -64,8 +65,8 @@ commands:
   setup [--with-miri]   check/install lavapipe, the Vulkan loader, validation layers,
                         spirv-val, Xvfb and the thumbv7em-none-eabihf target; --with-miri also
                         installs the pinned nightly with miri
-  test                  setup, then shader check, fmt, clippy, tests, the C interface
-                        (C examples, C++ test), no_std build,
+  test                  setup, then shader check, fmt, clippy, tests, the reader sweep
+                        (release), the C interface (C examples, C++ test), no_std build,
                         the viewer under Xvfb, clippy without prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   capi-header           write capi/include/caveclod.h from the caveclod-capi sources
@@ -419,6 +420,19 @@ fn test_steps() -> Vec<(String, Step)> {
         step(
             "cargo test --workspace",
             &["test", "--workspace", "--no-fail-fast"],
+        ),
+        // Thousands of imports of megabyte inputs need an optimised build (the sweep is
+        // ignored in debug builds).
+        step(
+            "reader sweep: truncations and byte flips of ../shared/data through the in-memory bake (release)",
+            &[
+                "test",
+                "--release",
+                "-p",
+                "caveclod-bake",
+                "--test",
+                "reader_sweep",
+            ],
         ),
         (
             "C interface: refine.c and arena.c (C99), the C++17 test (sanitizers), against the Rust API"

@@ -21,10 +21,8 @@
 //! feet are converted; arc-seconds and radians need [`ImportOptions::spacing`], which, when
 //! given, also overrides the spacing of metre and foot grids.
 
-use std::path::Path;
-
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{read_file, ImportError, ImportOptions, ImportReport, Source};
+use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
 use crate::mesh::Mesh;
 
 const BLOCK: usize = 1024;
@@ -34,12 +32,12 @@ const VOID: i64 = -32767;
 
 pub(crate) fn import_dem(
     source: &Source,
-    path: &Path,
+    bytes: &[u8],
+    _load: &mut Loader<'_>,
     options: &ImportOptions,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
-    let bytes = read_file(source, path)?;
-    let dem = parse_dem(source, &bytes)?;
+    let dem = parse_dem(source, bytes)?;
     let grid = dem.to_grid(source, options.spacing)?;
     if dem.voids > 0 {
         report.notes.push(format!(

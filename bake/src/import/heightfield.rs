@@ -41,12 +41,14 @@ impl Heightfield {
             && self.height(col + 1, row + 1).is_some()
     }
 
-    /// Slope `dh/dx` (or `dh/dz` with `along_z`) at a post, from the neighbours that exist.
-    fn slope(&self, col: usize, row: usize, along_z: bool) -> f32 {
+    /// Slope `dh/dx` (or `dh/dz` with `along_z`) at a post, from the neighbours that exist;
+    /// in `f64`, where any two finite `f32` heights and spacing give a finite slope whose
+    /// square is finite too (in `f32` the difference of heights near `f32::MAX` overflows).
+    fn slope(&self, col: usize, row: usize, along_z: bool) -> f64 {
         let (len, i, step) = if along_z {
-            (self.depth, row, self.spacing[1])
+            (self.depth, row, f64::from(self.spacing[1]))
         } else {
-            (self.width, col, self.spacing[0])
+            (self.width, col, f64::from(self.spacing[0]))
         };
         let at = |j: usize| {
             if along_z {
@@ -54,6 +56,7 @@ impl Heightfield {
             } else {
                 self.height(j, row)
             }
+            .map(f64::from)
         };
         let here = at(i);
         let before = if i > 0 { at(i - 1) } else { None };
@@ -99,8 +102,25 @@ pub(crate) fn heightfield_to_mesh(
 }
 
 /// The post count, which must match the heights; no height infinite (NaN marks a missing
-/// post).
+/// post); a spacing that is a positive `f32` over a grid whose extent is one too (a header's
+/// resolution can be anything an `f64` holds).
 fn check_grid(source: &Source, grid: &Heightfield) -> Result<usize, ImportError> {
+    let [sx, sz] = grid.spacing;
+    let extent = [
+        grid.width.saturating_sub(1) as f32 * sx,
+        grid.depth.saturating_sub(1) as f32 * sz,
+    ];
+    let positive = |v: f32| v.is_finite() && v > 0.0;
+    if !(positive(sx) && positive(sz) && extent.iter().all(|e| e.is_finite())) {
+        return Err(source.unsupported(
+            "grid",
+            format!(
+                "a spacing of {sx} x {sz} m over {} x {} posts is outside the range of 32-bit \
+                 coordinates",
+                grid.width, grid.depth
+            ),
+        ));
+    }
     let posts = grid
         .width
         .checked_mul(grid.depth)
@@ -194,7 +214,7 @@ fn push_posts(
                 -grid.slope(col, row, true),
             ];
             let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            mesh.normals.push([n[0] / len, n[1] / len, n[2] / len]);
+            mesh.normals.push(n.map(|c| (c / len) as f32));
             mesh.uvs.push([col as f32 * u_scale, row as f32 * v_scale]);
         }
     }
@@ -293,6 +313,48 @@ mod tests {
         assert_eq!(mesh.triangles.len(), 6);
         assert_eq!(mesh.positions.len(), 8);
         mesh.validate().unwrap();
+    }
+
+    /// Neighbouring heights near `f32::MAX` of opposite signs: their difference overflows
+    /// `f32`, and the normals must still be finite unit vectors (found by the `npy` fuzz
+    /// target, whose mesh had a NaN normal).
+    #[test]
+    fn extreme_heights_give_finite_normals() {
+        let (max, min) = (f32::MAX, f32::MIN);
+        let g = grid(3, 3, vec![max, min, max, min, max, min, max, min, max]);
+        let mut report = ImportReport::default();
+        let mesh = heightfield_to_mesh(&source(), &g, "t", &mut report).unwrap();
+        mesh.validate().unwrap();
+        assert_eq!(mesh.triangles.len(), 8);
+        for n in &mesh.normals {
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            assert!((len - 1.0).abs() < 1e-5, "{n:?}");
+        }
+        // At the middle of the west edge the height rises from MIN to MAX going east: the
+        // normal leans west, almost level.
+        let n = mesh.normals[3];
+        assert!(n[0] < -0.999 && n[1] > 0.0, "{n:?}");
+    }
+
+    /// A DEM header's resolution can round to 0 or infinity in `f32`, or give an extent
+    /// past `f32::MAX`: typed errors, not NaN or infinite positions.
+    #[test]
+    fn spacing_outside_f32_is_an_error() {
+        for spacing in [
+            [0.0, 3.0],
+            [f32::INFINITY, 3.0],
+            [2.0, f32::NAN],
+            [2e38, 2e38],
+        ] {
+            let g = Heightfield {
+                spacing,
+                ..grid(3, 2, vec![0.0; 6])
+            };
+            let err =
+                heightfield_to_mesh(&source(), &g, "t", &mut ImportReport::default()).unwrap_err();
+            assert!(matches!(err, ImportError::Unsupported { .. }), "{err}");
+            assert!(err.to_string().contains("3 x 2 posts"), "{err}");
+        }
     }
 
     #[test]

@@ -1,6 +1,8 @@
-//! Importers: files on disk to a [`Mesh`].
+//! Importers: files on disk, or bytes in memory, to a [`Mesh`].
 //!
-//! [`import`] picks the importer from the file's extension (case-insensitive):
+//! [`import`] picks the importer from the file's extension (case-insensitive);
+//! [`import_bytes`] does the same for bytes held in memory under a file name, a [`Loader`] the
+//! caller passes serving the files they refer to (MTL libraries, glTF buffers):
 //!
 //! | extension | format | source file |
 //! |---|---|---|
@@ -88,14 +90,55 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Mesh, ImportError>
     import_with_report(path, options).map(|(mesh, _)| mesh)
 }
 
+/// Reads a file that an input refers to (an OBJ's `mtllib`, a glTF buffer's URI) by the name
+/// the input gives.
+pub type Loader<'a> = dyn FnMut(&str) -> std::io::Result<Vec<u8>> + 'a;
+
 /// Like [`import`], and also returns what was skipped and any notes.
 pub fn import_with_report(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<(Mesh, ImportReport), ImportError> {
     let source = Source::new(path);
-    type Importer =
-        fn(&Source, &Path, &ImportOptions, &mut ImportReport) -> Result<Mesh, ImportError>;
+    let importer = importer_for(&source, path, options)?;
+    let bytes = std::fs::read(path).map_err(|e| source.io("cannot read", e))?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut load = |name: &str| std::fs::read(dir.join(name));
+    run_importer(source, importer, &bytes, &mut load, options)
+}
+
+/// Reads a mesh from `bytes` in memory: `name` stands for the file in errors and its
+/// extension chooses the importer, as in [`import`]; `load` reads the files the input refers
+/// to (MTL libraries, glTF buffers), by the name the input gives them. The same checks hold:
+/// a typed error or a mesh for which [`Mesh::validate`] holds, never a panic.
+pub fn import_bytes(
+    name: &str,
+    bytes: &[u8],
+    load: &mut Loader<'_>,
+    options: &ImportOptions,
+) -> Result<(Mesh, ImportReport), ImportError> {
+    let path = Path::new(name);
+    let source = Source::new(path);
+    let importer = importer_for(&source, path, options)?;
+    run_importer(source, importer, bytes, load, options)
+}
+
+/// One importer: the input's bytes, a loader for the files it names, the options and the
+/// report to add to.
+type Importer = fn(
+    &Source,
+    &[u8],
+    &mut Loader<'_>,
+    &ImportOptions,
+    &mut ImportReport,
+) -> Result<Mesh, ImportError>;
+
+/// The importer for `path`'s extension, after checking the options.
+fn importer_for(
+    source: &Source,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<Importer, ImportError> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -140,12 +183,22 @@ pub fn import_with_report(
             });
         }
     }
+    Ok(importer)
+}
 
+/// Runs `importer`, turning a panic into [`ImportError::Internal`], and checks its mesh.
+fn run_importer(
+    source: Source,
+    importer: Importer,
+    bytes: &[u8],
+    load: &mut Loader<'_>,
+    options: &ImportOptions,
+) -> Result<(Mesh, ImportReport), ImportError> {
     let mut report = ImportReport::default();
     // Every importer validates its input and returns errors; this only turns a bug (ours or a
     // dependency's) into an error instead of taking the caller down.
     let result = panic::catch_unwind(AssertUnwindSafe(|| {
-        importer(&source, path, options, &mut report)
+        importer(&source, bytes, load, options, &mut report)
     }));
     let mesh = match result {
         Ok(result) => result?,
@@ -182,11 +235,6 @@ pub fn import_with_report(
         });
     }
     Ok((mesh, report))
-}
-
-/// Reads the whole file, naming it in the error.
-pub(crate) fn read_file(source: &Source, path: &Path) -> Result<Vec<u8>, ImportError> {
-    std::fs::read(path).map_err(|e| source.io("cannot read", e))
 }
 
 /// sRGB-encoded component in 0..=1 to linear.

@@ -10,15 +10,14 @@
 //! SRTM void), become holes. Rejected with an error: Fortran order, other ranks, structured
 //! or other dtypes, ±inf heights, a data section of the wrong length.
 
-use std::path::Path;
-
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{read_file, ImportError, ImportOptions, ImportReport, Source};
+use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
 use crate::mesh::Mesh;
 
 pub(crate) fn import_npy(
     source: &Source,
-    path: &Path,
+    bytes: &[u8],
+    _load: &mut Loader<'_>,
     options: &ImportOptions,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
@@ -28,8 +27,7 @@ pub(crate) fn import_npy(
                   `--spacing M`)"
             .to_owned(),
     })?;
-    let bytes = read_file(source, path)?;
-    let grid = parse_npy(source, &bytes, spacing)?;
+    let grid = parse_npy(source, bytes, spacing)?;
     heightfield_to_mesh(source, &grid, "terrain", report)
 }
 

@@ -36,30 +36,27 @@ mod scene;
 pub(crate) mod tests;
 
 use std::collections::HashMap;
-use std::path::Path;
 
 use ::gltf::json;
 use ::gltf::Semantic;
 
-use super::{read_file, ImportError};
+use super::{ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
 use crate::mesh::Mesh;
 use buffers::{load_buffers, split_glb};
 
 pub(crate) fn import_gltf(
     source: &Source,
-    path: &Path,
+    bytes: &[u8],
+    load: &mut Loader<'_>,
     _options: &ImportOptions,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
-    let bytes = read_file(source, path)?;
-    let glb = path
+    let glb = std::path::Path::new(&source.name)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    sniff(source, &bytes, glb)?;
-    let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    let mut load = |uri: &str| std::fs::read(base.join(uri));
-    import_bytes(source, &bytes, &mut load, report)
+    sniff(source, bytes, glb)?;
+    import_bytes(source, bytes, load, report)
 }
 
 /// The file's first bytes checked against its extension: a `.glb` starts with the magic
@@ -91,9 +88,6 @@ fn sniff(source: &Source, bytes: &[u8], glb: bool) -> Result<(), ImportError> {
         )),
     }
 }
-
-/// Loads a file a URI names, relative to the glTF file.
-type Loader<'a> = dyn FnMut(&str) -> std::io::Result<Vec<u8>> + 'a;
 
 /// The passes: the container, the validated document, the buffers, then every mesh of the
 /// scene's nodes, and the notes about what was dropped or ignored on the way.

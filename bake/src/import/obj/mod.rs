@@ -32,23 +32,20 @@ mod mtl;
 mod tests;
 
 use std::collections::HashMap;
-use std::path::Path;
 
-use super::{next_index, read_file, srgb_to_linear, ImportError};
+use super::{next_index, srgb_to_linear, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
 use crate::mesh::{Mesh, Triangle, NO_ATTRIBUTE};
 use mtl::{load_materials, push_surfaces, MaterialLibraries};
 
 pub(crate) fn import_obj(
     source: &Source,
-    path: &Path,
+    bytes: &[u8],
+    load: &mut Loader<'_>,
     _options: &ImportOptions,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
-    let bytes = read_file(source, path)?;
-    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    let mut load = |name: &str| -> std::io::Result<Vec<u8>> { std::fs::read(dir.join(name)) };
-    parse_obj(source, &bytes, &mut load, report)
+    parse_obj(source, bytes, load, report)
 }
 
 /// "This corner has no such attribute" in a parsed corner.
@@ -77,9 +74,6 @@ struct Face {
 struct NamedSurface {
     name: String,
 }
-
-/// Loads a file named by `mtllib`, relative to the OBJ.
-type Loader<'a> = dyn FnMut(&str) -> std::io::Result<Vec<u8>> + 'a;
 
 /// The passes: every statement read, every index checked once the whole file is read, the
 /// MTL libraries read, then the surfaces and the triangles appended, and notes on what was

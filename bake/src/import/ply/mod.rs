@@ -30,14 +30,13 @@ mod properties;
 mod tests;
 
 use std::io::{Cursor, ErrorKind};
-use std::path::Path;
 
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
 use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
 use properties::{A, NX, R, U, VERTEX_NAMES, X};
 
-use super::{next_index, push_surface, read_file, srgb_to_linear, ImportError};
+use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
 use crate::mesh::{Mesh, Surface, Texture, Triangle, NO_ATTRIBUTE};
 
@@ -46,12 +45,12 @@ type ByteReader<'a> = Reader<Cursor<&'a [u8]>>;
 
 pub(crate) fn import_ply(
     source: &Source,
-    path: &Path,
+    bytes: &[u8],
+    _load: &mut Loader<'_>,
     _options: &ImportOptions,
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
-    let bytes = read_file(source, path)?;
-    parse_ply(source, &bytes, report)
+    parse_ply(source, bytes, report)
 }
 
 fn scalar_size(t: &ScalarType) -> usize {

@@ -1,0 +1,13 @@
+//! The in-memory importer of numpy `.npy` heightfields, 1 m spacing on arbitrary bytes: a typed error or a mesh that
+//! validates, never a panic (the import's own panic guard does not hide one: the fuzzer's
+//! panic hook aborts first).
+#![no_main]
+
+mod readers;
+
+use caveclod_bake::import::ImportOptions;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = readers::import("fuzz.npy", data, &ImportOptions { spacing: Some(1.0) });
+});
