@@ -104,6 +104,35 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The largest magnitude of any coordinate, normal, texture coordinate or colour value:
+    /// the bake squares and sums them in single precision (bounding spheres, lengths,
+    /// interpolation), which must stay finite.
+    pub const MAX_MAGNITUDE: f32 = 1e18;
+
+    /// Checks what the bake needs beyond [`validate`](Self::validate): every value within
+    /// [`Mesh::MAX_MAGNITUDE`]. Returns a description of the first value beyond it.
+    pub fn check_magnitudes(&self) -> Result<(), String> {
+        /// Values the bake squares, sums and interpolates in single precision (bounding
+        /// spheres, lengths, quadrics) must stay far from `f32::MAX`.
+        fn within<const N: usize>(name: &str, values: &[[f32; N]]) -> Result<(), String> {
+            match values
+                .iter()
+                .position(|v| v.iter().any(|c| c.abs() > Mesh::MAX_MAGNITUDE))
+            {
+                None => Ok(()),
+                Some(i) => Err(format!(
+                    "{name}[{i}] is beyond ±{:e}: {:?}",
+                    Mesh::MAX_MAGNITUDE,
+                    values[i]
+                )),
+            }
+        }
+        within("positions", &self.positions)?;
+        within("normals", &self.normals)?;
+        within("uvs", &self.uvs)?;
+        within("colors", &self.colors)
+    }
+
     /// Checks the invariants every importer guarantees: every index in range (or
     /// [`NO_ATTRIBUTE`] where allowed), every surface id below `surfaces.len()`, every number
     /// finite. Returns a description of the first violation.

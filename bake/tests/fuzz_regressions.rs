@@ -53,3 +53,50 @@ fn dem_spacing_outside_f32_is_a_typed_error() {
         );
     }
 }
+
+/// The `bake_mesh` fuzzer's findings: coordinates near `f32::MAX` made the bake's own output
+/// fail validation (an infinite bounding radius, non-finite attributes). Values beyond
+/// `Mesh::MAX_MAGNITUDE` are refused up front, naming the element; large values within it
+/// bake into a hierarchy that loads.
+#[test]
+fn coordinates_near_f32_max_are_refused_and_large_ones_bake() {
+    use caveclod_bake::mesh::{Surface, Triangle, NO_ATTRIBUTE};
+    use caveclod_bake::pipeline::{bake_mesh, BakeError};
+    let mesh = |far: f32| Mesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [far, 0.0, 0.0],
+            [0.0, far, 0.0],
+            [far, far, 1.0],
+        ],
+        triangles: vec![
+            Triangle {
+                position: [0, 1, 2],
+                normal: [NO_ATTRIBUTE; 3],
+                uv: [NO_ATTRIBUTE; 3],
+                color: [NO_ATTRIBUTE; 3],
+                surface: 0,
+            },
+            Triangle {
+                position: [1, 3, 2],
+                normal: [NO_ATTRIBUTE; 3],
+                uv: [NO_ATTRIBUTE; 3],
+                color: [NO_ATTRIBUTE; 3],
+                surface: 0,
+            },
+        ],
+        surfaces: vec![Surface::plain("s".to_string())],
+        ..Mesh::default()
+    };
+    match bake_mesh(&mesh(3.0e38), "huge", &mut |_| {}) {
+        Err(BakeError::Weld { path, source }) => {
+            let message = source.to_string();
+            assert_eq!(path, "huge");
+            assert!(message.contains("positions[1]"), "{message}");
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    let (baked, _) = bake_mesh(&mesh(1.0e17), "large", &mut |_| {}).expect("bakes");
+    let bytes = baked.to_bytes(&[]).expect("writes");
+    caveclod_core::Hierarchy::from_bytes(&bytes).expect("loads");
+}

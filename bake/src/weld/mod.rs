@@ -169,10 +169,17 @@ pub enum WeldError {
     /// More surfaces than the format's 16 bits.
     #[error("{0} surfaces, at most 65535 supported")]
     TooManySurfaces(usize),
+    /// The mesh itself is not valid ([`Mesh::validate`]): an index out of range, a value not
+    /// finite or beyond what single-precision bounds hold.
+    #[error("{0}")]
+    Invalid(String),
 }
 
 /// Welds, repairs and groups `mesh`.
 pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
+    mesh.validate()
+        .and_then(|()| mesh.check_magnitudes())
+        .map_err(WeldError::Invalid)?;
     if mesh.surfaces.len() > u16::MAX as usize {
         return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
     }
