@@ -58,6 +58,7 @@ impl Flyover {
                     "first_frame_ops": r.ops.first().copied().unwrap_or(0),
                     "refine_ms_mean": r.refine_ms_mean(),
                     "refine_ms_p99": r.refine_ms_p99(),
+                    "refine_cpu_ms_p99": r.refine_cpu_ms_p99(),
                     "emit_ms_mean": r.emit_ms_mean(),
                     "active_polygons_mean": r.active_mean(),
                     "active_polygons_max": r.active_max(),
