@@ -4,6 +4,7 @@
 use super::geometry::next;
 use super::work::Work;
 use super::{NONE, PARALLEL_MIN};
+use rayon::prelude::*;
 
 /// A collapse as a pass ranks it: `(cost, t, u)`.
 pub(super) type Candidate = (f64, u32, u32);
@@ -197,7 +198,7 @@ impl Work<'_> {
     }
 }
 
-/// Ranks every slot of the live triangles, split over the threads by ranges of triangles
+/// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
 /// (each slot's ranking depends on the mesh alone, so the split does not change it), and
 /// lists each edge's cheaper allowed direction in `cands`, in slot order.
 pub(super) fn rank_all(
@@ -226,32 +227,27 @@ pub(super) fn rank_all(
         run(live, 0, slots, cands);
         return;
     }
+    // Each part's triangles and their slots, up to the next part's first triangle.
     let per = live.len().div_ceil(threads);
-    let parts: Vec<Vec<Candidate>> = std::thread::scope(|scope| {
-        let mut rest = slots;
-        let mut first = 0;
-        let mut handles = Vec::new();
-        for (i, part) in live.chunks(per).enumerate() {
-            // This thread's triangles run up to the next part's first.
-            let end = live
-                .get((i + 1) * per)
-                .map_or(first + rest.len(), |&f| f as usize);
-            let (mine, others) = rest.split_at_mut(end - first);
-            rest = others;
-            let run = &run;
-            let start = first;
-            handles.push(scope.spawn(move || {
-                let mut found = Vec::with_capacity(part.len() * 3 / 2);
-                run(part, start, mine, &mut found);
-                found
-            }));
-            first = end;
-        }
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    });
+    let mut jobs = Vec::with_capacity(threads);
+    let (mut rest, mut first) = (slots, 0);
+    for (i, part) in live.chunks(per).enumerate() {
+        let end = live
+            .get((i + 1) * per)
+            .map_or(first + rest.len(), |&f| f as usize);
+        let (mine, others) = rest.split_at_mut(end - first);
+        rest = others;
+        jobs.push((part, first, mine));
+        first = end;
+    }
+    let parts: Vec<Vec<Candidate>> = jobs
+        .into_par_iter()
+        .map(|(part, start, mine)| {
+            let mut found = Vec::with_capacity(part.len() * 3 / 2);
+            run(part, start, mine, &mut found);
+            found
+        })
+        .collect();
     for part in parts {
         cands.extend_from_slice(&part);
     }

@@ -6,6 +6,7 @@ use super::work::{NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
+use rayon::prelude::*;
 
 /// Weight of a boundary plane per squared length of its edge. Heavier than a triangle's
 /// plane (weighted by its area) so that borders slide little: on a terrain tile the border
@@ -330,29 +331,21 @@ fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f
     ]
 }
 
-/// `f(i)` for `i` in `0..n`, in order, computed on up to `threads` threads.
+/// `f(i)` for `i` in `0..n`, in order, computed on the rayon pool (on one thread below
+/// [`PARALLEL_MIN`] items or with `threads` at most 1).
 pub(super) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     if threads <= 1 || n < PARALLEL_MIN {
         return (0..n).map(f).collect();
     }
-    let per = n.div_ceil(threads);
-    std::thread::scope(|scope| {
-        let parts: Vec<_> = (0..n)
-            .step_by(per)
-            .map(|lo| {
-                let f = &f;
-                scope.spawn(move || (lo..(lo + per).min(n)).map(f).collect::<Vec<T>>())
-            })
-            .collect();
-        parts
-            .into_iter()
-            .flat_map(|part| part.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    })
+    (0..n)
+        .into_par_iter()
+        .with_min_len(PARALLEL_MIN)
+        .map(&f)
+        .collect()
 }
 
-/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, on a thread
-/// each, with the triangle lists and the wedges of those positions.
+/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, as a rayon
+/// task each, with the triangle lists and the wedges of those positions.
 pub(super) fn by_positions(
     ranges: &[(usize, usize)],
     faces_of: &mut [Vec<u32>],
@@ -364,17 +357,18 @@ pub(super) fn by_positions(
         f(0, faces_of.len(), faces_of, wedges);
         return;
     }
-    std::thread::scope(|scope| {
-        let (mut faces_of, mut wedges) = (faces_of, wedges);
-        for &(lo, hi) in ranges {
-            let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
-            let count = (wedge_start[hi] - wedge_start[lo]) as usize;
-            let (these_wedges, other_wedges) = wedges.split_at_mut(count);
-            (faces_of, wedges) = (other_faces, other_wedges);
-            let f = &f;
-            scope.spawn(move || f(lo, hi, these_faces, these_wedges));
-        }
-    });
+    let mut parts = Vec::with_capacity(ranges.len());
+    let (mut faces_of, mut wedges) = (faces_of, wedges);
+    for &(lo, hi) in ranges {
+        let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
+        let count = (wedge_start[hi] - wedge_start[lo]) as usize;
+        let (these_wedges, other_wedges) = wedges.split_at_mut(count);
+        (faces_of, wedges) = (other_faces, other_wedges);
+        parts.push((lo, hi, these_faces, these_wedges));
+    }
+    parts
+        .into_par_iter()
+        .for_each(|(lo, hi, faces, wedges)| f(lo, hi, faces, wedges));
 }
 
 /// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from
