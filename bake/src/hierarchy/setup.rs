@@ -41,10 +41,13 @@ pub(super) fn work<'w>(w: &'w Welded, weights: &AttributeWeights, threads: usize
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
     let info = position_info(w);
+    let diagonal = s.diagonal;
     let p = s.p;
     let pos = p.clone();
     let mut work = Work {
         w,
+        weights: *weights,
+        diagonal,
         p,
         info,
         tris,
@@ -110,7 +113,7 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// One wedge per surface group at each position, with its scaled attributes and an
+    /// One wedge per surface group at each position, with its attributes and an
     /// empty quadric; and where each position's wedges start.
     fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
         let np = self.w.positions.len();
@@ -120,7 +123,7 @@ impl<'a> Setup<'a> {
         for vs in &self.w.vertices {
             wedges.extend(vs.iter().map(|&(group, a)| Wedge {
                 group,
-                attrs: scaled_attributes(self.w, a, self.weights, self.diagonal),
+                attr: a,
                 q: Quadric::default(),
             }));
             wedge_start.push(wedges.len() as u32);
@@ -311,7 +314,13 @@ impl Work<'_> {
     }
 }
 
-fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f64) -> [f64; M] {
+/// The attributes `attr` of `w`, each kind scaled by its weight times `scale`.
+pub(super) fn scaled_attributes(
+    w: &Welded,
+    attr: u32,
+    weights: &AttributeWeights,
+    scale: f64,
+) -> [f64; M] {
     let a = &w.attributes[attr as usize];
     let normal = if a.normal_from_geometry {
         0.0
