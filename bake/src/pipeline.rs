@@ -68,35 +68,22 @@ pub fn bake_mesh(
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(Baked, BakeInfo), BakeError> {
     let start = Instant::now();
-    progress(Stage::Weld);
-    let w = weld::weld(mesh).map_err(|source| BakeError::Weld {
-        path: name.to_string(),
-        source,
-    })?;
-    let h = hierarchy::build(&w, &AttributeWeights::default(), &mut |done, most| {
-        progress(Stage::Collapse(done, most))
-    })
-    .map_err(|source| BakeError::Hierarchy {
-        path: name.to_string(),
-        source,
-    })?;
-    progress(Stage::Assemble);
-    let baked = Baked::new(&w, &h).with_materials(&mesh.surfaces, Path::new(""));
-    baked.hierarchy().map_err(BakeError::Invalid)?;
-    let info = BakeInfo {
-        input_triangles: mesh.triangles.len() as u64,
-        surface_groups: w.group_count as u64,
-        repairs: w.repairs,
-        bake_seconds: start.elapsed().as_secs_f64(),
-        passes: h.passes,
-        notes: Vec::new(),
-    };
-    Ok((baked, info))
+    let w = weld_mesh(mesh, name, progress)?;
+    build_welded(
+        &w,
+        &mesh.surfaces,
+        mesh.triangles.len(),
+        name,
+        start,
+        progress,
+    )
 }
 
 /// Imports and bakes a file; `bake_seconds` includes the import. Texture files are relative
 /// to the file's directory. The primitives the import skipped are counted in the repairs
-/// (`skipped_primitives`), its notes kept in [`BakeInfo::notes`].
+/// (`skipped_primitives`), its notes kept in [`BakeInfo::notes`]. The imported mesh is
+/// dropped once welded, before the hierarchy is built (of it only the surfaces are kept),
+/// so that the two never take memory at once.
 pub fn bake_file(
     path: &Path,
     options: &ImportOptions,
@@ -104,8 +91,12 @@ pub fn bake_file(
 ) -> Result<(Baked, BakeInfo), BakeError> {
     let start = Instant::now();
     progress(Stage::Import);
-    let (mesh, report) = import::import_with_report(path, options)?;
-    let (mut baked, mut info) = bake_mesh(&mesh, &path.display().to_string(), progress)?;
+    let (mut mesh, report) = import::import_with_report(path, options)?;
+    let name = path.display().to_string();
+    let w = weld_mesh(&mesh, &name, progress)?;
+    let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
+    drop(mesh);
+    let (mut baked, mut info) = build_welded(&w, &surfaces, triangles, &name, start, progress)?;
     baked.texture_dir = source_dir(path);
     info.repairs.skipped_primitives = report.skipped_primitives as u64;
     info.notes = report.notes;
@@ -128,6 +119,53 @@ pub fn bake_bytes(
     let (mesh, _) = import::import_bytes(name, bytes, load, options)?;
     let (baked, mut info) = bake_mesh(&mesh, name, progress)?;
     info.bake_seconds = start.elapsed().as_secs_f64();
+    Ok((baked, info))
+}
+
+/// The welding step of a bake.
+fn weld_mesh(
+    mesh: &Mesh,
+    name: &str,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<weld::Welded, BakeError> {
+    progress(Stage::Weld);
+    weld::weld(mesh).map_err(|source| BakeError::Weld {
+        path: name.to_string(),
+        source,
+    })
+}
+
+/// The steps of a bake after welding: the hierarchy, the arrays with the surfaces'
+/// materials, and their validation.
+fn build_welded(
+    w: &weld::Welded,
+    surfaces: &[crate::mesh::Surface],
+    input_triangles: usize,
+    name: &str,
+    start: Instant,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo), BakeError> {
+    let h = hierarchy::build(w, &AttributeWeights::default(), &mut |done, most| {
+        progress(Stage::Collapse(done, most))
+    })
+    .map_err(|source| BakeError::Hierarchy {
+        path: name.to_string(),
+        source,
+    })?;
+    progress(Stage::Assemble);
+    let baked = Baked::new(w, &h).with_materials(surfaces, Path::new(""));
+    // The hierarchy is in the arrays now; validating them does not need it.
+    let passes = h.passes;
+    drop(h);
+    baked.hierarchy().map_err(BakeError::Invalid)?;
+    let info = BakeInfo {
+        input_triangles: input_triangles as u64,
+        surface_groups: w.group_count as u64,
+        repairs: w.repairs,
+        bake_seconds: start.elapsed().as_secs_f64(),
+        passes,
+        notes: Vec::new(),
+    };
     Ok((baked, info))
 }
 

@@ -5,6 +5,7 @@
 use super::geometry::{dot, point_triangle_d2, sub, P3, V3};
 use super::work::Work;
 use super::{NONE, PARALLEL_MIN};
+use rayon::prelude::*;
 
 impl Work<'_> {
     /// The points of the error bounds, the input's positions, each given to a triangle it
@@ -96,19 +97,7 @@ impl Work<'_> {
         let found: Vec<Vec<(f64, u32)>> = if parts.len() <= 1 {
             parts.iter().map(|part| run(part)).collect()
         } else {
-            std::thread::scope(|scope| {
-                let handles: Vec<_> = parts
-                    .iter()
-                    .map(|part| {
-                        let run = &run;
-                        scope.spawn(move || run(part))
-                    })
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect()
-            })
+            parts.par_iter().map(|part| run(part)).collect()
         };
         for (&(x, s), &(d, f)) in moved.iter().zip(found.iter().flatten()) {
             if f != NONE {

@@ -148,7 +148,7 @@ pub type Progress<'a> = &'a mut dyn FnMut(u64, u64);
 /// the next pass would have used; the cut costs passes, not depth to speak of.
 const PASS_SHARE: f64 = 0.5;
 
-/// Threads evaluating edges.
+/// Parts the parallel steps split their work into at most (rayon tasks).
 const MAX_THREADS: usize = 8;
 
 /// Triangles below which work stays on one thread.
@@ -202,9 +202,7 @@ pub fn build(
     weights: &AttributeWeights,
     progress: Progress<'_>,
 ) -> Result<Hierarchy, BuildError> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(MAX_THREADS);
+    let threads = rayon::current_num_threads().min(MAX_THREADS);
     let mut work = setup::work(w, weights, threads);
     pass::collapse_all(&mut work, threads, progress)?;
     Ok(work.into_hierarchy())

@@ -4,6 +4,7 @@
 use super::geometry::next;
 use super::work::Work;
 use super::{NONE, PARALLEL_MIN};
+use rayon::prelude::*;
 
 /// A collapse as a pass ranks it: `(cost, t, u)`.
 pub(super) type Candidate = (f64, u32, u32);
@@ -197,9 +198,12 @@ impl Work<'_> {
     }
 }
 
-/// Ranks every slot of the live triangles, split over the threads by ranges of triangles
+/// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
 /// (each slot's ranking depends on the mesh alone, so the split does not change it), and
 /// lists each edge's cheaper allowed direction in `cands`, in slot order.
+///
+/// The parts count their candidates while ranking, then write them straight into their
+/// stretch of `cands`: the list is never held twice.
 pub(super) fn rank_all(
     work: &Work<'_>,
     live: &[u32],
@@ -207,52 +211,70 @@ pub(super) fn rank_all(
     cands: &mut Vec<Candidate>,
     threads: usize,
 ) {
-    // `slots` from triangle `first` on.
-    let run = |live: &[u32], first: usize, slots: &mut [[Slot; 3]], cands: &mut Vec<Candidate>| {
-        for &f in live {
-            for (k, slot) in slots[f as usize - first].iter_mut().enumerate() {
-                work.rank(f, k, slot);
-                let [a, b] = slot.ends;
-                match slot.dir {
-                    1 => cands.push((slot.cost(), b, a)),
-                    2 => cands.push((slot.cost(), a, b)),
-                    _ => {}
-                }
-            }
-        }
-    };
     cands.clear();
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        run(live, 0, slots, cands);
+        for &f in live {
+            for (k, slot) in slots[f as usize].iter_mut().enumerate() {
+                work.rank(f, k, slot);
+                cands.extend(candidate(slot));
+            }
+        }
         return;
     }
+    // Each part's triangles and their slots (`slots` from triangle `first` on), up to the
+    // next part's first triangle.
     let per = live.len().div_ceil(threads);
-    let parts: Vec<Vec<Candidate>> = std::thread::scope(|scope| {
-        let mut rest = slots;
-        let mut first = 0;
-        let mut handles = Vec::new();
-        for (i, part) in live.chunks(per).enumerate() {
-            // This thread's triangles run up to the next part's first.
-            let end = live
-                .get((i + 1) * per)
-                .map_or(first + rest.len(), |&f| f as usize);
-            let (mine, others) = rest.split_at_mut(end - first);
-            rest = others;
-            let run = &run;
-            let start = first;
-            handles.push(scope.spawn(move || {
-                let mut found = Vec::with_capacity(part.len() * 3 / 2);
-                run(part, start, mine, &mut found);
-                found
-            }));
-            first = end;
-        }
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    });
-    for part in parts {
-        cands.extend_from_slice(&part);
+    let mut jobs = Vec::with_capacity(threads);
+    let (mut rest, mut first) = (slots, 0);
+    for (i, part) in live.chunks(per).enumerate() {
+        let end = live
+            .get((i + 1) * per)
+            .map_or(first + rest.len(), |&f| f as usize);
+        let (mine, others) = rest.split_at_mut(end - first);
+        rest = others;
+        jobs.push((part, first, mine));
+        first = end;
+    }
+    let counts: Vec<usize> = jobs
+        .par_iter_mut()
+        .map(|(part, first, mine)| {
+            let mut count = 0;
+            for &f in part.iter() {
+                for (k, slot) in mine[f as usize - *first].iter_mut().enumerate() {
+                    work.rank(f, k, slot);
+                    count += usize::from(slot.dir != 0);
+                }
+            }
+            count
+        })
+        .collect();
+    cands.resize(counts.iter().sum(), (0.0, 0, 0));
+    let mut outs = Vec::with_capacity(jobs.len());
+    let mut free = &mut cands[..];
+    for &n in &counts {
+        let (out, others) = free.split_at_mut(n);
+        outs.push(out);
+        free = others;
+    }
+    jobs.into_par_iter()
+        .zip(outs)
+        .for_each(|((part, first, mine), out)| {
+            let found = part
+                .iter()
+                .flat_map(|&f| &mine[f as usize - first])
+                .filter_map(candidate);
+            for (o, c) in out.iter_mut().zip(found) {
+                *o = c;
+            }
+        });
+}
+
+/// The collapse a ranked slot lists: its cheaper allowed direction, if any.
+fn candidate(slot: &Slot) -> Option<Candidate> {
+    let [a, b] = slot.ends;
+    match slot.dir {
+        1 => Some((slot.cost(), b, a)),
+        2 => Some((slot.cost(), a, b)),
+        _ => None,
     }
 }

@@ -6,6 +6,7 @@ use super::work::{NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
+use rayon::prelude::*;
 
 /// Weight of a boundary plane per squared length of its edge. Heavier than a triangle's
 /// plane (weighted by its area) so that borders slide little: on a terrain tile the border
@@ -40,10 +41,13 @@ pub(super) fn work<'w>(w: &'w Welded, weights: &AttributeWeights, threads: usize
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
     let info = position_info(w);
+    let diagonal = s.diagonal;
     let p = s.p;
     let pos = p.clone();
     let mut work = Work {
         w,
+        weights: *weights,
+        diagonal,
         p,
         info,
         tris,
@@ -109,7 +113,7 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// One wedge per surface group at each position, with its scaled attributes and an
+    /// One wedge per surface group at each position, with its attributes and an
     /// empty quadric; and where each position's wedges start.
     fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
         let np = self.w.positions.len();
@@ -119,7 +123,7 @@ impl<'a> Setup<'a> {
         for vs in &self.w.vertices {
             wedges.extend(vs.iter().map(|&(group, a)| Wedge {
                 group,
-                attrs: scaled_attributes(self.w, a, self.weights, self.diagonal),
+                attr: a,
                 q: Quadric::default(),
             }));
             wedge_start.push(wedges.len() as u32);
@@ -310,7 +314,13 @@ impl Work<'_> {
     }
 }
 
-fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f64) -> [f64; M] {
+/// The attributes `attr` of `w`, each kind scaled by its weight times `scale`.
+pub(super) fn scaled_attributes(
+    w: &Welded,
+    attr: u32,
+    weights: &AttributeWeights,
+    scale: f64,
+) -> [f64; M] {
     let a = &w.attributes[attr as usize];
     let normal = if a.normal_from_geometry {
         0.0
@@ -330,29 +340,21 @@ fn scaled_attributes(w: &Welded, attr: u32, weights: &AttributeWeights, scale: f
     ]
 }
 
-/// `f(i)` for `i` in `0..n`, in order, computed on up to `threads` threads.
+/// `f(i)` for `i` in `0..n`, in order, computed on the rayon pool (on one thread below
+/// [`PARALLEL_MIN`] items or with `threads` at most 1).
 pub(super) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     if threads <= 1 || n < PARALLEL_MIN {
         return (0..n).map(f).collect();
     }
-    let per = n.div_ceil(threads);
-    std::thread::scope(|scope| {
-        let parts: Vec<_> = (0..n)
-            .step_by(per)
-            .map(|lo| {
-                let f = &f;
-                scope.spawn(move || (lo..(lo + per).min(n)).map(f).collect::<Vec<T>>())
-            })
-            .collect();
-        parts
-            .into_iter()
-            .flat_map(|part| part.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
-    })
+    (0..n)
+        .into_par_iter()
+        .with_min_len(PARALLEL_MIN)
+        .map(&f)
+        .collect()
 }
 
-/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, on a thread
-/// each, with the triangle lists and the wedges of those positions.
+/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, as a rayon
+/// task each, with the triangle lists and the wedges of those positions.
 pub(super) fn by_positions(
     ranges: &[(usize, usize)],
     faces_of: &mut [Vec<u32>],
@@ -364,17 +366,18 @@ pub(super) fn by_positions(
         f(0, faces_of.len(), faces_of, wedges);
         return;
     }
-    std::thread::scope(|scope| {
-        let (mut faces_of, mut wedges) = (faces_of, wedges);
-        for &(lo, hi) in ranges {
-            let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
-            let count = (wedge_start[hi] - wedge_start[lo]) as usize;
-            let (these_wedges, other_wedges) = wedges.split_at_mut(count);
-            (faces_of, wedges) = (other_faces, other_wedges);
-            let f = &f;
-            scope.spawn(move || f(lo, hi, these_faces, these_wedges));
-        }
-    });
+    let mut parts = Vec::with_capacity(ranges.len());
+    let (mut faces_of, mut wedges) = (faces_of, wedges);
+    for &(lo, hi) in ranges {
+        let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
+        let count = (wedge_start[hi] - wedge_start[lo]) as usize;
+        let (these_wedges, other_wedges) = wedges.split_at_mut(count);
+        (faces_of, wedges) = (other_faces, other_wedges);
+        parts.push((lo, hi, these_faces, these_wedges));
+    }
+    parts
+        .into_par_iter()
+        .for_each(|(lo, hi, faces, wedges)| f(lo, hi, faces, wedges));
 }
 
 /// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from

@@ -110,3 +110,40 @@ fn a_full_share_cuts_nothing() {
         assert!(half < order_key(n as f64), "{n} candidates");
     }
 }
+
+/// The hierarchy of a mesh large enough to be split into parallel parts, built in a rayon
+/// pool of `threads` threads.
+fn build_on(threads: usize, w: &crate::weld::Welded) -> Hierarchy {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool")
+        .install(|| build(w, &AttributeWeights::default(), &mut |_, _| {}).expect("build"))
+}
+
+#[test]
+fn the_hierarchy_is_the_same_on_one_thread_and_on_several() {
+    // 2 × 79² triangles: above PARALLEL_MIN, so the parallel steps split their work.
+    let w = crate::weld::weld(&terrain(80)).expect("weld");
+    assert!(w.triangles.len() > 2 * PARALLEL_MIN);
+    let (one, three) = (build_on(1, &w), build_on(3, &w));
+    let key = |h: &Hierarchy| {
+        (
+            h.collapses
+                .iter()
+                .map(|c| (c.t, c.u, c.fl, c.fr, c.neighbours))
+                .collect::<Vec<_>>(),
+            h.parent.clone(),
+            h.error.iter().map(|e| e.to_bits()).collect::<Vec<_>>(),
+            h.radius.iter().map(|r| r.to_bits()).collect::<Vec<_>>(),
+            h.corners.clone(),
+            h.alive.clone(),
+            h.passes,
+        )
+    };
+    assert!(one.collapses.len() > 1000);
+    assert!(
+        key(&one) == key(&three),
+        "the thread count changed the hierarchy"
+    );
+}

@@ -4,15 +4,17 @@
 use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, next, prev, sub, P3, V3};
-use super::{Hierarchy, NONE};
+use super::setup::scaled_attributes;
+use super::{AttributeWeights, Hierarchy, NONE};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
 
-/// The quadric of one surface group at a position, with that group's scaled attributes
-/// there.
+/// The quadric of one surface group at a position, with that group's attributes there
+/// (an index into the welded mesh's; [`Work::attrs_of`] scales them when a cost reads
+/// them, which keeps the wedge 64 bytes smaller than holding them scaled).
 pub(super) struct Wedge {
     pub(super) group: u32,
-    pub(super) attrs: [f64; M],
+    pub(super) attr: u32,
     pub(super) q: Quadric,
 }
 
@@ -53,6 +55,9 @@ pub(super) struct PosInfo {
 /// The mesh being simplified, with per node its triangles.
 pub(super) struct Work<'w> {
     pub(super) w: &'w Welded,
+    pub(super) weights: AttributeWeights,
+    /// The bounding box's diagonal, which scales the attributes.
+    pub(super) diagonal: f64,
     /// Point of every position.
     pub(super) p: Vec<V3>,
     pub(super) info: Vec<PosInfo>,
@@ -89,6 +94,12 @@ pub(super) struct Work<'w> {
 }
 
 impl Work<'_> {
+    /// The scaled attributes of a wedge.
+    #[inline]
+    pub(super) fn attrs_of(&self, wedge: &Wedge) -> [f64; M] {
+        scaled_attributes(self.w, wedge.attr, &self.weights, self.diagonal)
+    }
+
     #[inline]
     pub(super) fn wedges_at(&self, pos: usize) -> &[Wedge] {
         &self.wedges[self.wedge_start[pos] as usize..self.wedge_start[pos + 1] as usize]
