@@ -153,12 +153,27 @@ impl Quadric {
         self.solve(&m, 3)
     }
 
+    /// `A` as a full symmetric matrix (the solve reads it row by row).
+    fn unpacked(&self) -> [[f64; DIM]; DIM] {
+        let mut full = [[0.0; DIM]; DIM];
+        let mut idx = 0;
+        for i in 0..DIM {
+            for j in i..DIM {
+                full[i][j] = self.a[idx];
+                full[j][i] = self.a[idx];
+                idx += 1;
+            }
+        }
+        full
+    }
+
     /// Solves for coordinates `fixed..DIM`, the others held at `start`'s.
     fn solve(&self, start: &[f64; DIM], fixed: usize) -> [f64; DIM] {
         let n = DIM - fixed;
+        let full = self.unpacked();
         let mut trace = 0.0;
         for i in fixed..DIM {
-            trace += self.at(i, i);
+            trace += full[i][i];
         }
         let eps = 1e-3 * (trace / n as f64).max(f64::MIN_POSITIVE);
         // M x = r with M = A_ff + εI, r = -(b_f + A_fx x_x) + ε m_f.
@@ -166,13 +181,11 @@ impl Quadric {
         let mut r = [0.0; DIM];
         for i in 0..n {
             let gi = i + fixed;
-            for j in 0..n {
-                m[i][j] = self.at(gi, j + fixed);
-            }
+            m[i][..n].copy_from_slice(&full[gi][fixed..]);
             m[i][i] += eps;
             let mut s = -self.b[gi] + eps * start[gi];
             for k in 0..fixed {
-                s -= self.at(gi, k) * start[k];
+                s -= full[gi][k] * start[k];
             }
             r[i] = s;
         }
@@ -255,6 +268,20 @@ mod tests {
         assert!(q.eval(&point([0.5, 0.5, 0.0], 0.25)).abs() < 1e-12);
         // Off it by 3 along z: 9 per unit area.
         assert!((q.eval(&point([0.5, 0.5, 3.0], 0.25)) - 9.0 * area).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_solve_reads_every_entry_of_a_as_the_packed_index_gives_it() {
+        let mut q = Quadric::default();
+        for (k, a) in q.a.iter_mut().enumerate() {
+            *a = 1.0 + k as f64;
+        }
+        let full = q.unpacked();
+        for i in 0..DIM {
+            for j in 0..DIM {
+                assert_eq!(full[i][j], q.at(i, j), "({i}, {j})");
+            }
+        }
     }
 
     #[test]

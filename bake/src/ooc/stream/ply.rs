@@ -394,7 +394,6 @@ impl Reader<'_> {
         let vcount = report.vertices;
         let int_list = self.int_list();
         let mut raw: Vec<i64> = Vec::new();
-        let mut idx: Vec<u64> = Vec::new();
         for f in 0..self.header.elements[fi].count {
             let at = || format!("face {f}");
             self.face_indices(f, int_list, &mut raw)?;
@@ -402,24 +401,22 @@ impl Reader<'_> {
                 report.skipped_faces += 1;
                 continue;
             }
-            idx.clear();
-            for &i in &raw {
-                if i < 0 || i as u64 >= vcount {
-                    return Err(self.bad(
-                        &at(),
-                        format!("vertex index {i} out of range ({vcount} vertices)"),
-                    ));
-                }
-                idx.push(i as u64);
+            if let Some(&i) = raw.iter().find(|&&i| i < 0 || i as u64 >= vcount) {
+                return Err(self.bad(
+                    &at(),
+                    format!("vertex index {i} out of range ({vcount} vertices)"),
+                ));
             }
+            // Every index is in range: the casts are exact.
+            let idx = |k: usize| raw[k] as u64;
             let terr = |e| OocError::temp("reading the vertex file", e);
-            for k in 1..idx.len() - 1 {
+            for k in 1..raw.len() - 1 {
                 let t = sink.slot()?;
                 t.surface = 0;
                 t.flags = self.layout.flags;
-                t.corners[0] = *cache.get_ref(idx[0]).map_err(terr)?;
-                t.corners[1] = *cache.get_ref(idx[k]).map_err(terr)?;
-                t.corners[2] = *cache.get_ref(idx[k + 1]).map_err(terr)?;
+                t.corners[0] = *cache.get_ref(idx(0)).map_err(terr)?;
+                t.corners[1] = *cache.get_ref(idx(k)).map_err(terr)?;
+                t.corners[2] = *cache.get_ref(idx(k + 1)).map_err(terr)?;
                 t.key = keyer.key(&t.corners.map(|c| c.position));
                 report.triangles += 1;
             }
@@ -444,6 +441,40 @@ impl Reader<'_> {
         }
     }
 
+    /// The vertex indices of a binary face whose count and indices are all in the read
+    /// buffer into `raw`, consumed in one step (the common case: one buffer look-up a face);
+    /// false, with nothing read, when they are not there or the count is out of range (the
+    /// general path then reads them, or names the error).
+    #[inline]
+    fn face_from_buffer(&mut self, big: bool, ct: Scalar, ty: Scalar, raw: &mut Vec<i64>) -> bool {
+        let (cs, s) = (ct.size(), ty.size());
+        let buf = self.r.buffer();
+        let Some(head) = buf.get(..cs) else {
+            return false;
+        };
+        let n = ct.decode_int(head, big);
+        if !(0..=1_000_000).contains(&n) {
+            return false;
+        }
+        let end = cs + n as usize * s;
+        let Some(list) = buf.get(cs..end) else {
+            return false;
+        };
+        match (ty, big) {
+            (Scalar::I32, false) => raw.extend(
+                list.chunks_exact(4)
+                    .map(|c| i64::from(i32::from_le_bytes([c[0], c[1], c[2], c[3]]))),
+            ),
+            (Scalar::U32, false) => raw.extend(
+                list.chunks_exact(4)
+                    .map(|c| i64::from(u32::from_le_bytes([c[0], c[1], c[2], c[3]]))),
+            ),
+            _ => raw.extend(list.chunks_exact(s).map(|c| ty.decode_int(c, big))),
+        }
+        self.r.consume(end);
+        true
+    }
+
     /// The vertex indices of face `f` into `raw`, as they are in the file.
     fn face_indices(
         &mut self,
@@ -456,6 +487,7 @@ impl Reader<'_> {
         let fi = self.layout.fi;
         raw.clear();
         match int_list {
+            Some((big, ct, ty)) if self.face_from_buffer(big, ct, ty, raw) => {}
             Some((big, ct, ty)) => {
                 let n = with_bytes(&mut self.r, &mut self.record, ct.size(), |b| {
                     ct.decode_int(b, big)
