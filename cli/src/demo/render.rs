@@ -126,11 +126,15 @@ fn draw(
                 }
             })
             .collect();
+        // The first frame has no picture before it to morph from: it refines at once, as
+        // the measured flights' first frames do.
+        let first = params.without_morphs();
+        let params = if f == 0 { &first } else { &params };
         for (i, cam) in cams.iter_mut().enumerate() {
             if let Err(e) = cam.refine(
                 h,
                 &looks[i].view(viewports[i].width, viewports[i].height),
-                &params,
+                params,
             ) {
                 outcome = Err(format!("camera {i}, frame {f}: {e}"));
             }

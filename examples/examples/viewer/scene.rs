@@ -307,10 +307,17 @@ impl<'h> Scene<'h> {
                 continue;
             }
             let view = c.control.look().view(vp.width, vp.height);
+            // A camera at its base mesh has no picture to morph from: it refines at once.
+            let first = params.without_morphs();
+            let params = if c.state.split_count() == 0 {
+                &first
+            } else {
+                &params
+            };
             let start = Instant::now();
             let stats = c
                 .state
-                .refine(&self.h, &view, &params)
+                .refine(&self.h, &view, params)
                 .map_err(|e| format!("camera {}: refinement: {e}", i + 1))?;
             c.stats.refine_ms = start.elapsed().as_secs_f64() * 1e3;
             c.stats.operations = stats.splits + stats.collapses;
