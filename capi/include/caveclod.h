@@ -143,9 +143,9 @@ typedef struct CaveclodRefineParams {
     float refine_morph_s;
     // Seconds a coarsen morph takes; 0 collapses at once (default 16/60).
     float coarsen_morph_s;
-    // Fastest a morphing vertex glides across the screen, pixels per second: a morph whose
-    // path is long on the screen takes longer than its duration (default 9, 0.15 px per
-    // frame at 60 Hz; 0 or infinity: no limit).
+    // Fastest a morphing vertex may glide across the screen, pixels per second: a morph
+    // whose path is long on the screen then takes longer than its duration (0 or infinity,
+    // the default: no limit).
     float morph_speed_px_s;
     // Coarsen outside the view frustum (default true).
     bool frustum_culling;

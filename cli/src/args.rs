@@ -159,9 +159,9 @@ pub struct FlyoverArgs {
     /// camera holds up to half its polygon budget in morphs, 16,384 at full capacity).
     #[arg(long)]
     pub no_geomorphs: bool,
-    /// Fastest a morphing vertex glides across the screen, in pixels per second (a morph
-    /// long on the screen takes longer than its duration); 0 for no limit
-    #[arg(long, default_value_t = 9.0, value_parser = non_negative)]
+    /// Fastest a morphing vertex may glide across the screen, in pixels per second (a morph
+    /// long on the screen takes longer than its duration); 0, the default, for no limit
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     pub morph_speed: f32,
     /// Regulate each camera's tolerance to hold this many active polygons (starting at
     /// --tolerance; a state per camera on one thread).

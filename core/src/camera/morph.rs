@@ -48,9 +48,9 @@
 //! blends every slot from persistent vertices, in any order: a slot's blend walks its chain
 //! ([`gpu::morph_slot_vertex`](crate::gpu::morph_slot_vertex)).
 //!
-//! A morph also glides no faster than [`RefineParams::morph_speed_px_s`] across the screen:
-//! a floating child far from its parent on the screen takes longer than the duration, so
-//! no vertex jumps however coarse the node that splits.
+//! A morph can also be held to a screen speed ([`RefineParams::morph_speed_px_s`], off by
+//! default): a floating child far from its parent on the screen then takes longer than the
+//! duration, so no vertex slides far in one frame however coarse the node that splits.
 
 use bytemuck::{Pod, Zeroable};
 
