@@ -478,21 +478,8 @@ fn drawn(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> HashMap<u32, Vec3> {
 
 /// Views along one approach, nearer each frame.
 fn closing_in(h: &Hierarchy<'_>, frames: usize) -> Vec<LookAt> {
-    let m = h.meta();
-    let lo = Vec3::from_array(m.bounds_min);
-    let hi = Vec3::from_array(m.bounds_max);
-    let centre = (lo + hi) * 0.5;
-    let size = (hi - lo).length().max(1e-3);
-    let dir = Vec3::new(0.3, 0.8, 0.6).normalize();
     (0..frames)
-        .map(|f| LookAt {
-            eye: centre + dir * size * (3.0 - 2.6 * f as f32 / frames as f32),
-            target: centre,
-            up: Vec3::Y,
-            fov_y: 1.2,
-            near: size * 1e-3,
-            far: size * 100.0,
-        })
+        .map(|f| approach_look(h, 3.0 - 2.6 * f as f32 / frames as f32))
         .collect()
 }
 

@@ -37,7 +37,7 @@ mod npy;
 #[cfg(feature = "obj")]
 mod obj;
 #[cfg(feature = "ply")]
-mod ply;
+pub(crate) mod ply;
 
 use std::panic::{self, AssertUnwindSafe};
 use std::path::Path;

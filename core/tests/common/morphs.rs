@@ -17,21 +17,25 @@ pub fn morph_config(h: &Hierarchy<'_>, max_morphs: u32) -> CameraConfig {
 
 /// Views along one line towards the terrain: `k` from 0 (close, much detail) to 1 (far).
 pub fn approach(h: &Hierarchy<'_>, k: f32) -> View {
+    approach_look(h, 0.4 + 20.0 * k).view(1280, 720)
+}
+
+/// The look at the terrain's centre along that line from `distance` times its size.
+pub fn approach_look(h: &Hierarchy<'_>, distance: f32) -> LookAt {
     let m = h.meta();
     let lo = Vec3::from_array(m.bounds_min);
     let hi = Vec3::from_array(m.bounds_max);
     let centre = (lo + hi) * 0.5;
     let size = (hi - lo).length().max(1e-3);
     let dir = Vec3::new(0.3, 0.8, 0.6).normalize();
-    let look = LookAt {
-        eye: centre + dir * size * (0.4 + 20.0 * k),
+    LookAt {
+        eye: centre + dir * size * distance,
         target: centre,
         up: Vec3::Y,
         fov_y: 1.2,
         near: size * 1e-3,
         far: size * 100.0,
-    };
-    look.view(1280, 720)
+    }
 }
 
 /// Fine enough that the golden terrain refines deeply from close by.

@@ -25,7 +25,7 @@
 //! Faces with fewer than three vertices are skipped and counted.
 
 mod ascii;
-mod properties;
+pub(crate) mod properties;
 #[cfg(test)]
 mod tests;
 

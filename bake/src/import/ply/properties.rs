@@ -9,10 +9,10 @@ pub(super) const NX: usize = 3;
 pub(super) const U: usize = 6;
 pub(super) const R: usize = 8;
 pub(super) const A: usize = 11;
-pub(super) const SLOTS: usize = 12;
+pub(crate) const SLOTS: usize = 12;
 
 /// What each slot holds, as errors name it.
-pub(super) const VERTEX_NAMES: [&str; SLOTS] = [
+pub(crate) const VERTEX_NAMES: [&str; SLOTS] = [
     "coordinate x",
     "coordinate y",
     "coordinate z",

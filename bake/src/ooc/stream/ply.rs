@@ -63,21 +63,8 @@ pub(super) fn ply(
     Ok(report)
 }
 
-/// What each vertex slot holds, as errors name it (as the in-core importer does).
-const SLOT_NAMES: [&str; 12] = [
-    "coordinate x",
-    "coordinate y",
-    "coordinate z",
-    "normal x",
-    "normal y",
-    "normal z",
-    "texture coordinate u",
-    "texture coordinate v",
-    "red",
-    "green",
-    "blue",
-    "alpha",
-];
+/// What each vertex slot holds, as errors name it (the in-core importer's names).
+const SLOT_NAMES: [&str; 12] = crate::import::ply::properties::VERTEX_NAMES;
 
 /// An error in the file `name` at `at`.
 fn bad(name: &str, at: &str, message: String) -> OocError {
