@@ -51,10 +51,11 @@ pub const MAX_MORPHS: u32 = 16384;
 /// collapse at once, and the other half then has half again as much room.
 const MORPH_HEADROOM: f64 = 0.75;
 
-/// Morph memory for a camera of `budget` polygons: half its budget. Morphs slowed by the
+/// Morph memory for a camera of `budget` polygons: half its budget. Morphs slowed by a
 /// screen speed limit ([`RefineParams::morph_speed_px_s`]) near the eye outlast their
 /// durations, so the operations of one duration underestimate them; over St. Helens at
-/// 1 px the cameras hold up to about a third of their active polygons in morphs at once.
+/// 1 px with `--morph-speed 9` the cameras held up to about a third of their active
+/// polygons in morphs at once.
 pub fn morphs_for_budget(budget: u32) -> u32 {
     (budget / 2).max(256)
 }

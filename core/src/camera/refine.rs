@@ -513,7 +513,9 @@ impl CameraState<'_> {
             Some(_) if i < f.active_len as usize => i as u32,
             _ => 0,
         };
-        if f.morphs.scalars.live > 0 {
+        // Slots change only where a morph started, ended or a collapse ended one.
+        let changed = st.morphs_started + st.morphs_finished + st.collapses > 0;
+        if changed && f.morphs.scalars.live > 0 {
             f.link_morph_chains(h);
         }
         st.active_nodes = f.active_nodes;
