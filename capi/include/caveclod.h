@@ -147,6 +147,13 @@ typedef struct CaveclodRefineParams {
     // whose path is long on the screen then takes longer than its duration (0 or infinity,
     // the default: no limit).
     float morph_speed_px_s;
+    // How large on the screen a morphing camera's nodes may stay, in tolerances: a node
+    // whose bounding sphere projects larger splits, which keeps morphs' paths short on the
+    // screen for more polygons (0 or infinity, the default: no bound).
+    float morph_radius_tolerances;
+    // How far beyond the view's sides a morphing camera refines, in radians, so what
+    // turns into view was refined before it shows (default 0.1; 0 for none).
+    float morph_guard_rad;
     // Coarsen outside the view frustum (default true).
     bool frustum_culling;
     // Coarsen where the surface faces away from the eye (default true).

@@ -95,6 +95,13 @@ pub struct CaveclodRefineParams {
     /// whose path is long on the screen then takes longer than its duration (0 or infinity,
     /// the default: no limit).
     pub morph_speed_px_s: f32,
+    /// How large on the screen a morphing camera's nodes may stay, in tolerances: a node
+    /// whose bounding sphere projects larger splits, which keeps morphs' paths short on the
+    /// screen for more polygons (0 or infinity, the default: no bound).
+    pub morph_radius_tolerances: f32,
+    /// How far beyond the view's sides a morphing camera refines, in radians, so what
+    /// turns into view was refined before it shows (default 0.1; 0 for none).
+    pub morph_guard_rad: f32,
     /// Coarsen outside the view frustum (default true).
     pub frustum_culling: bool,
     /// Coarsen where the surface faces away from the eye (default true).
@@ -110,6 +117,8 @@ impl From<RefineParams> for CaveclodRefineParams {
             refine_morph_s: p.refine_morph_s,
             coarsen_morph_s: p.coarsen_morph_s,
             morph_speed_px_s: p.morph_speed_px_s,
+            morph_radius_tolerances: p.morph_radius_tolerances,
+            morph_guard_rad: p.morph_guard_rad,
             frustum_culling: p.frustum_culling,
             backface_culling: p.backface_culling,
         }
@@ -123,7 +132,10 @@ impl CaveclodRefineParams {
         let sane = self.tolerance_px >= 0.0
             && !self.tolerance_px.is_nan()
             && times.iter().all(|t| t.is_finite() && *t >= 0.0)
-            && self.morph_speed_px_s >= 0.0;
+            && self.morph_speed_px_s >= 0.0
+            && self.morph_radius_tolerances >= 0.0
+            && self.morph_guard_rad.is_finite()
+            && self.morph_guard_rad >= 0.0;
         if !sane {
             return Err(CaveclodStatus::InvalidArgument);
         }
@@ -138,6 +150,8 @@ impl CaveclodRefineParams {
             refine_morph_s: self.refine_morph_s,
             coarsen_morph_s: self.coarsen_morph_s,
             morph_speed_px_s: self.morph_speed_px_s,
+            morph_radius_tolerances: self.morph_radius_tolerances,
+            morph_guard_rad: self.morph_guard_rad,
             ..RefineParams::default()
         })
     }

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use caveclod_core::RefineParams;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 #[derive(Parser)]
@@ -163,6 +164,15 @@ pub struct FlyoverArgs {
     /// long on the screen takes longer than its duration); 0, the default, for no limit
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     pub morph_speed: f32,
+    /// How large on the screen a morphing camera's nodes may stay, in tolerances: a node
+    /// whose bounding radius projects larger splits, which keeps morphs' paths short on the
+    /// screen for more polygons (16 to 32 is a useful range); 0, the default, for no bound
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub morph_radius: f32,
+    /// How far beyond the view's sides a morphing camera refines, in degrees (what turns
+    /// into view is refined and morphing before it shows); 0 for none
+    #[arg(long, default_value_t = RefineParams::default().morph_guard_rad.to_degrees(), value_parser = non_negative)]
+    pub morph_guard: f32,
     /// Regulate each camera's tolerance to hold this many active polygons (starting at
     /// --tolerance; a state per camera on one thread).
     #[arg(long, conflicts_with_all = ["shared_state", "threads"])]

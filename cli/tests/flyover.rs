@@ -26,6 +26,8 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         hashed_pair_map: false,
         geomorphs: true,
         morph_speed_px_s: 9.0,
+        morph_radius_tolerances: 16.0,
+        morph_guard_rad: 0.1,
         target_polygons: None,
     };
     let per = fly(&h, &options).expect("per-camera flight");

@@ -112,6 +112,36 @@ impl View {
         }
     }
 
+    /// This view with each side plane through the eye turned outwards by `angle` radians
+    /// about the eye, so the frustum reaches `angle` further on every side (a guard band:
+    /// what turns into view was refined before it shows). Planes that do not pass through
+    /// the eye (an orthographic view's), the near and far planes, a view without a near
+    /// plane, and an angle that is not positive and finite are left as they are.
+    pub fn widened(&self, angle: f32) -> Self {
+        let mut out = *self;
+        let used = (self.plane_count as usize).min(6);
+        if !(angle > 0.0 && angle.is_finite()) || used < 5 {
+            return out;
+        }
+        let forward = self.planes[4].truncate();
+        let (sin, cos) = (libm::sinf(angle), libm::cosf(angle));
+        let reach = 1e-4 * (1.0 + self.eye.abs().max_element());
+        for p in &mut out.planes[..4] {
+            let n = p.truncate();
+            if (n.dot(self.eye) + p.w).abs() > reach {
+                continue;
+            }
+            // The plane's edge direction towards the view direction, in the plane.
+            let edge = (forward - n * n.dot(forward)).normalize_or_zero();
+            if edge == Vec3::ZERO {
+                continue;
+            }
+            let turned = (n * cos + edge * sin).normalize_or_zero();
+            *p = turned.extend(-turned.dot(self.eye));
+        }
+        out
+    }
+
     /// `true` if the sphere lies at least partly inside every plane.
     #[inline]
     pub fn sphere_visible(&self, centre: Vec3, radius: f32) -> bool {
@@ -125,6 +155,53 @@ impl View {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A point just past a side of the view is inside the widened view when it is less than
+    /// the angle past it, and outside when it is more; the near and far planes stay, and
+    /// a view whose planes do not pass through the eye is left as it is.
+    #[test]
+    fn a_widened_view_reaches_the_angle_further_on_every_side() {
+        let look = LookAt {
+            eye: Vec3::new(1.0, 2.0, 3.0),
+            target: Vec3::new(4.0, 1.0, -2.0),
+            up: Vec3::Y,
+            fov_y: 1.0,
+            near: 0.1,
+            far: 100.0,
+        };
+        let view = look.view(900, 600);
+        let angle = 0.1;
+        let wide = view.widened(angle);
+        assert_eq!(wide.planes[4..], view.planes[4..]);
+        let forward = (look.target - look.eye).normalize();
+        let right = forward.cross(Vec3::Y).normalize();
+        let up = right.cross(forward);
+        let half_y = look.fov_y / 2.0;
+        let half_x = libm::atanf(libm::tanf(half_y) * 1.5);
+        for (axis, half) in [
+            (right, half_x),
+            (-right, half_x),
+            (up, half_y),
+            (-up, half_y),
+        ] {
+            let at = |a: f32| look.eye + (forward * libm::cosf(a) + axis * libm::sinf(a)) * 10.0;
+            assert!(view.sphere_visible(at(half - 0.01), 0.0));
+            assert!(!view.sphere_visible(at(half + 0.05), 0.0));
+            assert!(wide.sphere_visible(at(half + 0.05), 0.0));
+            assert!(wide.sphere_visible(at(half + angle - 0.01), 0.0));
+            assert!(!wide.sphere_visible(at(half + angle + 0.01), 0.0));
+        }
+        let unchanged = View::without_frustum(look.eye, 100.0);
+        assert_eq!(unchanged.widened(angle), unchanged);
+        assert_eq!(view.widened(0.0), view);
+        assert_eq!(view.widened(f32::NAN), view);
+        // Planes away from the eye (an orthographic view's) stay.
+        let mut ortho = view;
+        for p in &mut ortho.planes[..4] {
+            p.w += 1.0;
+        }
+        assert_eq!(ortho.widened(angle), ortho);
+    }
 
     #[test]
     fn look_at_frustum_matches_its_matrix() {

@@ -67,8 +67,9 @@ fn upload(ctx: &Context, h: &Hierarchy<'_>, colours: &[[u8; 4]]) -> VertexBuffer
     vertices
 }
 
-/// Refines camera `c` to its view's front, then `c + 1` more passes of 0.1 s with the view
-/// still, so its refine morphs stand part-way (a different part for each camera).
+/// Draws camera `c`'s first picture looking away from the model (a camera's first pass
+/// never morphs), refines it to its view's front, then `c + 1` more passes of 0.1 s with the
+/// view still, so its refine morphs stand part-way (a different part for each camera).
 fn refine_mid_morph(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, look: &LookAt, c: usize) {
     let v = quadrants()[c];
     let view = look.view(v.width, v.height);
@@ -76,6 +77,11 @@ fn refine_mid_morph(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, look: &LookAt,
         dt_s: 0.0,
         ..RefineParams::default()
     };
+    let away = LookAt {
+        target: look.eye + (look.eye - look.target),
+        ..*look
+    };
+    ok(cam.refine(h, &away.view(v.width, v.height), &first), "first picture");
     ok(cam.refine(h, &view, &first), "refine");
     let step = RefineParams {
         dt_s: 0.1,

@@ -57,6 +57,8 @@ fn options(a: &FlyoverArgs) -> FlyoverOptions {
         hashed_pair_map: a.hashed_pair_map,
         geomorphs: !a.no_geomorphs,
         morph_speed_px_s: a.morph_speed,
+        morph_radius_tolerances: a.morph_radius,
+        morph_guard_rad: a.morph_guard.to_radians(),
         target_polygons: a.target_polygons,
     }
 }

@@ -126,10 +126,9 @@ fn draw(
                 }
             })
             .collect();
-        // The first frame has no picture before it to morph from: it refines at once, as
-        // the measured flights' first frames do.
-        let first = params.without_morphs();
-        let params = if f == 0 { &first } else { &params };
+        // The first frame refines without morphs (`CameraState::refine`): there is no
+        // picture before it to morph from.
+        let params = &params;
         for (i, cam) in cams.iter_mut().enumerate() {
             if let Err(e) = cam.refine(
                 h,

@@ -252,24 +252,8 @@ pub fn frame(
     rec: &mut Record,
     compact: CompactNow,
 ) -> Result<(), String> {
-    // A camera at its base mesh (new, or with nothing in view) refines in one full pass, as
-    // an engine settles a new camera: amortisation spreads coherent motion over frames. The
-    // first frame also refines without morphs: there is no picture before it to morph from.
-    let first = RefineParams {
-        visit_fraction: 1.0,
-        max_visits: u32::MAX,
-        ..*params
-    };
-    let first = if rec.ops.is_empty() {
-        first.without_morphs()
-    } else {
-        first
-    };
-    let params = if cam.split_count() == 0 || rec.ops.is_empty() {
-        &first
-    } else {
-        params
-    };
+    // A camera at its base mesh settles in one full pass, without morphs in its first
+    // (`CameraState::refine`).
     let c0 = thread_cpu_ns();
     let t0 = Instant::now();
     // Compaction counts as refinement time: it is what keeps the next passes local.

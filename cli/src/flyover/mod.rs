@@ -168,6 +168,12 @@ pub struct FlyoverOptions {
     /// The fastest a morphing vertex glides across the screen, in pixels per second
     /// ([`RefineParams::morph_speed_px_s`]; 0 for no limit).
     pub morph_speed_px_s: f32,
+    /// How large on the screen a morphing camera's nodes may stay, in tolerances
+    /// ([`RefineParams::morph_radius_tolerances`]; 0 for no bound).
+    pub morph_radius_tolerances: f32,
+    /// How far beyond the view's sides a morphing camera refines, in radians
+    /// ([`RefineParams::morph_guard_rad`]).
+    pub morph_guard_rad: f32,
     /// Fly every camera with a [`caveclod_core::Regulator`] holding this many active
     /// polygons, starting at `tolerance` (a state per camera on one thread only). The
     /// cameras are budgeted to the target plus 25%, without a sizing flight.
@@ -192,6 +198,8 @@ impl Default for FlyoverOptions {
             hashed_pair_map: false,
             geomorphs: true,
             morph_speed_px_s: RefineParams::default().morph_speed_px_s,
+            morph_radius_tolerances: RefineParams::default().morph_radius_tolerances,
+            morph_guard_rad: RefineParams::default().morph_guard_rad,
             target_polygons: None,
         }
     }
@@ -307,6 +315,8 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
             options.visit_fraction
         },
         morph_speed_px_s: options.morph_speed_px_s,
+        morph_radius_tolerances: options.morph_radius_tolerances,
+        morph_guard_rad: options.morph_guard_rad,
         ..RefineParams::default()
     };
     let params = if morphing {
@@ -347,12 +357,15 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
             budget: Some(budget),
         });
     }
-    // The sizing flight refines every third frame: it finds fronts, without morphs.
+    // The sizing flight refines every third frame: it finds fronts. Its cameras morph as the
+    // flight's do, so they refine against the same criterion (a morphing camera's guard band
+    // and radius bound) and hold the collapses their coarsen morphs defer.
+    let sizing_config = full_config.with_morphs(morphs(MAX_MORPHS));
     let s = fly_per_camera(
         h,
         &views,
-        &params.without_morphs(),
-        &full_config,
+        &params,
+        &sizing_config,
         SIZING_STRIDE,
         false,
         options.mode == Mode::Threads,

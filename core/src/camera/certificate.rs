@@ -78,6 +78,7 @@ const CONE_LIPSCHITZ: f64 = 2.01;
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Key {
     tz2_bits: u32,
+    radius_error_bits: u32,
     planes: u32,
     frustum: bool,
     backface: bool,
@@ -154,6 +155,7 @@ impl Odometer {
             last: None,
             key: Key {
                 tz2_bits: 0,
+                radius_error_bits: 0,
                 planes: 0,
                 frustum: false,
                 backface: false,
@@ -164,13 +166,16 @@ impl Odometer {
         }
     }
 
-    /// Moves to `view` for a pass with squared tolerance `tz2` and the given culling
+    /// Moves to `view` for a pass with squared tolerance `tz2`, the share of a node's radius
+    /// that counts as uniform error (`RefineParams::radius_error`) and the given culling
     /// switches, forgetting every certificate in `records` when they no longer apply.
+    #[allow(clippy::too_many_arguments)]
     pub fn advance(
         &mut self,
         h: &Hierarchy<'_>,
         view: &View,
         tz2: f32,
+        radius_error: f32,
         frustum: bool,
         backface: bool,
         records: &mut [ActiveVertex],
@@ -178,6 +183,7 @@ impl Odometer {
         let planes = (view.plane_count as usize).min(view.planes.len());
         let key = Key {
             tz2_bits: tz2.to_bits(),
+            radius_error_bits: radius_error.to_bits(),
             planes: planes as u32,
             frustum,
             backface,
@@ -230,6 +236,14 @@ impl Odometer {
         }
     }
 
+    /// A node's uniform error as the criterion counts it: at least the share of its radius
+    /// the key says (see `Criterion::wants_split`, whose product this rounds the same way).
+    #[inline(always)]
+    fn uniform(&self, b: &SplitBounds) -> f32 {
+        b.uni_error
+            .max(b.radius * f32::from_bits(self.key.radius_error_bits))
+    }
+
     /// The own certificate of a node whose split the criterion just did not want
     /// ([`own_holds`]); [`UNKNOWN`] when there is no slack.
     pub fn unwanted_own(&self, b: &SplitBounds) -> f32 {
@@ -265,7 +279,7 @@ impl Odometer {
         };
         let point = Vec3::from_array(b.point);
         let d = distance(point, eye);
-        let m = f64::from(b.uni_error.max(b.dir_error));
+        let m = f64::from(self.uniform(b).max(b.dir_error));
         let too_fine = d * (1.0 - 1e-12) - m * self.inv_tolerance * (1.0 + MARGIN);
         if too_fine > 0.0 {
             return Slack {
@@ -302,9 +316,9 @@ impl Odometer {
         // Which errors decide "wanted" without the cone: both when there is no cone; else
         // only the uniform one (the directional one then depends on the view direction).
         let m = if has_cone {
-            b.uni_error
+            self.uniform(b)
         } else {
-            b.uni_error.max(b.dir_error)
+            self.uniform(b).max(b.dir_error)
         };
         let mut slack = f64::from(m) * self.inv_tolerance * (1.0 - MARGIN) - d * (1.0 + 1e-12);
         if self.key.frustum {

@@ -66,7 +66,10 @@ impl CameraState<'_> {
         } else {
             f32::INFINITY
         };
-        let c = Criterion::new(view, scale * scale, params);
+        let morphing = self.front.morphs.capacity() > 0;
+        let view = &params.refined_view(view, morphing);
+        let radius_error = params.radius_error(morphing);
+        let c = Criterion::new(view, scale * scale, radius_error, params);
         let mut lag = FrontLag {
             active_nodes: self.front.active_nodes,
             ..FrontLag::default()

@@ -90,6 +90,7 @@ pub(crate) struct Scalars {
     morphs: MorphScalars,
     visit_cursor: u32,
     compaction: Progress,
+    refined: bool,
 }
 
 impl Scalars {
@@ -108,6 +109,7 @@ impl Scalars {
             morphs: MorphScalars::EMPTY,
             visit_cursor: 0,
             compaction: Progress::IDLE,
+            refined: false,
         }
     }
 }
@@ -161,6 +163,7 @@ impl<'m> CameraState<'m> {
                     scalars: scalars.morphs,
                 },
                 visit_cursor: scalars.visit_cursor,
+                refined: scalars.refined,
                 compaction: scalars.compaction,
             },
             stack: bytemuck::cast_slice_mut(stack),
@@ -183,6 +186,7 @@ impl<'m> CameraState<'m> {
             odometer: f.odometer,
             morphs: f.morphs.scalars,
             visit_cursor: f.visit_cursor,
+            refined: f.refined,
             compaction: f.compaction,
         }
     }

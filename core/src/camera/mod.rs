@@ -360,6 +360,9 @@ pub(crate) struct Front<'m> {
     pub morphs: Morphs<'m>,
     /// Where the next amortised refinement pass starts in `active`.
     pub visit_cursor: u32,
+    /// Whether a pass ran since the camera was made or reset: the first one has no picture
+    /// to morph from.
+    pub refined: bool,
     /// How far an incremental compaction has come (see `compact_step`).
     pub compaction: compact_step::Progress,
 }
@@ -457,6 +460,7 @@ impl<'m> CameraState<'m> {
         f.active_polygons = f.base;
         f.churn = 0;
         f.visit_cursor = 0;
+        f.refined = false;
         f.compaction = compact_step::Progress::IDLE;
         f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);

@@ -15,6 +15,30 @@ pub fn morph_config(h: &Hierarchy<'_>, max_morphs: u32) -> CameraConfig {
     CameraConfig::full(h).with_morphs(max_morphs)
 }
 
+/// A camera with `config`'s memory that has drawn a first picture: its first pass, which
+/// never morphs, looked away from the terrain, so the camera stands at its base mesh and its
+/// next pass morphs what it splits.
+pub fn morphing_camera<'m>(
+    h: &Hierarchy<'_>,
+    memory: &'m mut [u32],
+    config: &CameraConfig,
+) -> CameraState<'m> {
+    let mut cam = CameraState::with_config(h, memory, config).expect("memory");
+    let towards = approach_look(h, 50.0);
+    let away = LookAt {
+        target: towards.eye + (towards.eye - towards.target),
+        ..towards
+    };
+    let st = cam
+        .refine(h, &away.view(1280, 720), &RefineParams::default())
+        .expect("refine");
+    assert_eq!(
+        st.splits, 0,
+        "the terrain lies behind the first picture's eye"
+    );
+    cam
+}
+
 /// Views along one line towards the terrain: `k` from 0 (close, much detail) to 1 (far).
 pub fn approach(h: &Hierarchy<'_>, k: f32) -> View {
     approach_look(h, 0.4 + 20.0 * k).view(1280, 720)
@@ -44,6 +68,8 @@ pub fn fine() -> RefineParams {
         tolerance_px: 0.05,
         backface_culling: false,
         morph_speed_px_s: 0.0,
+        // Cameras without morph memory, which the tests compare with, have no guard band.
+        morph_guard_rad: 0.0,
         ..RefineParams::default()
     }
 }

@@ -307,13 +307,8 @@ impl<'h> Scene<'h> {
                 continue;
             }
             let view = c.control.look().view(vp.width, vp.height);
-            // A camera at its base mesh has no picture to morph from: it refines at once.
-            let first = params.without_morphs();
-            let params = if c.state.split_count() == 0 {
-                &first
-            } else {
-                &params
-            };
+            // A new or reset camera's first pass does not morph (`CameraState::refine`).
+            let params = &params;
             let start = Instant::now();
             let stats = c
                 .state
