@@ -156,19 +156,24 @@ impl View {
 mod tests {
     use super::*;
 
-    /// A point just past a side of the view is inside the widened view when it is less than
-    /// the angle past it, and outside when it is more; the near and far planes stay, and
-    /// a view whose planes do not pass through the eye is left as it is.
-    #[test]
-    fn a_widened_view_reaches_the_angle_further_on_every_side() {
-        let look = LookAt {
+    /// The tests' look: off every axis, 1 radian high.
+    fn look() -> LookAt {
+        LookAt {
             eye: Vec3::new(1.0, 2.0, 3.0),
             target: Vec3::new(4.0, 1.0, -2.0),
             up: Vec3::Y,
             fov_y: 1.0,
             near: 0.1,
             far: 100.0,
-        };
+        }
+    }
+
+    /// A point just past a side of the view is inside the widened view when it is less than
+    /// the angle past it, and outside when it is more; the near and far planes stay, and
+    /// a view whose planes do not pass through the eye is left as it is.
+    #[test]
+    fn a_widened_view_reaches_the_angle_further_on_every_side() {
+        let look = look();
         let view = look.view(900, 600);
         let angle = 0.1;
         let wide = view.widened(angle);
@@ -205,14 +210,7 @@ mod tests {
 
     #[test]
     fn look_at_frustum_matches_its_matrix() {
-        let look = LookAt {
-            eye: Vec3::new(1.0, 2.0, 3.0),
-            target: Vec3::new(4.0, 1.0, -2.0),
-            up: Vec3::Y,
-            fov_y: 1.0,
-            near: 0.1,
-            far: 100.0,
-        };
+        let look = look();
         let view = look.view(900, 600);
         assert!((view.pixels_per_radian - 600.0 / (2.0 * libm::tanf(0.5))).abs() < 1e-3);
         let m = look.view_projection(1.5);

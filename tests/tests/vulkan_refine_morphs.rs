@@ -81,7 +81,10 @@ fn refine_mid_morph(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, look: &LookAt,
         target: look.eye + (look.eye - look.target),
         ..*look
     };
-    ok(cam.refine(h, &away.view(v.width, v.height), &first), "first picture");
+    ok(
+        cam.refine(h, &away.view(v.width, v.height), &first),
+        "first picture",
+    );
     ok(cam.refine(h, &view, &first), "refine");
     let step = RefineParams {
         dt_s: 0.1,
