@@ -152,7 +152,7 @@ typedef struct CaveclodRefineParams {
     // screen for more polygons (0 or infinity, the default: no bound).
     float morph_radius_tolerances;
     // How far beyond the view's sides a morphing camera refines, in radians, so what
-    // turns into view was refined before it shows (default 0.1; 0 for none).
+    // turns into view was refined before it shows (default 0.15; 0 for none).
     float morph_guard_rad;
     // Coarsen outside the view frustum (default true).
     bool frustum_culling;

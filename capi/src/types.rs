@@ -100,7 +100,7 @@ pub struct CaveclodRefineParams {
     /// screen for more polygons (0 or infinity, the default: no bound).
     pub morph_radius_tolerances: f32,
     /// How far beyond the view's sides a morphing camera refines, in radians, so what
-    /// turns into view was refined before it shows (default 0.1; 0 for none).
+    /// turns into view was refined before it shows (default 0.15; 0 for none).
     pub morph_guard_rad: f32,
     /// Coarsen outside the view frustum (default true).
     pub frustum_culling: bool,
