@@ -27,9 +27,10 @@ pub(crate) fn write_too_small(
 pub(crate) enum Shortfall {
     /// Fewer lists (or count slots) than surfaces.
     TooFewOutputs { needed: usize, given: usize },
-    /// Surface `surface`'s list is shorter than its index count.
+    /// Surface `surface`'s list (the packed list when `None`) is shorter than its index
+    /// count.
     TooSmall {
-        surface: SurfaceId,
+        surface: Option<SurfaceId>,
         needed: usize,
         given: usize,
     },
@@ -54,11 +55,44 @@ pub(crate) fn check_lists(
         let n = needed(s);
         if list.len() < n {
             return Err(Shortfall::TooSmall {
-                surface: SurfaceId(s as u16),
+                surface: Some(SurfaceId(s as u16)),
                 needed: n,
                 given: list.len(),
             });
         }
     }
     Ok(())
+}
+
+/// Checks a packed list of `out_len` indices and `offsets` (surfaces + 1 entries) against
+/// `needed(surface)` indices for each of `surfaces`, then sets `offsets[0]` to 0 and
+/// `offsets[s + 1]` to where surface `s` starts: its cursor while the lists are written,
+/// its end once they are. Returns the total.
+pub(crate) fn start_packed(
+    out_len: usize,
+    offsets: &mut [u32],
+    surfaces: usize,
+    needed: impl Fn(usize) -> usize,
+) -> Result<usize, Shortfall> {
+    if offsets.len() < surfaces + 1 {
+        return Err(Shortfall::TooFewOutputs {
+            needed: surfaces + 1,
+            given: offsets.len(),
+        });
+    }
+    let total = (0..surfaces).map(&needed).sum();
+    if out_len < total {
+        return Err(Shortfall::TooSmall {
+            surface: None,
+            needed: total,
+            given: out_len,
+        });
+    }
+    offsets[0] = 0;
+    let mut start = 0u32;
+    for s in 0..surfaces {
+        offsets[s + 1] = start;
+        start += needed(s) as u32;
+    }
+    Ok(total)
 }

@@ -18,7 +18,7 @@ use super::morph::MorphRemap;
 use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{PolyId, SurfaceId};
-use crate::outputs::{check_lists, Shortfall};
+use crate::outputs::{check_lists, start_packed, Shortfall};
 
 /// Why indices could not be emitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +60,23 @@ pub enum EmitError {
         /// Indices found.
         found: usize,
     },
+}
+
+impl From<Shortfall> for EmitError {
+    fn from(e: Shortfall) -> Self {
+        match e {
+            Shortfall::TooFewOutputs { needed, given } => Self::TooFewOutputs { needed, given },
+            Shortfall::TooSmall {
+                surface,
+                needed,
+                given,
+            } => Self::OutputTooSmall {
+                surface,
+                needed,
+                given,
+            },
+        }
+    }
 }
 
 impl core::fmt::Display for EmitError {
@@ -199,20 +216,7 @@ impl CameraState<'_> {
             return Err(EmitError::WrongHierarchy);
         }
         let ns = h.surface_count();
-        check_lists(out, written, ns, |s| self.index_count(s)).map_err(|e| match e {
-            Shortfall::TooFewOutputs { needed, given } => {
-                EmitError::TooFewOutputs { needed, given }
-            }
-            Shortfall::TooSmall {
-                surface,
-                needed,
-                given,
-            } => EmitError::OutputTooSmall {
-                surface: Some(surface),
-                needed,
-                given,
-            },
-        })?;
+        check_lists(out, written, ns, |s| self.index_count(s))?;
         written[..ns].fill(0);
         let mut total = 0;
         self.for_each_triangle(h, |s, tri| {
@@ -276,27 +280,7 @@ impl CameraState<'_> {
             return Err(EmitError::WrongHierarchy);
         }
         let ns = h.surface_count();
-        if offsets.len() < ns + 1 {
-            return Err(EmitError::TooFewOutputs {
-                needed: ns + 1,
-                given: offsets.len(),
-            });
-        }
-        let total = self.total_index_count();
-        if out.len() < total {
-            return Err(EmitError::OutputTooSmall {
-                surface: None,
-                needed: total,
-                given: out.len(),
-            });
-        }
-        // offsets[s + 1] is surface s's cursor during the pass and its end afterwards.
-        offsets[0] = 0;
-        let mut start = 0u32;
-        for s in 0..ns {
-            offsets[s + 1] = start;
-            start += self.index_count(s) as u32;
-        }
+        let total = start_packed(out.len(), offsets, ns, |s| self.index_count(s))?;
         self.for_each_triangle(h, |s, tri| {
             let at = offsets[s + 1] as usize;
             if let Some(dst) = out.get_mut(at..at + 3) {

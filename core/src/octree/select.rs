@@ -14,7 +14,7 @@ use glam::Vec3;
 
 use super::model::{Octree, OctreeNode};
 use crate::ids::SurfaceId;
-use crate::outputs::{check_lists, Shortfall};
+use crate::outputs::{check_lists, start_packed, Shortfall};
 use crate::view::View;
 
 /// Why a cut could not be made, selected or emitted.
@@ -45,6 +45,23 @@ pub enum CutError {
         /// Room given.
         given: usize,
     },
+}
+
+impl From<Shortfall> for CutError {
+    fn from(e: Shortfall) -> Self {
+        match e {
+            Shortfall::TooFewOutputs { needed, given } => Self::TooFewOutputs { needed, given },
+            Shortfall::TooSmall {
+                surface,
+                needed,
+                given,
+            } => Self::OutputTooSmall {
+                surface,
+                needed,
+                given,
+            },
+        }
+    }
 }
 
 impl core::fmt::Display for CutError {
@@ -302,18 +319,7 @@ impl<'m> OctreeCut<'m> {
             return Err(CutError::WrongOctree);
         }
         let ns = o.surface_count();
-        check_lists(out, written, ns, |s| self.index_count(s)).map_err(|e| match e {
-            Shortfall::TooFewOutputs { needed, given } => CutError::TooFewOutputs { needed, given },
-            Shortfall::TooSmall {
-                surface,
-                needed,
-                given,
-            } => CutError::OutputTooSmall {
-                surface: Some(surface),
-                needed,
-                given,
-            },
-        })?;
+        check_lists(out, written, ns, |s| self.index_count(s))?;
         written[..ns].fill(0);
         let mut total = 0;
         self.for_each_range(o, |s, src| {
@@ -340,27 +346,7 @@ impl<'m> OctreeCut<'m> {
             return Err(CutError::WrongOctree);
         }
         let ns = o.surface_count();
-        if offsets.len() < ns + 1 {
-            return Err(CutError::TooFewOutputs {
-                needed: ns + 1,
-                given: offsets.len(),
-            });
-        }
-        let total = self.total_index_count();
-        if out.len() < total {
-            return Err(CutError::OutputTooSmall {
-                surface: None,
-                needed: total,
-                given: out.len(),
-            });
-        }
-        // offsets[s + 1] is surface s's cursor during the pass and its end afterwards.
-        offsets[0] = 0;
-        let mut start = 0u32;
-        for s in 0..ns {
-            offsets[s + 1] = start;
-            start += self.index_count(s) as u32;
-        }
+        let total = start_packed(out.len(), offsets, ns, |s| self.index_count(s))?;
         self.for_each_range(o, |s, src| {
             let at = offsets[s + 1] as usize;
             if let Some(dst) = out.get_mut(at..at + src.len()) {
