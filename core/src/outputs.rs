@@ -22,6 +22,32 @@ pub(crate) fn write_too_small(
     }
 }
 
+/// `From<Shortfall>` for an emission error with `TooFewOutputs { needed, given }` and
+/// `OutputTooSmall { surface, needed, given }` variants.
+macro_rules! from_shortfall {
+    ($error:ty) => {
+        impl From<$crate::outputs::Shortfall> for $error {
+            fn from(e: $crate::outputs::Shortfall) -> Self {
+                match e {
+                    $crate::outputs::Shortfall::TooFewOutputs { needed, given } => {
+                        Self::TooFewOutputs { needed, given }
+                    }
+                    $crate::outputs::Shortfall::TooSmall {
+                        surface,
+                        needed,
+                        given,
+                    } => Self::OutputTooSmall {
+                        surface,
+                        needed,
+                        given,
+                    },
+                }
+            }
+        }
+    };
+}
+pub(crate) use from_shortfall;
+
 /// What is wrong with the buffers given for `surfaces` per-surface lists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Shortfall {

@@ -18,7 +18,7 @@ use super::morph::MorphRemap;
 use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{PolyId, SurfaceId};
-use crate::outputs::{check_lists, start_packed, Shortfall};
+use crate::outputs::{check_lists, start_packed};
 
 /// Why indices could not be emitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,22 +62,7 @@ pub enum EmitError {
     },
 }
 
-impl From<Shortfall> for EmitError {
-    fn from(e: Shortfall) -> Self {
-        match e {
-            Shortfall::TooFewOutputs { needed, given } => Self::TooFewOutputs { needed, given },
-            Shortfall::TooSmall {
-                surface,
-                needed,
-                given,
-            } => Self::OutputTooSmall {
-                surface,
-                needed,
-                given,
-            },
-        }
-    }
-}
+crate::outputs::from_shortfall!(EmitError);
 
 impl core::fmt::Display for EmitError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {

@@ -14,7 +14,7 @@ use glam::Vec3;
 
 use super::model::{Octree, OctreeNode};
 use crate::ids::SurfaceId;
-use crate::outputs::{check_lists, start_packed, Shortfall};
+use crate::outputs::{check_lists, start_packed};
 use crate::view::View;
 
 /// Why a cut could not be made, selected or emitted.
@@ -47,22 +47,7 @@ pub enum CutError {
     },
 }
 
-impl From<Shortfall> for CutError {
-    fn from(e: Shortfall) -> Self {
-        match e {
-            Shortfall::TooFewOutputs { needed, given } => Self::TooFewOutputs { needed, given },
-            Shortfall::TooSmall {
-                surface,
-                needed,
-                given,
-            } => Self::OutputTooSmall {
-                surface,
-                needed,
-                given,
-            },
-        }
-    }
-}
+crate::outputs::from_shortfall!(CutError);
 
 impl core::fmt::Display for CutError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
