@@ -30,6 +30,7 @@
 
 mod bake;
 mod block;
+mod replay;
 mod stitch;
 mod tiles;
 
@@ -39,6 +40,13 @@ use rayon::prelude::*;
 
 use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
 use crate::weld::Welded;
+
+/// Share of a block's triangles a level leaves (all but the last, which collapses all it
+/// can): four blocks merged into one of the next level hold about as many triangles as one
+/// of this level, and no block is simplified into the long thin fans a frozen border leaves
+/// around the few positions that remain inside it, which the collapses across the old
+/// border could then hardly undo.
+const LEVEL_SHARE: f64 = 0.25;
 
 /// How the blocks are cut.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,7 +146,12 @@ pub fn build(
         for result in built {
             let (b, h) = result?;
             passes = passes.max(h.passes);
-            whole.stitch(&b, &h, &frozen, levels.is_empty())?;
+            let keep = if side == 1 {
+                stitch::Keep::All
+            } else {
+                stitch::Keep::Share(LEVEL_SHARE)
+            };
+            whole.stitch(&b, &h, &frozen, levels.is_empty(), keep)?;
         }
         whole.clear_border();
         whole.h.passes += passes;

@@ -14,6 +14,7 @@
 use std::collections::HashMap;
 
 use super::block::Block;
+use super::replay::Replay;
 use super::BlockedError;
 use crate::hierarchy::{merge_cones, Collapse, Hierarchy};
 
@@ -84,15 +85,16 @@ impl Whole {
         self.border.clear();
     }
 
-    /// Adds block `b`'s hierarchy `local` (built with its border frozen); `frozen` per
-    /// position of the whole mesh. The leaves of the first level (`first`) take their bounds
-    /// from the blocks that hold them.
+    /// Adds block `b`'s hierarchy `local` (built with its border frozen), or as many of its
+    /// first collapses as `keep` says; `frozen` per position of the whole mesh. The leaves of
+    /// the first level (`first`) take their bounds from the blocks that hold them.
     pub(super) fn stitch(
         &mut self,
         b: &Block,
         local: &Hierarchy,
         frozen: &[bool],
         first: bool,
+        keep: Keep,
     ) -> Result<(), BlockedError> {
         let nl = b.positions.len();
         let mut node: Vec<u32> = b
@@ -117,15 +119,27 @@ impl Whole {
                 m.remove(&e);
             });
         }
+        let mut replay = Replay::new(
+            b.welded.triangles.iter().map(|t| t.p).collect(),
+            nl,
+            local.collapses.len(),
+        );
+        let stop = match keep {
+            Keep::All => 0,
+            Keep::Share(share) => (b.tris.len() as f64 * share) as usize,
+        };
         for (i, c) in local.collapses.iter().enumerate() {
+            if replay.live <= stop {
+                break;
+            }
             let n_local = nl + i;
             let (t, u) = (node[c.t as usize], node[c.u as usize]);
             let tri = |f: u32| if f == NONE { NONE } else { b.tris[f as usize] };
             let mut neighbours = c.neighbours.map(tri);
             let pos_of = |v: u32| b.positions[local.node_position[v as usize] as usize];
-            let corner = |f: u32, k: usize| pos_of(local.corners[f as usize][k]);
-            if local.corners[c.fl as usize][c.rot_l as usize] != c.t {
-                return Err(BlockedError::Stitch("a dead triangle lost its corners"));
+            let corner = |f: u32, k: usize| pos_of(replay.corners[f as usize][k]);
+            if replay.corners[c.fl as usize][c.rot_l as usize] != c.t {
+                return Err(BlockedError::Stitch("a collapse's f_l does not hold its t"));
             }
             // `fl_ccw` lies across `fl`'s edge `x → t`; `fr_clw` across `fr`'s `t → y`.
             let pt = pos_of(c.t);
@@ -161,6 +175,7 @@ impl Whole {
             self.h.parent[ui] = created;
             self.current[pt as usize] = created;
             node.push(created);
+            replay.apply(local, nl, i);
             self.h.collapses.push(Collapse {
                 t,
                 u,
@@ -172,11 +187,11 @@ impl Whole {
             });
         }
         for (i, &f) in b.tris.iter().enumerate() {
-            self.h.corners[f as usize] = local.corners[i].map(|v| node[v as usize]);
-            self.h.alive[f as usize] = local.alive[i];
+            self.h.corners[f as usize] = replay.corners[i].map(|v| node[v as usize]);
+            self.h.alive[f as usize] = replay.alive[i];
         }
         for (i, &f) in b.tris.iter().enumerate() {
-            if local.alive[i] {
+            if replay.alive[i] {
                 self.border_edges(f, frozen, |m, e| {
                     m.insert(e, f);
                 });
@@ -199,6 +214,15 @@ impl Whole {
             }
         }
     }
+}
+
+/// How much of a block's build a level keeps.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Keep {
+    /// Every collapse.
+    All,
+    /// The first collapses, until no more than this share of the block's triangles is left.
+    Share(f64),
 }
 
 /// The distance between the positions of the block's nodes `t` and `u`.
