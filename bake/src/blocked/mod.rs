@@ -13,7 +13,8 @@
 //! 2. each block of a level becomes a mesh of its own (`block`) whose positions shared
 //!    with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
-//!    frozen position. The blocks are independent jobs; here they run on all threads;
+//!    frozen position. The blocks are independent jobs; here as many run at once as there
+//!    are threads;
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
 //!    mesh's nodes and triangles;
 //! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
@@ -134,24 +135,34 @@ pub fn build(
         for b in &blocks {
             whole.add_border(b, &frozen);
         }
-        let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = blocks
-            .into_par_iter()
-            .map(|tris| {
-                let b = block::extract(w, &whole.h.corners, &whole.h.node_position, tris, &frozen);
-                let h = build_frozen(&b.welded, weights, &b.frozen, &mut |_, _| {})?;
-                Ok((b, h))
-            })
-            .collect();
+        // As many blocks at once as there are threads, stitched in block order before the
+        // next ones are built: a level holds only the builds in flight, not all its blocks'.
         let mut passes = 0;
-        for result in built {
-            let (b, h) = result?;
-            passes = passes.max(h.passes);
-            let keep = if side == 1 {
-                stitch::Keep::All
-            } else {
-                stitch::Keep::Share(LEVEL_SHARE)
-            };
-            whole.stitch(&b, &h, &frozen, levels.is_empty(), keep)?;
+        for chunk in blocks.chunks(rayon::current_num_threads().max(1)) {
+            let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = chunk
+                .par_iter()
+                .map(|tris| {
+                    let b = block::extract(
+                        w,
+                        &whole.h.corners,
+                        &whole.h.node_position,
+                        tris.clone(),
+                        &frozen,
+                    );
+                    let h = build_frozen(&b.welded, weights, &b.frozen, &mut |_, _| {})?;
+                    Ok((b, h))
+                })
+                .collect();
+            for result in built {
+                let (b, h) = result?;
+                passes = passes.max(h.passes);
+                let keep = if side == 1 {
+                    stitch::Keep::All
+                } else {
+                    stitch::Keep::Share(LEVEL_SHARE)
+                };
+                whole.stitch(&b, &h, &frozen, levels.is_empty(), keep)?;
+            }
         }
         whole.clear_border();
         whole.h.passes += passes;
