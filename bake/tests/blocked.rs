@@ -224,3 +224,32 @@ fn a_blocked_terrain_is_one_valid_hierarchy_whose_roots_bound_the_input() {
         }
     }
 }
+
+#[test]
+fn the_blocked_hierarchy_is_the_same_on_one_thread_and_on_several() {
+    let w = welded(40, true);
+    let options = BlockedOptions {
+        block_triangles: 400,
+    };
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| {
+                blocked::build(&w, &AttributeWeights::default(), &options, &mut |_, _| {})
+                    .expect("blocked build")
+            })
+    };
+    let (one, four) = (on(1), on(4));
+    let key = |h: &Hierarchy| -> Vec<_> {
+        h.collapses
+            .iter()
+            .map(|c| (c.t, c.u, c.fl, c.fr, c.neighbours, c.rot_l, c.rot_r))
+            .collect()
+    };
+    assert_eq!(key(&one.hierarchy), key(&four.hierarchy));
+    assert_eq!(one.hierarchy.error, four.hierarchy.error);
+    assert_eq!(one.hierarchy.radius, four.hierarchy.radius);
+    assert_eq!(one.levels, four.levels);
+}
