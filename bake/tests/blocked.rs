@@ -26,7 +26,7 @@ fn welded(nx: u32, holed: bool) -> Welded {
 fn a_frozen_position_is_never_removed_but_others_collapse_onto_it() {
     let w = welded(20, false);
     let frozen: Vec<bool> = (0..w.positions.len()).map(|x| x % 3 == 0).collect();
-    let h = hierarchy::build_frozen(&w, &AttributeWeights::default(), &frozen, &mut |_, _| {})
+    let h = hierarchy::build_frozen(&w, &AttributeWeights::default(), &frozen, 0, &mut |_, _| {})
         .expect("build");
     assert!(h.collapses.len() > w.positions.len() / 3);
     let mut onto_frozen = 0;
@@ -252,4 +252,27 @@ fn the_blocked_hierarchy_is_the_same_on_one_thread_and_on_several() {
     assert_eq!(one.hierarchy.error, four.hierarchy.error);
     assert_eq!(one.hierarchy.radius, four.hierarchy.radius);
     assert_eq!(one.levels, four.levels);
+}
+
+#[test]
+fn a_build_stopped_early_is_the_start_of_the_full_one() {
+    let w = welded(24, true);
+    let frozen: Vec<bool> = (0..w.positions.len()).map(|x| x % 7 == 0).collect();
+    let weights = AttributeWeights::default();
+    let full = hierarchy::build_frozen(&w, &weights, &frozen, 0, &mut |_, _| {}).expect("full");
+    let stop_at = w.triangles.len() / 4;
+    let part =
+        hierarchy::build_frozen(&w, &weights, &frozen, stop_at, &mut |_, _| {}).expect("part");
+    assert!(part.collapses.len() < full.collapses.len());
+    let live = part.alive.iter().filter(|&&a| a).count();
+    assert!(live <= stop_at, "{live} > {stop_at}");
+    for (a, b) in part.collapses.iter().zip(&full.collapses) {
+        assert_eq!(
+            (a.t, a.u, a.fl, a.fr, a.neighbours),
+            (b.t, b.u, b.fl, b.fr, b.neighbours)
+        );
+    }
+    let nodes = w.positions.len() + part.collapses.len();
+    assert_eq!(part.error[..], full.error[..nodes]);
+    assert_eq!(part.radius[..], full.radius[..nodes]);
 }

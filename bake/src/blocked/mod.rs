@@ -13,7 +13,8 @@
 //! 2. each block of a level becomes a mesh of its own (`block`) whose positions shared
 //!    with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
-//!    frozen position. The blocks are independent jobs; here as many run at once as there
+//!    frozen position, down to a quarter of its triangles on every level but the last
+//!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
 //!    are threads;
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
 //!    mesh's nodes and triangles;
@@ -138,6 +139,11 @@ pub fn build(
         // As many blocks at once as there are threads, stitched in block order before the
         // next ones are built: a level holds only the builds in flight, not all its blocks'.
         let mut passes = 0;
+        let keep = if side == 1 {
+            stitch::Keep::All
+        } else {
+            stitch::Keep::Share(LEVEL_SHARE)
+        };
         for chunk in blocks.chunks(rayon::current_num_threads().max(1)) {
             let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = chunk
                 .par_iter()
@@ -149,18 +155,19 @@ pub fn build(
                         tris.clone(),
                         &frozen,
                     );
-                    let h = build_frozen(&b.welded, weights, &b.frozen, &mut |_, _| {})?;
+                    // The level keeps only the collapses down to its share; the passes
+                    // after it would be thrown away.
+                    let stop_at = match keep {
+                        stitch::Keep::All => 0,
+                        stitch::Keep::Share(share) => (tris.len() as f64 * share) as usize,
+                    };
+                    let h = build_frozen(&b.welded, weights, &b.frozen, stop_at, &mut |_, _| {})?;
                     Ok((b, h))
                 })
                 .collect();
             for result in built {
                 let (b, h) = result?;
                 passes = passes.max(h.passes);
-                let keep = if side == 1 {
-                    stitch::Keep::All
-                } else {
-                    stitch::Keep::Share(LEVEL_SHARE)
-                };
                 whole.stitch(&b, &h, &frozen, levels.is_empty(), keep)?;
             }
         }

@@ -203,21 +203,24 @@ pub fn build(
     weights: &AttributeWeights,
     progress: Progress<'_>,
 ) -> Result<Hierarchy, BuildError> {
-    build_frozen(w, weights, &[], progress)
+    build_frozen(w, weights, &[], 0, progress)
 }
 
 /// Builds the hierarchy of a welded mesh whose positions `frozen[x]` (absent: not frozen)
 /// stay where they are: a frozen position is never the one a collapse removes, as if it were
 /// RIGID, but others may collapse onto it. A block of a larger mesh is built this way with its
-/// border frozen ([`crate::blocked`]), so that the blocks around it still fit.
+/// border frozen ([`crate::blocked`]), so that the blocks around it still fit. The passes end
+/// early after the first that leaves `stop_at` triangles or fewer (0: they go on until none
+/// applies anything); the collapses until then are those a full build begins with.
 pub fn build_frozen(
     w: &Welded,
     weights: &AttributeWeights,
     frozen: &[bool],
+    stop_at: usize,
     progress: Progress<'_>,
 ) -> Result<Hierarchy, BuildError> {
     let threads = rayon::current_num_threads().min(MAX_THREADS);
     let mut work = setup::work(w, weights, frozen, threads);
-    pass::collapse_all(&mut work, threads, progress)?;
+    pass::collapse_all(&mut work, threads, stop_at, progress)?;
     Ok(work.into_hierarchy())
 }
