@@ -3,13 +3,15 @@
 //! From real meshes to baked caveclod hierarchies, as a library for asset pipelines and build
 //! scripts: importers ([`import`], each format a cargo feature), welding, repairs and surface
 //! groups ([`weld`]), attribute-aware quadric simplification into a balanced hierarchy of
-//! half-edge collapses ([`hierarchy`], [`quadric`]), g-mesh levels ([`gmesh`]), out-of-core
+//! half-edge collapses ([`hierarchy`], [`quadric`]), the same hierarchy built in blocks for meshes
+//! too large for one build ([`blocked`]), g-mesh levels ([`gmesh`]), out-of-core
 //! simplification with a multiresolution octree ([`ooc`]), materials and vertex colours
 //! ([`materials`]), the `.clod` writer ([`baked`]),
 //! and OBJ export ([`export`]). [`pipeline`] runs the whole bake; progress reaches the caller
 //! through the callbacks it passes. The `caveclod` command-line tool is `caveclod-cli`.
 
 pub mod baked;
+pub mod blocked;
 pub mod export;
 mod fxhash;
 pub mod gmesh;

@@ -1,6 +1,7 @@
 //! Criterion benchmarks of caveclod live in `benches/`; this library holds what several of
 //! them share.
 
+pub mod cut;
 pub mod distance;
 
 use caveclod_core::glam::Vec3;

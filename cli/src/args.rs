@@ -58,7 +58,13 @@ pub struct BakeArgs {
     /// size whose hierarchy fits the memory budget.
     #[arg(long)]
     pub out_of_core: bool,
-    /// Memory budget for --out-of-core (256M, 1G, ...).
+    /// Build the hierarchy in blocks, level by level: square blocks of the input built with
+    /// their borders frozen, then merged two by two and built across the old borders. The
+    /// whole hierarchy, as many polygons as the input; each block's build fits the memory
+    /// budget, several at once.
+    #[arg(long, conflicts_with = "out_of_core")]
+    pub blocked: bool,
+    /// Memory budget for --out-of-core and --blocked (256M, 1G, ...).
     #[arg(long, default_value = "256M", value_parser = caveclod_bake::ooc::parse_size)]
     pub memory_budget: u64,
     /// Directory for --out-of-core's temporary files (the system's by default).

@@ -104,7 +104,7 @@ pub(super) fn corner_of(c: [u32; 3], v: u32) -> usize {
 }
 
 /// Smallest cone containing two cones `(axis, half angle)`.
-pub(super) fn merge_cones(a: ([f32; 3], f32), b: ([f32; 3], f32)) -> ([f32; 3], f32) {
+pub(crate) fn merge_cones(a: ([f32; 3], f32), b: ([f32; 3], f32)) -> ([f32; 3], f32) {
     use std::f32::consts::PI;
     let d = (a.0[0] * b.0[0] + a.0[1] * b.0[1] + a.0[2] * b.0[2]).clamp(-1.0, 1.0);
     let phi = d.acos();

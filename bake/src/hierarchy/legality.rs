@@ -65,7 +65,7 @@ impl Work<'_> {
     }
 
     /// The surface-group rules for moving `u` onto `t` across an edge with the triangles
-    /// `fl` and `fr` (`NONE` on a border): a RIGID position never floats; a SHARP one
+    /// `fl` and `fr` (`NONE` on a border): a RIGID or frozen position never floats; a SHARP one
     /// floats only along a boundary onto a non-FREE one; every group at `u` has a vertex
     /// at `t`.
     #[inline]
@@ -75,6 +75,9 @@ impl Work<'_> {
             self.node_pos[u as usize] as usize,
         );
         let (it, iu) = (self.info[pt], self.info[pu]);
+        if iu.frozen {
+            return false;
+        }
         match iu.class {
             PositionClass::Rigid => return false,
             PositionClass::Sharp => {

@@ -38,7 +38,7 @@
 //!   ([`crate::weld::Attributes::normal_from_geometry`]: computed, or an importer's smooth
 //!   one) gets no weight: it would only make curved regions dearer, which the distance
 //!   term already does, at the expense of geometric accuracy.
-//! - **Legality**: the surface-group rules (a RIGID position never floats; a SHARP one floats
+//! - **Legality**: the surface-group rules (a RIGID or frozen position never floats; a SHARP one floats
 //!   only along a boundary edge onto a non-FREE position; every group at the removed position
 //!   must have a vertex at the kept one), the link condition, no doubled faces, no face
 //!   flipped or collapsed, and Hoppe's requirement that `fl_clw` (and `fr_ccw` when `f_r`
@@ -63,6 +63,7 @@
 mod bounds;
 mod collapse;
 mod geometry;
+pub(crate) use geometry::merge_cones;
 mod legality;
 mod pass;
 mod rank;
@@ -202,8 +203,24 @@ pub fn build(
     weights: &AttributeWeights,
     progress: Progress<'_>,
 ) -> Result<Hierarchy, BuildError> {
+    build_frozen(w, weights, &[], 0, progress)
+}
+
+/// Builds the hierarchy of a welded mesh whose positions `frozen[x]` (absent: not frozen)
+/// stay where they are: a frozen position is never the one a collapse removes, as if it were
+/// RIGID, but others may collapse onto it. A block of a larger mesh is built this way with its
+/// border frozen ([`crate::blocked`]), so that the blocks around it still fit. The passes end
+/// early after the first that leaves `stop_at` triangles or fewer (0: they go on until none
+/// applies anything); the collapses until then are those a full build begins with.
+pub fn build_frozen(
+    w: &Welded,
+    weights: &AttributeWeights,
+    frozen: &[bool],
+    stop_at: usize,
+    progress: Progress<'_>,
+) -> Result<Hierarchy, BuildError> {
     let threads = rayon::current_num_threads().min(MAX_THREADS);
-    let mut work = setup::work(w, weights, threads);
-    pass::collapse_all(&mut work, threads, progress)?;
+    let mut work = setup::work(w, weights, frozen, threads);
+    pass::collapse_all(&mut work, threads, stop_at, progress)?;
     Ok(work.into_hierarchy())
 }

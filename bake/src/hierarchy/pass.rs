@@ -20,6 +20,7 @@ use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 pub(super) fn collapse_all(
     work: &mut Work<'_>,
     threads: usize,
+    stop_at: usize,
     progress: Progress<'_>,
 ) -> Result<(), BuildError> {
     let mut passes = Passes::new(work.tris.len());
@@ -48,7 +49,7 @@ pub(super) fn collapse_all(
                 "a pass over every ranked collapse stopped at a share",
             ));
         }
-        if applied == 0 && (full || !cut) {
+        if applied == 0 && (full || !cut) || stop_at > 0 && live_triangles(work) <= stop_at {
             return Ok(());
         }
         if u64::from(pass) >= max_passes || done > most {
@@ -59,6 +60,17 @@ pub(super) fn collapse_all(
         }
         full = applied == 0;
     }
+}
+
+/// Triangles left: each collapse removes its `f_l`, and its `f_r` when it has one.
+fn live_triangles(work: &Work<'_>) -> usize {
+    let removed: usize = work
+        .h
+        .collapses
+        .iter()
+        .map(|c| 1 + usize::from(c.fr != NONE))
+        .sum();
+    work.tris.len() - removed
 }
 
 /// What the passes keep from one to the next.

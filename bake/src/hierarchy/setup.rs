@@ -31,7 +31,12 @@ struct Setup<'a> {
 
 /// The work for a welded mesh, with the quadrics of every wedge, the triangles around every
 /// position, and the leaves' rings, cones and radii.
-pub(super) fn work<'w>(w: &'w Welded, weights: &AttributeWeights, threads: usize) -> Work<'w> {
+pub(super) fn work<'w>(
+    w: &'w Welded,
+    weights: &AttributeWeights,
+    frozen: &[bool],
+    threads: usize,
+) -> Work<'w> {
     let np = w.positions.len();
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
@@ -40,7 +45,7 @@ pub(super) fn work<'w>(w: &'w Welded, weights: &AttributeWeights, threads: usize
     s.add_triangle_quadrics(&mut faces_of, &mut wedges, &wedge_start);
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
-    let info = position_info(w);
+    let info = position_info(w, frozen);
     let diagonal = s.diagonal;
     let p = s.p;
     let pos = p.clone();
@@ -251,13 +256,15 @@ impl<'a> Setup<'a> {
     }
 }
 
-/// What the surface-group rules read of every position.
-fn position_info(w: &Welded) -> Vec<PosInfo> {
+/// What the surface-group rules read of every position (`frozen[x]`, absent: false).
+fn position_info(w: &Welded, frozen: &[bool]) -> Vec<PosInfo> {
     w.classes
         .iter()
         .zip(&w.vertices)
-        .map(|(&class, vs)| PosInfo {
+        .enumerate()
+        .map(|(x, (&class, vs))| PosInfo {
             class,
+            frozen: frozen.get(x).copied().unwrap_or(false),
             group: match vs.as_slice() {
                 [(g, _)] => *g,
                 _ => NONE,

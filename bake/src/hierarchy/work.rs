@@ -48,6 +48,8 @@ pub(super) struct NodeOut {
 #[derive(Clone, Copy)]
 pub(super) struct PosInfo {
     pub(super) class: PositionClass,
+    /// Never removed by a collapse ([`super::build_frozen`]).
+    pub(super) frozen: bool,
     /// The position's one surface group, or `NONE` when it has several.
     pub(super) group: u32,
 }

@@ -2,6 +2,7 @@
 //! levels, write the .clod file and print its report.
 
 use caveclod_bake::baked::Baked;
+use caveclod_bake::blocked::{bake_file_blocked, BlockedOptions, LevelStats};
 use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
@@ -24,6 +25,8 @@ struct Made {
     ooc_stats: Option<OocStats>,
     /// The multiresolution octree (out of core only, when the options ask for it).
     octree: Option<MultiresOctree>,
+    /// The levels of a blocked build (blocked only).
+    levels: Option<(BlockedOptions, Vec<LevelStats>)>,
 }
 
 /// Bakes the input, writes the .clod file, reads it back and prints its report. The output
@@ -40,6 +43,8 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
     let mut on_stage = |s: Stage| show_stage(&bar, s);
     let made = if a.out_of_core {
         bake_streamed(a, &mut on_stage)
+    } else if a.blocked {
+        bake_blocked(a, &mut on_stage)
     } else {
         bake_file(
             &a.input,
@@ -51,6 +56,7 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
             info,
             ooc_stats: None,
             octree: None,
+            levels: None,
         })
         .map_err(|e| e.to_string())
     };
@@ -137,7 +143,38 @@ fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, 
         info: o.info,
         ooc_stats: Some(o.stats),
         octree: o.octree,
+        levels: None,
     })
+}
+
+/// Bytes per input triangle a block's build peaks at (the in-core build's, measured), which
+/// sizes the blocks from the memory budget.
+const BLOCK_BYTES_PER_TRIANGLE: u64 = 1024;
+
+/// Bakes the input in blocks ([`caveclod_bake::blocked`]), the blocks sized so that as
+/// many builds as run at once fit the memory budget.
+fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, String> {
+    let options =
+        BlockedOptions::for_budget(a.memory_budget, rayon_threads(), BLOCK_BYTES_PER_TRIANGLE);
+    let (baked, info, levels) = bake_file_blocked(
+        &a.input,
+        &ImportOptions { spacing: a.spacing },
+        &options,
+        on_stage,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(Made {
+        baked,
+        info,
+        ooc_stats: None,
+        octree: None,
+        levels: Some((options, levels)),
+    })
+}
+
+/// Threads the blocks of a level are built on.
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, usize::from)
 }
 
 /// The g-mesh levels over the baked hierarchy, down to `min_polygons` (the default if `None`).
@@ -179,6 +216,21 @@ fn bake_report(h: &Hierarchy<'_>, made: &Made, memory_budget: u64) -> Map<String
             json!(st.input_triangles as f64 / info.bake_seconds),
         );
         r.insert("out_of_core".into(), ooc_report(st, memory_budget));
+    }
+    if let Some((options, levels)) = &made.levels {
+        r.insert(
+            "blocked".into(),
+            json!({
+                "memory_budget": memory_budget,
+                "block_triangles": options.block_triangles,
+                "levels": levels.iter().map(|l| json!({
+                    "blocks": l.blocks,
+                    "largest_block": l.largest_block,
+                    "triangles": l.triangles,
+                    "collapses": l.collapses,
+                })).collect::<Vec<_>>(),
+            }),
+        );
     }
     r.insert(
         "peak_rss_bytes".into(),

@@ -12,7 +12,7 @@ mod render;
 
 use std::path::Path;
 
-use caveclod_cli::aligned::AlignedBytes;
+use caveclod_cli::mapped::ClodBytes;
 use caveclod_core::Hierarchy;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -32,13 +32,13 @@ pub fn run(cli: Cli) -> Result<(), String> {
     }
 }
 
-/// Reads a .clod file into aligned memory and hands its validated hierarchy to `f`.
+/// Maps a .clod file and hands its validated hierarchy, borrowing the mapped bytes, to `f`.
 fn with_hierarchy<T>(
     path: &Path,
     f: impl FnOnce(&Hierarchy<'_>) -> Result<T, String>,
 ) -> Result<T, String> {
-    // Cache-line aligned: no record straddles two lines.
-    let file = AlignedBytes::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    // Page aligned: no record straddles two cache lines.
+    let file = ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let h = file
         .hierarchy()
         .map_err(|e| format!("{}: {e}", path.display()))?;

@@ -10,20 +10,21 @@ use std::time::Instant;
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, Stage};
 use caveclod_cli::aligned::AlignedBytes;
+use caveclod_cli::mapped::ClodBytes;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
 use caveclod_vulkan::MorphStage;
 use caveclod_vulkan::Viewport;
 
 use crate::controls::CameraControl;
 
-/// Reads a `.clod` file, or bakes any other file caveclod-bake imports (OBJ, PLY, glTF,
+/// Maps a `.clod` file, or bakes any other file caveclod-bake imports (OBJ, PLY, glTF,
 /// DEM, NPY) in memory, reporting its stages on stderr.
-pub fn load(path: &Path, spacing: Option<f32>) -> Result<AlignedBytes, String> {
+pub fn load(path: &Path, spacing: Option<f32>) -> Result<ClodBytes, String> {
     let is_clod = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("clod"));
     if is_clod {
-        return AlignedBytes::read(path).map_err(|e| format!("{}: {e}", path.display()));
+        return ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()));
     }
     let start = Instant::now();
     let mut progress = BakeProgress::new();
@@ -39,7 +40,7 @@ pub fn load(path: &Path, spacing: Option<f32>) -> Result<AlignedBytes, String> {
         info.input_triangles,
         start.elapsed().as_secs_f64()
     );
-    Ok(AlignedBytes::from_slice(&bytes))
+    Ok(AlignedBytes::from_slice(&bytes).into())
 }
 
 /// Shows the bake's stage on stderr: on a terminal one line rewritten in place, with the

@@ -1,0 +1,223 @@
+//! Building the vertex hierarchy of a mesh in blocks, level by level (Hoppe's construction
+//! for terrains too large for one build).
+//!
+//! References:
+//! - Hugues Hoppe. Smooth view-dependent level-of-detail control and its application to
+//!   terrain rendering. 1998 (blocks simplified with their borders frozen, then merged with
+//!   their neighbours and simplified across the old borders, level by level)
+//!
+//! The steps ([`build`]):
+//! 1. the blocks of the first level: square tiles over the mesh's two widest axes
+//!    (`tiles`), a triangle in the tile of its centroid, as many tiles as keep a block near
+//!    [`BlockedOptions::block_triangles`];
+//! 2. each block of a level becomes a mesh of its own (`block`) whose positions shared
+//!    with another block are frozen, and is built on its own
+//!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
+//!    frozen position, down to a quarter of its triangles on every level but the last
+//!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
+//!    are threads;
+//! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
+//!    mesh's nodes and triangles;
+//! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
+//!    from what the last one left, their old borders no longer frozen; the level of a single
+//!    block, nothing frozen, ends it, as the in-core build ends.
+//!
+//! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
+//! `0..positions` the leaves, collapse `c` creating node `positions + c`, so
+//! [`crate::baked::Baked::new`] turns it into a `.clod` as it does an in-core build. A
+//! node's bounds hold everything below it across the levels: its radius holds its
+//! children's spheres, its cone their cones, and its error adds the block's own measure
+//! (the distance of the level's positions from the triangles that replace them) to the
+//! largest error of the nodes the level started from below it.
+
+mod bake;
+mod block;
+mod replay;
+mod stitch;
+mod tiles;
+
+pub use bake::{bake_file_blocked, bake_mesh_blocked, BlockedBakeError};
+
+use rayon::prelude::*;
+
+use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
+use crate::weld::Welded;
+
+/// Share of a block's triangles a level leaves (all but the last, which collapses all it
+/// can): four blocks merged into one of the next level hold about as many triangles as one
+/// of this level, and no block is simplified into the long thin fans a frozen border leaves
+/// around the few positions that remain inside it, which the collapses across the old
+/// border could then hardly undo.
+const LEVEL_SHARE: f64 = 0.25;
+
+/// How the blocks are cut.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BlockedOptions {
+    /// Triangles a first-level block holds about (at most on average): the tiles per axis
+    /// are the smallest power of two that keeps the blocks this small.
+    pub block_triangles: usize,
+}
+
+impl BlockedOptions {
+    /// Blocks whose in-core build fits `budget` bytes with `jobs` of them built at once,
+    /// at `bytes_per_triangle` of the build's peak per triangle.
+    pub fn for_budget(budget: u64, jobs: usize, bytes_per_triangle: u64) -> Self {
+        let per_job = budget / jobs.max(1) as u64;
+        Self {
+            block_triangles: (per_job / bytes_per_triangle.max(1)).max(1024) as usize,
+        }
+    }
+}
+
+/// What one level did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LevelStats {
+    /// Blocks built.
+    pub blocks: usize,
+    /// Triangles of the largest block.
+    pub largest_block: usize,
+    /// Triangles alive at the level's start.
+    pub triangles: usize,
+    /// Collapses the level applied.
+    pub collapses: usize,
+}
+
+/// The whole hierarchy and the levels that built it.
+#[derive(Clone, Debug)]
+pub struct Blocked {
+    /// The hierarchy, as [`crate::hierarchy::build`] would hand it over.
+    pub hierarchy: Hierarchy,
+    /// Per level, from the first.
+    pub levels: Vec<LevelStats>,
+}
+
+/// Why a blocked build failed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum BlockedError {
+    /// A block's build broke an invariant.
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// A block's hierarchy did not fit the whole (a baker bug).
+    #[error("internal error: a block's hierarchy does not join the whole: {0}")]
+    Stitch(&'static str),
+}
+
+/// Builds the hierarchy of `w` in blocks; `progress` gets `(collapses so far, at most
+/// collapsible)` after each level.
+pub fn build(
+    w: &Welded,
+    weights: &AttributeWeights,
+    options: &BlockedOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Blocked, BlockedError> {
+    let np = w.positions.len();
+    let most = np.saturating_sub(1) as u64;
+    let grid = tiles::Grid::new(
+        w,
+        tiles::side_for(w.triangles.len(), options.block_triangles),
+    );
+    let mut tile: Vec<u32> = w
+        .triangles
+        .iter()
+        .map(|t| grid.tile_of(t.p.map(|x| w.positions[x as usize])))
+        .collect();
+    let mut side = grid.side;
+    let mut whole = stitch::Whole::new(np, w.triangles.iter().map(|t| t.p).collect());
+    let mut levels = Vec::new();
+    loop {
+        let blocks = blocks_of(&tile, &whole.h.alive, side);
+        let frozen = shared_positions(&blocks, &whole.h, np);
+        let mut stats = LevelStats {
+            blocks: blocks.len(),
+            largest_block: blocks.iter().map(Vec::len).max().unwrap_or(0),
+            triangles: blocks.iter().map(Vec::len).sum(),
+            collapses: whole.h.collapses.len(),
+        };
+        for b in &blocks {
+            whole.add_border(b, &frozen);
+        }
+        // As many blocks at once as there are threads, stitched in block order before the
+        // next ones are built: a level holds only the builds in flight, not all its blocks'.
+        let mut passes = 0;
+        let keep = if side == 1 {
+            stitch::Keep::All
+        } else {
+            stitch::Keep::Share(LEVEL_SHARE)
+        };
+        for chunk in blocks.chunks(rayon::current_num_threads().max(1)) {
+            let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = chunk
+                .par_iter()
+                .map(|tris| {
+                    let b = block::extract(
+                        w,
+                        &whole.h.corners,
+                        &whole.h.node_position,
+                        tris.clone(),
+                        &frozen,
+                    );
+                    // The level keeps only the collapses down to its share; the passes
+                    // after it would be thrown away.
+                    let stop_at = match keep {
+                        stitch::Keep::All => 0,
+                        stitch::Keep::Share(share) => (tris.len() as f64 * share) as usize,
+                    };
+                    let h = build_frozen(&b.welded, weights, &b.frozen, stop_at, &mut |_, _| {})?;
+                    Ok((b, h))
+                })
+                .collect();
+            for result in built {
+                let (b, h) = result?;
+                passes = passes.max(h.passes);
+                whole.stitch(&b, &h, &frozen, levels.is_empty(), keep)?;
+            }
+        }
+        whole.clear_border();
+        whole.h.passes += passes;
+        stats.collapses = whole.h.collapses.len() - stats.collapses;
+        levels.push(stats);
+        progress(whole.h.collapses.len() as u64, most);
+        if side == 1 {
+            break;
+        }
+        for t in &mut tile {
+            *t = tiles::merged(*t, side);
+        }
+        side /= 2;
+    }
+    Ok(Blocked {
+        hierarchy: whole.h,
+        levels,
+    })
+}
+
+/// The live triangles of each non-empty tile of a grid of side `side`, by tile.
+fn blocks_of(tile: &[u32], alive: &[bool], side: u32) -> Vec<Vec<u32>> {
+    let mut by_tile: Vec<Vec<u32>> = vec![Vec::new(); (side * side) as usize];
+    for (f, (&t, &a)) in tile.iter().zip(alive).enumerate() {
+        if a {
+            by_tile[t as usize].push(f as u32);
+        }
+    }
+    by_tile.retain(|b| !b.is_empty());
+    by_tile
+}
+
+/// Per position: whether triangles of more than one block touch it.
+fn shared_positions(blocks: &[Vec<u32>], h: &Hierarchy, positions: usize) -> Vec<bool> {
+    const UNSEEN: u32 = u32::MAX;
+    let mut owner = vec![UNSEEN; positions];
+    let mut shared = vec![false; positions];
+    for (i, b) in blocks.iter().enumerate() {
+        for &f in b {
+            for v in h.corners[f as usize] {
+                let x = h.node_position[v as usize] as usize;
+                if owner[x] == UNSEEN {
+                    owner[x] = i as u32;
+                } else if owner[x] != i as u32 {
+                    shared[x] = true;
+                }
+            }
+        }
+    }
+    shared
+}
