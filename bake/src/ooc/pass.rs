@@ -131,7 +131,12 @@ impl<'a> Clustering<'a> {
         let mut c = parts
             .next()
             .unwrap_or_else(|| self.new_clusterer(resolution));
-        for p in parts {
+        let rest: Vec<Clusterer> = parts.collect();
+        c.reserve(
+            rest.iter().map(Clusterer::cluster_count).sum(),
+            rest.iter().map(Clusterer::triangle_count).sum(),
+        );
+        for p in rest {
             c.merge(&p);
         }
         Ok(c)

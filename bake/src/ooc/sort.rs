@@ -39,15 +39,19 @@ use super::stream::SoupSink;
 use super::temp::{SpillWriter, TempSpace};
 use super::OocError;
 
-/// Bytes of chunk a triangle takes: its item and its `(key, index)` sort pair, twice (the
-/// radix sort's scatter buffer).
-const fn chunk_bytes_per_triangle<T>() -> usize {
-    std::mem::size_of::<T>() + 2 * std::mem::size_of::<(u64, u32)>()
+/// Bytes of chunk a triangle takes: its item, and twice its `(key, index)` sort pair (the
+/// radix sort's scatter buffer) for records, or twice the key (sorted in place) for keys.
+const fn chunk_bytes_per_triangle<T: RunItem>() -> usize {
+    if T::RECORDS {
+        std::mem::size_of::<T>() + 2 * std::mem::size_of::<(u64, u32)>()
+    } else {
+        2 * std::mem::size_of::<T>()
+    }
 }
 
 /// What a sort chunk holds per triangle: its whole record ([`SoupTriangle`]) or its key alone
 /// (`u64`, for a pass that needs only the order and the occupied cells).
-pub trait RunItem: Pod + Send + Sync {
+pub trait RunItem: Pod + Default + Send + Sync {
     /// Whether runs of this item have records besides their keys.
     const RECORDS: bool;
     /// The item of a triangle.
@@ -207,7 +211,8 @@ impl<'a, T: RunItem> RunBuilder<'a, T> {
         let h = std::thread::Builder::new()
             .name("caveclod-sort".into())
             .spawn(move || {
-                write_run(&chunk, records, keys)
+                let mut chunk = chunk;
+                write_run(&mut chunk, records, keys)
                     .map(|(records, keys)| {
                         let run = Run {
                             records,
@@ -335,6 +340,10 @@ impl SoupSink for RunBuilder<'_, u64> {
         Ok(())
     }
 
+    fn positions_only(&self) -> bool {
+        true
+    }
+
     /// The reader fills a scratch record; its key is kept at the next call (or the finish).
     #[inline]
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError> {
@@ -352,12 +361,23 @@ impl SoupSink for RunBuilder<'_, u64> {
 }
 
 /// Sorts a chunk's triangles by key and writes their records (where there are) and their
-/// keys; returns the two paths.
+/// keys; returns the two paths. Keys alone are sorted in place; records through `(key,
+/// index)` pairs and one gather, so the 96-byte records move once.
 fn write_run<T: RunItem>(
-    chunk: &[T],
-    mut records: Option<SpillWriter>,
+    chunk: &mut Vec<T>,
+    records: Option<SpillWriter>,
     mut keys: SpillWriter,
 ) -> io::Result<(Option<PathBuf>, PathBuf)> {
+    let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
+    let Some(mut records) = records else {
+        radix_sort_by(chunk, T::key);
+        for part in chunk.chunks(4096) {
+            kbuf.clear();
+            kbuf.extend(part.iter().map(T::key));
+            keys.write_all(bytemuck::cast_slice(&kbuf))?;
+        }
+        return Ok((None, keys.finish()?));
+    };
     let mut order: Vec<(u64, u32)> = chunk
         .iter()
         .enumerate()
@@ -365,19 +385,15 @@ fn write_run<T: RunItem>(
         .collect();
     radix_sort(&mut order);
     let mut buf: Vec<T> = Vec::with_capacity(4096);
-    let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
     for part in order.chunks(4096) {
-        if let Some(records) = &mut records {
-            buf.clear();
-            buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
-            records.write_all(bytemuck::cast_slice(&buf))?;
-        }
+        buf.clear();
+        buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
+        records.write_all(bytemuck::cast_slice(&buf))?;
         kbuf.clear();
         kbuf.extend(part.iter().map(|&(k, _)| k));
         keys.write_all(bytemuck::cast_slice(&kbuf))?;
     }
-    let records = records.map(SpillWriter::finish).transpose()?;
-    Ok((records, keys.finish()?))
+    Ok((Some(records.finish()?), keys.finish()?))
 }
 
 /// Bits of a radix-sort digit.
@@ -388,7 +404,12 @@ const DIGIT_BITS: u32 = 11;
 /// shares (the high digits of a run's keys, which come from one region of the input, mostly
 /// are). Six passes at most, linear time, against the `n log n` comparisons of a sort.
 fn radix_sort(v: &mut Vec<(u64, u32)>) {
-    let Some(&(first, _)) = v.first() else {
+    radix_sort_by(v, |&(k, _)| k);
+}
+
+/// The radix sort of [`radix_sort`] on any items by `key` (stable).
+fn radix_sort_by<E: Copy + Default>(v: &mut Vec<E>, key: impl Fn(&E) -> u64) {
+    let Some(first) = v.first().map(&key) else {
         return;
     };
     const DIGITS: usize = 64usize.div_ceil(DIGIT_BITS as usize);
@@ -396,13 +417,14 @@ fn radix_sort(v: &mut Vec<(u64, u32)>) {
     let mask = RADIX as u64 - 1;
     let mut varying = 0u64;
     let mut counts = vec![[0usize; RADIX]; DIGITS];
-    for &(k, _) in v.iter() {
+    for e in v.iter() {
+        let k = key(e);
         varying |= k ^ first;
         for (d, c) in counts.iter_mut().enumerate() {
             c[((k >> (d as u32 * DIGIT_BITS)) & mask) as usize] += 1;
         }
     }
-    let mut other = vec![(0u64, 0u32); v.len()];
+    let mut other = vec![E::default(); v.len()];
     for (d, c) in counts.iter_mut().enumerate() {
         let shift = d as u32 * DIGIT_BITS;
         if (varying >> shift) & mask == 0 {
@@ -414,9 +436,9 @@ fn radix_sort(v: &mut Vec<(u64, u32)>) {
             *n = at;
             at += here;
         }
-        for &(k, i) in v.iter() {
-            let b = ((k >> shift) & mask) as usize;
-            other[c[b]] = (k, i);
+        for e in v.iter() {
+            let b = ((key(e) >> shift) & mask) as usize;
+            other[c[b]] = *e;
             c[b] += 1;
         }
         std::mem::swap(v, &mut other);

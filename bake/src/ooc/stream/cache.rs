@@ -53,6 +53,17 @@ impl<T: Pod, S: RecordSource<T>> BlockCache<T, S> {
         }
     }
 
+    /// The source, to change how it reads; [`BlockCache::clear`] then drops what it read
+    /// before.
+    pub fn source_mut(&mut self) -> &mut S {
+        &mut self.source
+    }
+
+    /// Forgets every cached block.
+    pub fn clear(&mut self) {
+        self.tags.fill(u64::MAX);
+    }
+
     /// Record `i` (below the count).
     #[inline]
     pub fn get(&mut self, i: u64) -> io::Result<T> {

@@ -49,6 +49,11 @@ pub trait SoupSink {
     /// Room for one more triangle, which the caller fills in completely (its key too):
     /// readers build triangles in place, with no copy of the record on the way.
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
+    /// Whether the sink reads only the triangles' positions and keys: readers may then leave
+    /// the other attributes out (zero).
+    fn positions_only(&self) -> bool {
+        false
+    }
     /// One triangle (its key already set).
     fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
         *self.slot()? = *t;

@@ -80,8 +80,10 @@ impl<'a> PlyInput<'a> {
                 file: direct,
                 start: vertices_at,
                 stride,
+                position_fields: fields.iter().filter(|f| f.2 < 3).copied().collect(),
                 fields,
                 big: reader.header.format == Format::Binary { big: true },
+                positions_only: false,
                 bytes: Vec::new(),
             }),
         };
@@ -106,6 +108,13 @@ impl<'a> PlyInput<'a> {
             .map_err(|e| OocError::io(r.name, "cannot read", e))?;
         let (vi, fi) = (r.layout.vi, r.layout.fi);
         sink.start(&self.cube, r.header.elements[fi].count)?;
+        let positions_only = sink.positions_only();
+        if let VertexSource::Input(v) = self.cache.source_mut() {
+            if v.positions_only != positions_only {
+                v.positions_only = positions_only;
+                self.cache.clear();
+            }
+        }
         r.skip(vi + 1..fi)?;
         let mut report = StreamReport {
             surfaces: self.surfaces.clone(),
@@ -621,7 +630,11 @@ pub(super) struct FixedVertices {
     start: u64,
     stride: usize,
     fields: Vec<Field>,
+    /// The position fields alone.
+    position_fields: Vec<Field>,
     big: bool,
+    /// Whether to decode the positions alone (the rest left zero).
+    positions_only: bool,
     /// The block's bytes.
     bytes: Vec<u8>,
 }
@@ -637,8 +650,16 @@ impl RecordSource<Corner> for VertexSource {
             .read_exact_at(&mut f.bytes, f.start + first * f.stride as u64)?;
         for (c, b) in dst.iter_mut().zip(f.bytes.chunks_exact(f.stride)) {
             let mut v = NO_SLOTS;
-            decode_fixed(b, &f.fields, f.big, &mut v);
-            *c = corner([v[0] as f32, v[1] as f32, v[2] as f32], &v);
+            if f.positions_only {
+                decode_fixed(b, &f.position_fields, f.big, &mut v);
+                *c = Corner {
+                    position: [v[0] as f32, v[1] as f32, v[2] as f32],
+                    ..Corner::default()
+                };
+            } else {
+                decode_fixed(b, &f.fields, f.big, &mut v);
+                *c = corner([v[0] as f32, v[1] as f32, v[2] as f32], &v);
+            }
         }
         Ok(())
     }
