@@ -96,16 +96,13 @@ impl Quadric {
             *v /= l2;
         }
         let mut q = Self::default();
-        // Row by row of the packed upper triangle, each a slice the compiler vectorises.
-        let mut row = q.a.as_mut_slice();
+        let mut idx = 0;
         for i in 0..DIM {
-            let (r, rest) = row.split_at_mut(DIM - i);
-            let (a1, a2) = (e1[i], e2[i]);
-            for ((x, &b1), &b2) in r.iter_mut().zip(&e1[i..]).zip(&e2[i..]) {
-                *x = area * (0.0 - a1 * b1 - a2 * b2);
+            for j in i..DIM {
+                let id = if i == j { 1.0 } else { 0.0 };
+                q.a[idx] = area * (id - e1[i] * e1[j] - e2[i] * e2[j]);
+                idx += 1;
             }
-            r[0] = area * (1.0 - a1 * a1 - a2 * a2);
-            row = rest;
         }
         let (pe1, pe2) = (dot(&p[0], &e1), dot(&p[0], &e2));
         for k in 0..DIM {
