@@ -448,7 +448,7 @@ fn bad_input_gives_clear_errors_and_leaves_no_temporary_files() {
 }
 
 /// The acceptance run: 20 million generated triangles with a 256 MiB budget. Slow (a 610 MB
-/// file and several GB of temporary files); run in release with `--ignored`.
+/// file and about 320 MB of temporary files); run in release with `--ignored`.
 #[test]
 #[ignore]
 fn twenty_million_triangles_bake_within_the_memory_budget() {

@@ -4,35 +4,39 @@
 //! with Garland & Heckbert's 1998 generalized quadrics so that normals, colours and texture
 //! coordinates are preserved along with the shape:
 //!
-//! 1. [`stream`]: the input (PLY, OBJ) is read once, vertex data going to a temporary file
-//!    looked up through a bounded cache, and turned into a triangle soup ([`soup`]) whose
-//!    records carry everything later stages need and a spatial key (the Morton code of the
-//!    centroid);
-//! 2. [`sort`]: the soup is cut into sorted runs (a thread sorts and writes one chunk while
-//!    the reader fills the next); only their keys are merged into one file, counting the
-//!    occupied octree cells at every depth; the records are merged later, as they are
-//!    clustered;
+//! 1. [`stream`]: the input (PLY, OBJ) is opened and its vertices read once (binary PLY
+//!    vertices stay in the input, others go to a temporary file), looked up through a bounded
+//!    cache; its faces can then be streamed as a triangle soup ([`soup`]) as often as needed,
+//!    each triangle carrying everything later stages need and a spatial key (the Morton code
+//!    of its centroid);
+//! 2. [`sort`]: a first pass over the faces sorts only the keys into runs (a thread sorts and
+//!    writes one chunk while the reader fills the next) and merges them into one file,
+//!    counting the occupied octree cells at every depth;
 //! 3. [`octree`]: the sorted keys are the octree's storage: each node is a range of them;
 //!    nodes split until a leaf holds at most a set number of triangles or the maximum depth;
-//! 4. [`cluster`]: leaf by leaf, each thread merging its leaves' records from the runs,
-//!    corners are clustered on a grid whose resolution the
-//!    occupied-cell counts say will make the output fit the target, with one quadric per cluster
-//!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
-//!    optima;
+//! 4. [`pass`], [`cluster`]: a second pass over the faces clusters the triangles as they
+//!    come, dealt out by key to fixed parts of the octree's leaves, a thread per group of
+//!    parts; corners are clustered on a grid whose resolution the occupied-cell counts say
+//!    will make the output fit the target, with one quadric per cluster ([`quadric`]);
+//!    clusters never span surfaces or UV seams; representatives are quadric optima;
 //! 5. [`multires`]: every coarser level is derived from the finest clustering by summing its
 //!    clusters' quadrics into the parent cells' clusters (exactly what clustering the input on
 //!    the coarser grid would give, without reading it again), and the levels are cut into
 //!    octree nodes stored as `OC..` sections of the `.clod` file, which
 //!    `caveclod_core::octree` selects per camera by projected error.
 //!
+//! Two passes over the faces with keys alone on disk, rather than one pass that writes every
+//! triangle's record to sorted runs: writing temporary files is what a large bake spends its
+//! time on (fresh pages of the page cache), while reading the input again is cheap; the 20M
+//! triangle terrain writes 320 MB of temporary files instead of 2.5 GB.
+//!
 //! The finest level is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands
 //! to the in-core pipeline for the view-dependent hierarchy. The target size comes from the
 //! budget ([`target_triangles_for_budget`]): the in-core hierarchy build needs about a
-//! kilobyte per triangle. Memory: the two sort chunks (half the budget), the vertex cache (an
-//! eighth), the merge buffers (a quarter, after the chunks are freed), then the clustering
-//! threads' merge buffers (a quarter) and the clusters (proportional to the output). Every
-//! temporary file lives in one [`TempSpace`] directory, removed when the simplification
-//! returns, with an error or without.
+//! kilobyte per triangle. Memory: the two key chunks (half the budget), the vertex cache (an
+//! eighth), the merge buffers (a quarter, after the chunks are freed), then the clusters
+//! (proportional to the output). Every temporary file lives in one [`TempSpace`] directory,
+//! removed when the simplification returns, with an error or without.
 //!
 //! In-memory meshes (glTF, which is not streamed) take the same clustering through
 //! [`cluster_mesh`].
@@ -256,10 +260,10 @@ pub fn simplify_file(
 /// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core, with the multiresolution
 /// octree when [`OocOptions::octree`] asks for it.
 ///
-/// The passes: the input streamed into sorted runs, the octree over the sorted keys, a first
-/// grid resolution from the occupied-cell counts, the leaves shared out to the threads and
-/// clustered (again on a coarser grid while the output is far above the target), then the
-/// finest level's mesh and the coarser levels.
+/// The passes: the input's vertices read, its keys streamed into sorted runs, the octree over
+/// the sorted keys, a first grid resolution from the occupied-cell counts, the faces read again
+/// and clustered by parts of the leaves on the threads (again on a coarser grid while the
+/// output is far above the target), then the finest level's mesh and the coarser levels.
 pub fn simplify(
     path: &Path,
     options: &OocOptions,

@@ -1,28 +1,28 @@
 //! External merge sort of the soup by spatial key, in memory-bounded chunks, merged on demand.
 //!
 //! [`RunBuilder`] receives the soup from a reader: it fills a chunk, and when the chunk is full
-//! a writer thread sorts its triangles by key (a radix sort of `(key, index)` pairs, then one
-//! gather, so the 96-byte records move once) and writes them as a sorted run, while the reader fills a second chunk: reading and sorting
-//! overlap on two cores. The two chunks together take the memory share the builder is given.
-//! Each run is written twice: its records, and its keys alone (8 bytes a triangle).
+//! a writer thread sorts it by key and writes it as a sorted run, while the reader fills a
+//! second chunk: reading and sorting overlap on two cores. The two chunks together take the
+//! memory share the builder is given. A builder of keys alone ([`RunBuilder::keys_only`], what
+//! [`super::simplify`] uses: its second pass reads the faces again) sorts the keys in place
+//! and writes only them, 8 bytes a triangle. A builder of records ([`RunBuilder::new`]) sorts
+//! `(key, index)` pairs and gathers once, so the 96-byte records move once, and writes each
+//! run twice: its records, and its keys alone.
 //!
 //! The runs are never merged into one sorted file of records. [`RunBuilder::finish`] merges
-//! only the keys (a twelfth of the bytes) into one sorted key file, counting on the way the
-//! distinct octree cells the triangles' centroids fall in at every depth
-//! ([`SortedSoup::occupied`]): the number of clusters (and so of output triangles) a
-//! clustering level will give, known before clustering. The octree is built over that key
-//! file. The records are merged as they are consumed: [`SortedSoup::merge_from`] starts a
-//! k-way merge of the runs at any position of the sorted order (found by binary searches on
-//! the runs' keys), so each clustering thread merges its own range of the octree's leaves and
-//! clusters the triangles straight from the merge. That saves writing the sorted soup and
-//! reading it back (two passes over 96 bytes a triangle), and splits the merge over the
-//! clustering threads.
+//! only the keys into one sorted key file, counting on the way the distinct octree cells the
+//! triangles' centroids fall in at every depth ([`SortedSoup::occupied`]): the number of
+//! clusters (and so of output triangles) a clustering level will give, known before
+//! clustering. The octree is built over that key file. Records, where the runs have them, are
+//! merged as they are consumed: [`SortedSoup::merge_from`] starts a k-way merge of the runs at
+//! any position of the sorted order (found by binary searches on the runs' keys), so a
+//! consumer can take any range of the octree's leaves straight from the merge without a
+//! sorted file of records.
 //!
 //! The sorted order is by key, then by run, then by position in the run: the same wherever a
-//! merge starts, so the clustering sees the triangles in one order whatever the threads. The
-//! merges take a run's triangles in stretches, up to the next best run's head, touching the
-//! heap once per stretch: runs of an input read in a spatially coherent order interleave
-//! little.
+//! merge starts. The merges take a run's items in stretches, up to the next best run's head,
+//! touching the heap once per stretch: runs of an input read in a spatially coherent order
+//! interleave little.
 
 use std::cmp::Reverse;
 use std::collections::binary_heap::{BinaryHeap, PeekMut};

@@ -2,14 +2,17 @@
 //! never holding the whole file.
 //!
 //! Indexed formats name vertices by number, so a triangle can only be written once its
-//! corners are known. The readers first copy the vertex data into fixed-size records in a
-//! temporary file (and take the bounding box on the way, which the spatial keys need), then
-//! read the faces and look their corners up through a [`BlockCache`]: a direct-mapped cache
-//! of blocks of that file whose size the memory budget sets. Real meshes (scanner output,
-//! exported models, the generator's terrain) name nearby vertices in nearby faces, so the
-//! cache hits almost always; a file whose faces jump around still works, only slower. This
-//! is cheaper than dereferencing by external sorts (Lindstrom's OoCS) while bounded the same
-//! way.
+//! corners are known. [`open`] reads the vertices first (taking the bounding box on the way,
+//! which the spatial keys need): binary PLY vertices of a fixed stride stay where they are in
+//! the input, others are copied into fixed-size records in a temporary file. [`Input::faces`]
+//! then reads the faces, as many times as asked, and looks their corners up through a
+//! [`BlockCache`]: a direct-mapped cache of blocks of vertices (decoded as a block comes in)
+//! whose size the memory budget sets. Real meshes (scanner output, exported models, the
+//! generator's terrain) name nearby vertices in nearby faces, so the cache hits almost always;
+//! a file whose faces jump around still works, only slower. This is cheaper than
+//! dereferencing by external sorts (Lindstrom's OoCS) while bounded the same way. A sink that
+//! needs only positions ([`SoupSink::positions_only`]) gets binary PLY corners without their
+//! other attributes decoded.
 //!
 //! PLY: element `vertex` with `x y z`, optional `nx ny nz`, `red green blue [alpha]` (integer
 //! colours divided by their maximum and taken as sRGB, as the in-core importer does), `u v`
