@@ -410,6 +410,18 @@ impl Clusterer {
         k
     }
 
+    /// Makes room for `clusters` more clusters (in as many cells) and `triangles` more
+    /// triangles at once, before merging others: growing by doubling would leave the
+    /// outgrown arrays' memory to the allocator at the peak.
+    pub(super) fn reserve(&mut self, clusters: usize, triangles: usize) {
+        self.clusters.reserve_exact(clusters);
+        self.cell_first.reserve_exact(clusters);
+        self.cell_coords.reserve_exact(clusters);
+        self.cells.reserve(clusters);
+        self.triangles.reserve_exact(triangles);
+        self.seen.reserve(triangles);
+    }
+
     /// Adds the clusters and triangles of `other` (same cube and options), which clustered
     /// other triangles: clusters of a cell and surface whose UV references agree are summed.
     pub fn merge(&mut self, other: &Clusterer) {

@@ -4,35 +4,39 @@
 //! with Garland & Heckbert's 1998 generalized quadrics so that normals, colours and texture
 //! coordinates are preserved along with the shape:
 //!
-//! 1. [`stream`]: the input (PLY, OBJ) is read once, vertex data going to a temporary file
-//!    looked up through a bounded cache, and turned into a triangle soup ([`soup`]) whose
-//!    records carry everything later stages need and a spatial key (the Morton code of the
-//!    centroid);
-//! 2. [`sort`]: the soup is cut into sorted runs (a thread sorts and writes one chunk while
-//!    the reader fills the next); only their keys are merged into one file, counting the
-//!    occupied octree cells at every depth; the records are merged later, as they are
-//!    clustered;
+//! 1. [`stream`]: the input (PLY, OBJ) is opened and its vertices read once (binary PLY
+//!    vertices stay in the input, others go to a temporary file), looked up through a bounded
+//!    cache; its faces can then be streamed as a triangle soup ([`soup`]) as often as needed,
+//!    each triangle carrying everything later stages need and a spatial key (the Morton code
+//!    of its centroid);
+//! 2. [`sort`]: a first pass over the faces sorts only the keys into runs (a thread sorts and
+//!    writes one chunk while the reader fills the next) and merges them into one file,
+//!    counting the occupied octree cells at every depth;
 //! 3. [`octree`]: the sorted keys are the octree's storage: each node is a range of them;
 //!    nodes split until a leaf holds at most a set number of triangles or the maximum depth;
-//! 4. [`cluster`]: leaf by leaf, each thread merging its leaves' records from the runs,
-//!    corners are clustered on a grid whose resolution the
-//!    occupied-cell counts say will make the output fit the target, with one quadric per cluster
-//!    ([`quadric`]); clusters never span surfaces or UV seams; representatives are quadric
-//!    optima;
+//! 4. [`pass`], [`cluster`]: a second pass over the faces clusters the triangles as they
+//!    come, dealt out by key to fixed parts of the octree's leaves, a thread per group of
+//!    parts; corners are clustered on a grid whose resolution the occupied-cell counts say
+//!    will make the output fit the target, with one quadric per cluster ([`quadric`]);
+//!    clusters never span surfaces or UV seams; representatives are quadric optima;
 //! 5. [`multires`]: every coarser level is derived from the finest clustering by summing its
 //!    clusters' quadrics into the parent cells' clusters (exactly what clustering the input on
 //!    the coarser grid would give, without reading it again), and the levels are cut into
 //!    octree nodes stored as `OC..` sections of the `.clod` file, which
 //!    `caveclod_core::octree` selects per camera by projected error.
 //!
+//! Two passes over the faces with keys alone on disk, rather than one pass that writes every
+//! triangle's record to sorted runs: writing temporary files is what a large bake spends its
+//! time on (fresh pages of the page cache), while reading the input again is cheap; the 20M
+//! triangle terrain writes 320 MB of temporary files instead of 2.5 GB.
+//!
 //! The finest level is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands
 //! to the in-core pipeline for the view-dependent hierarchy. The target size comes from the
 //! budget ([`target_triangles_for_budget`]): the in-core hierarchy build needs about a
-//! kilobyte per triangle. Memory: the two sort chunks (half the budget), the vertex cache (an
-//! eighth), the merge buffers (a quarter, after the chunks are freed), then the clustering
-//! threads' merge buffers (a quarter) and the clusters (proportional to the output). Every
-//! temporary file lives in one [`TempSpace`] directory, removed when the simplification
-//! returns, with an error or without.
+//! kilobyte per triangle. Memory: the two key chunks (half the budget), the vertex cache (an
+//! eighth), the merge buffers (a quarter, after the chunks are freed), then the clusters
+//! (proportional to the output). Every temporary file lives in one [`TempSpace`] directory,
+//! removed when the simplification returns, with an error or without.
 //!
 //! In-memory meshes (glTF, which is not streamed) take the same clustering through
 //! [`cluster_mesh`].
@@ -40,6 +44,7 @@
 pub mod cluster;
 pub mod multires;
 pub mod octree;
+pub mod pass;
 pub mod quadric;
 pub mod sort;
 pub mod soup;
@@ -255,10 +260,10 @@ pub fn simplify_file(
 /// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core, with the multiresolution
 /// octree when [`OocOptions::octree`] asks for it.
 ///
-/// The passes: the input streamed into sorted runs, the octree over the sorted keys, a first
-/// grid resolution from the occupied-cell counts, the leaves shared out to the threads and
-/// clustered (again on a coarser grid while the output is far above the target), then the
-/// finest level's mesh and the coarser levels.
+/// The passes: the input's vertices read, its keys streamed into sorted runs, the octree over
+/// the sorted keys, a first grid resolution from the occupied-cell counts, the faces read again
+/// and clustered by parts of the leaves on the threads (again on a coarser grid while the
+/// output is far above the target), then the finest level's mesh and the coarser levels.
 pub fn simplify(
     path: &Path,
     options: &OocOptions,
@@ -269,7 +274,9 @@ pub fn simplify(
     let temp = TempSpace::new(options.temp_dir.as_deref(), options.temp_quota)
         .map_err(|e| OocError::temp("creating the temporary directory", e))?;
     let mut stats = OocStats::default();
-    let (report, sorted) = sort_input(path, &temp, budget, progress, &mut stats)?;
+    let name = path.display().to_string();
+    let mut input = stream::open(path, &name, &temp, (budget / 8) as usize)?;
+    let (report, sorted) = sort_keys(&mut input, &temp, budget, progress, &mut stats)?;
     let file = std::fs::File::open(&sorted.keys)
         .map_err(|e| OocError::temp("reading the sorted keys", e))?;
     let tree = octree::Octree::build(
@@ -287,16 +294,9 @@ pub fn simplify(
     stats.target_triangles = target;
     let mut resolution = first_resolution(&sorted, target);
     let t1 = Instant::now();
-    let threads = options.threads.max(1).min(leaves.len().max(1));
-    let clustering = Clustering {
-        sorted: &sorted,
-        options,
-        parts: share_leaves(&leaves, sorted.triangles, threads),
-        // Merge buffers: a quarter of the budget, shared by the threads.
-        merge_bytes: (budget / 4) as usize / threads,
-    };
+    let clustering = pass::Clustering::new(sorted.cube, &leaves, sorted.triangles, options);
     let c = loop {
-        let c = clustering.cluster(resolution, progress)?;
+        let c = clustering.cluster(&mut input, resolution, progress)?;
         // The occupancy of centroids only estimates the output: go coarser when it came out
         // far above the target.
         if c.triangle_count() as u64 > 2 * target && resolution > 2 {
@@ -305,6 +305,7 @@ pub fn simplify(
         }
         break c;
     };
+    drop(input);
     stats.clusters = c.cluster_count() as u64;
     let mesh = c.finish(&report.surfaces);
     let t2 = Instant::now();
@@ -347,10 +348,11 @@ fn check_leaf_budget(options: &OocOptions) -> Result<(), OocError> {
     Ok(())
 }
 
-/// The input streamed into sorted runs (the sort chunks: half the budget; the vertex cache:
-/// an eighth) and their keys merged (a quarter); the input counts and stage times in `stats`.
-fn sort_input(
-    path: &Path,
+/// The first pass: the input's keys streamed into sorted runs (the sort chunks: half the
+/// budget; the vertex cache: an eighth) and merged (a quarter); the input counts and stage
+/// times in `stats`.
+fn sort_keys(
+    input: &mut stream::Input<'_>,
     temp: &TempSpace,
     budget: u64,
     progress: &mut dyn FnMut(OocStage),
@@ -365,8 +367,8 @@ fn sort_input(
                 OocStage::Read(d, n)
             })
         };
-        let mut runs = sort::RunBuilder::new(temp, (budget / 2) as usize, &mut sort_progress);
-        let report = stream::stream_file(path, temp, (budget / 8) as usize, &mut runs)?;
+        let mut runs = sort::RunBuilder::keys_only(temp, (budget / 2) as usize, &mut sort_progress);
+        let report = input.faces(&mut runs)?;
         stats.seconds[0] = t0.elapsed().as_secs_f64();
         let sorted = runs.finish((budget / 4) as usize)?;
         (report, sorted)
@@ -374,7 +376,7 @@ fn sort_input(
     stats.seconds[1] = t0.elapsed().as_secs_f64() - stats.seconds[0];
     if sorted.triangles == 0 {
         return Err(OocError::Empty {
-            file: path.display().to_string(),
+            file: input.name().to_string(),
         });
     }
     stats.input_triangles = sorted.triangles;
@@ -397,116 +399,6 @@ fn first_resolution(sorted: &sort::SortedSoup, target: u64) -> u32 {
         .unwrap_or(1);
     let f = (target as f64 / (2 * sorted.occupied[l as usize]).max(1) as f64).sqrt();
     ((f64::from(1u32 << l) * f.min(2.0)) as u32).max(2)
-}
-
-/// Contiguous runs of leaves with about equal triangle counts, one per thread (spatially
-/// coherent: few clusters on the borders between them).
-fn share_leaves(leaves: &[octree::Node], triangles: u64, threads: usize) -> Vec<&[octree::Node]> {
-    let mut parts: Vec<&[octree::Node]> = Vec::new();
-    let mut rest = leaves;
-    for t in 0..threads {
-        let want = (triangles - rest.first().map_or(triangles, |l| l.first)) / (threads - t) as u64;
-        let mut n = 0;
-        let mut sum = 0;
-        while n < rest.len() && (sum < want || n == 0) {
-            sum += rest[n].count;
-            n += 1;
-        }
-        let (a, b) = rest.split_at(n);
-        parts.push(a);
-        rest = b;
-    }
-    parts
-}
-
-/// One clustering pass over the sorted soup: each thread clusters its part of the leaves
-/// with its own clusters, merged at the end.
-struct Clustering<'a> {
-    sorted: &'a sort::SortedSoup,
-    options: &'a OocOptions,
-    /// The leaves of each thread, the first part on the calling thread.
-    parts: Vec<&'a [octree::Node]>,
-    /// Merge buffer bytes per thread.
-    merge_bytes: usize,
-}
-
-impl Clustering<'_> {
-    fn new_clusterer(&self, resolution: u32) -> Clusterer {
-        Clusterer::new(
-            self.sorted.cube,
-            ClusterOptions {
-                weights: self.options.weights,
-                ..ClusterOptions::at_resolution(resolution)
-            },
-        )
-    }
-
-    /// A part's triangles merged from the sorted runs, in sorted order, into `c`; `report`
-    /// hears each leaf's triangle count.
-    fn run(
-        &self,
-        part: &[octree::Node],
-        c: &mut Clusterer,
-        report: &mut dyn FnMut(u64),
-    ) -> Result<(), OocError> {
-        let Some(first) = part.first() else {
-            return Ok(());
-        };
-        let mut merge = self.sorted.merge_from(first.first, self.merge_bytes)?;
-        for leaf in part {
-            merge.take(leaf.count, &mut |t| c.add(t))?;
-            report(leaf.count);
-        }
-        Ok(())
-    }
-
-    /// Every part clustered at `resolution` and merged; progress from the calling thread's
-    /// part, scaled by the thread count.
-    fn cluster(
-        &self,
-        resolution: u32,
-        progress: &mut dyn FnMut(OocStage),
-    ) -> Result<Clusterer, OocError> {
-        let threads = self.parts.len();
-        let triangles = self.sorted.triangles;
-        let mut c = self.new_clusterer(resolution);
-        let others = std::thread::scope(|scope| {
-            let handles: Vec<_> = self.parts[1..]
-                .iter()
-                .map(|part| {
-                    scope.spawn(move || {
-                        let mut c = self.new_clusterer(resolution);
-                        self.run(part, &mut c, &mut |_| {}).map(|()| c)
-                    })
-                })
-                .collect();
-            let mut done = 0;
-            let first = self.run(self.parts[0], &mut c, &mut |n| {
-                done += n * threads as u64;
-                progress(OocStage::Cluster(
-                    resolution,
-                    done.min(triangles),
-                    triangles,
-                ));
-            });
-            let others: Vec<Result<Clusterer, OocError>> = handles
-                .into_iter()
-                .map(|h| {
-                    h.join().unwrap_or_else(|_| {
-                        Err(OocError::temp(
-                            "clustering",
-                            io::Error::other("a clustering thread panicked"),
-                        ))
-                    })
-                })
-                .collect();
-            first.map(|()| others)
-        })?;
-        for o in others {
-            c.merge(&o?);
-        }
-        Ok(c)
-    }
 }
 
 /// The bounding cube of a mesh's positions.

@@ -1,28 +1,28 @@
 //! External merge sort of the soup by spatial key, in memory-bounded chunks, merged on demand.
 //!
 //! [`RunBuilder`] receives the soup from a reader: it fills a chunk, and when the chunk is full
-//! a writer thread sorts its triangles by key (a radix sort of `(key, index)` pairs, then one
-//! gather, so the 96-byte records move once) and writes them as a sorted run, while the reader fills a second chunk: reading and sorting
-//! overlap on two cores. The two chunks together take the memory share the builder is given.
-//! Each run is written twice: its records, and its keys alone (8 bytes a triangle).
+//! a writer thread sorts it by key and writes it as a sorted run, while the reader fills a
+//! second chunk: reading and sorting overlap on two cores. The two chunks together take the
+//! memory share the builder is given. A builder of keys alone ([`RunBuilder::keys_only`], what
+//! [`super::simplify`] uses: its second pass reads the faces again) sorts the keys in place
+//! and writes only them, 8 bytes a triangle. A builder of records ([`RunBuilder::new`]) sorts
+//! `(key, index)` pairs and gathers once, so the 96-byte records move once, and writes each
+//! run twice: its records, and its keys alone.
 //!
 //! The runs are never merged into one sorted file of records. [`RunBuilder::finish`] merges
-//! only the keys (a twelfth of the bytes) into one sorted key file, counting on the way the
-//! distinct octree cells the triangles' centroids fall in at every depth
-//! ([`SortedSoup::occupied`]): the number of clusters (and so of output triangles) a
-//! clustering level will give, known before clustering. The octree is built over that key
-//! file. The records are merged as they are consumed: [`SortedSoup::merge_from`] starts a
-//! k-way merge of the runs at any position of the sorted order (found by binary searches on
-//! the runs' keys), so each clustering thread merges its own range of the octree's leaves and
-//! clusters the triangles straight from the merge. That saves writing the sorted soup and
-//! reading it back (two passes over 96 bytes a triangle), and splits the merge over the
-//! clustering threads.
+//! only the keys into one sorted key file, counting on the way the distinct octree cells the
+//! triangles' centroids fall in at every depth ([`SortedSoup::occupied`]): the number of
+//! clusters (and so of output triangles) a clustering level will give, known before
+//! clustering. The octree is built over that key file. Records, where the runs have them, are
+//! merged as they are consumed: [`SortedSoup::merge_from`] starts a k-way merge of the runs at
+//! any position of the sorted order (found by binary searches on the runs' keys), so a
+//! consumer can take any range of the octree's leaves straight from the merge without a
+//! sorted file of records.
 //!
 //! The sorted order is by key, then by run, then by position in the run: the same wherever a
-//! merge starts, so the clustering sees the triangles in one order whatever the threads. The
-//! merges take a run's triangles in stretches, up to the next best run's head, touching the
-//! heap once per stretch: runs of an input read in a spatially coherent order interleave
-//! little.
+//! merge starts. The merges take a run's items in stretches, up to the next best run's head,
+//! touching the heap once per stretch: runs of an input read in a spatially coherent order
+//! interleave little.
 
 use std::cmp::Reverse;
 use std::collections::binary_heap::{BinaryHeap, PeekMut};
@@ -39,15 +39,52 @@ use super::stream::SoupSink;
 use super::temp::{SpillWriter, TempSpace};
 use super::OocError;
 
-/// Bytes of chunk a triangle takes: its record and its `(key, index)` sort pair, twice (the
-/// radix sort's scatter buffer).
-const CHUNK_BYTES_PER_TRIANGLE: usize = RECORD_BYTES + 2 * std::mem::size_of::<(u64, u32)>();
+/// Bytes of chunk a triangle takes: its item, and twice its `(key, index)` sort pair (the
+/// radix sort's scatter buffer) for records, or twice the key (sorted in place) for keys.
+const fn chunk_bytes_per_triangle<T: RunItem>() -> usize {
+    if T::RECORDS {
+        std::mem::size_of::<T>() + 2 * std::mem::size_of::<(u64, u32)>()
+    } else {
+        2 * std::mem::size_of::<T>()
+    }
+}
+
+/// What a sort chunk holds per triangle: its whole record ([`SoupTriangle`]) or its key alone
+/// (`u64`, for a pass that needs only the order and the occupied cells).
+pub trait RunItem: Pod + Default + Send + Sync {
+    /// Whether runs of this item have records besides their keys.
+    const RECORDS: bool;
+    /// The item of a triangle.
+    fn of(t: &SoupTriangle) -> Self;
+    /// Its spatial key.
+    fn key(&self) -> u64;
+}
+
+impl RunItem for SoupTriangle {
+    const RECORDS: bool = true;
+    fn of(t: &SoupTriangle) -> Self {
+        *t
+    }
+    fn key(&self) -> u64 {
+        self.key
+    }
+}
+
+impl RunItem for u64 {
+    const RECORDS: bool = false;
+    fn of(t: &SoupTriangle) -> Self {
+        t.key
+    }
+    fn key(&self) -> u64 {
+        *self
+    }
+}
 
 /// One sorted run on disk.
 #[derive(Clone, Debug)]
 pub struct Run {
-    /// Its records, sorted by key.
-    pub records: PathBuf,
+    /// Its records, sorted by key (`None` for a run of keys alone).
+    pub records: Option<PathBuf>,
     /// Its keys alone, in the same order.
     pub keys: PathBuf,
     /// Triangles in it.
@@ -69,32 +106,59 @@ pub struct SortedSoup {
 }
 
 /// What a writer thread gives back: the emptied chunk (for reuse) and its run.
-type Written = Result<(Vec<SoupTriangle>, Run), OocError>;
+type Written<T> = Result<(Vec<T>, Run), OocError>;
 
-/// Collects the soup into sorted runs.
-pub struct RunBuilder<'a> {
+/// Collects the soup into sorted runs: of records ([`RunBuilder::new`]) or of keys alone
+/// ([`RunBuilder::keys_only`]).
+pub struct RunBuilder<'a, T: RunItem = SoupTriangle> {
     temp: &'a TempSpace,
-    chunk: Vec<SoupTriangle>,
+    chunk: Vec<T>,
     /// The other chunk, when the writer thread has given it back.
-    spare: Vec<SoupTriangle>,
-    writer: Option<JoinHandle<Written>>,
+    spare: Vec<T>,
+    writer: Option<JoinHandle<Written<T>>>,
     capacity: usize,
     runs: Vec<Run>,
     cube: Option<Cube>,
     total: u64,
     hint: u64,
     progress: &'a mut dyn FnMut(bool, u64, u64),
+    /// The triangle a reader is filling in a builder of keys, kept at the next one.
+    scratch: SoupTriangle,
+    /// Whether `scratch` holds a triangle not yet kept.
+    pending: bool,
 }
 
-impl<'a> RunBuilder<'a> {
-    /// A builder holding at most `chunk_bytes` of triangles at a time (two chunks of half
-    /// that, one filling while the other is sorted and written).
+impl<'a> RunBuilder<'a, SoupTriangle> {
+    /// A builder of records holding at most `chunk_bytes` of triangles at a time (two chunks
+    /// of half that, one filling while the other is sorted and written).
     pub fn new(
         temp: &'a TempSpace,
         chunk_bytes: usize,
         progress: &'a mut dyn FnMut(bool, u64, u64),
     ) -> Self {
-        let capacity = (chunk_bytes / 2 / CHUNK_BYTES_PER_TRIANGLE).max(1);
+        Self::with_chunk_bytes(temp, chunk_bytes, progress)
+    }
+}
+
+impl<'a> RunBuilder<'a, u64> {
+    /// A builder of keys alone (8 bytes a triangle on disk, a twelfth of a record) holding at
+    /// most `chunk_bytes` of keys at a time, as [`RunBuilder::new`].
+    pub fn keys_only(
+        temp: &'a TempSpace,
+        chunk_bytes: usize,
+        progress: &'a mut dyn FnMut(bool, u64, u64),
+    ) -> Self {
+        Self::with_chunk_bytes(temp, chunk_bytes, progress)
+    }
+}
+
+impl<'a, T: RunItem> RunBuilder<'a, T> {
+    fn with_chunk_bytes(
+        temp: &'a TempSpace,
+        chunk_bytes: usize,
+        progress: &'a mut dyn FnMut(bool, u64, u64),
+    ) -> Self {
+        let capacity = (chunk_bytes / 2 / chunk_bytes_per_triangle::<T>()).max(1);
         Self {
             temp,
             chunk: Vec::new(),
@@ -106,6 +170,8 @@ impl<'a> RunBuilder<'a> {
             total: 0,
             hint: 0,
             progress,
+            scratch: SoupTriangle::zeroed(),
+            pending: false,
         }
     }
 
@@ -134,14 +200,19 @@ impl<'a> RunBuilder<'a> {
         let n = self.runs.len();
         let terr = |e| OocError::temp(&format!("writing sorted run {n}"), e);
         // A small buffer: the writer's blocks are larger, and go to the file without a copy.
-        let records = self.temp.create("run", 1 << 16).map_err(terr)?;
+        let records = if T::RECORDS {
+            Some(self.temp.create("run", 1 << 16).map_err(terr)?)
+        } else {
+            None
+        };
         let keys = self.temp.create("run-keys", 1 << 16).map_err(terr)?;
         let chunk = std::mem::replace(&mut self.chunk, std::mem::take(&mut self.spare));
         let count = chunk.len() as u64;
         let h = std::thread::Builder::new()
             .name("caveclod-sort".into())
             .spawn(move || {
-                write_run(&chunk, records, keys)
+                let mut chunk = chunk;
+                write_run(&mut chunk, records, keys)
                     .map(|(records, keys)| {
                         let run = Run {
                             records,
@@ -173,10 +244,45 @@ impl<'a> RunBuilder<'a> {
         Ok(())
     }
 
+    /// Room for one more item in the chunk, counted for the progress.
+    #[inline]
+    fn room(&mut self) -> Result<(), OocError> {
+        if self.chunk.len() == self.chunk.capacity() || self.chunk.len() >= self.capacity {
+            self.grow()?;
+        }
+        self.total += 1;
+        if self.total % (1 << 16) == 0 {
+            (self.progress)(false, self.total, self.hint.max(self.total));
+        }
+        Ok(())
+    }
+
+    /// Keeps the triangle a reader filled in `scratch`, if any.
+    #[inline]
+    fn keep_pending(&mut self) -> Result<(), OocError> {
+        if self.pending {
+            self.pending = false;
+            self.room()?;
+            self.chunk.push(T::of(&self.scratch));
+        }
+        Ok(())
+    }
+
+    /// The cube and triangle count a reader announces.
+    fn begin(&mut self, cube: &Cube, triangles_hint: u64) {
+        self.cube = Some(*cube);
+        self.hint = triangles_hint;
+        let cap = self.capacity.min(triangles_hint.max(1024) as usize);
+        if self.chunk.capacity() < cap {
+            self.chunk.reserve_exact(cap - self.chunk.len());
+        }
+    }
+
     /// Writes the last run and merges the runs' keys into one sorted key file, using about
     /// `merge_bytes` of buffers. Progress: `(false, read, expected)` while reading,
     /// `(true, merged, total)` while merging.
     pub fn finish(mut self, merge_bytes: usize) -> Result<SortedSoup, OocError> {
+        self.keep_pending()?;
         self.flush()?;
         self.wait()?;
         self.chunk = Vec::new();
@@ -201,7 +307,7 @@ impl<'a> RunBuilder<'a> {
     }
 }
 
-impl Drop for RunBuilder<'_> {
+impl<T: RunItem> Drop for RunBuilder<'_, T> {
     /// A builder dropped on an error still waits for its writer, so that nothing writes into
     /// the temporary directory while it is removed.
     fn drop(&mut self) {
@@ -211,45 +317,74 @@ impl Drop for RunBuilder<'_> {
     }
 }
 
-impl SoupSink for RunBuilder<'_> {
+impl SoupSink for RunBuilder<'_, SoupTriangle> {
     fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError> {
-        self.cube = Some(*cube);
-        self.hint = triangles_hint;
-        let cap = self.capacity.min(triangles_hint.max(1024) as usize);
-        self.chunk = Vec::with_capacity(cap);
+        self.begin(cube, triangles_hint);
         Ok(())
     }
 
+    /// The record is built in place in the chunk.
     #[inline]
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError> {
-        if self.chunk.len() == self.chunk.capacity() || self.chunk.len() >= self.capacity {
-            self.grow()?;
-        }
-        self.total += 1;
-        if self.total % (1 << 16) == 0 {
-            (self.progress)(false, self.total, self.hint.max(self.total));
-        }
+        self.room()?;
         self.chunk.push(SoupTriangle::zeroed());
         let last = self.chunk.len() - 1;
         Ok(&mut self.chunk[last])
     }
 }
 
-/// Sorts a chunk's triangles by key and writes their records and their keys; returns the two
-/// paths.
-fn write_run(
-    chunk: &[SoupTriangle],
-    mut records: SpillWriter,
+impl SoupSink for RunBuilder<'_, u64> {
+    fn start(&mut self, cube: &Cube, triangles_hint: u64) -> Result<(), OocError> {
+        self.keep_pending()?;
+        self.begin(cube, triangles_hint);
+        Ok(())
+    }
+
+    fn positions_only(&self) -> bool {
+        true
+    }
+
+    /// The reader fills a scratch record; its key is kept at the next call (or the finish).
+    #[inline]
+    fn slot(&mut self) -> Result<&mut SoupTriangle, OocError> {
+        self.keep_pending()?;
+        self.pending = true;
+        Ok(&mut self.scratch)
+    }
+
+    fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
+        self.keep_pending()?;
+        self.room()?;
+        self.chunk.push(t.key);
+        Ok(())
+    }
+}
+
+/// Sorts a chunk's triangles by key and writes their records (where there are) and their
+/// keys; returns the two paths. Keys alone are sorted in place; records through `(key,
+/// index)` pairs and one gather, so the 96-byte records move once.
+fn write_run<T: RunItem>(
+    chunk: &mut Vec<T>,
+    records: Option<SpillWriter>,
     mut keys: SpillWriter,
-) -> io::Result<(PathBuf, PathBuf)> {
+) -> io::Result<(Option<PathBuf>, PathBuf)> {
+    let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
+    let Some(mut records) = records else {
+        radix_sort_by(chunk, T::key);
+        for part in chunk.chunks(4096) {
+            kbuf.clear();
+            kbuf.extend(part.iter().map(T::key));
+            keys.write_all(bytemuck::cast_slice(&kbuf))?;
+        }
+        return Ok((None, keys.finish()?));
+    };
     let mut order: Vec<(u64, u32)> = chunk
         .iter()
         .enumerate()
-        .map(|(i, t)| (t.key, i as u32))
+        .map(|(i, t)| (t.key(), i as u32))
         .collect();
     radix_sort(&mut order);
-    let mut buf: Vec<SoupTriangle> = Vec::with_capacity(4096);
-    let mut kbuf: Vec<u64> = Vec::with_capacity(4096);
+    let mut buf: Vec<T> = Vec::with_capacity(4096);
     for part in order.chunks(4096) {
         buf.clear();
         buf.extend(part.iter().map(|&(_, i)| chunk[i as usize]));
@@ -258,7 +393,7 @@ fn write_run(
         kbuf.extend(part.iter().map(|&(k, _)| k));
         keys.write_all(bytemuck::cast_slice(&kbuf))?;
     }
-    Ok((records.finish()?, keys.finish()?))
+    Ok((Some(records.finish()?), keys.finish()?))
 }
 
 /// Bits of a radix-sort digit.
@@ -269,7 +404,12 @@ const DIGIT_BITS: u32 = 11;
 /// shares (the high digits of a run's keys, which come from one region of the input, mostly
 /// are). Six passes at most, linear time, against the `n log n` comparisons of a sort.
 fn radix_sort(v: &mut Vec<(u64, u32)>) {
-    let Some(&(first, _)) = v.first() else {
+    radix_sort_by(v, |&(k, _)| k);
+}
+
+/// The radix sort of [`radix_sort`] on any items by `key` (stable).
+fn radix_sort_by<E: Copy + Default>(v: &mut Vec<E>, key: impl Fn(&E) -> u64) {
+    let Some(first) = v.first().map(&key) else {
         return;
     };
     const DIGITS: usize = 64usize.div_ceil(DIGIT_BITS as usize);
@@ -277,13 +417,14 @@ fn radix_sort(v: &mut Vec<(u64, u32)>) {
     let mask = RADIX as u64 - 1;
     let mut varying = 0u64;
     let mut counts = vec![[0usize; RADIX]; DIGITS];
-    for &(k, _) in v.iter() {
+    for e in v.iter() {
+        let k = key(e);
         varying |= k ^ first;
         for (d, c) in counts.iter_mut().enumerate() {
             c[((k >> (d as u32 * DIGIT_BITS)) & mask) as usize] += 1;
         }
     }
-    let mut other = vec![(0u64, 0u32); v.len()];
+    let mut other = vec![E::default(); v.len()];
     for (d, c) in counts.iter_mut().enumerate() {
         let shift = d as u32 * DIGIT_BITS;
         if (varying >> shift) & mask == 0 {
@@ -295,9 +436,9 @@ fn radix_sort(v: &mut Vec<(u64, u32)>) {
             *n = at;
             at += here;
         }
-        for &(k, i) in v.iter() {
-            let b = ((k >> shift) & mask) as usize;
-            other[c[b]] = (k, i);
+        for e in v.iter() {
+            let b = ((key(e) >> shift) & mask) as usize;
+            other[c[b]] = *e;
             c[b] += 1;
         }
         std::mem::swap(v, &mut other);
@@ -478,7 +619,15 @@ impl SortedSoup {
             .runs
             .iter()
             .zip(starts)
-            .map(|(r, s)| Cursor::new(open(&r.records)?, s, r.count, block).map_err(rerr))
+            .map(|(r, s)| {
+                let records = r.records.as_ref().ok_or_else(|| {
+                    OocError::temp(
+                        "reading a sorted run",
+                        io::Error::other("the runs were sorted without their records"),
+                    )
+                })?;
+                Cursor::new(open(records)?, s, r.count, block).map_err(rerr)
+            })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(SoupMerge(Merge::new(cursors, |t: &SoupTriangle| t.key)))
     }
@@ -564,7 +713,11 @@ mod tests {
         let temp = TempSpace::new(None, None).unwrap();
         let mut progress = |_, _, _| {};
         // Chunks of 10 triangles: 100 triangles make 10 runs.
-        let mut b = RunBuilder::new(&temp, 20 * CHUNK_BYTES_PER_TRIANGLE, &mut progress);
+        let mut b = RunBuilder::new(
+            &temp,
+            20 * chunk_bytes_per_triangle::<SoupTriangle>(),
+            &mut progress,
+        );
         let cube = Cube::around([0.0; 3], [1.0; 3]);
         b.start(&cube, 100).unwrap();
         let mut keys = Vec::new();
@@ -627,6 +780,56 @@ mod tests {
     }
 
     #[test]
+    fn a_builder_of_keys_sorts_and_counts_like_one_of_records() {
+        let temp = TempSpace::new(None, None).unwrap();
+        let cube = Cube::around([0.0; 3], [1.0; 3]);
+        let triangles: Vec<SoupTriangle> = (0..100u64)
+            .map(|i| {
+                let j = (i % 37) as f32;
+                let position = [(j * 0.618).fract(), (j * 0.37).fract(), j / 37.0];
+                SoupTriangle {
+                    key: cube.key(&[position; 3]),
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let mut p1 = |_, _, _| {};
+        let mut records = RunBuilder::new(
+            &temp,
+            20 * chunk_bytes_per_triangle::<SoupTriangle>(),
+            &mut p1,
+        );
+        let mut p2 = |_, _, _| {};
+        let mut keys =
+            RunBuilder::keys_only(&temp, 20 * chunk_bytes_per_triangle::<u64>(), &mut p2);
+        records.start(&cube, 100).unwrap();
+        keys.start(&cube, 100).unwrap();
+        for (i, t) in triangles.iter().enumerate() {
+            records.push(t).unwrap();
+            // Half pushed, half filled in place as the readers do.
+            if i % 2 == 0 {
+                keys.push(t).unwrap();
+            } else {
+                *keys.slot().unwrap() = *t;
+            }
+        }
+        let (a, b) = (
+            records.finish(1 << 16).unwrap(),
+            keys.finish(1 << 16).unwrap(),
+        );
+        assert_eq!(b.runs.len(), 10);
+        assert_eq!(b.triangles, 100);
+        assert_eq!(a.occupied, b.occupied);
+        assert_eq!(
+            std::fs::read(&a.keys).unwrap(),
+            std::fs::read(&b.keys).unwrap()
+        );
+        assert!(b.runs.iter().all(|r| r.records.is_none()));
+        let e = b.merge_from(0, 1 << 12).err().unwrap();
+        assert!(e.to_string().contains("without their records"), "{e}");
+    }
+
+    #[test]
     fn radix_sort_orders_by_key_then_index() {
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut v: Vec<(u64, u32)> = (0..5000u32)
@@ -658,7 +861,11 @@ mod tests {
         let parent = tempfile::tempdir().unwrap();
         let temp = TempSpace::new(Some(parent.path()), Some(50 * RECORD_BYTES as u64)).unwrap();
         let mut progress = |_, _, _| {};
-        let mut b = RunBuilder::new(&temp, 20 * CHUNK_BYTES_PER_TRIANGLE, &mut progress);
+        let mut b = RunBuilder::new(
+            &temp,
+            20 * chunk_bytes_per_triangle::<SoupTriangle>(),
+            &mut progress,
+        );
         b.start(&Cube::around([0.0; 3], [1.0; 3]), 0).unwrap();
         let mut result = Ok(());
         for _ in 0..200 {

@@ -113,6 +113,7 @@ fn show_stage(bar: &Progress, s: Stage) {
 /// Simplifies the input out of core, streaming it from disk with a bar of its own, then bakes
 /// the simplified mesh in core.
 fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, String> {
+    fixed_mmap_threshold();
     let options = OocOptions {
         temp_dir: a.temp_dir.clone(),
         target_triangles: a.target_triangles,
@@ -176,6 +177,24 @@ fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, S
 fn rayon_threads() -> usize {
     std::thread::available_parallelism().map_or(1, usize::from)
 }
+
+/// Buffers of a megabyte or more straight from the system and back to it when freed. An
+/// out-of-core bake allocates and frees buffers of many megabytes (sort chunks, clusters
+/// growing on several threads); glibc raises its threshold for that to the largest buffer
+/// freed so far, after which freed buffers stay resident in its arenas: about 100 MB more
+/// peak memory for the 20M-triangle terrain at a 256 MiB budget.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn fixed_mmap_threshold() {
+    // SAFETY: `mallopt` sets a parameter of glibc's allocator, which takes its own lock; it
+    // changes where later allocations come from, not any memory in use.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
+    }
+}
+
+/// Other allocators are left as they are.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn fixed_mmap_threshold() {}
 
 /// The g-mesh levels over the baked hierarchy, down to `min_polygons` (the default if `None`).
 fn gmesh_levels(baked: &Baked, min_polygons: Option<u32>) -> Result<GMeshData, String> {

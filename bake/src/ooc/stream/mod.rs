@@ -2,14 +2,17 @@
 //! never holding the whole file.
 //!
 //! Indexed formats name vertices by number, so a triangle can only be written once its
-//! corners are known. The readers first copy the vertex data into fixed-size records in a
-//! temporary file (and take the bounding box on the way, which the spatial keys need), then
-//! read the faces and look their corners up through a [`BlockCache`]: a direct-mapped cache
-//! of blocks of that file whose size the memory budget sets. Real meshes (scanner output,
-//! exported models, the generator's terrain) name nearby vertices in nearby faces, so the
-//! cache hits almost always; a file whose faces jump around still works, only slower. This
-//! is cheaper than dereferencing by external sorts (Lindstrom's OoCS) while bounded the same
-//! way.
+//! corners are known. [`open`] reads the vertices first (taking the bounding box on the way,
+//! which the spatial keys need): binary PLY vertices of a fixed stride stay where they are in
+//! the input, others are copied into fixed-size records in a temporary file. [`Input::faces`]
+//! then reads the faces, as many times as asked, and looks their corners up through a
+//! [`BlockCache`]: a direct-mapped cache of blocks of vertices (decoded as a block comes in)
+//! whose size the memory budget sets. Real meshes (scanner output, exported models, the
+//! generator's terrain) name nearby vertices in nearby faces, so the cache hits almost always;
+//! a file whose faces jump around still works, only slower. This is cheaper than
+//! dereferencing by external sorts (Lindstrom's OoCS) while bounded the same way. A sink that
+//! needs only positions ([`SoupSink::positions_only`]) gets binary PLY corners without their
+//! other attributes decoded.
 //!
 //! PLY: element `vertex` with `x y z`, optional `nx ny nz`, `red green blue [alpha]` (integer
 //! colours divided by their maximum and taken as sRGB, as the in-core importer does), `u v`
@@ -34,7 +37,7 @@ mod ply_format;
 use std::fs::File;
 use std::path::Path;
 
-pub use cache::BlockCache;
+pub use cache::{BlockCache, RecordSource};
 
 use super::soup::{Cube, SoupTriangle};
 use super::temp::TempSpace;
@@ -49,6 +52,11 @@ pub trait SoupSink {
     /// Room for one more triangle, which the caller fills in completely (its key too):
     /// readers build triangles in place, with no copy of the record on the way.
     fn slot(&mut self) -> Result<&mut SoupTriangle, OocError>;
+    /// Whether the sink reads only the triangles' positions and keys: readers may then leave
+    /// the other attributes out (zero).
+    fn positions_only(&self) -> bool {
+        false
+    }
     /// One triangle (its key already set).
     fn push(&mut self, t: &SoupTriangle) -> Result<(), OocError> {
         *self.slot()? = *t;
@@ -69,6 +77,63 @@ pub struct StreamReport {
     pub skipped_faces: u64,
 }
 
+/// An input whose vertices have been read into temporary records: its faces can be streamed
+/// any number of times ([`Input::faces`]), each pass reading only the faces again (the
+/// clustering's second pass needs the resolution the first pass's keys give).
+pub struct Input<'a> {
+    name: &'a str,
+    kind: Kind<'a>,
+}
+
+enum Kind<'a> {
+    Ply(ply::PlyInput<'a>),
+    Obj(obj::ObjInput<'a>),
+}
+
+/// Opens `path` (chosen by extension: `.ply`, `.obj`; named `name` in errors) and reads its
+/// vertices, using at most about `cache_bytes` for the vertex look-up afterwards.
+pub fn open<'a>(
+    path: &Path,
+    name: &'a str,
+    temp: &TempSpace,
+    cache_bytes: usize,
+) -> Result<Input<'a>, OocError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let file = || File::open(path).map_err(|source| OocError::io(name, "cannot read", source));
+    let kind = match ext.as_str() {
+        "ply" => Kind::Ply(ply::PlyInput::open(name, file()?, temp, cache_bytes)?),
+        "obj" => Kind::Obj(obj::ObjInput::open(name, path, temp, cache_bytes)?),
+        _ => {
+            return Err(OocError::Unsupported {
+                file: name.to_string(),
+                message: format!(
+                    "out-of-core baking reads .ply and .obj files, not '.{ext}' (bake it in core)"
+                ),
+            })
+        }
+    };
+    Ok(Input { name, kind })
+}
+
+impl Input<'_> {
+    /// The input's name in errors.
+    pub fn name(&self) -> &str {
+        self.name
+    }
+
+    /// Streams every face into `sink` (starting it with the bounding cube and the triangle
+    /// count the header or first pass gave).
+    pub fn faces(&mut self, sink: &mut dyn SoupSink) -> Result<StreamReport, OocError> {
+        match &mut self.kind {
+            Kind::Ply(p) => p.faces(sink),
+            Kind::Obj(o) => o.faces(sink),
+        }
+    }
+}
+
 /// Streams `path` (chosen by extension: `.ply`, `.obj`) into `sink`, using at most about
 /// `cache_bytes` for the vertex look-up.
 pub fn stream_file(
@@ -78,19 +143,5 @@ pub fn stream_file(
     sink: &mut dyn SoupSink,
 ) -> Result<StreamReport, OocError> {
     let name = path.display().to_string();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let open = || File::open(path).map_err(|source| OocError::io(&name, "cannot read", source));
-    match ext.as_str() {
-        "ply" => ply::ply(&name, open()?, temp, cache_bytes, sink),
-        "obj" => obj::obj(&name, open, temp, cache_bytes, sink),
-        _ => Err(OocError::Unsupported {
-            file: name,
-            message: format!(
-                "out-of-core baking reads .ply and .obj files, not '.{ext}' (bake it in core)"
-            ),
-        }),
-    }
+    open(path, &name, temp, cache_bytes)?.faces(sink)
 }

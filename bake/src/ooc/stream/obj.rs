@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::{BlockCache, SoupSink, StreamReport};
 use crate::mesh::Surface;
@@ -14,51 +14,84 @@ use crate::ooc::soup::{
 use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
 
-/// Streams the OBJ file that `open` opens (named `name` in errors) into `sink`.
-pub(super) fn obj(
-    name: &str,
-    open: impl Fn() -> Result<File, OocError>,
-    temp: &TempSpace,
-    cache_bytes: usize,
-    sink: &mut dyn SoupSink,
-) -> Result<StreamReport, OocError> {
-    let records = write_records(name, &open, temp)?;
-    if records.np == 0 {
-        return Err(OocError::Empty {
-            file: name.to_string(),
-        });
+/// An OBJ file whose `v`, `vt` and `vn` records are in temporary files: the faces can be
+/// read any number of times, each a pass over the file's lines.
+pub(super) struct ObjInput<'a> {
+    path: PathBuf,
+    faces: Faces<'a>,
+    cube: Cube,
+    faces_hint: u64,
+}
+
+impl<'a> ObjInput<'a> {
+    /// The first pass over the OBJ file at `path` (named `name` in errors): its records.
+    pub(super) fn open(
+        name: &'a str,
+        path: &Path,
+        temp: &TempSpace,
+        cache_bytes: usize,
+    ) -> Result<Self, OocError> {
+        let open = || File::open(path).map_err(|source| OocError::io(name, "cannot read", source));
+        let records = write_records(name, &open, temp)?;
+        if records.np == 0 {
+            return Err(OocError::Empty {
+                file: name.to_string(),
+            });
+        }
+        let tw = |e| OocError::temp("writing OBJ records", e);
+        let paths = [
+            records.pw.finish(),
+            records.tw.finish(),
+            records.nw.finish(),
+        ];
+        let [pp, tp, npth] = paths;
+        let (pp, tp, npth) = (pp.map_err(tw)?, tp.map_err(tw)?, npth.map_err(tw)?);
+        let rd = |p: &Path| File::open(p).map_err(|e| OocError::temp("reading OBJ records", e));
+        let cube = Cube::around(records.lo, records.hi);
+        let faces = Faces {
+            name,
+            pc: BlockCache::new(rd(&pp)?, records.np, cache_bytes / 2),
+            tc: BlockCache::new(rd(&tp)?, records.nt, cache_bytes / 4),
+            nc: BlockCache::new(rd(&npth)?, records.nn, cache_bytes / 4),
+            keyer: cube.keyer(),
+            color: if records.colors { HAS_COLOR } else { 0 },
+            report: StreamReport {
+                vertices: records.np,
+                ..Default::default()
+            },
+            surface_ids: HashMap::new(),
+            surface: None,
+            seen: [0; 3],
+            corners: Vec::new(),
+            surfaces: Vec::new(),
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            faces,
+            cube,
+            faces_hint: records.faces_hint,
+        })
     }
-    let tw = |e| OocError::temp("writing OBJ records", e);
-    let paths = [
-        records.pw.finish(),
-        records.tw.finish(),
-        records.nw.finish(),
-    ];
-    let [pp, tp, npth] = paths;
-    let (pp, tp, npth) = (pp.map_err(tw)?, tp.map_err(tw)?, npth.map_err(tw)?);
-    let rd = |p: &Path| File::open(p).map_err(|e| OocError::temp("reading OBJ records", e));
-    let cube = Cube::around(records.lo, records.hi);
-    let mut faces = Faces {
-        name,
-        pc: BlockCache::new(rd(&pp)?, records.np, cache_bytes / 2),
-        tc: BlockCache::new(rd(&tp)?, records.nt, cache_bytes / 4),
-        nc: BlockCache::new(rd(&npth)?, records.nn, cache_bytes / 4),
-        keyer: cube.keyer(),
-        color: if records.colors { HAS_COLOR } else { 0 },
-        report: StreamReport {
-            vertices: records.np,
+
+    /// The second pass over the file (again on every call): materials and faces into `sink`.
+    pub(super) fn faces(&mut self, sink: &mut dyn SoupSink) -> Result<StreamReport, OocError> {
+        let f = &mut self.faces;
+        f.report = StreamReport {
+            vertices: f.report.vertices,
             ..Default::default()
-        },
-        surface_ids: HashMap::new(),
-        surface: None,
-        seen: [0; 3],
-        corners: Vec::new(),
-        surfaces: Vec::new(),
-    };
-    sink.start(&cube, records.faces_hint)?;
-    read_lines(name, &open, &mut |n, s| faces.line(n, s, sink))?;
-    faces.report.surfaces = faces.surfaces;
-    Ok(faces.report)
+        };
+        f.surface_ids.clear();
+        f.surfaces.clear();
+        f.surface = None;
+        f.seen = [0; 3];
+        sink.start(&self.cube, self.faces_hint)?;
+        let (name, path) = (f.name, &self.path);
+        let open = || File::open(path).map_err(|source| OocError::io(name, "cannot read", source));
+        read_lines(name, &open, &mut |n, s| f.line(n, s, sink))?;
+        let mut report = f.report.clone();
+        report.surfaces = f.surfaces.clone();
+        Ok(report)
+    }
 }
 
 /// An error on line `line` of the file `name`.

@@ -2,65 +2,128 @@
 //! faces, their corners looked up through a [`BlockCache`].
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
+use std::os::unix::fs::FileExt;
 use std::path::PathBuf;
 
 use super::ply_format::{slot, with_bytes, Element, Field, Format, ItemReader, Property, Scalar};
-use super::{BlockCache, SoupSink, StreamReport};
+use super::{BlockCache, RecordSource, SoupSink, StreamReport};
 use crate::mesh::{Surface, Texture};
 use crate::ooc::soup::{encode_normal, Corner, Cube, HAS_COLOR, HAS_NORMAL, HAS_UV};
-use crate::ooc::temp::TempSpace;
+use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
 
-/// Streams the PLY file `file` (named `name` in errors) into `sink`.
-pub(super) fn ply(
-    name: &str,
-    file: File,
-    temp: &TempSpace,
-    cache_bytes: usize,
-    sink: &mut dyn SoupSink,
-) -> Result<StreamReport, OocError> {
-    let mut r = BufReader::with_capacity(1 << 20, file);
-    let header = Header::read(&mut r, name)?;
-    let layout = Layout::of(&header, name)?;
-    let mut ply = Reader {
-        name,
-        r,
-        items: ItemReader {
-            format: header.format,
-            bytes: Vec::new(),
-            line: String::new(),
-            list: Vec::new(),
-        },
-        record: Vec::new(),
-        header,
-        layout,
-    };
-    let (vi, fi) = (ply.layout.vi, ply.layout.fi);
-    ply.skip(0..vi)?;
-    let vcount = ply.header.elements[vi].count;
-    let (vpath, cube) = ply.write_vertices(temp)?;
-    if vcount == 0 {
-        return Err(OocError::Empty {
-            file: name.to_string(),
-        });
-    }
-    sink.start(&cube, ply.header.elements[fi].count)?;
-    let vf = File::open(&vpath).map_err(|e| OocError::temp("reading the vertex file", e))?;
-    let mut cache = BlockCache::<Corner>::new(vf, vcount, cache_bytes);
-    ply.skip(vi + 1..fi)?;
-    let mut report = StreamReport {
-        surfaces: vec![Surface {
-            texture: ply.header.texture.take().map(Texture::File),
+/// A PLY file whose vertices are in a temporary file: the faces can be read any number of
+/// times, from their offset in the file.
+pub(super) struct PlyInput<'a> {
+    reader: Reader<'a>,
+    cache: BlockCache<Corner, VertexSource>,
+    cube: Cube,
+    /// Byte offset of the first item after the vertex element's (where the faces' reading
+    /// starts).
+    after_vertices: u64,
+    surfaces: Vec<Surface>,
+    vertices: u64,
+}
+
+impl<'a> PlyInput<'a> {
+    /// Reads the header and the vertices of the PLY file `file` (named `name` in errors).
+    pub(super) fn open(
+        name: &'a str,
+        file: File,
+        temp: &TempSpace,
+        cache_bytes: usize,
+    ) -> Result<Self, OocError> {
+        let direct = file
+            .try_clone()
+            .map_err(|e| OocError::io(name, "cannot read", e))?;
+        let mut r = BufReader::with_capacity(1 << 20, file);
+        let header = Header::read(&mut r, name)?;
+        let layout = Layout::of(&header, name)?;
+        let mut reader = Reader {
+            name,
+            r,
+            items: ItemReader {
+                format: header.format,
+                bytes: Vec::new(),
+                line: String::new(),
+                list: Vec::new(),
+            },
+            record: Vec::new(),
+            header,
+            layout,
+        };
+        let vi = reader.layout.vi;
+        reader.skip(0..vi)?;
+        let vertices = reader.header.elements[vi].count;
+        let pos = |r: &mut Reader| {
+            r.r.stream_position()
+                .map_err(|e| OocError::io(name, "cannot read", e))
+        };
+        let vertices_at = pos(&mut reader)?;
+        let (stored, cube) = reader.write_vertices(temp)?;
+        if vertices == 0 {
+            return Err(OocError::Empty {
+                file: name.to_string(),
+            });
+        }
+        let after_vertices = pos(&mut reader)?;
+        let source = match stored {
+            Stored::File(vpath) => {
+                let vf =
+                    File::open(&vpath).map_err(|e| OocError::temp("reading the vertex file", e))?;
+                // The open file keeps the records readable; the name can go now.
+                let _ = std::fs::remove_file(&vpath);
+                VertexSource::Records(vf)
+            }
+            Stored::Input(stride, fields) => VertexSource::Input(FixedVertices {
+                file: direct,
+                start: vertices_at,
+                stride,
+                position_fields: fields.iter().filter(|f| f.2 < 3).copied().collect(),
+                fields,
+                big: reader.header.format == Format::Binary { big: true },
+                positions_only: false,
+                bytes: Vec::new(),
+            }),
+        };
+        let surfaces = vec![Surface {
+            texture: reader.header.texture.take().map(Texture::File),
             ..Surface::plain("default")
-        }],
-        vertices: vcount,
-        ..Default::default()
-    };
-    ply.read_faces(&cube, &mut cache, sink, &mut report)?;
-    drop(cache);
-    let _ = std::fs::remove_file(&vpath);
-    Ok(report)
+        }];
+        Ok(Self {
+            reader,
+            cache: BlockCache::new(source, vertices, cache_bytes),
+            cube,
+            after_vertices,
+            surfaces,
+            vertices,
+        })
+    }
+
+    /// Streams the faces into `sink`.
+    pub(super) fn faces(&mut self, sink: &mut dyn SoupSink) -> Result<StreamReport, OocError> {
+        let r = &mut self.reader;
+        r.r.seek(SeekFrom::Start(self.after_vertices))
+            .map_err(|e| OocError::io(r.name, "cannot read", e))?;
+        let (vi, fi) = (r.layout.vi, r.layout.fi);
+        sink.start(&self.cube, r.header.elements[fi].count)?;
+        let positions_only = sink.positions_only();
+        if let VertexSource::Input(v) = self.cache.source_mut() {
+            if v.positions_only != positions_only {
+                v.positions_only = positions_only;
+                self.cache.clear();
+            }
+        }
+        r.skip(vi + 1..fi)?;
+        let mut report = StreamReport {
+            surfaces: self.surfaces.clone(),
+            vertices: self.vertices,
+            ..Default::default()
+        };
+        r.read_faces(&self.cube, &mut self.cache, sink, &mut report)?;
+        Ok(report)
+    }
 }
 
 /// What each vertex slot holds, as errors name it (the in-core importer's names).
@@ -301,19 +364,31 @@ impl Reader<'_> {
         }
     }
 
-    /// The vertices to fixed records in a temporary file; returns its path and the
-    /// vertices' bounding cube.
-    fn write_vertices(&mut self, temp: &TempSpace) -> Result<(PathBuf, Cube), OocError> {
+    /// The vertices checked and bounded; those without a fixed stride copied to fixed
+    /// records in a temporary file (those with one are read from the input itself, decoded
+    /// as they come into the cache: nothing to write). Returns where they are and their
+    /// bounding cube.
+    fn write_vertices(&mut self, temp: &TempSpace) -> Result<(Stored, Cube), OocError> {
+        /// Where the vertices go.
+        enum Dest {
+            /// Nowhere: they stay in the input, at this stride, these fields decoded.
+            Input(usize, Vec<Field>),
+            /// To records in this file, through this block.
+            File(SpillWriter, Vec<Corner>),
+        }
         let vi = self.layout.vi;
         let vcount = self.header.elements[vi].count;
-        let mut vfile = temp
-            .create("vertices", 1 << 16)
-            .map_err(|e| OocError::temp("creating the vertex file", e))?;
         let verr = |e| OocError::temp("writing the vertex file", e);
-        // Records go to the file a block at a time (one write call, one quota check).
-        let mut block: Vec<Corner> = Vec::with_capacity(1 << 14);
+        let mut dest = match self.fixed_vertex() {
+            Some((stride, fields)) => Dest::Input(stride, fields),
+            // Records go to the file a block at a time (one write call, one quota check).
+            None => Dest::File(
+                temp.create("vertices", 1 << 16)
+                    .map_err(|e| OocError::temp("creating the vertex file", e))?,
+                Vec::with_capacity(1 << 14),
+            ),
+        };
         let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        let fixed = self.fixed_vertex();
         let big = self.header.format == Format::Binary { big: true };
         let Layout {
             vslots,
@@ -321,18 +396,15 @@ impl Reader<'_> {
             ..
         } = &self.layout;
         for i in 0..vcount {
-            let mut v = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
-            match &fixed {
-                Some((stride, fields)) => {
+            let mut v = NO_SLOTS;
+            match &dest {
+                Dest::Input(stride, fields) => {
                     with_bytes(&mut self.r, &mut self.record, *stride, |b| {
-                        for &(offset, ty, s, scale) in fields {
-                            let x = ty.decode(&b[offset..], big);
-                            v[s] = if s >= 8 { x / scale } else { x };
-                        }
+                        decode_fixed(b, fields, big, &mut v);
                     })
                     .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?;
                 }
-                None => self
+                Dest::File(..) => self
                     .items
                     .read(&mut self.r, &self.header.elements[vi], &mut |p, x, _| {
                         if let Some(s) = vslots[p] {
@@ -352,27 +424,31 @@ impl Reader<'_> {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
             }
-            block.push(corner(p, &v));
-            if block.len() == block.capacity() {
+            if let Dest::File(vfile, block) = &mut dest {
+                block.push(corner(p, &v));
+                if block.len() == block.capacity() {
+                    vfile.write_all(bytemuck::cast_slice(block)).map_err(verr)?;
+                    block.clear();
+                }
+            }
+        }
+        let stored = match dest {
+            Dest::Input(stride, fields) => Stored::Input(stride, fields),
+            Dest::File(mut vfile, block) => {
                 vfile
                     .write_all(bytemuck::cast_slice(&block))
                     .map_err(verr)?;
-                block.clear();
+                Stored::File(vfile.finish().map_err(verr)?)
             }
-        }
-        vfile
-            .write_all(bytemuck::cast_slice(&block))
-            .map_err(verr)?;
-        drop(block);
-        let vpath = vfile.finish().map_err(verr)?;
-        Ok((vpath, Cube::around(lo, hi)))
+        };
+        Ok((stored, Cube::around(lo, hi)))
     }
 
     /// The faces, each a fan of triangles whose corners come from `cache`, into `sink`.
     fn read_faces(
         &mut self,
         cube: &Cube,
-        cache: &mut BlockCache<Corner>,
+        cache: &mut BlockCache<Corner, VertexSource>,
         sink: &mut dyn SoupSink,
         report: &mut StreamReport,
     ) -> Result<(), OocError> {
@@ -513,6 +589,76 @@ impl Reader<'_> {
                         format!("vertex index {i} out of range ({vcount} vertices)"),
                     ));
                 }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The vertex slots before a vertex is read: what a property the file lacks reads as.
+const NO_SLOTS: [f64; 12] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+
+/// The slots of a vertex of fixed stride from its bytes `b`.
+#[inline]
+fn decode_fixed(b: &[u8], fields: &[Field], big: bool, v: &mut [f64; 12]) {
+    for &(offset, ty, s, scale) in fields {
+        let x = ty.decode(&b[offset..], big);
+        v[s] = if s >= 8 { x / scale } else { x };
+    }
+}
+
+/// Where the vertices are after the vertex pass.
+enum Stored {
+    /// Fixed records in a temporary file.
+    File(PathBuf),
+    /// In the input, at a stride, these fields decoded.
+    Input(usize, Vec<Field>),
+}
+
+/// Where the PLY reader's vertex cache reads from.
+pub(super) enum VertexSource {
+    /// Records written from vertices without a fixed stride (ascii, lists).
+    Records(File),
+    /// The input's own binary vertices.
+    Input(FixedVertices),
+}
+
+/// The binary vertices of a PLY file, decoded a block at a time.
+pub(super) struct FixedVertices {
+    file: File,
+    /// Byte offset of the first vertex.
+    start: u64,
+    stride: usize,
+    fields: Vec<Field>,
+    /// The position fields alone.
+    position_fields: Vec<Field>,
+    big: bool,
+    /// Whether to decode the positions alone (the rest left zero).
+    positions_only: bool,
+    /// The block's bytes.
+    bytes: Vec<u8>,
+}
+
+impl RecordSource<Corner> for VertexSource {
+    fn read(&mut self, first: u64, dst: &mut [Corner]) -> std::io::Result<()> {
+        let f = match self {
+            VertexSource::Records(file) => return file.read(first, dst),
+            VertexSource::Input(f) => f,
+        };
+        f.bytes.resize(dst.len() * f.stride, 0);
+        f.file
+            .read_exact_at(&mut f.bytes, f.start + first * f.stride as u64)?;
+        for (c, b) in dst.iter_mut().zip(f.bytes.chunks_exact(f.stride)) {
+            let mut v = NO_SLOTS;
+            if f.positions_only {
+                decode_fixed(b, &f.position_fields, f.big, &mut v);
+                *c = Corner {
+                    position: [v[0] as f32, v[1] as f32, v[2] as f32],
+                    ..Corner::default()
+                };
+            } else {
+                decode_fixed(b, &f.fields, f.big, &mut v);
+                *c = corner([v[0] as f32, v[1] as f32, v[2] as f32], &v);
             }
         }
         Ok(())
