@@ -2,7 +2,7 @@
 //! collapse hands the positions of the removed node's triangles to the nearest of the
 //! triangles that replace them, and raises the new node's error to the largest distance.
 
-use super::geometry::{dot, point_triangle_d2, sub, P3, V3};
+use super::geometry::{dot, point_triangle_d2, sub, V3};
 use super::work::Work;
 use super::{NONE, PARALLEL_MIN};
 use rayon::prelude::*;
@@ -11,12 +11,20 @@ impl Work<'_> {
     /// The points of the error bounds, the input's positions, each given to a triangle it
     /// is a corner of (its first).
     pub(super) fn place_points(&mut self) {
-        self.pts_of = vec![Vec::new(); self.tris.len()];
+        self.pts_head = vec![NONE; self.tris.len()];
+        self.pts_next = vec![NONE; self.p.len()];
         for (x, faces) in self.faces_of[..self.p.len()].iter().enumerate() {
             if let Some(&f) = faces.first() {
-                self.pts_of[f as usize].push(self.p[x].map(|c| c as f32));
+                self.pts_next[x] = std::mem::replace(&mut self.pts_head[f as usize], x as u32);
             }
         }
+    }
+
+    /// The point of the error bounds standing for position `x`: in single precision
+    /// (ample for an error bound), relative to the centre.
+    #[inline]
+    fn point(&self, x: u32) -> V3 {
+        self.p[x as usize].map(|c| c as f32 as f64)
     }
 
     /// The nearest triangle of `star` to each of `points` and the squared distance, into
@@ -24,7 +32,7 @@ impl Work<'_> {
     pub(super) fn nearest(
         &self,
         star: &[u32],
-        points: &[(P3, u32)],
+        points: &[(u32, u32)],
         tris: &mut Vec<([V3; 3], V3, f64)>,
         out: &mut Vec<(f64, u32)>,
     ) {
@@ -33,13 +41,13 @@ impl Work<'_> {
         tris.extend(star.iter().map(|&f| {
             let tri = &self.tris[f as usize];
             (
-                tri.c.map(|v| self.pos[v as usize]),
+                tri.c.map(|v| self.pos(v)),
                 tri.n,
                 tri.len * tri.len,
             )
         }));
         for &(x, _) in points {
-            let x = x.map(f64::from);
+            let x = self.point(x);
             let mut best = (f64::INFINITY, NONE);
             for (&f, &([a, b, c], n, len2)) in star.iter().zip(tris.iter()) {
                 // The distance to the plane is a lower bound.
@@ -79,7 +87,7 @@ impl Work<'_> {
         }
         let this = &*self;
         let first_node = self.nodes.len() - self.from_kept.len();
-        let run = |part: &[(P3, u32)]| {
+        let run = |part: &[(u32, u32)]| {
             let (mut out, mut tris) = (Vec::with_capacity(part.len()), Vec::new());
             for points in part.chunk_by(|a, b| a.1 == b.1) {
                 let s = points[0].1 as usize;
@@ -101,7 +109,8 @@ impl Work<'_> {
         };
         for (&(x, s), &(d, f)) in moved.iter().zip(found.iter().flatten()) {
             if f != NONE {
-                self.pts_of[f as usize].push(x);
+                self.pts_next[x as usize] =
+                    std::mem::replace(&mut self.pts_head[f as usize], x);
                 let error = &mut self.nodes[s as usize].error;
                 *error = error.max(d.sqrt() as f32);
             }

@@ -31,8 +31,11 @@ impl Work<'_> {
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
         for &f in &self.faces_of[c.u as usize] {
-            self.moved
-                .extend(self.pts_of[f as usize].drain(..).map(|x| (x, s)));
+            let mut x = std::mem::replace(&mut self.pts_head[f as usize], NONE);
+            while x != NONE {
+                self.moved.push((x, s));
+                x = self.pts_next[x as usize];
+            }
         }
         self.push_node(c);
         self.merge_wedges(c);
@@ -58,8 +61,7 @@ impl Work<'_> {
         self.nodes[t].parent = s;
         self.nodes[u].parent = s;
         let (nt, nu) = (self.nodes[t], self.nodes[u]);
-        let (p_t, p_u) = (self.pos[t], self.pos[u]);
-        self.pos.push(p_t);
+        let (p_t, p_u) = (self.pos(c.t), self.pos(c.u));
         self.nodes.push(NodeOut {
             parent: NONE,
             error: nt.error.max(nu.error),

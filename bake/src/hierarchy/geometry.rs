@@ -27,9 +27,6 @@ pub(super) fn norm(a: V3) -> V3 {
     }
 }
 
-/// A point the error bounds measure (single precision is ample for an error bound).
-pub(super) type P3 = [f32; 3];
-
 /// Squared distance from `x` to the triangle `a b c` (Ericson, "Real-Time Collision
 /// Detection", 5.1.5: the closest point by the Voronoi region of `x`).
 pub(super) fn point_triangle_d2(x: V3, a: V3, b: V3, c: V3) -> f64 {

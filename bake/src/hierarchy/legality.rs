@@ -116,18 +116,14 @@ impl Work<'_> {
                 return None;
             }
         }
-        let p_t = self.pos[t as usize];
+        let p_t = self.pos(t);
         for &f in &self.faces_of[u as usize] {
             if f == fl || f == fr {
                 continue;
             }
             let tri = &self.tris[f as usize];
             let c = tri.c;
-            let mut q = [
-                self.pos[c[0] as usize],
-                self.pos[c[1] as usize],
-                self.pos[c[2] as usize],
-            ];
+            let mut q = [self.pos(c[0]), self.pos(c[1]), self.pos(c[2])];
             q[corner_of(c, u)] = p_t;
             let after = cross(sub(q[1], q[0]), sub(q[2], q[0]));
             let (before, lb) = (tri.n, tri.len);

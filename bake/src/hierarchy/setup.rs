@@ -48,7 +48,6 @@ pub(super) fn work<'w>(
     let info = position_info(w, frozen);
     let diagonal = s.diagonal;
     let p = s.p;
-    let pos = p.clone();
     let mut work = Work {
         w,
         weights: *weights,
@@ -57,7 +56,6 @@ pub(super) fn work<'w>(
         info,
         tris,
         alive: vec![true; nt],
-        pos,
         faces_of,
         valence: Vec::new(),
         node_pos: (0..np as u32).collect(),
@@ -68,7 +66,8 @@ pub(super) fn work<'w>(
         stamp: vec![0; np],
         shrunk: vec![0; np],
         start_valence: vec![0; np],
-        pts_of: Vec::new(),
+        pts_head: Vec::new(),
+        pts_next: Vec::new(),
         moved: Vec::new(),
         from_kept: Vec::new(),
     };
@@ -294,8 +293,6 @@ impl Work<'_> {
 
     /// A leaf's number of neighbours, normal cone and bounding radius.
     fn leaf(&self, v: u32) -> (u32, ([f32; 3], f32), f32) {
-        let mut ring = Vec::new();
-        self.find_ring(v, &mut ring);
         let normals = self.faces_of[v as usize]
             .iter()
             .map(|&f| norm(self.tris[f as usize].n));
@@ -304,20 +301,32 @@ impl Work<'_> {
                 .clone()
                 .fold([0.0; 3], |a, n| [a[0] + n[0], a[1] + n[1], a[2] + n[2]]),
         );
+        // The widest normal: the smallest cosine (one arc cosine per leaf).
         let angle = normals
-            .map(|n| dot(axis, n).clamp(-1.0, 1.0).acos())
-            .fold(0.0f64, f64::max);
+            .map(|n| dot(axis, n).clamp(-1.0, 1.0))
+            .fold(1.0f64, f64::min)
+            .acos();
         let cone = if axis == [0.0; 3] {
             ([0.0; 3], std::f32::consts::PI)
         } else {
             (axis.map(|x| x as f32), angle as f32)
         };
-        let pv = self.pos[v as usize];
-        let radius = ring
-            .iter()
-            .map(|&o| len(sub(self.pos[o as usize], pv)))
-            .fold(0.0, f64::max) as f32;
-        (ring.len() as u32, cone, radius)
+        // The ring as `Work::find_ring` lists it, without collecting it.
+        let pv = self.pos(v);
+        let (mut valence, mut radius) = (0u32, 0.0f64);
+        for &f in &self.faces_of[v as usize] {
+            let t = &self.tris[f as usize];
+            let j = corner_of(t.c, v);
+            let border = t.o[prev(j)] == NONE;
+            for o in [Some(t.c[next(j)]), border.then_some(t.c[prev(j)])]
+                .into_iter()
+                .flatten()
+            {
+                valence += 1;
+                radius = radius.max(len(sub(self.pos(o), pv)));
+            }
+        }
+        (valence, cone, radius as f32)
     }
 }
 

@@ -3,7 +3,7 @@
 
 use caveclod_core::format::PositionClass;
 
-use super::geometry::{corner_of, cross, next, prev, sub, P3, V3};
+use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::setup::scaled_attributes;
 use super::{AttributeWeights, Hierarchy, NONE};
 use crate::quadric::{Quadric, M};
@@ -65,8 +65,6 @@ pub(super) struct Work<'w> {
     pub(super) info: Vec<PosInfo>,
     pub(super) tris: Vec<Tri>,
     pub(super) alive: Vec<bool>,
-    /// Point of every node (its position's).
-    pub(super) pos: Vec<V3>,
     /// Triangles around every node.
     pub(super) faces_of: Vec<Vec<u32>>,
     /// Number of distinct neighbours of every live node.
@@ -85,11 +83,14 @@ pub(super) struct Work<'w> {
     /// A node's number of neighbours at the start of the pass it last lost one in.
     pub(super) start_valence: Vec<u32>,
     /// The input's positions each triangle stands for (nearest to it when it last
-    /// changed), which the error bounds measure; relative to the centre.
-    pub(super) pts_of: Vec<Vec<P3>>,
-    /// Points the pass's collapses moved, waiting for [`Work::settle`], each with the new
-    /// node whose triangles it goes to (those of one node in a row).
-    pub(super) moved: Vec<(P3, u32)>,
+    /// changed), which the error bounds measure, as a list per triangle: its first
+    /// position, or `NONE`...
+    pub(super) pts_head: Vec<u32>,
+    /// ...and each position's next one in its triangle's list, or `NONE`.
+    pub(super) pts_next: Vec<u32>,
+    /// Points (positions) the pass's collapses moved, waiting for [`Work::settle`], each
+    /// with the new node whose triangles it goes to (those of one node in a row).
+    pub(super) moved: Vec<(u32, u32)>,
     /// Per collapse of the pass, in order: how many of its new node's triangles came from
     /// the kept child (they are listed first; the removed child's follow).
     pub(super) from_kept: Vec<u32>,
@@ -140,13 +141,15 @@ impl Work<'_> {
         border
     }
 
+    /// The point of node `v` (its position's).
+    #[inline]
+    pub(super) fn pos(&self, v: u32) -> V3 {
+        self.p[self.node_pos[v as usize] as usize]
+    }
+
     #[inline]
     pub(super) fn triangle_normal(&self, c: [u32; 3]) -> V3 {
-        let (a, b, d) = (
-            self.pos[c[0] as usize],
-            self.pos[c[1] as usize],
-            self.pos[c[2] as usize],
-        );
+        let (a, b, d) = (self.pos(c[0]), self.pos(c[1]), self.pos(c[2]));
         cross(sub(b, a), sub(d, a))
     }
 
