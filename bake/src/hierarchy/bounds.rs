@@ -3,9 +3,70 @@
 //! triangles that replace them, and raises the new node's error to the largest distance.
 
 use super::geometry::{dot, point_triangle_d2, sub, V3};
-use super::work::Work;
+use super::work::{Tri, Work};
 use super::{NONE, PARALLEL_MIN};
 use rayon::prelude::*;
+
+/// A triangle as the nearest-triangle search reads it: corners, edges from the first,
+/// unnormalised normal and the Gram entries of the edges.
+#[derive(Clone, Copy)]
+pub(super) struct Probe {
+    a: V3,
+    b: V3,
+    c: V3,
+    ab: V3,
+    ac: V3,
+    n: V3,
+    /// `|n|²`, which is `d00 d11 - d01²`.
+    len2: f64,
+    d00: f64,
+    d01: f64,
+    d11: f64,
+}
+
+impl Probe {
+    fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
+        let [a, b, c] = tri.c.map(pos);
+        let (ab, ac) = (sub(b, a), sub(c, a));
+        Self {
+            a,
+            b,
+            c,
+            ab,
+            ac,
+            n: tri.n,
+            len2: tri.len * tri.len,
+            d00: dot(ab, ab),
+            d01: dot(ab, ac),
+            d11: dot(ac, ac),
+        }
+    }
+
+    /// The squared distance from `x` to the triangle if it is below `best`.
+    ///
+    /// The distance to the plane is a lower bound; when `x` projects inside the triangle
+    /// it is the distance, and only a projection outside takes the general case.
+    #[inline]
+    fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
+        let ax = sub(x, self.a);
+        let h = dot(ax, self.n);
+        if self.len2 > 0.0 {
+            if h * h >= best * self.len2 {
+                return None;
+            }
+            let (d20, d21) = (dot(ax, self.ab), dot(ax, self.ac));
+            // Barycentric coordinates of the projection, times `len2`.
+            let v = self.d11 * d20 - self.d01 * d21;
+            let w = self.d00 * d21 - self.d01 * d20;
+            if v >= 0.0 && w >= 0.0 && v + w <= self.len2 {
+                let d = h * h / self.len2;
+                return (d < best).then_some(d);
+            }
+        }
+        let d = point_triangle_d2(x, self.a, self.b, self.c);
+        (d < best).then_some(d)
+    }
+}
 
 impl Work<'_> {
     /// The points of the error bounds, the input's positions, each given to a triangle it
@@ -28,35 +89,22 @@ impl Work<'_> {
     }
 
     /// The nearest triangle of `star` to each of `points` and the squared distance, into
-    /// `out`; `tris` is scratch space.
+    /// `out`; `probes` is scratch space.
     pub(super) fn nearest(
         &self,
         star: &[u32],
         points: &[(u32, u32)],
-        tris: &mut Vec<([V3; 3], V3, f64)>,
+        probes: &mut Vec<Probe>,
         out: &mut Vec<(f64, u32)>,
     ) {
-        // The triangles' corners and plane normals, gathered once for all the points.
-        tris.clear();
-        tris.extend(star.iter().map(|&f| {
-            let tri = &self.tris[f as usize];
-            (
-                tri.c.map(|v| self.pos(v)),
-                tri.n,
-                tri.len * tri.len,
-            )
-        }));
+        // What the distances read of the triangles, gathered once for all the points.
+        probes.clear();
+        probes.extend(star.iter().map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))));
         for &(x, _) in points {
             let x = self.point(x);
             let mut best = (f64::INFINITY, NONE);
-            for (&f, &([a, b, c], n, len2)) in star.iter().zip(tris.iter()) {
-                // The distance to the plane is a lower bound.
-                let h = dot(sub(x, a), n);
-                if len2 > 0.0 && h * h >= best.0 * len2 {
-                    continue;
-                }
-                let d = point_triangle_d2(x, a, b, c);
-                if d < best.0 {
+            for (&f, probe) in star.iter().zip(probes.iter()) {
+                if let Some(d) = probe.d2_below(x, best.0) {
                     best = (d, f);
                 }
             }
@@ -88,7 +136,7 @@ impl Work<'_> {
         let this = &*self;
         let first_node = self.nodes.len() - self.from_kept.len();
         let run = |part: &[(u32, u32)]| {
-            let (mut out, mut tris) = (Vec::with_capacity(part.len()), Vec::new());
+            let (mut out, mut probes) = (Vec::with_capacity(part.len()), Vec::new());
             for points in part.chunk_by(|a, b| a.1 == b.1) {
                 let s = points[0].1 as usize;
                 let star = &this.faces_of[s];
@@ -98,7 +146,7 @@ impl Work<'_> {
                 } else {
                     star
                 };
-                this.nearest(moved_ones, points, &mut tris, &mut out);
+                this.nearest(moved_ones, points, &mut probes, &mut out);
             }
             out
         };

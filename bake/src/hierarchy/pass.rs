@@ -204,7 +204,7 @@ impl Passes {
             };
             let slot = &self.slots[i / 3][i % 3];
             let [a, b] = slot.ends;
-            let (t, u) = if slot.dir == 1 { (a, b) } else { (b, a) };
+            let (t, u) = if slot.dir() == 1 { (a, b) } else { (b, a) };
             Next::Try {
                 t,
                 u,

@@ -73,6 +73,7 @@ pub(super) fn work<'w>(
     };
     work.place_points();
     work.add_leaves(threads);
+    work.reserve_nodes();
     work
 }
 
@@ -273,6 +274,18 @@ fn position_info(w: &Welded, frozen: &[bool]) -> Vec<PosInfo> {
 }
 
 impl Work<'_> {
+    /// Room for every node a build can add (a collapse per position but one), so the
+    /// per-node arrays never grow by doubling past what they need.
+    fn reserve_nodes(&mut self) {
+        let more = self.p.len().saturating_sub(1);
+        self.faces_of.reserve_exact(more);
+        self.node_pos.reserve_exact(more);
+        self.stamp.reserve_exact(more);
+        self.shrunk.reserve_exact(more);
+        self.start_valence.reserve_exact(more);
+        self.h.collapses.reserve_exact(more);
+    }
+
     /// The leaves' valences, normal cones and bounding radii (to their ring), on all
     /// threads.
     fn add_leaves(&mut self, threads: usize) {
