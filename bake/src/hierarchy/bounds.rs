@@ -2,7 +2,7 @@
 //! collapse hands the positions of the removed node's triangles to the nearest of the
 //! triangles that replace them, and raises the new node's error to the largest distance.
 
-use super::geometry::{dot, point_triangle_d2, sub, V3};
+use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
 use super::work::{Tri, Work};
 use super::{NONE, PARALLEL_MIN};
 use rayon::prelude::*;
@@ -28,14 +28,16 @@ impl Probe {
     fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
         let [a, b, c] = tri.c.map(pos);
         let (ab, ac) = (sub(b, a), sub(c, a));
+        let n = cross(ab, ac);
+        let l = len(n);
         Self {
             a,
             b,
             c,
             ab,
             ac,
-            n: tri.n,
-            len2: tri.len * tri.len,
+            n,
+            len2: l * l,
             d00: dot(ab, ab),
             d01: dot(ab, ac),
             d11: dot(ac, ac),

@@ -111,7 +111,7 @@ impl Work<'_> {
     }
 
     /// The triangles left around `t` and `u` become the new node `s`'s (the kept child's
-    /// first, which [`Work::settle`] relies on), with their normals at the new corners.
+    /// first, which [`Work::settle`] relies on).
     fn move_star(&mut self, c: Collapse, s: u32) {
         let (t, u) = (c.t, c.u);
         let mut star = std::mem::take(&mut self.faces_of[t as usize]);
@@ -124,8 +124,6 @@ impl Work<'_> {
                     *x = s;
                 }
             }
-            tri.n = self.triangle_normal(tri.c);
-            tri.len = len(tri.n);
             self.tris[f as usize] = tri;
         }
         self.faces_of.push(star);

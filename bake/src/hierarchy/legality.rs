@@ -124,9 +124,10 @@ impl Work<'_> {
             let tri = &self.tris[f as usize];
             let c = tri.c;
             let mut q = [self.pos(c[0]), self.pos(c[1]), self.pos(c[2])];
+            let before = cross(sub(q[1], q[0]), sub(q[2], q[0]));
             q[corner_of(c, u)] = p_t;
             let after = cross(sub(q[1], q[0]), sub(q[2], q[0]));
-            let (before, lb) = (tri.n, tri.len);
+            let lb = len(before);
             let la = len(after);
             if la <= 1e-12 * (1.0 + lb) || dot(before, after) <= 0.2 * lb * la {
                 return None;

@@ -176,10 +176,9 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// The triangles with their normals and, across each edge, the triangle with the
-    /// reverse edge.
+    /// The triangles with, across each edge, the triangle with the reverse edge.
     fn triangles(&self, faces_of: &[Vec<u32>]) -> Vec<Tri> {
-        let (w, p) = (self.w, &self.p);
+        let w = self.w;
         let opp = par_map(w.triangles.len(), self.threads, |f| {
             let c = w.triangles[f].p;
             [0, 1, 2].map(|k| {
@@ -197,16 +196,10 @@ impl<'a> Setup<'a> {
         w.triangles
             .iter()
             .zip(&opp)
-            .map(|(t, &o)| {
-                let [a, b, d] = t.p.map(|x| p[x as usize]);
-                let n = cross(sub(b, a), sub(d, a));
-                Tri {
-                    c: t.p,
-                    o,
-                    group: t.group,
-                    n,
-                    len: len(n),
-                }
+            .map(|(t, &o)| Tri {
+                c: t.p,
+                o,
+                group: t.group,
             })
             .collect()
     }
@@ -308,7 +301,7 @@ impl Work<'_> {
     fn leaf(&self, v: u32) -> (u32, ([f32; 3], f32), f32) {
         let normals = self.faces_of[v as usize]
             .iter()
-            .map(|&f| norm(self.tris[f as usize].n));
+            .map(|&f| norm(self.triangle_normal(self.tris[f as usize].c)));
         let axis = norm(
             normals
                 .clone()

@@ -18,9 +18,9 @@ pub(super) struct Wedge {
     pub(super) q: Quadric,
 }
 
-/// A triangle of the mesh being simplified, in one cache line.
+/// A triangle of the mesh being simplified: 28 bytes (its normal is computed where a
+/// check reads it, from the corners, rather than kept).
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
 pub(super) struct Tri {
     /// Current corners (nodes), counter-clockwise.
     pub(super) c: [u32; 3],
@@ -29,10 +29,6 @@ pub(super) struct Tri {
     pub(super) o: [u32; 3],
     /// Surface group.
     pub(super) group: u32,
-    /// Unnormalised normal at the current corners.
-    pub(super) n: V3,
-    /// Its length.
-    pub(super) len: f64,
 }
 
 /// What the hierarchy records of a node.
