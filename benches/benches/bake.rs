@@ -18,23 +18,33 @@
 //!   area samples of both directions. Both divided by the input's bounding-box diagonal.
 //! - **Speed**: the whole bake (`pipeline::bake_mesh`: weld, hierarchy, assembly and
 //!   validation; the import is not timed) against `meshopt::simplify` of the welded mesh to
-//!   1%, medians of a few runs, and the bake's stages from one extra run.
+//!   1%, medians of a few runs, and the bake's stages from one extra run; input triangles
+//!   per second of the bake.
+//! - **Memory**: the peak resident set of a bake measured from outside: this executable runs
+//!   itself as a child (`--peak-rss-child FILE`: `pipeline::bake_file`, the import included,
+//!   as `caveclod bake` runs it) under `/usr/bin/time -v` and reads its "Maximum resident set
+//!   size"; divided by the input triangles. Without `/usr/bin/time` the row says so.
+//!
+//! The inputs are lucy and the St. Helens terrain from `../shared/data`, and a generated
+//! 1200 × 1200 grid (`caveclod_tests::generate::terrain`, 2,875,202 triangles with normals,
+//! colours and UVs, written to the temporary directory and removed after the run).
 //!
 //! Prints the figures with ratios (ours / meshopt) and writes them to `bake-quality.csv` in
-//! the target directory. `cargo bench -p caveclod-benches --bench bake` (about a minute; a
+//! the target directory. `cargo bench -p caveclod-benches --bench bake` (a few minutes; a
 //! filter argument such as `-- bake/lucy` picks inputs); without `--bench` (as
-//! `cargo test --benches` runs it) it runs once on spot with fewer samples. Inputs that are
-//! absent are skipped with a note.
+//! `cargo test --benches` runs it) it runs once on spot and a small generated grid with
+//! fewer samples. Inputs that are absent are skipped with a note.
 
 use std::collections::BinaryHeap;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::time::Instant;
 
 use caveclod_bake::baked::Baked;
 use caveclod_bake::hierarchy::{self, AttributeWeights};
 use caveclod_bake::import::{self, ImportOptions};
 use caveclod_bake::mesh::Mesh;
-use caveclod_bake::pipeline::bake_mesh;
+use caveclod_bake::pipeline::{bake_file, bake_mesh};
 use caveclod_bake::weld::{self, Welded};
 use caveclod_benches::distance::{d2, distances, sample, Bvh, Reference, Soup};
 use caveclod_core::{CameraState, Hierarchy, NodeId};
@@ -162,6 +172,46 @@ fn meshopt_cut(w: &Welded, indices: &[u32], target: usize) -> (Soup, f32) {
     (soup, error)
 }
 
+/// Peak resident set of `bake_file` of `path` in a child process, read from
+/// `/usr/bin/time -v`: `(bytes, the child's bake seconds)`, or why it was not measured.
+fn peak_rss(path: &Path) -> Result<(u64, f64), String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let out = Command::new("/usr/bin/time")
+        .arg("-v")
+        .arg(exe)
+        .arg("--peak-rss-child")
+        .arg(path)
+        .output()
+        .map_err(|e| format!("/usr/bin/time: {e}"))?;
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        return Err(format!(
+            "the child failed ({}): {}",
+            out.status,
+            stderr.lines().next().unwrap_or("")
+        ));
+    }
+    let kbytes = stderr
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("Maximum resident set size (kbytes):"))
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .ok_or("no maximum resident set size in /usr/bin/time's report")?;
+    let seconds = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find_map(|l| l.strip_prefix("bake_seconds "))
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .ok_or("the child printed no bake time")?;
+    Ok((kbytes * 1024, seconds))
+}
+
+/// The child of [`peak_rss`]: bakes `path` as `caveclod bake` does and prints its time.
+fn peak_rss_child(path: &Path) {
+    let t = Instant::now();
+    let (baked, info) = bake_file(path, &ImportOptions::default(), &mut |_| {}).expect("bake");
+    println!("bake_seconds {}", t.elapsed().as_secs_f64());
+    assert!(info.input_triangles > 0 && baked.hierarchy().is_ok());
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_unstable_by(f64::total_cmp);
     v[v.len() / 2]
@@ -188,6 +238,12 @@ impl Csv {
             "{input},{metric},{target},{ours},{meshopt},{}\n",
             ours / meshopt
         ));
+    }
+
+    /// A figure of ours alone.
+    fn single(&mut self, input: &str, metric: &str, target: usize, ours: f64) {
+        self.0
+            .push_str(&format!("{input},{metric},{target},{ours},,\n"));
     }
 }
 
@@ -259,6 +315,29 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
         ours_t / mo_t,
         t_build / mo_t
     );
+    println!(
+        "input triangles per second: {:.3} M (bake), {:.3} M (hierarchy stage alone)",
+        n as f64 / ours_t / 1e6,
+        n as f64 / t_build / 1e6
+    );
+    csv.single(name, "triangles_per_second_bake", n, n as f64 / ours_t);
+    match peak_rss(path) {
+        Ok((bytes, seconds)) => {
+            println!(
+                "peak resident set of a file bake in a child (import included, {seconds:.3} s): \
+                 {:.1} MB, {:.0} bytes per input triangle",
+                bytes as f64 / 1e6,
+                bytes as f64 / n as f64
+            );
+            csv.single(
+                name,
+                "peak_rss_bytes_per_triangle",
+                n,
+                bytes as f64 / n as f64,
+            );
+        }
+        Err(why) => println!("peak resident set: not measured ({why})"),
+    }
     csv.row(name, "seconds_bake_vs_simplify_1pct", one, ours_t, mo_t);
     csv.row(
         name,
@@ -333,24 +412,42 @@ fn target_dir() -> Option<PathBuf> {
     exe.ancestors().nth(3).map(Path::to_path_buf)
 }
 
+/// An input of the benchmark.
+enum Source {
+    /// A file under `shared/data`.
+    Data(&'static str),
+    /// A generated terrain of at least this many triangles.
+    Grid(u64),
+}
+
 fn main() {
-    let benchmarking = std::env::args().any(|a| a == "--bench");
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--peak-rss-child") {
+        peak_rss_child(Path::new(&args[i + 1]));
+        return;
+    }
+    let benchmarking = args.iter().any(|a| a == "--bench");
     // Like criterion, a filter among the arguments picks benchmarks by substring of their
-    // names, `bake/lucy` and `bake/st_helens` (`bake/spot` without `--bench`).
-    let filters: Vec<String> = std::env::args()
+    // names, `bake/lucy`, `bake/st_helens` and `bake/grid1200` (`bake/spot` and
+    // `bake/grid_small` without `--bench`).
+    let filters: Vec<String> = args
+        .iter()
         .skip(1)
         .filter(|a| !a.starts_with('-'))
+        .cloned()
         .collect();
     let wanted = |name: &str| {
         let id = format!("bake/{name}");
         filters.is_empty() || filters.iter().any(|f| id.contains(f.as_str()))
     };
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
-    let (inputs, settings): (&[(&str, &str)], _) = if benchmarking {
+    let (inputs, settings): (&[(&str, Source)], _) = if benchmarking {
         (
             &[
-                ("lucy", "scans/lucy.ply"),
-                ("st_helens", "terrain/SainteHelens.dem"),
+                ("lucy", Source::Data("scans/lucy.ply")),
+                ("st_helens", Source::Data("terrain/SainteHelens.dem")),
+                // 1200 × 1200 vertices.
+                ("grid1200", Source::Grid(2_875_202)),
             ],
             Settings {
                 samples: 200_000,
@@ -360,7 +457,10 @@ fn main() {
         )
     } else {
         (
-            &[("spot", "spot/spot_triangulated.obj")],
+            &[
+                ("spot", Source::Data("spot/spot_triangulated.obj")),
+                ("grid_small", Source::Grid(20_000)),
+            ],
             Settings {
                 samples: 20_000,
                 bake_runs: 1,
@@ -369,26 +469,41 @@ fn main() {
         )
     };
     println!(
-        "# Bake quality and speed against meshoptimizer ({} build, load average {})",
+        "# Bake quality and speed against meshoptimizer ({} build, load average {}, {} threads)",
         if cfg!(debug_assertions) {
             "debug"
         } else {
             "release"
         },
-        load()
+        load(),
+        rayon::current_num_threads()
     );
     let mut csv = Csv("input,metric,target_triangles,ours,meshopt,ratio\n".into());
     let mut ran = 0;
-    for &(name, relative) in inputs {
+    for (name, source) in inputs {
         if !wanted(name) {
             continue;
         }
-        let path = data.join(relative);
-        if !path.exists() {
-            println!("note: {relative} not found under ../shared/data; skipping {name}");
-            continue;
+        match source {
+            Source::Data(relative) => {
+                let path = data.join(relative);
+                if !path.exists() {
+                    println!("note: {relative} not found under ../shared/data; skipping {name}");
+                    continue;
+                }
+                run(name, &path, &settings, &mut csv);
+            }
+            &Source::Grid(triangles) => {
+                let path = std::env::temp_dir().join(format!(
+                    "caveclod-bake-bench-{}-{name}.ply",
+                    std::process::id()
+                ));
+                caveclod_tests::generate::terrain(&path, triangles, &mut |_, _| {})
+                    .expect("generate the grid");
+                run(name, &path, &settings, &mut csv);
+                std::fs::remove_file(&path).expect("remove the generated grid");
+            }
         }
-        run(name, &path, &settings, &mut csv);
         ran += 1;
     }
     println!("\nload average at the end: {}", load());
