@@ -172,9 +172,20 @@ fn meshopt_cut(w: &Welded, indices: &[u32], target: usize) -> (Soup, f32) {
     (soup, error)
 }
 
+/// What [`peak_rss`] measures of a child's bake.
+struct Child {
+    /// Its maximum resident set.
+    bytes: u64,
+    /// Its bake's wall time, as it measured it.
+    seconds: f64,
+    /// Its processor time, user and system, all threads (from `/usr/bin/time`): unlike the
+    /// wall time, a busy host does not inflate it.
+    cpu_seconds: f64,
+}
+
 /// Peak resident set of `bake_file` of `path` in a child process, read from
-/// `/usr/bin/time -v`: `(bytes, the child's bake seconds)`, or why it was not measured.
-fn peak_rss(path: &Path) -> Result<(u64, f64), String> {
+/// `/usr/bin/time -v`, or why it was not measured.
+fn peak_rss(path: &Path) -> Result<Child, String> {
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
     let out = Command::new("/usr/bin/time")
         .arg("-v")
@@ -191,17 +202,25 @@ fn peak_rss(path: &Path) -> Result<(u64, f64), String> {
             stderr.lines().next().unwrap_or("")
         ));
     }
-    let kbytes = stderr
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("Maximum resident set size (kbytes):"))
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .ok_or("no maximum resident set size in /usr/bin/time's report")?;
+    let field = |name: &str| {
+        stderr
+            .lines()
+            .find_map(|l| l.trim().strip_prefix(name))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .ok_or(format!("no \"{name}\" in /usr/bin/time's report"))
+    };
+    let kbytes = field("Maximum resident set size (kbytes):")?;
+    let cpu_seconds = field("User time (seconds):")? + field("System time (seconds):")?;
     let seconds = String::from_utf8_lossy(&out.stdout)
         .lines()
         .find_map(|l| l.strip_prefix("bake_seconds "))
         .and_then(|v| v.trim().parse::<f64>().ok())
         .ok_or("the child printed no bake time")?;
-    Ok((kbytes * 1024, seconds))
+    Ok(Child {
+        bytes: kbytes as u64 * 1024,
+        seconds,
+        cpu_seconds,
+    })
 }
 
 /// The child of [`peak_rss`]: bakes `path` as `caveclod bake` does and prints its time.
@@ -322,13 +341,18 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
     );
     csv.single(name, "triangles_per_second_bake", n, n as f64 / ours_t);
     match peak_rss(path) {
-        Ok((bytes, seconds)) => {
+        Ok(Child {
+            bytes,
+            seconds,
+            cpu_seconds,
+        }) => {
             println!(
-                "peak resident set of a file bake in a child (import included, {seconds:.3} s): \
-                 {:.1} MB, {:.0} bytes per input triangle",
+                "peak resident set of a file bake in a child (import included, {seconds:.3} s, \
+                 {cpu_seconds:.2} s of processor time): {:.1} MB, {:.0} bytes per input triangle",
                 bytes as f64 / 1e6,
                 bytes as f64 / n as f64
             );
+            csv.single(name, "child_cpu_seconds", n, cpu_seconds);
             csv.single(
                 name,
                 "peak_rss_bytes_per_triangle",
