@@ -101,7 +101,10 @@ impl Work<'_> {
     ) {
         // What the distances read of the triangles, gathered once for all the points.
         probes.clear();
-        probes.extend(star.iter().map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))));
+        probes.extend(
+            star.iter()
+                .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
+        );
         for &(x, _) in points {
             let x = self.point(x);
             let mut best = (f64::INFINITY, NONE);
@@ -159,8 +162,7 @@ impl Work<'_> {
         };
         for (&(x, s), &(d, f)) in moved.iter().zip(found.iter().flatten()) {
             if f != NONE {
-                self.pts_next[x as usize] =
-                    std::mem::replace(&mut self.pts_head[f as usize], x);
+                self.pts_next[x as usize] = std::mem::replace(&mut self.pts_head[f as usize], x);
                 let error = &mut self.nodes[s as usize].error;
                 *error = error.max(d.sqrt() as f32);
             }
