@@ -123,7 +123,7 @@ pub fn bake_bytes(
 }
 
 /// The welding step of a bake.
-fn weld_mesh(
+pub(crate) fn weld_mesh(
     mesh: &Mesh,
     name: &str,
     progress: &mut dyn FnMut(Stage),
@@ -152,6 +152,19 @@ fn build_welded(
         path: name.to_string(),
         source,
     })?;
+    assemble(w, h, surfaces, input_triangles, start, progress)
+}
+
+/// The last steps of a bake: the arrays of `w` and its hierarchy `h` with the surfaces'
+/// materials, their validation, and the report.
+pub(crate) fn assemble(
+    w: &weld::Welded,
+    h: hierarchy::Hierarchy,
+    surfaces: &[crate::mesh::Surface],
+    input_triangles: usize,
+    start: Instant,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Baked, BakeInfo), BakeError> {
     progress(Stage::Assemble);
     let baked = Baked::new(w, &h).with_materials(surfaces, Path::new(""));
     // The hierarchy is in the arrays now; validating them does not need it.

@@ -9,7 +9,7 @@ use crate::baked::Baked;
 use crate::hierarchy::AttributeWeights;
 use crate::import::{self, ImportOptions};
 use crate::mesh::{Mesh, Surface};
-use crate::pipeline::{BakeError, Stage};
+use crate::pipeline::{assemble, weld_mesh, BakeError, Stage};
 use crate::report::BakeInfo;
 use crate::weld;
 
@@ -77,19 +77,6 @@ pub fn bake_mesh_blocked(
     Ok((baked, info, levels))
 }
 
-/// The welding step.
-fn weld_mesh(
-    mesh: &Mesh,
-    name: &str,
-    progress: &mut dyn FnMut(Stage),
-) -> Result<weld::Welded, BlockedBakeError> {
-    progress(Stage::Weld);
-    Ok(weld::weld(mesh).map_err(|source| BakeError::Weld {
-        path: name.to_string(),
-        source,
-    })?)
-}
-
 /// The steps after welding: the blocked hierarchy, the arrays with the surfaces' materials,
 /// and their validation.
 fn bake_welded(
@@ -111,18 +98,13 @@ fn bake_welded(
         path: name.to_string(),
         source,
     })?;
-    progress(Stage::Assemble);
-    let baked = Baked::new(w, &built.hierarchy).with_materials(surfaces, Path::new(""));
-    let passes = built.hierarchy.passes;
-    drop(built.hierarchy);
-    baked.hierarchy().map_err(BakeError::Invalid)?;
-    let info = BakeInfo {
-        input_triangles: input_triangles as u64,
-        surface_groups: w.group_count as u64,
-        repairs: w.repairs,
-        bake_seconds: start.elapsed().as_secs_f64(),
-        passes,
-        notes: Vec::new(),
-    };
+    let (baked, info) = assemble(
+        w,
+        built.hierarchy,
+        surfaces,
+        input_triangles,
+        start,
+        progress,
+    )?;
     Ok((baked, info, built.levels))
 }
