@@ -446,7 +446,11 @@ int main(int argc, char **argv) {
     CaveclodCamera morph_cam;
     CHECK_STATUS(caveclod_camera_init(&h, &morphing, morph_memory.data(), bytes, &morph_cam),
                  CAVECLOD_STATUS_OK);
+    // A camera's first pass never morphs (nothing was drawn before it): draw the second
+    // view first, then turn to the first, which morphs what it splits.
     CaveclodRefineStats ms{};
+    CHECK_STATUS(caveclod_camera_refine(&morph_cam, &h, &views[1], &params, &ms), CAVECLOD_STATUS_OK);
+    CHECK(ms.morphs_started == 0);
     CHECK_STATUS(caveclod_camera_refine(&morph_cam, &h, &views[0], &params, &ms), CAVECLOD_STATUS_OK);
     CHECK(ms.morphs_started > 0);
     const CaveclodMorphVertex *slots = nullptr;
