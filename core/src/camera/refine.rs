@@ -89,9 +89,10 @@ pub struct RefineParams {
     /// criterion alone leaves large flat nodes near the eye unsplit until their small error
     /// projects to the tolerance, and their floating children then slide hundreds of pixels
     /// in one morph; the bound splits them sooner, at the cost of more polygons: over St.
-    /// Helens at 1 px, 32 tolerances (with a 6-degree guard band) cut the worst camera's
-    /// 99th-percentile vertex move per frame about twofold for 1.5–1.7 times the polygons,
-    /// 16 about fourfold for 3.5–4 times. Applies only to a camera with morph memory and a
+    /// Helens at 1 px, against a camera with neither bound nor guard band, 32 tolerances
+    /// (with a 6-degree band) take the worst camera's 99th-percentile vertex move per frame
+    /// from 3.2 to 1.4 px for 1.6–1.9 times the polygons, 16 (with a 12-degree band) to
+    /// 0.9 px for 3.6–4.6 times. Applies only to a camera with morph memory and a
     /// refine duration, and scales with the tolerance, so a regulator that moves the
     /// tolerance moves it too. Infinity (the default), 0, a negative value or NaN set no
     /// bound: Hoppe's criterion alone.
