@@ -213,9 +213,17 @@ pub fn eye_at(route: &Route, frame: usize, speed: f32, ground: &Ground) -> (Vec3
     (eye, forward * pitch.cos() - Vec3::Y * pitch.sin())
 }
 
+/// Near clip distance as a share of the ground's size: well inside the lowest clearance (0.015),
+/// so no ground under the flight is clipped, and as far out as that allows, because a depth
+/// buffer's resolution at distance `d` is about `d² / (near · 2²⁴)`. At a near of 0.1 on a
+/// 14 km terrain it would be tens of metres at the horizon, where the far side of a ridge then
+/// wins the depth test through its front and its back faces, lit from behind, show as dark
+/// specks.
+const NEAR_SHARE: f32 = 2e-3;
+
 /// Near and far clip distances of the fly-over's views over `ground`.
 pub fn clip(ground: &Ground) -> (f32, f32) {
-    (0.1, 2.0 * ground.size)
+    (NEAR_SHARE * ground.size, 2.0 * ground.size)
 }
 
 /// The view of `route` at frame `frame` (1280 x 720, 60 degrees), flying `speed` world units
