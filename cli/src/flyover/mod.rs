@@ -359,20 +359,11 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     }
     // The sizing flight refines every third frame: it finds fronts. Its cameras morph as the
     // flight's do, so they refine against the same criterion (a morphing camera's guard band
-    // and radius bound) and hold the collapses their coarsen morphs defer.
+    // and radius bound) and hold the collapses their coarsen morphs defer. They are
+    // full-capacity states, so they fly one at a time: a single full state at once (about 52
+    // bytes per polygon of the hierarchy) rather than one per camera.
     let sizing_config = full_config.with_morphs(morphs(MAX_MORPHS));
-    let s = fly_per_camera(
-        h,
-        &views,
-        &params,
-        &sizing_config,
-        SIZING_STRIDE,
-        false,
-        options.mode == Mode::Threads,
-        options.frames_in_flight,
-        options.compaction(),
-        None,
-    )?;
+    let s = fly_one_at_a_time(h, &views, &params, &sizing_config, options)?;
     let largest = summarise(&s.records).active_max;
     let budget =
         ((f64::from(largest) * BUDGET_HEADROOM).ceil() as u32).max(h.base_polygon_count() as u32);
@@ -390,6 +381,40 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
         sizing: Some(s),
         budget: Some(budget),
     })
+}
+
+/// The sizing flight: each camera's views flown on their own, one camera after the other, as
+/// one [`Flight`] with a record per camera.
+fn fly_one_at_a_time(
+    h: &Hierarchy<'_>,
+    views: &[Vec<View>],
+    params: &RefineParams,
+    config: &CameraConfig,
+    options: &FlyoverOptions,
+) -> Result<Flight, String> {
+    let mut all: Option<Flight> = None;
+    for one in views.chunks(1) {
+        let f = fly_per_camera(
+            h,
+            one,
+            params,
+            config,
+            SIZING_STRIDE,
+            false,
+            false,
+            options.frames_in_flight,
+            options.compaction(),
+            None,
+        )?;
+        match &mut all {
+            None => all = Some(f),
+            Some(a) => {
+                a.records.extend(f.records);
+                a.wall += f.wall;
+            }
+        }
+    }
+    all.ok_or_else(|| "no camera to fly".to_string())
 }
 
 /// The cameras' costs to balance pinned threads by: their mean refinement time in the
