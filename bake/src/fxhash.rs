@@ -4,13 +4,21 @@
 //! baker does not need, at several times the cost.
 
 use std::collections::{HashMap, HashSet};
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 /// A `HashMap` with [`FxHasher`].
 pub type FxHashMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// A `HashSet` with [`FxHasher`].
 pub type FxHashSet<K> = HashSet<K, BuildHasherDefault<FxHasher>>;
+
+/// The [`FxHasher`] hash of `value`, for tables that store only ids and hash what they point
+/// at (`hashbrown::HashTable`).
+pub fn hash_of<T: Hash + ?Sized>(value: &T) -> u64 {
+    let mut h = FxHasher::default();
+    value.hash(&mut h);
+    h.finish()
+}
 
 /// A map with room for `n` entries.
 pub fn map_with_capacity<K, V>(n: usize) -> FxHashMap<K, V> {

@@ -4,8 +4,9 @@
 
 use super::repair::Kept;
 use super::{Attributes, Repairs, GEOMETRIC_NORMAL_DEGREES, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::fxhash::hash_of;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
+use hashbrown::hash_table::{Entry, HashTable};
 
 pub(super) fn sub(a: [f32; 3], b: [f32; 3]) -> [f64; 3] {
     [
@@ -36,7 +37,35 @@ pub(super) fn normalize(v: [f64; 3]) -> [f32; 3] {
     }
 }
 
+/// Where a corner's attributes come from: its normal's index (or, for a normal computed
+/// here, its position's, flagged), and its UV's and colour's indices, `NONE` where absent.
+/// Corners from the same sources have the same attributes.
+fn source(mesh: &Mesh, kept: &[Kept], corner: u32) -> [u64; 2] {
+    let (p, i) = kept[corner as usize / 3];
+    let (t, k) = (&mesh.triangles[i as usize], corner as usize % 3);
+    let normal = mesh.normals.get(t.normal[k] as usize).is_some() && t.normal[k] != NO_ATTRIBUTE;
+    let uv = mesh.uvs.get(t.uv[k] as usize).map_or(NONE, |_| t.uv[k]);
+    let color = mesh
+        .colors
+        .get(t.color[k] as usize)
+        .map_or(NONE, |_| t.color[k]);
+    [
+        if normal {
+            t.normal[k] as u64
+        } else {
+            1 << 32 | p[k] as u64
+        },
+        (uv as u64) << 32 | color as u64,
+    ]
+}
+
 /// The distinct attribute sets and each kept triangle's per corner.
+///
+/// Two tables of ids look the corners up, each hashing what its ids point at rather than
+/// storing a key: the first corner read from each source (8 bytes an entry, where a map
+/// from the sources would take 24), and the distinct sets (4 bytes an entry, where a map
+/// from their 36-byte keys would take 40). On a mesh with a set per position these tables
+/// are the weld's largest temporaries.
 pub(super) fn corner_attributes(
     mesh: &Mesh,
     kept: &[Kept],
@@ -45,44 +74,49 @@ pub(super) fn corner_attributes(
 ) -> (Vec<Attributes>, Vec<[u32; 3]>) {
     let computed = area_normals(kept, positions);
     let min_cos = GEOMETRIC_NORMAL_DEGREES.to_radians().cos();
-    let mut attr_ids: FxHashMap<[u32; 9], u32> = map_with_capacity(0);
-    // Corners with the same sources (normal or, for a computed one, position; UV; colour)
-    // have the same attributes: look those up once.
-    let mut by_source: FxHashMap<[u64; 2], u32> = map_with_capacity(positions.len());
+    let mut by_value: HashTable<u32> = HashTable::new();
+    // `(corner, attribute id)` of the first corner of each source.
+    let mut by_source: HashTable<(u32, u32)> = HashTable::with_capacity(positions.len());
     let mut attributes: Vec<Attributes> = Vec::new();
     let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
-    for &(p, i) in kept {
-        let t = &mesh.triangles[i];
+    for (f, &(p, i)) in kept.iter().enumerate() {
+        let t = &mesh.triangles[i as usize];
         let mut a = [0u32; 3];
         for k in 0..3 {
+            let corner = (3 * f + k) as u32;
             let normal = mesh
                 .normals
                 .get(t.normal[k] as usize)
                 .filter(|_| t.normal[k] != NO_ATTRIBUTE);
-            let uv = mesh.uvs.get(t.uv[k] as usize);
-            let color = mesh.colors.get(t.color[k] as usize);
             if normal.is_none() {
                 repairs.computed_normals += 1;
             }
-            let source = [
-                normal.map_or(1 << 32 | p[k] as u64, |_| t.normal[k] as u64),
-                (uv.map_or(NONE, |_| t.uv[k]) as u64) << 32
-                    | color.map_or(NONE, |_| t.color[k]) as u64,
-            ];
-            a[k] = *by_source.entry(source).or_insert_with(|| {
-                let attrs = Attributes {
-                    normal: normal
-                        .copied()
-                        .unwrap_or_else(|| normalize(computed[p[k] as usize])),
-                    uv: uv.copied().unwrap_or([0.0; 2]),
-                    color: color.copied().unwrap_or([1.0; 4]),
-                    normal_from_geometry: true,
-                };
-                *attr_ids.entry(attrs.key()).or_insert_with(|| {
-                    attributes.push(attrs);
-                    attributes.len() as u32 - 1
-                })
-            });
+            let src = source(mesh, kept, corner);
+            let entry = by_source.entry(
+                hash_of(&src),
+                |&(c, _)| source(mesh, kept, c) == src,
+                |&(c, _)| hash_of(&source(mesh, kept, c)),
+            );
+            a[k] = match entry {
+                Entry::Occupied(e) => e.get().1,
+                Entry::Vacant(v) => {
+                    let attrs = Attributes {
+                        normal: normal
+                            .copied()
+                            .unwrap_or_else(|| normalize(computed[p[k] as usize])),
+                        uv: mesh.uvs.get(t.uv[k] as usize).copied().unwrap_or([0.0; 2]),
+                        color: mesh
+                            .colors
+                            .get(t.color[k] as usize)
+                            .copied()
+                            .unwrap_or([1.0; 4]),
+                        normal_from_geometry: true,
+                    };
+                    let id = distinct_id(&mut by_value, &mut attributes, attrs);
+                    v.insert((corner, id));
+                    id
+                }
+            };
             let from_geometry = normal.is_none_or(|&n| {
                 let g = computed[p[k] as usize];
                 let n = n.map(f64::from);
@@ -93,6 +127,30 @@ pub(super) fn corner_attributes(
         tri_attrs.push(a);
     }
     (attributes, tri_attrs)
+}
+
+/// The id of the set equal to `attrs` (by [`Attributes::key`]) in `attributes`, appended
+/// when new; `table` holds every id of `attributes`.
+fn distinct_id(
+    table: &mut HashTable<u32>,
+    attributes: &mut Vec<Attributes>,
+    attrs: Attributes,
+) -> u32 {
+    let key = attrs.key();
+    let entry = table.entry(
+        hash_of(&key),
+        |&id| attributes[id as usize].key() == key,
+        |&id| hash_of(&attributes[id as usize].key()),
+    );
+    match entry {
+        Entry::Occupied(e) => *e.get(),
+        Entry::Vacant(v) => {
+            attributes.push(attrs);
+            let id = attributes.len() as u32 - 1;
+            v.insert(id);
+            id
+        }
+    }
 }
 
 /// The area-weighted normal of every position (unnormalised).

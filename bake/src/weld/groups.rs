@@ -31,7 +31,7 @@ pub(super) fn grow_groups(
     positions: usize,
 ) -> Groups {
     let nt = kept.len();
-    let surface = |f: usize| mesh.triangles[kept[f].1].surface;
+    let surface = |f: usize| mesh.triangles[kept[f].1 as usize].surface;
     let corner_attr = |f: usize, v: u32| {
         let k = kept[f].0.iter().position(|&x| x == v).unwrap_or(0);
         tri_attrs[f][k]

@@ -166,6 +166,14 @@ pub enum WeldError {
     /// More surface-group ids than the format's 16 bits.
     #[error("{0} surface-group ids needed, at most 65535 supported")]
     TooManyGroups(u32),
+    /// More triangles or points than the format's 32-bit ids number.
+    #[error("{triangles} triangles and {points} points: at most {} of each supported", u32::MAX - 1)]
+    TooLarge {
+        /// Triangles of the mesh.
+        triangles: usize,
+        /// Points of the mesh.
+        points: usize,
+    },
     /// More surfaces than the format's 16 bits.
     #[error("{0} surfaces, at most 65535 supported")]
     TooManySurfaces(usize),
@@ -183,6 +191,10 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     if mesh.surfaces.len() > u16::MAX as usize {
         return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
     }
+    let (triangles, points) = (mesh.triangles.len(), mesh.positions.len());
+    if triangles >= NONE as usize || points >= NONE as usize {
+        return Err(WeldError::TooLarge { triangles, points });
+    }
     let mut repairs = Repairs::default();
     let (mut positions, remap) = repair::weld_positions(mesh, &mut repairs);
     let mut kept = repair::drop_degenerate_and_duplicates(mesh, &remap, &positions, &mut repairs)?;
@@ -193,10 +205,14 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
     let opp = repair::opposites(&kept, &faces_of);
     repair::split_non_manifold_vertices(&faces_of, &opp, &mut kept, &mut positions, &mut repairs);
+    drop(faces_of);
     let (attributes, tri_attrs) =
         attributes::corner_attributes(mesh, &kept, &positions, &mut repairs);
     let groups = groups::grow_groups(mesh, &kept, &tri_attrs, &opp, positions.len());
     let classes = groups::classify(&kept, &opp, &groups.group, positions.len());
+    // The steps below build the result: the repair tables go first, so they and the result
+    // never take memory at once.
+    drop(opp);
     let vertices = groups::vertices_per_position(&groups.vertex_of, positions.len());
     let (colour, colour_count) = groups::colour_groups(&vertices, &groups);
     if colour_count > u16::MAX as u32 {
@@ -210,7 +226,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         .map(|(f, (&(p, i), &a))| WeldedTri {
             p,
             a,
-            surface: mesh.triangles[i].surface,
+            surface: mesh.triangles[i as usize].surface,
             group: group[f],
         })
         .collect();

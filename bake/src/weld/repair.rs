@@ -3,11 +3,12 @@
 
 use super::attributes::{cross, sub};
 use super::{ek, Repairs, WeldError, NONE};
-use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
+use crate::fxhash::{hash_of, map_with_capacity, set_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
+use hashbrown::hash_table::{Entry, HashTable};
 
 /// A kept triangle: its positions and the source triangle (for its attributes).
-pub(super) type Kept = ([u32; 3], usize);
+pub(super) type Kept = ([u32; 3], u32);
 
 /// Step 1: welds positions with identical coordinates; returns the welded positions and the
 /// welded position of every input position.
@@ -59,7 +60,7 @@ pub(super) fn drop_degenerate_and_duplicates(
             repairs.duplicate_triangles += 1;
             continue;
         }
-        kept.push((p, i));
+        kept.push((p, i as u32));
     }
     if kept.is_empty() {
         return Err(WeldError::Empty {
@@ -72,21 +73,19 @@ pub(super) fn drop_degenerate_and_duplicates(
 
 /// Step 3: cuts the edges used by more than two triangles or twice in one direction: the later
 /// triangle gets its own copies of the edge's two positions. Afterwards every directed edge
-/// has one triangle and every edge at most two.
+/// has one triangle and every edge at most two. (A triangle's edge is cut when the same
+/// directed edge came before: a third triangle on an edge repeats one of the first two's
+/// directions.)
 pub(super) fn cut_non_manifold_edges(
     kept: &mut [Kept],
     positions: &mut Vec<[f32; 3]>,
     repairs: &mut Repairs,
 ) {
-    let mut directed: FxHashMap<u64, u32> = map_with_capacity(3 * kept.len());
+    let mut directed = DirectedEdges::with_capacity(3 * kept.len());
     for f in 0..kept.len() {
         let p = kept[f].0;
         let conflict: Vec<usize> = (0..3)
-            .filter(|&k| {
-                let (a, b) = (p[k], p[(k + 1) % 3]);
-                directed.contains_key(&ek(a, b))
-                    || (directed.contains_key(&ek(b, a)) && edge_faces(&directed, a, b) >= 2)
-            })
+            .filter(|&k| directed.contains(kept, p[k], p[(k + 1) % 3]))
             .collect();
         let mut q = p;
         if !conflict.is_empty() {
@@ -105,7 +104,50 @@ pub(super) fn cut_non_manifold_edges(
             kept[f].0 = q;
         }
         for k in 0..3 {
-            directed.insert(ek(q[k], q[(k + 1) % 3]), f as u32);
+            directed.insert(kept, 3 * f as u32 + k as u32);
+        }
+    }
+}
+
+/// The directed edges of the triangles met so far, as their corners' ids (`3 f + k`: the edge
+/// from corner `k` of kept triangle `f` to the next), hashed by their ends, which are read
+/// from the triangles: 4 bytes an entry, where a map keyed by the ends would take 16.
+struct DirectedEdges {
+    table: HashTable<u32>,
+}
+
+impl DirectedEdges {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            table: HashTable::with_capacity(n),
+        }
+    }
+
+    /// The ends of corner `c`'s edge.
+    fn ends(kept: &[Kept], c: u32) -> (u32, u32) {
+        let (p, k) = (kept[c as usize / 3].0, c as usize % 3);
+        (p[k], p[(k + 1) % 3])
+    }
+
+    fn contains(&self, kept: &[Kept], a: u32, b: u32) -> bool {
+        self.table
+            .find(hash_of(&ek(a, b)), |&c| Self::ends(kept, c) == (a, b))
+            .is_some()
+    }
+
+    /// Adds corner `c`'s edge, unless the same directed edge is there already.
+    fn insert(&mut self, kept: &[Kept], c: u32) {
+        let (a, b) = Self::ends(kept, c);
+        let hash = hash_of(&ek(a, b));
+        if let Entry::Vacant(v) = self.table.entry(
+            hash,
+            |&o| Self::ends(kept, o) == (a, b),
+            |&o| {
+                let (a, b) = Self::ends(kept, o);
+                hash_of(&ek(a, b))
+            },
+        ) {
+            v.insert(c);
         }
     }
 }
@@ -139,11 +181,6 @@ pub(super) fn split_non_manifold_vertices(
             }
         }
     }
-}
-
-/// Triangles on the undirected edge `a`–`b` so far.
-fn edge_faces(directed: &FxHashMap<u64, u32>, a: u32, b: u32) -> usize {
-    usize::from(directed.contains_key(&ek(a, b))) + usize::from(directed.contains_key(&ek(b, a)))
 }
 
 /// The triangles around every position, in triangle order, in one array.
@@ -215,7 +252,7 @@ struct Fans {
 impl Fans {
     /// Finds the fans around `v`, each grown breadth-first from the first triangle (in
     /// `faces` order) that no earlier fan took.
-    fn find(&mut self, v: u32, faces: &[u32], kept: &[([u32; 3], usize)], opp: &[[u32; 3]]) {
+    fn find(&mut self, v: u32, faces: &[u32], kept: &[Kept], opp: &[[u32; 3]]) {
         self.order.clear();
         self.bounds.clear();
         self.done.clear();
