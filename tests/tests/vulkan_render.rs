@@ -377,16 +377,7 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
     let expected: Vec<Vertex> = coarse
         .iter()
         .zip(&fine)
-        .map(|(&a, &b)| {
-            let mut v = morph_vertex(a, b, instance.t);
-            let [ox, oy, oz, s] = instance.offset_scale;
-            v.position = [
-                v.position[0] * s + ox,
-                v.position[1] * s + oy,
-                v.position[2] * s + oz,
-            ];
-            v
-        })
+        .map(|(&a, &b)| place(morph_vertex(a, b, instance.t), &instance))
         .collect();
     let look = terrain_camera(16.0, 0.9, 0.8, 0.55);
     let surfaces = lists.len();
@@ -404,42 +395,18 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
         "instances",
     );
 
-    let mut renderer = ok(
-        Renderer::new(
-            &ctx,
-            RendererDesc {
-                geomorph: true,
-                ..RendererDesc::single(SIZE, SIZE)
-            },
-        ),
-        "renderer",
+    let morphed = render_morphed(
+        &ctx,
+        &coarse_buffer,
+        Morph {
+            fine: &fine_buffer,
+            instances: &instances,
+        },
+        surfaces,
+        &look,
+        (SIZE, SIZE),
+        IndexSource::Lists(&list_refs),
     );
-    let mut indices = CameraIndices::new("morph", surfaces, renderer.desc().frames_in_flight);
-    let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            &ctx,
-            &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices: &coarse_buffer,
-                indices: &mut indices,
-                source: IndexSource::Lists(&list_refs),
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: Some(Morph {
-                    fine: &fine_buffer,
-                    instances: &instances,
-                }),
-            }],
-        ),
-        "render geomorph",
-    );
-    let morphed = ok(renderer.read_target(&ctx, 0), "read back");
-    ok(renderer.destroy(&ctx), "destroy renderer");
-    ok(indices.destroy(&ctx), "destroy indices");
     let cpu = render_alone(
         &ctx,
         &expected_buffer,
