@@ -12,19 +12,6 @@ use common::morphs::*;
 use common::{emit_checked, golden, views};
 use proptest::prelude::*;
 
-/// 48 cases; under miri 2, and no regression file (miri isolates the file system).
-fn config() -> ProptestConfig {
-    if cfg!(miri) {
-        ProptestConfig {
-            cases: 2,
-            failure_persistence: None,
-            ..ProptestConfig::default()
-        }
-    } else {
-        ProptestConfig::with_cases(48)
-    }
-}
-
 /// Frames of a random flight, at most `most` (fewer under miri).
 fn flight_len(most: usize) -> std::ops::Range<usize> {
     1..if cfg!(miri) { 4 } else { most }
@@ -150,7 +137,7 @@ fn a_still_front_compacts_in_steps_to_the_full_compactions_order() {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(common::proptest_config(48, 2))]
 
     /// After any flight with any visit budgets (and incremental compaction steps between
     /// frames), an amortised camera held still settles at the front a camera refined by full
