@@ -142,21 +142,17 @@ fn vertex_buffer_written_once_index_bytes_reported() {
         let stats = ok(
             renderer.render(
                 &ctx,
-                &mut [CameraDraw {
-                    target: 0,
+                &mut [plain_draw(
+                    0,
                     viewport,
-                    view_proj: look.view_projection(viewport.aspect()),
-                    vertices: &vertices,
-                    indices: &mut indices,
-                    source: IndexSource::Camera {
+                    &look,
+                    &vertices,
+                    &mut indices,
+                    IndexSource::Camera {
                         hierarchy: &h,
                         camera: &cam,
                     },
-                    colours: &COLOURS,
-                    materials: None,
-                    refine_morphs: None,
-                    morph: None,
-                }],
+                )],
             ),
             "render",
         );
@@ -238,20 +234,12 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
     let mut draws: Vec<CameraDraw<'_, '_>> = indices
         .iter_mut()
         .enumerate()
-        .map(|(i, ind)| CameraDraw {
-            target: 0,
-            viewport: quadrants[i],
-            view_proj: looks[i].view_projection(quadrants[i].aspect()),
-            vertices: &vertices,
-            indices: ind,
-            source: IndexSource::Camera {
+        .map(|(i, ind)| {
+            let source = IndexSource::Camera {
                 hierarchy: &h,
                 camera: &cams[i],
-            },
-            colours: &COLOURS,
-            materials: None,
-            refine_morphs: None,
-            morph: None,
+            };
+            plain_draw(0, quadrants[i], &looks[i], &vertices, ind, source)
         })
         .collect();
     let stats = ok(renderer.render(&ctx, &mut draws), "render four");
@@ -504,21 +492,11 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
         .enumerate()
         .map(|(i, ind)| {
             let viewport = Viewport::full(sizes[i].0, sizes[i].1);
-            CameraDraw {
-                target: i,
-                viewport,
-                view_proj: looks[i].view_projection(viewport.aspect()),
-                vertices: &vertices,
-                indices: ind,
-                source: IndexSource::Camera {
-                    hierarchy: &h,
-                    camera: &cams[i],
-                },
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: None,
-            }
+            let source = IndexSource::Camera {
+                hierarchy: &h,
+                camera: &cams[i],
+            };
+            plain_draw(i, viewport, &looks[i], &vertices, ind, source)
         })
         .collect();
     let stats = ok(renderer.render(&ctx, &mut draws), "render two targets");

@@ -131,6 +131,30 @@ pub fn refine(
     );
 }
 
+/// A draw of `source` into `target` at `viewport`, seen from `look`, plain: in the tests'
+/// colours, without materials or morphs (a draw that needs them sets them over this one).
+pub fn plain_draw<'a, 'c>(
+    target: usize,
+    viewport: Viewport,
+    look: &LookAt,
+    vertices: &'a VertexBuffer,
+    indices: &'a mut CameraIndices,
+    source: IndexSource<'a, 'c>,
+) -> CameraDraw<'a, 'c> {
+    CameraDraw {
+        target,
+        viewport,
+        view_proj: look.view_projection(viewport.aspect()),
+        vertices,
+        indices,
+        source,
+        colours: &COLOURS,
+        materials: None,
+        refine_morphs: None,
+        morph: None,
+    }
+}
+
 /// Renders one camera's indices from `source` alone into a fresh `w` × `h` renderer and
 /// reads the image back; destroys what it made.
 pub fn render_alone(
@@ -180,16 +204,8 @@ fn render_one(
         renderer.render(
             ctx,
             &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices,
-                indices: &mut indices,
-                source,
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
                 morph,
+                ..plain_draw(0, viewport, look, vertices, &mut indices, source)
             }],
         ),
         "render",
