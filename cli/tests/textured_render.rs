@@ -159,10 +159,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         &root,
         &look,
         &baked_vertices,
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &cam,
-        },
+        IndexSource::camera(&h, &cam),
     );
     let (vertices, lists) = direct(&mesh);
     let direct_vertices = ok(

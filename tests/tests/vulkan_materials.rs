@@ -51,10 +51,7 @@ fn render_with(ctx: &Context, materials: &[SurfaceMaterial<'_>]) -> RgbaImage {
                     &look,
                     &vertices,
                     &mut indices,
-                    IndexSource::Camera {
-                        hierarchy: &h,
-                        camera: &cam,
-                    },
+                    IndexSource::camera(&h, &cam),
                 )
             }],
         ),

@@ -149,10 +149,7 @@ fn draw(
                     hierarchy: h,
                     camera: cam,
                 },
-                None => IndexSource::Camera {
-                    hierarchy: h,
-                    camera: cam,
-                },
+                None => IndexSource::camera(h, cam),
             };
             CameraDraw {
                 refine_morphs,
@@ -368,10 +365,7 @@ fn morph_draws_are_refused_where_they_cannot_work() {
             .map(|e| e.to_string())
     };
     // Plain emission with morphs, and morphs made for another vertex buffer.
-    let camera = IndexSource::Camera {
-        hierarchy: &h,
-        camera: &cam,
-    };
+    let camera = IndexSource::camera(&h, &cam);
     let e = attempt(camera, Some(&mut morphs));
     assert!(
         e.as_deref().is_some_and(|e| e.contains("MorphedCamera")),

@@ -48,10 +48,7 @@ fn full_detail_equals_the_input_mesh_and_coarse_differs() {
         surfaces,
         &look,
         (SIZE, SIZE),
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &cam,
-        },
+        IndexSource::camera(&h, &cam),
     );
 
     // The input mesh drawn directly.
@@ -80,10 +77,7 @@ fn full_detail_equals_the_input_mesh_and_coarse_differs() {
         surfaces,
         &look,
         (SIZE, SIZE),
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &coarse_cam,
-        },
+        IndexSource::camera(&h, &coarse_cam),
     );
     save(&full, "full.png");
     save(&direct, "direct.png");
@@ -148,10 +142,7 @@ fn vertex_buffer_written_once_index_bytes_reported() {
                     &look,
                     &vertices,
                     &mut indices,
-                    IndexSource::Camera {
-                        hierarchy: &h,
-                        camera: &cam,
-                    },
+                    IndexSource::camera(&h, &cam),
                 )],
             ),
             "render",
@@ -235,10 +226,7 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
         .iter_mut()
         .enumerate()
         .map(|(i, ind)| {
-            let source = IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            };
+            let source = IndexSource::camera(&h, &cams[i]);
             plain_draw(0, quadrants[i], &looks[i], &vertices, ind, source)
         })
         .collect();
@@ -259,10 +247,7 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
             h.surface_count(),
             &looks[i],
             (q.width, q.height),
-            IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            },
+            IndexSource::camera(&h, &cams[i]),
         );
         let part = ok(split.crop(*q), "crop");
         save(&alone, &format!("alone{i}.png"));
@@ -492,10 +477,7 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
         .enumerate()
         .map(|(i, ind)| {
             let viewport = Viewport::full(sizes[i].0, sizes[i].1);
-            let source = IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            };
+            let source = IndexSource::camera(&h, &cams[i]);
             plain_draw(i, viewport, &looks[i], &vertices, ind, source)
         })
         .collect();
@@ -516,10 +498,7 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
             h.surface_count(),
             &looks[i],
             sizes[i],
-            IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            },
+            IndexSource::camera(&h, &cams[i]),
         );
         assert!(alone.covered(BACKGROUND) > u64::from(sizes[i].0 * sizes[i].1) / 10);
         let d = ok(images[i].diff(&alone), "diff");
