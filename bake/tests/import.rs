@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use caveclod_bake::import::{import, import_bytes, import_with_report, ImportError, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
+use caveclod_tests::shared_data;
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let path = dir.join(name);
@@ -421,19 +422,6 @@ fn mutated_files_never_panic() {
     assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
 }
 
-/// Where the shared data lives, or `None` (with a note) when it is absent.
-fn shared(relative: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("note: {relative} not found under ../shared/data; skipping");
-        None
-    }
-}
-
 fn timed(path: &Path, options: &ImportOptions) -> (Mesh, caveclod_bake::import::ImportReport) {
     let start = Instant::now();
     let result = import_with_report(path, options).unwrap();
@@ -452,7 +440,7 @@ fn timed(path: &Path, options: &ImportOptions) -> (Mesh, caveclod_bake::import::
 
 #[test]
 fn flight_helmet() {
-    let Some(path) = shared("FlightHelmet/FlightHelmet.gltf") else {
+    let Some(path) = shared_data::file("FlightHelmet/FlightHelmet.gltf") else {
         return;
     };
     let (mesh, report) = timed(&path, &no_options());
@@ -475,7 +463,7 @@ fn flight_helmet() {
 
 #[test]
 fn spot_obj() {
-    let Some(path) = shared("spot/spot_triangulated.obj") else {
+    let Some(path) = shared_data::file("spot/spot_triangulated.obj") else {
         return;
     };
     let (mesh, _) = timed(&path, &no_options());
@@ -500,7 +488,7 @@ fn spot_obj() {
 
 #[test]
 fn lucy_ply() {
-    let Some(path) = shared("scans/lucy.ply") else {
+    let Some(path) = shared_data::file("scans/lucy.ply") else {
         return;
     };
     let (mesh, _) = timed(&path, &no_options());
@@ -511,7 +499,7 @@ fn lucy_ply() {
 
 #[test]
 fn sainte_helens_dem() {
-    let Some(path) = shared("terrain/SainteHelens.dem") else {
+    let Some(path) = shared_data::file("terrain/SainteHelens.dem") else {
         return;
     };
     let (mesh, report) = timed(&path, &no_options());

@@ -15,6 +15,7 @@ use caveclod_bake::pipeline::bake_file;
 use caveclod_core::format::materials::AlphaMode;
 use caveclod_core::format::materials::{vertex_colour_linear, TextureRef};
 use caveclod_core::Hierarchy;
+use caveclod_tests::shared_data;
 use caveclod_tests::AlignedBytes;
 use serde_json::json;
 
@@ -399,19 +400,6 @@ fn the_export_never_writes_over_its_inputs() {
     );
 }
 
-/// Where the shared data lives, or `None` (with a note) when the file is absent.
-fn shared(relative: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("note: {relative} not found under ../shared/data; skipping");
-        None
-    }
-}
-
 /// Bakes `input` into a temporary directory, exports the `.clod` into another and imports
 /// the export: the `.clod`'s materials are the source's `(name, texture file)` pairs in
 /// surface order, each texture path names the source's image from the `.clod`, and the OBJ
@@ -455,7 +443,7 @@ fn round_trip_keeps(input: &Path, expected: &[(String, PathBuf)]) {
 
 #[test]
 fn flight_helmet_keeps_its_six_textured_materials() {
-    let Some(path) = shared("FlightHelmet/FlightHelmet.gltf") else {
+    let Some(path) = shared_data::file("FlightHelmet/FlightHelmet.gltf") else {
         return;
     };
     // The materials in the order the meshes first use them (here: material order), each
@@ -485,8 +473,8 @@ fn flight_helmet_keeps_its_six_textured_materials() {
 #[test]
 fn spot_keeps_its_texture() {
     let (Some(obj), Some(png)) = (
-        shared("spot/spot_triangulated.obj"),
-        shared("spot/spot_texture.png"),
+        shared_data::file("spot/spot_triangulated.obj"),
+        shared_data::file("spot/spot_texture.png"),
     ) else {
         return;
     };

@@ -14,6 +14,7 @@ use caveclod_bake::ooc::{
 };
 use caveclod_bake::pipeline;
 use caveclod_tests::generate;
+use caveclod_tests::shared_data;
 
 fn no_progress(_: ooc::OocStage) {}
 
@@ -130,21 +131,9 @@ fn a_cluster_is_at_the_quadric_optimum_not_the_mean() {
     );
 }
 
-fn data(relative: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("note: {relative} not found under ../shared/data; skipping");
-        None
-    }
-}
-
 #[test]
 fn flight_helmet_clusters_keep_materials_apart_and_uv_seams_open() {
-    let Some(path) = data("FlightHelmet/FlightHelmet.gltf") else {
+    let Some(path) = shared_data::file("FlightHelmet/FlightHelmet.gltf") else {
         return;
     };
     let mesh = import::import(&path, &Default::default()).unwrap();

@@ -16,13 +16,14 @@
 
 use std::collections::HashMap;
 use std::hash::Hash;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use caveclod_bake::import::{import_bytes, ImportError, ImportOptions};
 use caveclod_bake::mesh::{Mesh, Triangle, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::{bake_mesh, BakeError};
 use caveclod_tests::rng::SplitMix64 as Rng;
+use caveclod_tests::shared_data;
 use caveclod_tests::AlignedBytes;
 
 /// Truncation points per input, evenly spaced over its length (with the empty file).
@@ -64,10 +65,6 @@ const INPUTS: [Input; 5] = [
     },
 ];
 
-fn shared_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data")
-}
-
 /// An input's files in memory: the main file and every file next to it that it may name.
 struct Files {
     name: String,
@@ -80,7 +77,7 @@ struct Files {
 
 impl Files {
     fn read(input: &Input) -> Option<Files> {
-        let dir = shared_dir();
+        let dir = shared_data::dir();
         let main_path = dir.join(input.main);
         let mutated_path = dir.join(input.mutated);
         if !main_path.exists() || !mutated_path.exists() {

@@ -15,7 +15,6 @@
 //! `cargo test --release -p caveclod-bake --test real_data`, or with `--include-ignored`).
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use caveclod_bake::import::{self, ImportOptions};
@@ -27,20 +26,8 @@ use caveclod_core::{CameraState, Hierarchy, NodeId};
 use caveclod_tests::check::{check_front, split_all};
 // The tests' generator, so failures reproduce from the seed.
 use caveclod_tests::rng::SplitMix64 as Rng;
+use caveclod_tests::shared_data;
 use caveclod_tests::AlignedBytes;
-
-/// Where the shared data lives, or `None` (with a note) when the file is absent.
-fn shared(relative: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("note: {relative} not found under ../shared/data; skipping");
-        None
-    }
-}
 
 type Key = [[u32; 3]; 3];
 
@@ -296,7 +283,7 @@ fn random_collapses(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, rng: &mut Rng,
 }
 
 fn bake_and_check(e: &Expect) {
-    let Some(path) = shared(e.file) else {
+    let Some(path) = shared_data::file(e.file) else {
         return;
     };
     let build = if cfg!(debug_assertions) {

@@ -361,7 +361,7 @@ fn main() {
         let id = format!("bake/{name}");
         filters.is_empty() || filters.iter().any(|f| id.contains(f.as_str()))
     };
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let data = caveclod_tests::shared_data::dir();
     let (inputs, settings): (&[(&str, Source)], _) = if benchmarking {
         (
             &[

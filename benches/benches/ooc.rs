@@ -16,7 +16,7 @@
 //! `cargo bench -p caveclod-benches --bench ooc`; data from `../shared/data` (skipped when
 //! absent). Output: one table on stdout.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use caveclod_bake::import;
@@ -29,9 +29,7 @@ fn soup(positions: &[[f32; 3]], tris: impl Iterator<Item = [u32; 3]>) -> Soup {
 }
 
 fn data(relative: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
+    let p = caveclod_tests::shared_data::dir().join(relative);
     p.exists().then_some(p)
 }
 

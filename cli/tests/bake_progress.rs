@@ -3,8 +3,10 @@
 //! baker) ends, and with stderr not a terminal reports progress as plain lines, at most one
 //! per `CAVECLOD_PROGRESS_INTERVAL` seconds.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use caveclod_tests::parts::{PartSoup, SoupShape};
 use caveclod_tests::AlignedBytes;
@@ -12,7 +14,7 @@ use serde_json::Value;
 
 /// `caveclod bake <input> -o <output> --json` with the interval `interval` (stderr piped).
 fn bake(input: &Path, output: &Path, interval: &str) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caveclod"))
+    common::command()
         .arg("bake")
         .arg(input)
         .arg("-o")

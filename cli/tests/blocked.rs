@@ -2,30 +2,9 @@
 //! (less the counted repairs) built in several levels of blocks sized from the memory budget,
 //! which `caveclod info` validates and the fly-over flies over from the memory map.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-use serde_json::Value;
-
-fn caveclod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caveclod"))
-        .args(args)
-        .output()
-        .expect("run caveclod")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON report")
-}
+use common::{caveclod, json, s};
 
 #[test]
 fn a_blocked_bake_holds_every_triangle_and_validates() {

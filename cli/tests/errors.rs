@@ -1,23 +1,12 @@
 //! Bad input and unsafe outputs: each case exits non-zero with a message naming the file and
 //! the element at fault (or is refused before any work), and no input file is ever changed.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
+use common::{caveclod, json, s, TERRAIN6};
 use serde_json::Value;
-
-const CLOD: &str = "../core/tests/data/terrain6.clod";
-
-fn caveclod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caveclod"))
-        .args(args)
-        .output()
-        .expect("run caveclod")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// Runs the command, which must fail; returns its stderr after checking that every one of
 /// `inputs` still holds the bytes it had before.
@@ -86,7 +75,7 @@ impl Dir {
         p
     }
     fn clod(&self, name: &str) -> PathBuf {
-        let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join(CLOD)).unwrap();
+        let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join(TERRAIN6)).unwrap();
         self.file(name, bytes)
     }
     fn path(&self, name: &str) -> PathBuf {
@@ -207,13 +196,7 @@ fn skipped_faces_are_counted_in_the_repairs_and_printed() {
     text.push_str("f 1 2\nl 1 2 3\n");
     let obj = d.file("skips.obj", &text);
     let out = d.path("skips.clod");
-    let run = caveclod(&["bake", s(&obj), "-o", s(&out), "--json"]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let r: Value = serde_json::from_slice(&run.stdout).unwrap();
+    let r = json(&caveclod(&["bake", s(&obj), "-o", s(&out), "--json"]));
     assert_eq!(r["repairs"]["skipped_primitives"], 2, "{r}");
     let notes = r["notes"].as_array().unwrap();
     assert!(
@@ -317,9 +300,7 @@ fn info_json_reports_a_bad_file_on_stdout() {
     assert_eq!(r["valid"], false);
     assert!(r["error"].as_str().unwrap().contains("bad.clod"), "{r}");
     let good = d.clod("good.clod");
-    let out = caveclod(&["info", "--json", s(&good)]);
-    assert!(out.status.success());
-    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let r = json(&caveclod(&["info", "--json", s(&good)]));
     assert_eq!(r["valid"], true);
 }
 
@@ -383,12 +364,13 @@ fn the_out_of_core_readers_name_the_same_elements() {
     let mut text = grid_obj(6);
     text.push_str("f 1 2\n");
     let obj = d.file("skips.obj", &text);
-    let run = caveclod(&["bake", "--out-of-core", s(&obj), "-o", s(&out), "--json"]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let r: Value = serde_json::from_slice(&run.stdout).unwrap();
+    let r = json(&caveclod(&[
+        "bake",
+        "--out-of-core",
+        s(&obj),
+        "-o",
+        s(&out),
+        "--json",
+    ]));
     assert_eq!(r["repairs"]["skipped_primitives"], 1, "{r}");
 }

@@ -2,13 +2,15 @@
 //! and as JSON; `caveclod export` writes the MTL file and the embedded textures beside the
 //! OBJ.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 use caveclod_bake::mesh::{AlphaMode, Surface, Texture};
 use caveclod_bake::pipeline::bake_mesh;
 use caveclod_tests::{meshes, to_mesh};
-use serde_json::{json, Value};
+use common::{caveclod, s, stdout, succeeded};
+use serde_json::json;
 
 /// A two-surface terrain with a texture file ("tex/rock.png" in `dir`) and an embedded
 /// image, written to `dir/terrain.clod`.
@@ -38,25 +40,12 @@ fn write_clod(dir: &Path) -> std::path::PathBuf {
     path
 }
 
-fn caveclod(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_caveclod"))
-        .args(args)
-        .output()
-        .expect("run caveclod");
-    assert!(
-        out.status.success(),
-        "caveclod {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("UTF-8 output")
-}
-
 #[test]
 fn info_lists_materials() {
     let dir = tempfile::tempdir().unwrap();
     let clod = write_clod(dir.path());
     let file = clod.to_str().unwrap();
-    let report: Value = serde_json::from_str(&caveclod(&["info", "--json", file])).unwrap();
+    let report = common::json(&caveclod(&["info", "--json", file]));
     assert_eq!(
         report["materials"],
         json!([
@@ -79,7 +68,7 @@ fn info_lists_materials() {
         ])
     );
     assert_eq!(report["vertex_colours"], json!(false));
-    let text = caveclod(&["info", file]);
+    let text = stdout(&caveclod(&["info", file]));
     assert!(text.contains("material 0: 'Rock'"), "{text}");
     assert!(
         text.contains("texture tex/rock.png, MASK 0.5, double-sided"),
@@ -97,8 +86,7 @@ fn info_of_a_file_without_materials() {
     let path = dir.path().join("plain.clod");
     let bytes = caveclod_tests::bake(&meshes::terrain(6, 6, 1)).to_bytes();
     std::fs::write(&path, &bytes[..]).unwrap();
-    let report: Value =
-        serde_json::from_str(&caveclod(&["info", "--json", path.to_str().unwrap()])).unwrap();
+    let report = common::json(&caveclod(&["info", "--json", s(&path)]));
     assert_eq!(report["materials"], json!([]));
     assert_eq!(report["vertex_colours"], json!(false));
 }
@@ -109,12 +97,7 @@ fn export_writes_the_library_beside_the_obj() {
     let clod = write_clod(dir.path());
     let obj = dir.path().join("out/terrain.obj");
     std::fs::create_dir_all(obj.parent().unwrap()).unwrap();
-    caveclod(&[
-        "export",
-        clod.to_str().unwrap(),
-        "-o",
-        obj.to_str().unwrap(),
-    ]);
+    succeeded(&caveclod(&["export", s(&clod), "-o", s(&obj)]));
     let text = std::fs::read_to_string(&obj).unwrap();
     assert!(text.contains("mtllib terrain.mtl"));
     assert!(text.contains("usemtl Rock") && text.contains("usemtl Water"));

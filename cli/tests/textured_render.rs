@@ -102,7 +102,7 @@ fn draw(
 
 #[test]
 fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/FlightHelmet");
+    let root = caveclod_tests::shared_data::dir().join("FlightHelmet");
     let gltf = root.join("FlightHelmet.gltf");
     if !gltf.is_file() {
         // The shared data sits beside the repository, not in it (as for the bake's
@@ -159,10 +159,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         &root,
         &look,
         &baked_vertices,
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &cam,
-        },
+        IndexSource::camera(&h, &cam),
     );
     let (vertices, lists) = direct(&mesh);
     let direct_vertices = ok(

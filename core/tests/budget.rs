@@ -9,21 +9,8 @@ mod common;
 
 use caveclod_core::{CameraState, Hierarchy, NodeId, RefineParams, View};
 use common::morphs::*;
-use common::{emit_checked, golden, views};
+use common::{emit_checked, golden_hierarchy, views};
 use proptest::prelude::*;
-
-/// 48 cases; under miri 2, and no regression file (miri isolates the file system).
-fn config() -> ProptestConfig {
-    if cfg!(miri) {
-        ProptestConfig {
-            cases: 2,
-            failure_persistence: None,
-            ..ProptestConfig::default()
-        }
-    } else {
-        ProptestConfig::with_cases(48)
-    }
-}
 
 /// Frames of a random flight, at most `most` (fewer under miri).
 fn flight_len(most: usize) -> std::ops::Range<usize> {
@@ -88,8 +75,7 @@ fn finish_cycle(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, budget: u32) -> u3
 
 #[test]
 fn a_visit_budget_bounds_each_call_and_the_calls_cover_the_list() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let view = approach(&h, 0.0);
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
@@ -129,8 +115,7 @@ fn a_visit_budget_bounds_each_call_and_the_calls_cover_the_list() {
 
 #[test]
 fn a_still_front_compacts_in_steps_to_the_full_compactions_order() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
     // Scatter the arrays: refine near, far and near again.
@@ -150,7 +135,7 @@ fn a_still_front_compacts_in_steps_to_the_full_compactions_order() {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(common::proptest_config(48, 2))]
 
     /// After any flight with any visit budgets (and incremental compaction steps between
     /// frames), an amortised camera held still settles at the front a camera refined by full
@@ -164,8 +149,7 @@ proptest! {
              prop::sample::select(vec![0u32, 1, 40, 5000])),
             flight_len(30)),
     ) {
-        let file = golden();
-        let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+        let h = golden_hierarchy();
         let all = all_views(&h);
         let mut memory = vec![0u32; CameraState::words_needed(&h)];
         let mut cam = CameraState::new(&h, &mut memory).expect("memory");
@@ -205,8 +189,7 @@ proptest! {
              prop::sample::select(vec![0.1f32, 1.0 / 3.0, 1.0])),
             flight_len(30)),
     ) {
-        let file = golden();
-        let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+        let h = golden_hierarchy();
         let pos = position_of_vertex(&h);
         let all = all_views(&h);
         let config = morph_config(&h, max_morphs);
@@ -253,8 +236,7 @@ proptest! {
         // A cycle in steps of 1 takes thousands of calls: too slow for miri.
         budget in prop::sample::select(if cfg!(miri) { vec![300u32] } else { vec![1u32, 7, 300] }),
     ) {
-        let file = golden();
-        let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+        let h = golden_hierarchy();
         let pos = position_of_vertex(&h);
         let all = all_views(&h);
         let config = morph_config(&h, max_morphs);

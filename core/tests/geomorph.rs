@@ -16,13 +16,12 @@ use caveclod_core::{
     CameraConfig, CameraError, CameraState, Hierarchy, LookAt, NodeId, RefineParams, RefineStats,
 };
 use common::morphs::*;
-use common::{golden, views};
+use common::{golden_hierarchy, views};
 use proptest::prelude::*;
 
 #[test]
 fn morph_memory_is_sized_and_bounded() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let plain = CameraState::words_needed_for(&h, &CameraConfig::full(&h));
     assert_eq!(plain, CameraState::words_needed(&h));
     for n in [1u32, 7, 300] {
@@ -54,12 +53,10 @@ fn morph_memory_is_sized_and_bounded() {
 /// without it takes, pass for pass, and emits the same indices in the same order.
 #[test]
 fn zero_durations_decide_as_a_camera_without_morphs() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 8);
-    let mut mem_m = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let h = golden_hierarchy();
+    let mut mem_m = MorphMemory::new(&h, 8);
     let mut mem_p = vec![0u32; CameraState::words_needed(&h)];
-    let mut morphing = morphing_camera(&h, &mut mem_m, &config);
+    let mut morphing = mem_m.camera(&h);
     let mut plain = CameraState::new(&h, &mut mem_p).expect("memory");
     let all = views(&h, 24);
     for (i, view) in all.iter().chain(all.iter().rev()).enumerate() {
@@ -82,14 +79,12 @@ fn zero_durations_decide_as_a_camera_without_morphs() {
 /// 60 passes per second.
 #[test]
 fn morphs_last_their_duration_in_seconds() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let view = approach(&h, 0.6);
     let mut passes_needed = Vec::new();
     for fps in [30.0f32, 60.0] {
-        let config = morph_config(&h, 256);
-        let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-        let mut cam = morphing_camera(&h, &mut memory, &config);
+        let mut memory = MorphMemory::new(&h, 256);
+        let mut cam = memory.camera(&h);
         let p = RefineParams {
             dt_s: 1.0 / fps,
             ..fine()
@@ -131,12 +126,10 @@ fn morphs_last_their_duration_in_seconds() {
 /// and the front (and its triangles) a camera without morph memory settles at.
 #[test]
 fn finished_morphs_emit_what_a_camera_without_morphs_emits() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 64);
-    let mut mem_m = vec![0u32; CameraState::words_needed_for(&h, &config)];
+    let h = golden_hierarchy();
+    let mut mem_m = MorphMemory::new(&h, 64);
     let mut mem_p = vec![0u32; CameraState::words_needed(&h)];
-    let mut morphing = morphing_camera(&h, &mut mem_m, &config);
+    let mut morphing = mem_m.camera(&h);
     let mut plain = CameraState::new(&h, &mut mem_p).expect("memory");
     let p = fine();
     let pos = position_of_vertex(&h);
@@ -180,11 +173,9 @@ fn finished_morphs_emit_what_a_camera_without_morphs_emits() {
 /// front.
 #[test]
 fn aborted_coarsen_morphs_return_to_the_fine_state() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     let p = fine();
     let pos = position_of_vertex(&h);
     let (near, far) = (approach(&h, 0.0), approach(&h, 1.0));
@@ -242,11 +233,9 @@ fn aborted_coarsen_morphs_return_to_the_fine_state() {
 /// pass, before the vertex moves on; so does a split of the floating child itself.
 #[test]
 fn an_illegal_collapse_aborts_its_coarsen_morph() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     let pos = position_of_vertex(&h);
     let far = approach(&h, 1.0);
     let mut neighbour_aborts = 0;
@@ -340,11 +329,9 @@ fn an_illegal_collapse_aborts_its_coarsen_morph() {
 /// camera without morphs, and every collapse on the way came after its morph.
 #[test]
 fn coarsen_morphs_collapse_when_they_end() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     let mut plain_memory = vec![0u32; CameraState::words_needed(&h)];
     let mut plain = CameraState::new(&h, &mut plain_memory).expect("memory");
     let p = fine();
@@ -377,11 +364,9 @@ fn coarsen_morphs_collapse_when_they_end() {
 /// happens at once and is counted, and the splits are those a camera without morphs makes.
 #[test]
 fn a_full_morph_memory_drops_morphs_and_counts_them() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 1);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 1);
+    let mut cam = memory.camera(&h);
     let mut plain_memory = vec![0u32; CameraState::words_needed(&h)];
     let mut plain = CameraState::new(&h, &mut plain_memory).expect("memory");
     let p = fine();
@@ -400,11 +385,9 @@ fn a_full_morph_memory_drops_morphs_and_counts_them() {
 /// with the terrain behind the eye nothing morphs.
 #[test]
 fn nodes_outside_the_view_split_and_collapse_at_once() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     let p = fine();
     // Far enough that no bounding sphere holds the eye.
     let view = approach(&h, 0.6);
@@ -446,11 +429,9 @@ fn nodes_outside_the_view_split_and_collapse_at_once() {
 /// coarsen morphs collapse.
 #[test]
 fn durations_set_to_zero_end_every_morph() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     let p = fine();
     let (near, mid) = (approach(&h, 0.0), approach(&h, 0.3));
     settle(&h, &mut cam, &near, &p);
@@ -499,11 +480,9 @@ fn closing_in(h: &Hierarchy<'_>, frames: usize) -> Vec<LookAt> {
 /// drawn (its slot's `from` names the parent's slot), so the child appears without a jump.
 #[test]
 fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 512);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 512);
+    let mut cam = memory.camera(&h);
     let pos = position_of_vertex(&h);
     let vc = h.vertices().len() as u32;
     let p = fine();
@@ -542,11 +521,9 @@ fn a_split_of_a_morphing_vertex_starts_where_it_is_drawn() {
     ignore = "screen measures over many passes; the chains' memory safety is the proptest's"
 )]
 fn morphs_glide_no_faster_than_the_speed_limit() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
-    let config = morph_config(&h, 512);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let h = golden_hierarchy();
+    let mut memory = MorphMemory::new(&h, 512);
+    let mut cam = memory.camera(&h);
     let speed = 30.0;
     let p = RefineParams {
         morph_speed_px_s: speed,
@@ -582,18 +559,6 @@ fn morphs_glide_no_faster_than_the_speed_limit() {
     assert!(slowed, "the speed limit never slowed a morph");
 }
 
-fn config() -> ProptestConfig {
-    if cfg!(miri) {
-        ProptestConfig {
-            cases: 2,
-            failure_persistence: None,
-            ..ProptestConfig::default()
-        }
-    } else {
-        ProptestConfig::with_cases(64)
-    }
-}
-
 /// One frame of a random flight: a view, a frame time, a tolerance, an operation budget.
 fn frame() -> impl Strategy<Value = (usize, f32, f32, u32)> {
     (
@@ -609,8 +574,7 @@ fn frame() -> impl Strategy<Value = (usize, f32, f32, u32)> {
 /// alone would leave; without morph memory, or with the bound off, the errors alone decide.
 #[test]
 fn the_radius_bound_splits_nodes_large_on_the_screen() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let view = approach(&h, 0.6);
     let bound = 4.0;
     let p = RefineParams {
@@ -618,15 +582,14 @@ fn the_radius_bound_splits_nodes_large_on_the_screen() {
         morph_radius_tolerances: bound,
         ..fine()
     };
-    let config = morph_config(&h, 256);
-    let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut cam = morphing_camera(&h, &mut memory, &config);
+    let mut memory = MorphMemory::new(&h, 256);
+    let mut cam = memory.camera(&h);
     settle(&h, &mut cam, &view, &p);
     let mut plain_memory = vec![0u32; CameraState::words_needed(&h)];
     let mut plain = CameraState::new(&h, &mut plain_memory).expect("memory");
     settle(&h, &mut plain, &view, &p);
-    let mut unbounded_memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-    let mut unbounded = morphing_camera(&h, &mut unbounded_memory, &config);
+    let mut unbounded_memory = MorphMemory::new(&h, 256);
+    let mut unbounded = unbounded_memory.camera(&h);
     let off = RefineParams {
         morph_radius_tolerances: f32::INFINITY,
         ..p
@@ -665,7 +628,7 @@ fn the_radius_bound_splits_nodes_large_on_the_screen() {
 }
 
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(common::proptest_config(64, 2))]
 
     /// Over any flight, any frame times and any morph memory, every morphing vertex lies
     /// between its endpoints and morphed emission agrees with the plain one; once the
@@ -676,14 +639,12 @@ proptest! {
         max_morphs in 1u32..40,
         frames in prop::collection::vec(frame(), 1..if cfg!(miri) { 4 } else { 40 }),
     ) {
-        let file = golden();
-        let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+        let h = golden_hierarchy();
         let pos = position_of_vertex(&h);
         let mut all = views(&h, 6);
         all.extend((0..6).map(|k| approach(&h, k as f32 / 5.0)));
-        let config = morph_config(&h, max_morphs);
-        let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
-        let mut cam = morphing_camera(&h, &mut memory, &config);
+        let mut memory = MorphMemory::new(&h, max_morphs);
+        let mut cam = memory.camera(&h);
         let mut plain_memory = vec![0u32; CameraState::words_needed(&h)];
         let mut plain = CameraState::new(&h, &mut plain_memory).expect("memory");
         let mut last = None;

@@ -2,6 +2,8 @@
 //! `T < 0` selects level 0 and `T > 1` the coarsest, and the predictive controller always
 //! terminates and lands within `ε` of the budget whenever some bias can.
 
+mod common;
+
 use caveclod_core::gmesh::{
     control, scene_polygons, ControlEntry, ControlParams, LodInstance, LodModel, Partitions,
 };
@@ -42,21 +44,8 @@ fn counts(finest: u32, shrink: &[f32]) -> Vec<u32> {
     c
 }
 
-/// 256 cases; under miri 3, and no regression file (miri isolates the file system).
-fn config() -> ProptestConfig {
-    if cfg!(miri) {
-        ProptestConfig {
-            cases: 3,
-            failure_persistence: None,
-            ..ProptestConfig::default()
-        }
-    } else {
-        ProptestConfig::with_cases(256)
-    }
-}
-
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(common::proptest_config(256, 3))]
 
     #[test]
     fn f_is_continuous_at_every_boundary(

@@ -16,7 +16,7 @@ use caveclod_core::{
     CutError, Hierarchy, LookAt, Octree, OctreeCut, OctreeFormatError, SelectStats, SurfaceId, View,
 };
 use common::{golden, Aligned};
-use counting::allocations;
+use counting::{allocations, assert_counting};
 
 /// An owned octree: a strip of quads along x in the plane z = 0, `y` in `0..1`, a complete
 /// binary tree of `levels` levels. Level-0 nodes are 16 wide; every node holds two quads,
@@ -855,11 +855,7 @@ fn select_and_emit_do_not_allocate() {
     let mut slices: Vec<&mut [u32]> = lists.iter_mut().map(|l| l.as_mut_slice()).collect();
     let mut written = vec![0u32; 2];
 
-    let before = allocations();
-    let probe: Vec<u8> = Vec::with_capacity(1);
-    black_box(&probe);
-    assert!(allocations() > before, "the counting allocator saw nothing");
-    drop(probe);
+    assert_counting();
 
     let before = allocations();
     let o = Octree::new(s.parts()).expect("valid");

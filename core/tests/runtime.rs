@@ -10,7 +10,7 @@ use caveclod_core::{
     CameraError, CameraState, EmitError, Hierarchy, NodeId, OpError, PolyId, RefineParams,
     SurfaceId,
 };
-use common::{collapse_all, golden, params, views};
+use common::{collapse_all, golden_hierarchy, params, views};
 
 /// Force-splits every active splittable node until none is left; returns the splits applied.
 fn split_all(h: &Hierarchy<'_>, cam: &mut CameraState<'_>) -> u32 {
@@ -138,8 +138,7 @@ fn assert_emission_matches_groups(h: &Hierarchy<'_>, cam: &CameraState<'_>) {
 
 #[test]
 fn full_split_reaches_the_full_resolution_mesh_and_full_collapse_the_base_mesh() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
     assert_base_mesh(&h, &cam);
@@ -187,8 +186,7 @@ fn emitted(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> (Vec<u32>, Vec<u32>) {
 /// polygon slot more.
 #[test]
 fn the_index_cache_changes_no_index() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let plain_config = caveclod_core::CameraConfig {
         index_cache: false,
         ..caveclod_core::CameraConfig::full(&h)
@@ -225,8 +223,7 @@ fn the_index_cache_changes_no_index() {
 
 #[test]
 fn refinement_settles_and_coarsens_again() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
     let m = h.meta();
@@ -287,8 +284,7 @@ fn settle(
 
 #[test]
 fn too_small_emit_outputs_are_refused() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
     split_all(&h, &mut cam);
@@ -346,8 +342,7 @@ fn too_small_emit_outputs_are_refused() {
 
 #[test]
 fn too_little_camera_memory_is_refused() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let needed = CameraState::words_needed(&h);
     let mut memory = vec![0u32; needed - 1];
     assert_eq!(
@@ -382,8 +377,7 @@ fn too_little_camera_memory_is_refused() {
 
 #[test]
 fn a_full_camera_refuses_splits_without_failing() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let config = caveclod_core::CameraConfig {
         max_pairs: 3,
         stack_len: 256,
@@ -424,8 +418,7 @@ fn a_full_camera_refuses_splits_without_failing() {
 
 #[test]
 fn a_camera_is_refused_by_another_hierarchy() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     // The same arrays, validated in memory: a different identity.
     let other = Hierarchy::from_parts(*h.parts()).expect("same parts");
     assert_ne!(h.checksum(), other.checksum());
@@ -465,8 +458,7 @@ fn a_camera_is_refused_by_another_hierarchy() {
 
 #[test]
 fn operations_on_the_wrong_nodes_are_refused() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = CameraState::new(&h, &mut memory).expect("memory");
     let leaf = NodeId(h.node_count() as u32 - 1);
@@ -504,8 +496,7 @@ fn operations_on_the_wrong_nodes_are_refused() {
 /// file, `max_pairs` 2 to 4 reported 1 split for 2 to 4 applied (found as a bug, fixed).
 #[test]
 fn refine_stats_count_every_split_applied() {
-    let file = golden();
-    let h = Hierarchy::from_bytes(file.bytes()).expect("golden file");
+    let h = golden_hierarchy();
     let m = h.meta();
     let centre = (caveclod_core::glam::Vec3::from_array(m.bounds_min)
         + caveclod_core::glam::Vec3::from_array(m.bounds_max))

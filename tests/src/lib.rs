@@ -9,6 +9,7 @@ pub mod generate;
 pub mod meshes;
 pub mod parts;
 pub mod rng;
+pub mod shared_data;
 pub mod soak;
 
 pub use bake::{bake, to_mesh, AlignedBytes, BakedMesh};

@@ -135,25 +135,19 @@ fn frames(
         .get_or_insert_with(|| CameraIndices::new("camera", h.surface_count(), 2));
     let viewport = Viewport::full(SIZE, SIZE);
     for _ in 0..count {
+        let source = match parts.morphs {
+            Some(_) => IndexSource::MorphedCamera {
+                hierarchy: h,
+                camera: &scene.cam,
+            },
+            None => IndexSource::camera(h, &scene.cam),
+        };
         renderer.render(
             ctx,
             &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: scene.look.view_projection(viewport.aspect()),
-                vertices,
-                indices,
-                source: match parts.morphs {
-                    Some(_) => IndexSource::MorphedCamera {
-                        hierarchy: h,
-                        camera: &scene.cam,
-                    },
-                    None => IndexSource::camera(h, &scene.cam),
-                },
-                colours: &COLOURS,
                 materials: parts.materials.as_ref(),
                 refine_morphs: parts.morphs.as_mut(),
-                morph: None,
+                ..plain_draw(0, viewport, &scene.look, vertices, indices, source)
             }],
         )?;
     }

@@ -11,24 +11,11 @@ use caveclod_core::format::Vertex;
 use caveclod_core::gmesh::GMesh;
 use caveclod_core::gpu::{morph_vertex, MorphInstance};
 use caveclod_tests::{bake, meshes};
-use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Geomorph, IndexSource, LookAt, Morph, MorphInstances, Renderer,
-    RendererDesc, VertexBuffer, Viewport,
-};
+use caveclod_vulkan::{Geomorph, IndexSource, LookAt, Morph, MorphInstances, VertexBuffer};
 use glam::Vec3;
 use vulkan_support::*;
 
 const SIZE: u32 = 256;
-
-fn place(mut v: Vertex, inst: &MorphInstance) -> Vertex {
-    let [ox, oy, oz, s] = inst.offset_scale;
-    v.position = [
-        v.position[0] * s + ox,
-        v.position[1] * s + oy,
-        v.position[2] * s + oz,
-    ];
-    v
-}
 
 #[test]
 fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
@@ -132,43 +119,19 @@ fn vertex_stage_compute_stage_and_cpu_draw_the_same_gmesh_level() {
         MorphInstances::new(&ctx, "instances", &instances),
         "instances",
     );
-    let mut renderer = ok(
-        Renderer::new(
-            &ctx,
-            RendererDesc {
-                geomorph: true,
-                ..RendererDesc::single(SIZE, SIZE)
-            },
-        ),
-        "renderer",
-    );
-    let mut indices = CameraIndices::new("gmesh", surfaces, renderer.desc().frames_in_flight);
     let list_refs: Vec<&[u32]> = lists.iter().map(Vec::as_slice).collect();
-    let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            &ctx,
-            &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices: &coarse,
-                indices: &mut indices,
-                source: IndexSource::Lists(&list_refs),
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: Some(Morph {
-                    fine: &fine,
-                    instances: &inst_buffer,
-                }),
-            }],
-        ),
-        "render geomorph",
+    let vertex_image = render_morphed(
+        &ctx,
+        &coarse,
+        Morph {
+            fine: &fine,
+            instances: &inst_buffer,
+        },
+        surfaces,
+        &look,
+        (SIZE, SIZE),
+        IndexSource::Lists(&list_refs),
     );
-    let vertex_image = ok(renderer.read_target(&ctx, 0), "read back");
-    ok(renderer.destroy(&ctx), "destroy renderer");
-    ok(indices.destroy(&ctx), "destroy indices");
 
     // Unmorphed (t = 0 everywhere), to show the morph is visible at all.
     let flat: Vec<Vertex> = instances

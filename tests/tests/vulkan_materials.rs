@@ -44,19 +44,15 @@ fn render_with(ctx: &Context, materials: &[SurfaceMaterial<'_>]) -> RgbaImage {
         renderer.render(
             ctx,
             &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices: &vertices,
-                indices: &mut indices,
-                source: IndexSource::Camera {
-                    hierarchy: &h,
-                    camera: &cam,
-                },
-                colours: &COLOURS,
                 materials: Some(&set),
-                refine_morphs: None,
-                morph: None,
+                ..plain_draw(
+                    0,
+                    viewport,
+                    &look,
+                    &vertices,
+                    &mut indices,
+                    IndexSource::camera(&h, &cam),
+                )
             }],
         ),
         "render",
@@ -212,16 +208,15 @@ fn triangle_pixel(
         renderer.render(
             ctx,
             &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices: &buffer,
-                indices: &mut indices,
-                source: IndexSource::Lists(&list),
-                colours: &COLOURS,
                 materials: set.as_ref(),
-                refine_morphs: None,
-                morph: None,
+                ..plain_draw(
+                    0,
+                    viewport,
+                    &look,
+                    &buffer,
+                    &mut indices,
+                    IndexSource::Lists(&list),
+                )
             }],
         ),
         "render",

@@ -118,17 +118,7 @@ fn host_frame(
     );
     ok(staging.destroy(ctx), "destroy staging");
     let mut indices = CameraIndices::new("host camera", h.surface_count(), 2);
-    ok(
-        indices.fill(
-            ctx,
-            1,
-            IndexSource::Camera {
-                hierarchy: h,
-                camera: cam,
-            },
-        ),
-        "fill",
-    );
+    ok(indices.fill(ctx, 1, IndexSource::camera(h, cam)), "fill");
     let mut draws = 0;
     let image = target.frame(host, |cmd| {
         draws = ok(
@@ -153,10 +143,7 @@ fn reference(ctx: &Context, h: &Hierarchy<'_>, cam: &CameraState<'_>, scene: &Sc
         h.surface_count(),
         &scene.look,
         (SIZE, SIZE),
-        IndexSource::Camera {
-            hierarchy: h,
-            camera: cam,
-        },
+        IndexSource::camera(h, cam),
     );
     ok(vertices.destroy(ctx), "destroy vertices");
     image
@@ -270,10 +257,7 @@ fn frames_create_no_resource_once_the_ring_is_sized() {
     // Full detail first, so every slot's buffers reach their largest size.
     let mut run = |frame: u64, cam: &CameraState<'_>, indices: &mut CameraIndices| {
         let slot = (frame % 3) as usize;
-        let source = IndexSource::Camera {
-            hierarchy: &h,
-            camera: cam,
-        };
+        let source = IndexSource::camera(&h, cam);
         ok(indices.fill(&ctx, slot, source), "fill");
         target.frame(&host, |cmd| {
             ok(

@@ -15,7 +15,7 @@ use caveclod_vulkan::{
     CameraDraw, CameraIndices, CameraMorphs, Context, IndexSource, LookAt, MorphStage, Renderer,
     RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
-use vulkan_support::{assert_clean, context, ok, save, terrain_camera, COLOURS};
+use vulkan_support::{assert_clean, context, ok, plain_draw, save, terrain_camera};
 
 const SIZE: u32 = 384;
 const MAX_MORPHS: u32 = 4096;
@@ -149,22 +149,11 @@ fn draw(
                     hierarchy: h,
                     camera: cam,
                 },
-                None => IndexSource::Camera {
-                    hierarchy: h,
-                    camera: cam,
-                },
+                None => IndexSource::camera(h, cam),
             };
             CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices,
-                indices,
-                source,
-                colours: &COLOURS,
-                materials: None,
-                morph: None,
                 refine_morphs,
+                ..plain_draw(0, viewport, look, vertices, indices, source)
             }
         })
         .collect();
@@ -368,26 +357,15 @@ fn morph_draws_are_refused_where_they_cannot_work() {
             .render(
                 &ctx,
                 &mut [CameraDraw {
-                    target: 0,
-                    viewport,
-                    view_proj: look.view_projection(1.0),
-                    vertices: &vertices,
-                    indices: &mut indices,
-                    source,
-                    colours: &COLOURS,
-                    materials: None,
-                    morph: None,
                     refine_morphs: morphs,
+                    ..plain_draw(0, viewport, &look, &vertices, &mut indices, source)
                 }],
             )
             .err()
             .map(|e| e.to_string())
     };
     // Plain emission with morphs, and morphs made for another vertex buffer.
-    let camera = IndexSource::Camera {
-        hierarchy: &h,
-        camera: &cam,
-    };
+    let camera = IndexSource::camera(&h, &cam);
     let e = attempt(camera, Some(&mut morphs));
     assert!(
         e.as_deref().is_some_and(|e| e.contains("MorphedCamera")),

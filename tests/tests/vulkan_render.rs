@@ -48,10 +48,7 @@ fn full_detail_equals_the_input_mesh_and_coarse_differs() {
         surfaces,
         &look,
         (SIZE, SIZE),
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &cam,
-        },
+        IndexSource::camera(&h, &cam),
     );
 
     // The input mesh drawn directly.
@@ -80,10 +77,7 @@ fn full_detail_equals_the_input_mesh_and_coarse_differs() {
         surfaces,
         &look,
         (SIZE, SIZE),
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &coarse_cam,
-        },
+        IndexSource::camera(&h, &coarse_cam),
     );
     save(&full, "full.png");
     save(&direct, "direct.png");
@@ -142,21 +136,14 @@ fn vertex_buffer_written_once_index_bytes_reported() {
         let stats = ok(
             renderer.render(
                 &ctx,
-                &mut [CameraDraw {
-                    target: 0,
+                &mut [plain_draw(
+                    0,
                     viewport,
-                    view_proj: look.view_projection(viewport.aspect()),
-                    vertices: &vertices,
-                    indices: &mut indices,
-                    source: IndexSource::Camera {
-                        hierarchy: &h,
-                        camera: &cam,
-                    },
-                    colours: &COLOURS,
-                    materials: None,
-                    refine_morphs: None,
-                    morph: None,
-                }],
+                    &look,
+                    &vertices,
+                    &mut indices,
+                    IndexSource::camera(&h, &cam),
+                )],
             ),
             "render",
         );
@@ -238,20 +225,9 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
     let mut draws: Vec<CameraDraw<'_, '_>> = indices
         .iter_mut()
         .enumerate()
-        .map(|(i, ind)| CameraDraw {
-            target: 0,
-            viewport: quadrants[i],
-            view_proj: looks[i].view_projection(quadrants[i].aspect()),
-            vertices: &vertices,
-            indices: ind,
-            source: IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            },
-            colours: &COLOURS,
-            materials: None,
-            refine_morphs: None,
-            morph: None,
+        .map(|(i, ind)| {
+            let source = IndexSource::camera(&h, &cams[i]);
+            plain_draw(0, quadrants[i], &looks[i], &vertices, ind, source)
         })
         .collect();
     let stats = ok(renderer.render(&ctx, &mut draws), "render four");
@@ -271,10 +247,7 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
             h.surface_count(),
             &looks[i],
             (q.width, q.height),
-            IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            },
+            IndexSource::camera(&h, &cams[i]),
         );
         let part = ok(split.crop(*q), "crop");
         save(&alone, &format!("alone{i}.png"));
@@ -377,16 +350,7 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
     let expected: Vec<Vertex> = coarse
         .iter()
         .zip(&fine)
-        .map(|(&a, &b)| {
-            let mut v = morph_vertex(a, b, instance.t);
-            let [ox, oy, oz, s] = instance.offset_scale;
-            v.position = [
-                v.position[0] * s + ox,
-                v.position[1] * s + oy,
-                v.position[2] * s + oz,
-            ];
-            v
-        })
+        .map(|(&a, &b)| place(morph_vertex(a, b, instance.t), &instance))
         .collect();
     let look = terrain_camera(16.0, 0.9, 0.8, 0.55);
     let surfaces = lists.len();
@@ -404,42 +368,18 @@ fn geomorph_vertex_stage_equals_the_cpu_morph_drawn_directly() {
         "instances",
     );
 
-    let mut renderer = ok(
-        Renderer::new(
-            &ctx,
-            RendererDesc {
-                geomorph: true,
-                ..RendererDesc::single(SIZE, SIZE)
-            },
-        ),
-        "renderer",
+    let morphed = render_morphed(
+        &ctx,
+        &coarse_buffer,
+        Morph {
+            fine: &fine_buffer,
+            instances: &instances,
+        },
+        surfaces,
+        &look,
+        (SIZE, SIZE),
+        IndexSource::Lists(&list_refs),
     );
-    let mut indices = CameraIndices::new("morph", surfaces, renderer.desc().frames_in_flight);
-    let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            &ctx,
-            &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices: &coarse_buffer,
-                indices: &mut indices,
-                source: IndexSource::Lists(&list_refs),
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: Some(Morph {
-                    fine: &fine_buffer,
-                    instances: &instances,
-                }),
-            }],
-        ),
-        "render geomorph",
-    );
-    let morphed = ok(renderer.read_target(&ctx, 0), "read back");
-    ok(renderer.destroy(&ctx), "destroy renderer");
-    ok(indices.destroy(&ctx), "destroy indices");
     let cpu = render_alone(
         &ctx,
         &expected_buffer,
@@ -537,21 +477,8 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
         .enumerate()
         .map(|(i, ind)| {
             let viewport = Viewport::full(sizes[i].0, sizes[i].1);
-            CameraDraw {
-                target: i,
-                viewport,
-                view_proj: looks[i].view_projection(viewport.aspect()),
-                vertices: &vertices,
-                indices: ind,
-                source: IndexSource::Camera {
-                    hierarchy: &h,
-                    camera: &cams[i],
-                },
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: None,
-            }
+            let source = IndexSource::camera(&h, &cams[i]);
+            plain_draw(i, viewport, &looks[i], &vertices, ind, source)
         })
         .collect();
     let stats = ok(renderer.render(&ctx, &mut draws), "render two targets");
@@ -571,10 +498,7 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
             h.surface_count(),
             &looks[i],
             sizes[i],
-            IndexSource::Camera {
-                hierarchy: &h,
-                camera: &cams[i],
-            },
+            IndexSource::camera(&h, &cams[i]),
         );
         assert!(alone.covered(BACKGROUND) > u64::from(sizes[i].0 * sizes[i].1) / 10);
         let d = ok(images[i].diff(&alone), "diff");

@@ -100,10 +100,7 @@ fn embedded_in_a_host_engine() {
         h.surface_count(),
         &look,
         (128, 128),
-        IndexSource::Camera {
-            hierarchy: &h,
-            camera: &cam,
-        },
+        IndexSource::camera(&h, &cam),
     );
     assert!(
         image.covered(BACKGROUND) > 128 * 128 / 10,

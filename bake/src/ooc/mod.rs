@@ -367,7 +367,8 @@ fn sort_keys(
                 OocStage::Read(d, n)
             })
         };
-        let mut runs = sort::RunBuilder::keys_only(temp, (budget / 2) as usize, &mut sort_progress);
+        let mut runs =
+            sort::RunBuilder::<u64>::new(temp, (budget / 2) as usize, &mut sort_progress);
         let report = input.faces(&mut runs)?;
         stats.seconds[0] = t0.elapsed().as_secs_f64();
         let sorted = runs.finish((budget / 4) as usize)?;

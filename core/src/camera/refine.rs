@@ -271,6 +271,11 @@ pub(super) struct Criterion {
     /// The square of the share of a node's bounding radius that counts as uniform error
     /// ([`RefineParams::radius_error`]); 0 for none.
     radius2: f32,
+    /// Whether `radius2` is positive: without the bound (the default), the split test takes
+    /// the uniform error alone and never multiplies the radius in (a branch every visit
+    /// takes the same way). The radius term is `radius² · 0 = 0` then, never above the
+    /// squared error of a validated node (finite, non-negative), so the answers are the same.
+    radius_bound: bool,
     /// Plane `k`'s `x`, `y`, `z`, `w` in lane `k % 4` of `planes[k / 4][0..4]`; the lanes of
     /// planes the view does not use always pass (`0 · p + ∞`).
     planes: [[Vec4; 4]; 2],
@@ -296,6 +301,7 @@ impl Criterion {
             },
             tz2,
             radius2: radius_error * radius_error,
+            radius_bound: radius_error * radius_error > 0.0,
             planes,
             frustum: params.frustum_culling,
             backface: params.backface_culling,
@@ -353,7 +359,11 @@ impl Criterion {
         let pe = p - self.eye;
         let pem2 = pe.length_squared();
         let rhs = self.tz2 * pem2;
-        let uni2 = (b.uni_error * b.uni_error).max(b.radius * b.radius * self.radius2);
+        let uni2 = if self.radius_bound {
+            (b.uni_error * b.uni_error).max(b.radius * b.radius * self.radius2)
+        } else {
+            b.uni_error * b.uni_error
+        };
         let dir2 = b.dir_error * b.dir_error;
         // Neither error projects to the tolerance: every branch below answers no. The
         // directional test compares dir2 · (pem2 - vdot²) with rhs · pem2; the left side

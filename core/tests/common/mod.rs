@@ -9,11 +9,14 @@
 
 pub mod morphs;
 
+use std::sync::OnceLock;
+
 use caveclod_core::format::{checksum64, FileHeader};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
     CameraConfig, CameraState, Hierarchy, LookAt, NodeId, OpError, RefineParams, View,
 };
+use proptest::test_runner::Config as ProptestConfig;
 
 /// The golden file's bytes as `include_bytes!` gives them (alignment 1).
 pub static GOLDEN: &[u8] = include_bytes!("../data/terrain6.clod");
@@ -64,6 +67,26 @@ impl Aligned {
 /// The golden file in aligned memory.
 pub fn golden() -> Aligned {
     Aligned::new(GOLDEN)
+}
+
+/// A property test's configuration: `cases` cases; under miri `miri_cases`, and no
+/// regression file (miri isolates the file system).
+pub fn proptest_config(cases: u32, miri_cases: u32) -> ProptestConfig {
+    if cfg!(miri) {
+        ProptestConfig {
+            cases: miri_cases,
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        }
+    } else {
+        ProptestConfig::with_cases(cases)
+    }
+}
+
+/// The golden file's hierarchy, over one aligned copy of the file per test binary.
+pub fn golden_hierarchy() -> Hierarchy<'static> {
+    static FILE: OnceLock<Aligned> = OnceLock::new();
+    Hierarchy::from_bytes(FILE.get_or_init(golden).bytes()).expect("golden file")
 }
 
 /// The header of `bytes` (at least 64 of them).

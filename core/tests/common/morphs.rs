@@ -15,6 +15,27 @@ pub fn morph_config(h: &Hierarchy<'_>, max_morphs: u32) -> CameraConfig {
     CameraConfig::full(h).with_morphs(max_morphs)
 }
 
+/// Memory for a camera with room for `max_morphs` morphs, with the configuration
+/// ([`morph_config`]) it is sized for.
+pub struct MorphMemory {
+    config: CameraConfig,
+    words: Vec<u32>,
+}
+
+impl MorphMemory {
+    /// Memory for [`morph_config`]`(h, max_morphs)`.
+    pub fn new(h: &Hierarchy<'_>, max_morphs: u32) -> Self {
+        let config = morph_config(h, max_morphs);
+        let words = vec![0u32; CameraState::words_needed_for(h, &config)];
+        Self { config, words }
+    }
+
+    /// A [`morphing_camera`] in this memory.
+    pub fn camera(&mut self, h: &Hierarchy<'_>) -> CameraState<'_> {
+        morphing_camera(h, &mut self.words, &self.config)
+    }
+}
+
 /// A camera with `config`'s memory that has drawn a first picture: its first pass, which
 /// never morphs, looked away from the terrain, so the camera stands at its base mesh and its
 /// next pass morphs what it splits.

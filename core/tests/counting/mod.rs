@@ -22,6 +22,14 @@ pub fn allocations() -> u64 {
     ALLOCATIONS.with(Cell::get)
 }
 
+/// Checks that the counter works: one small allocation changes it.
+pub fn assert_counting() {
+    let before = allocations();
+    let probe: Vec<u8> = Vec::with_capacity(1);
+    std::hint::black_box(&probe);
+    assert!(allocations() > before, "the counting allocator saw nothing");
+}
+
 // SAFETY: every method forwards to `System` with the caller's arguments unchanged; the
 // counter is a thread-local `Cell` with a const initialiser, which never allocates.
 unsafe impl GlobalAlloc for Counting {

@@ -5,11 +5,12 @@
 pub mod host;
 
 use caveclod_core::format::Vertex;
+use caveclod_core::gpu::MorphInstance;
 use caveclod_core::{CameraState, Hierarchy, RefineParams};
 use caveclod_tests::meshes::TestMesh;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
-    RgbaImage, VertexBuffer, Viewport,
+    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph, Renderer,
+    RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
 use glam::Vec3;
 
@@ -130,6 +131,30 @@ pub fn refine(
     );
 }
 
+/// A draw of `source` into `target` at `viewport`, seen from `look`, plain: in the tests'
+/// colours, without materials or morphs (a draw that needs them sets them over this one).
+pub fn plain_draw<'a, 'c>(
+    target: usize,
+    viewport: Viewport,
+    look: &LookAt,
+    vertices: &'a VertexBuffer,
+    indices: &'a mut CameraIndices,
+    source: IndexSource<'a, 'c>,
+) -> CameraDraw<'a, 'c> {
+    CameraDraw {
+        target,
+        viewport,
+        view_proj: look.view_projection(viewport.aspect()),
+        vertices,
+        indices,
+        source,
+        colours: &COLOURS,
+        materials: None,
+        refine_morphs: None,
+        morph: None,
+    }
+}
+
 /// Renders one camera's indices from `source` alone into a fresh `w` × `h` renderer and
 /// reads the image back; destroys what it made.
 pub fn render_alone(
@@ -137,26 +162,50 @@ pub fn render_alone(
     vertices: &VertexBuffer,
     surfaces: usize,
     look: &LookAt,
+    size: (u32, u32),
+    source: IndexSource<'_, '_>,
+) -> RgbaImage {
+    render_one(ctx, vertices, None, surfaces, look, size, source)
+}
+
+/// [`render_alone`] through the geomorph vertex stage: `vertices` are the coarse ends,
+/// `morph` the fine ends and the instances, drawn in one instanced draw.
+pub fn render_morphed(
+    ctx: &Context,
+    vertices: &VertexBuffer,
+    morph: Morph<'_>,
+    surfaces: usize,
+    look: &LookAt,
+    size: (u32, u32),
+    source: IndexSource<'_, '_>,
+) -> RgbaImage {
+    render_one(ctx, vertices, Some(morph), surfaces, look, size, source)
+}
+
+/// One camera drawn into a fresh renderer (with the geomorph pipelines where it morphs),
+/// read back, and what was made destroyed.
+fn render_one(
+    ctx: &Context,
+    vertices: &VertexBuffer,
+    morph: Option<Morph<'_>>,
+    surfaces: usize,
+    look: &LookAt,
     (w, h): (u32, u32),
     source: IndexSource<'_, '_>,
 ) -> RgbaImage {
-    let mut renderer = ok(Renderer::new(ctx, RendererDesc::single(w, h)), "renderer");
+    let desc = RendererDesc {
+        geomorph: morph.is_some(),
+        ..RendererDesc::single(w, h)
+    };
+    let mut renderer = ok(Renderer::new(ctx, desc), "renderer");
     let mut indices = CameraIndices::new("alone", surfaces, renderer.desc().frames_in_flight);
     let viewport = Viewport::full(w, h);
     ok(
         renderer.render(
             ctx,
             &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices,
-                indices: &mut indices,
-                source,
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: None,
+                morph,
+                ..plain_draw(0, viewport, look, vertices, &mut indices, source)
             }],
         ),
         "render",
@@ -165,4 +214,16 @@ pub fn render_alone(
     ok(renderer.destroy(ctx), "destroy renderer");
     ok(indices.destroy(ctx), "destroy indices");
     image
+}
+
+/// `v` placed as a morph instance places its vertices: scaled by `offset_scale[3]`, then
+/// moved by `offset_scale[0..3]`.
+pub fn place(mut v: Vertex, inst: &MorphInstance) -> Vertex {
+    let [ox, oy, oz, s] = inst.offset_scale;
+    v.position = [
+        v.position[0] * s + ox,
+        v.position[1] * s + oy,
+        v.position[2] * s + oz,
+    ];
+    v
 }
