@@ -3,7 +3,7 @@
 
 use caveclod_core::Hierarchy;
 
-use super::smooth::REGULATED_TARGET;
+use super::smooth::{REGULATED_TARGET, SPEED_LIMIT_PX_S};
 use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};
 
 /// The measured flights.
@@ -34,6 +34,8 @@ pub struct Flights {
     pub unmorphed: Flyover,
     /// Four cameras regulated to 20,000 polygons, with geomorphs.
     pub regulated: Flyover,
+    /// Four cameras with geomorphs held to a screen speed ([`SPEED_LIMIT_PX_S`]).
+    pub speed_limited: Flyover,
 }
 
 /// The display rate the report converts per-frame figures at, for comparison with the CAVECLOD
@@ -63,8 +65,8 @@ pub const THREADS_ROUNDS: usize = 5;
 /// flights (four cameras on one thread, two and three cameras, each camera alone, four
 /// cameras without the index cache, four without it and with hashed pair maps) interleaved
 /// in segments of [`SEGMENT`] frames, so that the ratios compare flights measured under the
-/// same load; then four cameras with and without geomorphs and regulated, for popping and
-/// regulation.
+/// same load; then four cameras with and without geomorphs, regulated, and with geomorphs
+/// held to a screen speed, for popping and regulation.
 pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
     // The paper's experiment refines each camera's whole front every frame, as the shared
     // state does, so the comparisons weigh the states, not amortisation.
@@ -137,6 +139,13 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
             ..base
         },
     )?;
+    let speed_limited = fly(
+        h,
+        &FlyoverOptions {
+            morph_speed_px_s: SPEED_LIMIT_PX_S,
+            ..base
+        },
+    )?;
     Ok(Flights {
         per_camera,
         shared,
@@ -149,6 +158,7 @@ pub fn fly_all(h: &Hierarchy<'_>, frames: usize) -> Result<Flights, String> {
         morphed,
         unmorphed,
         regulated,
+        speed_limited,
     })
 }
 
