@@ -1,12 +1,16 @@
-//! The whole bake: import, weld, build the hierarchy, assemble the arrays.
+//! The whole bake: import, weld, build the hierarchy ([`Built`]), then either assemble the
+//! arrays ([`Built::assemble`], a [`Baked`]) or write the file from the collapses one array
+//! at a time ([`Built::write`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::baked::Baked;
+use caveclod_core::format::ExtraSection;
+
+use crate::baked::{BakeWriteError, Baked};
 use crate::hierarchy::{self, AttributeWeights};
 use crate::import::{self, ImportError, ImportOptions};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Surface};
 use crate::report::BakeInfo;
 use crate::weld::{self, WeldError};
 
@@ -58,6 +62,59 @@ fn source_dir(path: &Path) -> std::path::PathBuf {
     path.parent().unwrap_or(Path::new("")).to_path_buf()
 }
 
+/// A bake up to its arrays: the welded mesh, its collapse hierarchy and the surfaces, from
+/// which the `.clod` arrays follow.
+#[derive(Debug)]
+pub struct Built {
+    /// The welded mesh.
+    pub welded: weld::Welded,
+    /// Its collapse hierarchy.
+    pub collapses: hierarchy::Hierarchy,
+    /// The input's surfaces with their materials.
+    pub surfaces: Vec<Surface>,
+    /// The directory the surfaces' texture paths are relative to.
+    pub texture_dir: PathBuf,
+    /// About the bake so far; `bake_seconds` is brought up to date by
+    /// [`assemble`](Self::assemble) and [`write`](Self::write).
+    pub info: BakeInfo,
+    start: Instant,
+}
+
+impl Built {
+    /// The arrays with the surfaces' materials, validated ([`Baked::new`]); the mesh and the
+    /// collapses are dropped once the arrays are made.
+    pub fn assemble(self, progress: &mut dyn FnMut(Stage)) -> Result<(Baked, BakeInfo), BakeError> {
+        progress(Stage::Assemble);
+        let baked = Baked::new(&self.welded, &self.collapses)
+            .with_materials(&self.surfaces, &self.texture_dir);
+        drop((self.welded, self.collapses));
+        baked.hierarchy().map_err(BakeError::Invalid)?;
+        let mut info = self.info;
+        info.bake_seconds = self.start.elapsed().as_secs_f64();
+        Ok((baked, info))
+    }
+
+    /// Writes the `.clod` file at `path` with `extra` sections from the welded mesh and the
+    /// collapses one array at a time ([`crate::streamed`]): the arrays never all exist at
+    /// once, the mesh and the collapses are dropped once written, and the written file is
+    /// validated before it replaces `path`. Returns the file's length.
+    pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
+        crate::streamed::write(
+            self.welded,
+            self.collapses,
+            &self.surfaces,
+            &self.texture_dir,
+            path,
+            extra,
+        )
+    }
+
+    /// Seconds since the bake started.
+    pub fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
 /// Bakes an imported mesh, with its surfaces' materials and its vertex colours when it has
 /// them; texture files are taken as relative to the current directory (set
 /// [`Baked::texture_dir`] where they are relative to another; [`bake_file`] sets the
@@ -67,11 +124,20 @@ pub fn bake_mesh(
     name: &str,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(Baked, BakeInfo), BakeError> {
+    build_mesh(mesh, name, progress)?.assemble(progress)
+}
+
+/// [`bake_mesh`] up to the arrays.
+pub fn build_mesh(
+    mesh: &Mesh,
+    name: &str,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<Built, BakeError> {
     let start = Instant::now();
     let w = weld_mesh(mesh, name, progress)?;
     build_welded(
-        &w,
-        &mesh.surfaces,
+        w,
+        mesh.surfaces.clone(),
         mesh.triangles.len(),
         name,
         start,
@@ -81,14 +147,23 @@ pub fn bake_mesh(
 
 /// Imports and bakes a file; `bake_seconds` includes the import. Texture files are relative
 /// to the file's directory. The primitives the import skipped are counted in the repairs
-/// (`skipped_primitives`), its notes kept in [`BakeInfo::notes`]. The imported mesh is
-/// dropped once welded, before the hierarchy is built (of it only the surfaces are kept),
-/// so that the two never take memory at once.
+/// (`skipped_primitives`), its notes kept in [`BakeInfo::notes`].
 pub fn bake_file(
     path: &Path,
     options: &ImportOptions,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(Baked, BakeInfo), BakeError> {
+    build_file(path, options, progress)?.assemble(progress)
+}
+
+/// [`bake_file`] up to the arrays. The imported mesh is dropped once welded, before the
+/// hierarchy is built (of it only the surfaces are kept), so that the two never take memory
+/// at once.
+pub fn build_file(
+    path: &Path,
+    options: &ImportOptions,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<Built, BakeError> {
     let start = Instant::now();
     progress(Stage::Import);
     let (mut mesh, report) = import::import_with_report(path, options)?;
@@ -96,12 +171,11 @@ pub fn bake_file(
     let w = weld_mesh(&mesh, &name, progress)?;
     let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
     drop(mesh);
-    let (mut baked, mut info) = build_welded(&w, &surfaces, triangles, &name, start, progress)?;
-    baked.texture_dir = source_dir(path);
-    info.repairs.skipped_primitives = report.skipped_primitives as u64;
-    info.notes = report.notes;
-    info.bake_seconds = start.elapsed().as_secs_f64();
-    Ok((baked, info))
+    let mut built = build_welded(w, surfaces, triangles, &name, start, progress)?;
+    built.texture_dir = source_dir(path);
+    built.info.repairs.skipped_primitives = report.skipped_primitives as u64;
+    built.info.notes = report.notes;
+    Ok(built)
 }
 
 /// Imports a mesh from bytes in memory ([`import::import_bytes`]: `name`'s extension picks
@@ -135,51 +209,49 @@ pub(crate) fn weld_mesh(
     })
 }
 
-/// The steps of a bake after welding: the hierarchy, the arrays with the surfaces'
-/// materials, and their validation.
+/// The step of a bake after welding: the hierarchy.
 fn build_welded(
-    w: &weld::Welded,
-    surfaces: &[crate::mesh::Surface],
+    w: weld::Welded,
+    surfaces: Vec<Surface>,
     input_triangles: usize,
     name: &str,
     start: Instant,
     progress: &mut dyn FnMut(Stage),
-) -> Result<(Baked, BakeInfo), BakeError> {
-    let h = hierarchy::build(w, &AttributeWeights::default(), &mut |done, most| {
+) -> Result<Built, BakeError> {
+    let h = hierarchy::build(&w, &AttributeWeights::default(), &mut |done, most| {
         progress(Stage::Collapse(done, most))
     })
     .map_err(|source| BakeError::Hierarchy {
         path: name.to_string(),
         source,
     })?;
-    assemble(w, h, surfaces, input_triangles, start, progress)
+    Ok(built(w, h, surfaces, input_triangles, start))
 }
 
-/// The last steps of a bake: the arrays of `w` and its hierarchy `h` with the surfaces'
-/// materials, their validation, and the report.
-pub(crate) fn assemble(
-    w: &weld::Welded,
+/// A bake up to its arrays from the welded mesh `w` and its hierarchy `h`.
+pub(crate) fn built(
+    w: weld::Welded,
     h: hierarchy::Hierarchy,
-    surfaces: &[crate::mesh::Surface],
+    surfaces: Vec<Surface>,
     input_triangles: usize,
     start: Instant,
-    progress: &mut dyn FnMut(Stage),
-) -> Result<(Baked, BakeInfo), BakeError> {
-    progress(Stage::Assemble);
-    let baked = Baked::new(w, &h).with_materials(surfaces, Path::new(""));
-    // The hierarchy is in the arrays now; validating them does not need it.
-    let passes = h.passes;
-    drop(h);
-    baked.hierarchy().map_err(BakeError::Invalid)?;
+) -> Built {
     let info = BakeInfo {
         input_triangles: input_triangles as u64,
         surface_groups: w.group_count as u64,
         repairs: w.repairs,
         bake_seconds: start.elapsed().as_secs_f64(),
-        passes,
+        passes: h.passes,
         notes: Vec::new(),
     };
-    Ok((baked, info))
+    Built {
+        welded: w,
+        collapses: h,
+        surfaces,
+        texture_dir: PathBuf::new(),
+        info,
+        start,
+    }
 }
 
 /// What [`bake_out_of_core`] makes.
@@ -189,6 +261,18 @@ pub struct OutOfCoreBake {
     pub baked: Baked,
     /// About the bake (`input_triangles` counts the file's triangles).
     pub info: BakeInfo,
+    /// About the out-of-core simplification.
+    pub stats: crate::ooc::OocStats,
+    /// The multiresolution octree over every clustering level, when the options ask for it.
+    pub octree: Option<crate::ooc::MultiresOctree>,
+}
+
+/// What [`build_out_of_core`] makes: [`OutOfCoreBake`] up to the arrays.
+#[derive(Debug)]
+pub struct OutOfCoreBuild {
+    /// The clustered mesh's bake up to its arrays (`info.input_triangles` counts the file's
+    /// triangles).
+    pub built: Built,
     /// About the out-of-core simplification.
     pub stats: crate::ooc::OocStats,
     /// The multiresolution octree over every clustering level, when the options ask for it.
@@ -205,15 +289,34 @@ pub fn bake_out_of_core(
     ooc_progress: &mut dyn FnMut(crate::ooc::OocStage),
     progress: &mut dyn FnMut(Stage),
 ) -> Result<OutOfCoreBake, BakeError> {
+    let o = build_out_of_core(path, options, ooc_progress, progress)?;
+    let (baked, info) = o.built.assemble(progress)?;
+    Ok(OutOfCoreBake {
+        baked,
+        info,
+        stats: o.stats,
+        octree: o.octree,
+    })
+}
+
+/// [`bake_out_of_core`] up to the arrays.
+pub fn build_out_of_core(
+    path: &Path,
+    options: &crate::ooc::OocOptions,
+    ooc_progress: &mut dyn FnMut(crate::ooc::OocStage),
+    progress: &mut dyn FnMut(Stage),
+) -> Result<OutOfCoreBuild, BakeError> {
     let start = Instant::now();
     let s = crate::ooc::simplify(path, options, ooc_progress)?;
-    let (mut baked, mut info) = bake_mesh(&s.mesh, &path.display().to_string(), progress)?;
-    baked.texture_dir = source_dir(path);
+    let mut built = build_mesh(&s.mesh, &path.display().to_string(), progress)?;
+    built.start = start;
+    built.texture_dir = source_dir(path);
     drop(s.mesh);
     let mut octree = s.octree;
     if let Some(o) = &mut octree {
-        o.surface_count = baked.surface_count;
+        o.surface_count = built.welded.surface_count;
     }
+    let info = &mut built.info;
     info.input_triangles = s.stats.input_triangles;
     info.repairs.skipped_primitives = s.stats.skipped_primitives;
     if s.stats.skipped_primitives > 0 {
@@ -224,9 +327,8 @@ pub fn bake_out_of_core(
         ));
     }
     info.bake_seconds = start.elapsed().as_secs_f64();
-    Ok(OutOfCoreBake {
-        baked,
-        info,
+    Ok(OutOfCoreBuild {
+        built,
         stats: s.stats,
         octree,
     })

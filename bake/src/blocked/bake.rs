@@ -9,7 +9,7 @@ use crate::baked::Baked;
 use crate::hierarchy::AttributeWeights;
 use crate::import::{self, ImportOptions};
 use crate::mesh::{Mesh, Surface};
-use crate::pipeline::{assemble, weld_mesh, BakeError, Stage};
+use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
 use crate::weld;
 
@@ -29,15 +29,26 @@ pub enum BlockedBakeError {
     },
 }
 
-/// Imports `path` and bakes it in blocks; `bake_seconds` includes the import. The imported
-/// mesh is dropped once welded (only its surfaces are kept), so the two never take memory at
-/// once.
+/// Imports `path` and bakes it in blocks; `bake_seconds` includes the import.
 pub fn bake_file_blocked(
     path: &Path,
     import_options: &ImportOptions,
     options: &BlockedOptions,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(Baked, BakeInfo, Vec<LevelStats>), BlockedBakeError> {
+    let (built, levels) = build_file_blocked(path, import_options, options, progress)?;
+    let (baked, info) = built.assemble(progress)?;
+    Ok((baked, info, levels))
+}
+
+/// [`bake_file_blocked`] up to the arrays ([`Built`]). The imported mesh is dropped once
+/// welded (only its surfaces are kept), so the two never take memory at once.
+pub fn build_file_blocked(
+    path: &Path,
+    import_options: &ImportOptions,
+    options: &BlockedOptions,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(Built, Vec<LevelStats>), BlockedBakeError> {
     let start = Instant::now();
     progress(Stage::Import);
     let (mut mesh, report) =
@@ -46,13 +57,12 @@ pub fn bake_file_blocked(
     let w = weld_mesh(&mesh, &name, progress)?;
     let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
     drop(mesh);
-    let (mut baked, mut info, levels) =
-        bake_welded(&w, &surfaces, triangles, &name, options, progress)?;
-    baked.texture_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    info.repairs.skipped_primitives = report.skipped_primitives as u64;
-    info.notes = report.notes;
-    info.bake_seconds = start.elapsed().as_secs_f64();
-    Ok((baked, info, levels))
+    let (mut built, levels) =
+        build_welded(w, surfaces, triangles, &name, options, start, progress)?;
+    built.texture_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    built.info.repairs.skipped_primitives = report.skipped_primitives as u64;
+    built.info.notes = report.notes;
+    Ok((built, levels))
 }
 
 /// Bakes a mesh in blocks: welds it, builds its hierarchy level by level
@@ -65,31 +75,31 @@ pub fn bake_mesh_blocked(
 ) -> Result<(Baked, BakeInfo, Vec<LevelStats>), BlockedBakeError> {
     let start = Instant::now();
     let w = weld_mesh(mesh, name, progress)?;
-    let (baked, mut info, levels) = bake_welded(
-        &w,
-        &mesh.surfaces,
+    let (built, levels) = build_welded(
+        w,
+        mesh.surfaces.clone(),
         mesh.triangles.len(),
         name,
         options,
+        start,
         progress,
     )?;
-    info.bake_seconds = start.elapsed().as_secs_f64();
+    let (baked, info) = built.assemble(progress)?;
     Ok((baked, info, levels))
 }
 
-/// The steps after welding: the blocked hierarchy, the arrays with the surfaces' materials,
-/// and their validation.
-fn bake_welded(
-    w: &weld::Welded,
-    surfaces: &[Surface],
+/// The step after welding: the blocked hierarchy.
+fn build_welded(
+    w: weld::Welded,
+    surfaces: Vec<Surface>,
     input_triangles: usize,
     name: &str,
     options: &BlockedOptions,
+    start: Instant,
     progress: &mut dyn FnMut(Stage),
-) -> Result<(Baked, BakeInfo, Vec<LevelStats>), BlockedBakeError> {
-    let start = Instant::now();
-    let built = build(
-        w,
+) -> Result<(Built, Vec<LevelStats>), BlockedBakeError> {
+    let made = build(
+        &w,
         &AttributeWeights::default(),
         options,
         &mut |done, most| progress(Stage::Collapse(done, most)),
@@ -98,13 +108,6 @@ fn bake_welded(
         path: name.to_string(),
         source,
     })?;
-    let (baked, info) = assemble(
-        w,
-        built.hierarchy,
-        surfaces,
-        input_triangles,
-        start,
-        progress,
-    )?;
-    Ok((baked, info, built.levels))
+    let built = built(w, made.hierarchy, surfaces, input_triangles, start);
+    Ok((built, made.levels))
 }

@@ -36,7 +36,7 @@ mod replay;
 mod stitch;
 mod tiles;
 
-pub use bake::{bake_file_blocked, bake_mesh_blocked, BlockedBakeError};
+pub use bake::{bake_file_blocked, bake_mesh_blocked, build_file_blocked, BlockedBakeError};
 
 use rayon::prelude::*;
 

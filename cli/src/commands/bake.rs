@@ -1,15 +1,16 @@
 //! `caveclod bake`: import, bake (in core or streamed out of core), optionally add g-mesh
 //! levels, write the .clod file and print its report.
 
-use caveclod_bake::baked::Baked;
-use caveclod_bake::blocked::{bake_file_blocked, BlockedOptions, LevelStats};
+use caveclod_bake::baked::{BakeWriteError, Baked};
+use caveclod_bake::blocked::{build_file_blocked, BlockedOptions, LevelStats};
 use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
-use caveclod_bake::pipeline::{bake_file, bake_out_of_core, Stage};
+use caveclod_bake::pipeline::{build_file, build_out_of_core, Built, Stage};
 use caveclod_bake::report::BakeInfo;
 use caveclod_cli::info as report;
 use caveclod_cli::outputs;
+use caveclod_core::format::ExtraSection;
 use caveclod_core::Hierarchy;
 use serde_json::{json, Map, Value};
 
@@ -17,10 +18,15 @@ use super::progress::Progress;
 use super::with_hierarchy;
 use crate::args::BakeArgs;
 
-/// What a bake made, in core or out of core.
+/// What a bake made, in core or out of core, up to the arrays.
 struct Made {
-    baked: Baked,
-    info: BakeInfo,
+    built: Built,
+    /// What the report adds.
+    extras: Extras,
+}
+
+/// What a bake's report adds to the file's, and the extra sections besides the hierarchy.
+struct Extras {
     /// The out-of-core simplification's figures (out of core only).
     ooc_stats: Option<OocStats>,
     /// The multiresolution octree (out of core only, when the options ask for it).
@@ -46,31 +52,32 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
     } else if a.blocked {
         bake_blocked(a, &mut on_stage)
     } else {
-        bake_file(
+        build_file(
             &a.input,
             &ImportOptions { spacing: a.spacing },
             &mut on_stage,
         )
-        .map(|(baked, info)| Made {
-            baked,
-            info,
-            ooc_stats: None,
-            octree: None,
-            levels: None,
+        .map(|built| Made {
+            built,
+            extras: Extras {
+                ooc_stats: None,
+                octree: None,
+                levels: None,
+            },
         })
         .map_err(|e| e.to_string())
     };
     bar.finish();
-    let made = made?;
-    let levels = if a.gmesh {
-        bar.show("building g-mesh levels", None);
-        Some(gmesh_levels(&made.baked, a.gmesh_min_polygons)?)
+    let Made { built, extras } = made?;
+    let info = if a.gmesh {
+        write_with_gmesh(a, built, &extras, &bar)?
     } else {
-        None
+        // The arrays are assembled as they are written.
+        show_stage(&bar, Stage::Assemble);
+        write_streamed(a, built, &extras)?
     };
-    write(a, &made, levels.as_ref())?;
     with_hierarchy(&a.output, |h| {
-        let r = bake_report(h, &made, a.memory_budget);
+        let r = bake_report(h, &info, &extras, a.memory_budget);
         if a.json {
             println!("{}", Value::Object(r));
         } else {
@@ -133,18 +140,19 @@ fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, 
         };
         ooc_bar.show(&msg, Some((done, total)));
     };
-    let r = bake_out_of_core(&a.input, &options, &mut on_ooc, &mut |s| {
+    let r = build_out_of_core(&a.input, &options, &mut on_ooc, &mut |s| {
         ooc_bar.finish();
         on_stage(s)
     });
     ooc_bar.finish();
     let o = r.map_err(|e| e.to_string())?;
     Ok(Made {
-        baked: o.baked,
-        info: o.info,
-        ooc_stats: Some(o.stats),
-        octree: o.octree,
-        levels: None,
+        built: o.built,
+        extras: Extras {
+            ooc_stats: Some(o.stats),
+            octree: o.octree,
+            levels: None,
+        },
     })
 }
 
@@ -157,7 +165,7 @@ const BLOCK_BYTES_PER_TRIANGLE: u64 = 1024;
 fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, String> {
     let options =
         BlockedOptions::for_budget(a.memory_budget, rayon_threads(), BLOCK_BYTES_PER_TRIANGLE);
-    let (baked, info, levels) = bake_file_blocked(
+    let (built, levels) = build_file_blocked(
         &a.input,
         &ImportOptions { spacing: a.spacing },
         &options,
@@ -165,11 +173,12 @@ fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, S
     )
     .map_err(|e| e.to_string())?;
     Ok(Made {
-        baked,
-        info,
-        ooc_stats: None,
-        octree: None,
-        levels: Some((options, levels)),
+        built,
+        extras: Extras {
+            ooc_stats: None,
+            octree: None,
+            levels: Some((options, levels)),
+        },
     })
 }
 
@@ -206,37 +215,75 @@ fn gmesh_levels(baked: &Baked, min_polygons: Option<u32>) -> Result<GMeshData, S
     caveclod_bake::gmesh::build(&h, &options).map_err(|e| e.to_string())
 }
 
-/// Writes the hierarchy with its extra sections: the bake's report, the g-mesh levels and the
-/// multiresolution octree, each when there is one.
-fn write(a: &BakeArgs, made: &Made, levels: Option<&GMeshData>) -> Result<(), String> {
-    let json_info = made.info.to_json();
+/// Writes the file from the welded mesh and the collapses one array at a time
+/// ([`Built::write`]), with the bake's report and the multiresolution octree (if any) as
+/// extra sections; the mesh and the collapses are dropped once written. Returns the report.
+fn write_streamed(a: &BakeArgs, built: Built, extras: &Extras) -> Result<BakeInfo, String> {
+    let mut info = built.info.clone();
+    info.bake_seconds = built.seconds();
+    write_with(extras, &info, None, |sections| {
+        built.write(&a.output, sections)
+    })?;
+    Ok(info)
+}
+
+/// Assembles the arrays, builds the g-mesh levels over them and writes the file with the
+/// levels, the bake's report and the multiresolution octree (if any). Returns the report.
+fn write_with_gmesh(
+    a: &BakeArgs,
+    built: Built,
+    extras: &Extras,
+    bar: &Progress,
+) -> Result<BakeInfo, String> {
+    let (baked, info) = built
+        .assemble(&mut |s| show_stage(bar, s))
+        .map_err(|e| e.to_string())?;
+    bar.show("building g-mesh levels", None);
+    let levels = gmesh_levels(&baked, a.gmesh_min_polygons)?;
+    write_with(extras, &info, Some(&levels), |sections| {
+        baked.write(&a.output, sections)
+    })?;
+    Ok(info)
+}
+
+/// Gathers the extra sections (the bake's report, the g-mesh levels and the multiresolution
+/// octree, each when there is one) and writes the file through `write`.
+fn write_with(
+    extras: &Extras,
+    info: &BakeInfo,
+    levels: Option<&GMeshData>,
+    write: impl FnOnce(&[ExtraSection<'_>]) -> Result<u64, BakeWriteError>,
+) -> Result<(), String> {
+    let json_info = info.to_json();
     let mut sections = vec![BakeInfo::section(&json_info)];
     if let Some(g) = levels {
         sections.extend(g.sections());
     }
-    let octree_parts = made.octree.as_ref().map(|o| o.parts());
+    let octree_parts = extras.octree.as_ref().map(|o| o.parts());
     if let Some(p) = &octree_parts {
         sections.extend(p.sections());
     }
-    made.baked
-        .write(&a.output, &sections)
-        .map_err(|e| e.to_string())?;
+    write(&sections).map_err(|e| e.to_string())?;
     Ok(())
 }
 
 /// The written file's report with the bake's time, the out-of-core figures and peak memory.
-fn bake_report(h: &Hierarchy<'_>, made: &Made, memory_budget: u64) -> Map<String, Value> {
-    let info = &made.info;
+fn bake_report(
+    h: &Hierarchy<'_>,
+    info: &BakeInfo,
+    extras: &Extras,
+    memory_budget: u64,
+) -> Map<String, Value> {
     let mut r = report::report(h, Some(info));
     r.insert("bake_seconds".into(), json!(info.bake_seconds));
-    if let Some(st) = &made.ooc_stats {
+    if let Some(st) = &extras.ooc_stats {
         r.insert(
             "input_triangles_per_second".into(),
             json!(st.input_triangles as f64 / info.bake_seconds),
         );
         r.insert("out_of_core".into(), ooc_report(st, memory_budget));
     }
-    if let Some((options, levels)) = &made.levels {
+    if let Some((options, levels)) = &extras.levels {
         r.insert(
             "blocked".into(),
             json!({

@@ -21,9 +21,9 @@ use caveclod_core::format::checksum64;
 use caveclod_core::Hierarchy;
 
 use crate::aligned::AlignedBytes;
-use caveclod_bake::baked::{write_atomically, Baked};
+use caveclod_bake::baked::write_atomically;
 use caveclod_bake::import::ImportOptions;
-use caveclod_bake::pipeline::bake_file;
+use caveclod_bake::pipeline::build_file;
 use caveclod_vulkan::{Context, HeadlessDesc};
 
 use crate::snapshot::{render_snapshot, write_png, Layout, SnapshotDesc};
@@ -108,17 +108,14 @@ pub fn bake_cached(input: &Path, cache: &Path, rebake: bool) -> Result<Loaded, S
     let bytes = match cached {
         Some(b) => b,
         None => {
-            let (baked, _info): (Baked, _) =
-                bake_file(input, &ImportOptions::default(), &mut |_| {})
-                    .map_err(|e| e.to_string())?;
-            let out = baked.to_bytes(&[]).map_err(|e| e.to_string())?;
-            write_atomically(&clod, &out).map_err(|e| e.to_string())?;
+            // Written one array at a time and validated before it is renamed into place.
+            build_file(input, &ImportOptions::default(), &mut |_| {})
+                .map_err(|e| e.to_string())?
+                .write(&clod, &[])
+                .map_err(|e| e.to_string())?;
             baked_now = true;
-            let bytes = AlignedBytes::from_slice(&out);
-            bytes
-                .hierarchy()
-                .map_err(|e| format!("{}: {e}", clod.display()))?;
-            bytes
+            let out = std::fs::read(&clod).map_err(|e| format!("{}: {e}", clod.display()))?;
+            AlignedBytes::from_slice(&out)
         }
     };
     Ok(Loaded {

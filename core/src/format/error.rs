@@ -257,6 +257,23 @@ pub enum WriteError {
         /// The section.
         tag: Tag,
     },
+    /// More sections than [`MAX_SECTIONS`](super::MAX_SECTIONS).
+    TooManySections {
+        /// Sections given.
+        count: usize,
+    },
+    /// The file's length does not fit 64 bits.
+    TooLarge,
+    /// A section's bytes, as written section by section, differ in length from its plan
+    /// ([`SectionWriter`](super::SectionWriter)).
+    NotAsPlanned {
+        /// The section (`None`: bytes given after the last section).
+        tag: Option<Tag>,
+        /// Its planned length in bytes.
+        planned: u64,
+        /// Bytes given for it.
+        given: u64,
+    },
 }
 
 impl core::fmt::Display for WriteError {
@@ -271,6 +288,24 @@ impl core::fmt::Display for WriteError {
                     f,
                     "extra section {tag}: reserved tag or bytes not a whole number of records"
                 )
+            }
+            Self::TooManySections { count } => {
+                write!(
+                    f,
+                    "{count} sections, at most {} allowed",
+                    super::MAX_SECTIONS
+                )
+            }
+            Self::TooLarge => write!(f, "the file's length does not fit 64 bits"),
+            Self::NotAsPlanned {
+                tag: Some(tag),
+                planned,
+                given,
+            } => write!(f, "section {tag}: {given} bytes given, {planned} planned"),
+            Self::NotAsPlanned {
+                tag: None, given, ..
+            } => {
+                write!(f, "{given} bytes given after the last section")
             }
         }
     }

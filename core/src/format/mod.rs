@@ -29,25 +29,31 @@
 //! hierarchy when present: [`Hierarchy::materials`](crate::Hierarchy::materials) and
 //! [`Hierarchy::vertex_colours`](crate::Hierarchy::vertex_colours) give them.
 //!
-//! The writer side ([`serialized_len`], [`write_into`]) needs no allocation either: a std
-//! caller sizes a buffer with `serialized_len`, fills it with `write_into`, and writes it to
-//! disk through a temporary file and a rename.
+//! The writer side needs no allocation either. [`write_into`] fills a buffer sized by
+//! [`serialized_len`]; a file too large to hold in memory is written section by section
+//! through a [`FilePlan`] and a [`SectionWriter`] (the same layout), after
+//! [`validate_parts`] or followed by reading the written file back. A std caller writes
+//! through a temporary file and a rename either way.
 
 pub(crate) mod error;
 pub mod materials;
+mod plan;
 pub(crate) mod records;
 pub(crate) mod validate;
 mod writer;
 
 pub(crate) use error::FormatError;
 pub use error::WriteError;
+pub use plan::{FilePlan, SectionList, SectionSpec, SectionWriter, Sink, StreamError};
 pub use records::{
     octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
     PositionClass, Split, SplitBounds, Vertex, VertexKey,
 };
-pub use writer::{serialized_len, write_into, ExtraSection, HierarchyParts};
+pub use writer::{
+    serialized_len, validate_parts, write_into, ExtraSection, HierarchyParts, KNOWN_SECTIONS,
+};
 
-pub use crate::checksum::checksum64;
+pub use crate::checksum::{checksum64, Checksum64};
 
 use bytemuck::{Pod, Zeroable};
 

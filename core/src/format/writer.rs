@@ -1,12 +1,10 @@
-//! Serialising owned arrays into `.clod` bytes without allocating.
+//! Serialising owned arrays into `.clod` bytes without allocating, through the file's
+//! [`FilePlan`].
 
 use bytemuck::Pod;
 
-use super::{
-    align_up, tags, validate, FileHeader, SectionEntry, Tag, WriteError, MAGIC, VERSION_MAJOR,
-    VERSION_MINOR,
-};
-use crate::checksum::checksum64;
+use super::plan::{FilePlan, SectionList, SectionSpec, SectionWriter, Sink, StreamError};
+use super::{tags, validate, FileHeader, Tag, WriteError};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
@@ -67,9 +65,24 @@ fn known<'a, T: Pod>(tag: Tag, records: &'a [T]) -> Planned<'a> {
     }
 }
 
-const KNOWN: usize = 11;
+/// Sections a hierarchy always has, in their file order.
+pub const KNOWN_SECTIONS: [Tag; 11] = [
+    tags::META,
+    tags::POSITIONS,
+    tags::NODES,
+    tags::SPLITS,
+    tags::BOUNDS,
+    tags::POLYGONS,
+    tags::ROOTS,
+    tags::BASE,
+    tags::VERTEX_TABLE_OFFSETS,
+    tags::VERTEX_TABLE,
+    tags::VERTICES,
+];
 
-fn plan<'a>(parts: &HierarchyParts<'a>, meta: &'a Meta) -> [Planned<'a>; KNOWN] {
+const KNOWN: usize = KNOWN_SECTIONS.len();
+
+fn known_sections<'a>(parts: &HierarchyParts<'a>, meta: &'a Meta) -> [Planned<'a>; KNOWN] {
     [
         known(tags::META, core::slice::from_ref(meta)),
         known(tags::POSITIONS, parts.positions),
@@ -85,39 +98,64 @@ fn plan<'a>(parts: &HierarchyParts<'a>, meta: &'a Meta) -> [Planned<'a>; KNOWN] 
     ]
 }
 
-fn layout_len<'a>(sections: impl Iterator<Item = (u32, &'a [u8])>, count: usize) -> usize {
-    let mut at =
-        align_up(core::mem::size_of::<FileHeader>() + count * core::mem::size_of::<SectionEntry>());
-    for (_, bytes) in sections {
-        at = align_up(at + bytes.len());
-    }
-    at
+/// The hierarchy's sections then the extra ones: the file's sections in order.
+struct Listed<'a> {
+    known: [Planned<'a>; KNOWN],
+    extra: &'a [ExtraSection<'a>],
 }
 
-/// Bytes [`write_into`] will write for these parts and extra sections.
+impl Listed<'_> {
+    fn bytes(&self, i: usize) -> &[u8] {
+        match self.known.get(i) {
+            Some(k) => k.bytes,
+            None => self.extra[i - KNOWN].bytes,
+        }
+    }
+}
+
+impl SectionList for Listed<'_> {
+    fn count(&self) -> usize {
+        KNOWN + self.extra.len()
+    }
+    fn spec(&self, i: usize) -> SectionSpec {
+        let (tag, record_size, len) = match self.known.get(i) {
+            Some(k) => (k.tag, k.record_size, k.bytes.len()),
+            None => {
+                let e = &self.extra[i - KNOWN];
+                (e.tag, e.record_size, e.bytes.len())
+            }
+        };
+        SectionSpec {
+            tag,
+            record_size,
+            byte_len: len as u64,
+        }
+    }
+}
+
+/// Bytes [`write_into`] will write for these parts and extra sections (0 if they cannot be
+/// planned: [`FilePlan::new`]).
 pub fn serialized_len(parts: &HierarchyParts<'_>, extra: &[ExtraSection<'_>]) -> usize {
     let meta = Meta::default();
-    let known = plan(parts, &meta);
-    layout_len(
-        known
-            .iter()
-            .map(|s| (s.record_size, s.bytes))
-            .chain(extra.iter().map(|s| (s.record_size, s.bytes))),
-        KNOWN + extra.len(),
-    )
+    let listed = Listed {
+        known: known_sections(parts, &meta),
+        extra,
+    };
+    FilePlan::new(&listed).map_or(0, |p| p.file_len() as usize)
 }
 
 /// Validates `parts` and the appearance sections among `extra` (materials and vertex
-/// colours, [`materials`](crate::format::materials)) exactly as a reader would, then writes
-/// the file into `out`. Returns the number of bytes written, [`serialized_len`].
-pub fn write_into(
+/// colours, [`materials`](crate::format::materials)) exactly as a reader would, and checks
+/// that no extra section uses a tag of [`KNOWN_SECTIONS`] and each holds whole records.
+/// Returns the `META` record the file carries. [`write_into`] calls it; a caller writing
+/// the sections itself ([`SectionWriter`](super::SectionWriter)) calls it first.
+pub fn validate_parts(
     parts: &HierarchyParts<'_>,
     extra: &[ExtraSection<'_>],
-    out: &mut [u8],
-) -> Result<usize, WriteError> {
+) -> Result<Meta, WriteError> {
     let meta = validate::validate(parts, None)?;
     for e in extra {
-        let reserved = plan(parts, &meta).iter().any(|k| k.tag == e.tag);
+        let reserved = KNOWN_SECTIONS.contains(&e.tag);
         if reserved || e.record_size == 0 || e.bytes.len() % e.record_size as usize != 0 {
             return Err(WriteError::BadExtraSection { tag: e.tag });
         }
@@ -128,7 +166,51 @@ pub fn write_into(
         parts.surface_count as usize,
         parts.vertices.len(),
     )?;
-    let needed = serialized_len(parts, extra);
+    Ok(meta)
+}
+
+/// A [`Sink`] over a buffer.
+struct SliceSink<'b> {
+    out: &'b mut [u8],
+    at: usize,
+}
+
+impl Sink for SliceSink<'_> {
+    type Error = WriteError;
+    fn put(&mut self, bytes: &[u8]) -> Result<(), WriteError> {
+        let end = self.at + bytes.len();
+        let Some(dst) = self.out.get_mut(self.at..end) else {
+            return Err(WriteError::BufferTooSmall {
+                needed: end,
+                given: self.out.len(),
+            });
+        };
+        dst.copy_from_slice(bytes);
+        self.at = end;
+        Ok(())
+    }
+}
+
+fn flatten(e: StreamError<WriteError>) -> WriteError {
+    match e {
+        StreamError::Sink(e) | StreamError::Plan(e) => e,
+    }
+}
+
+/// Validates `parts` and `extra` ([`validate_parts`]), then writes the file into `out`
+/// through its [`FilePlan`]. Returns the number of bytes written, [`serialized_len`].
+pub fn write_into(
+    parts: &HierarchyParts<'_>,
+    extra: &[ExtraSection<'_>],
+    out: &mut [u8],
+) -> Result<usize, WriteError> {
+    let meta = validate_parts(parts, extra)?;
+    let listed = Listed {
+        known: known_sections(parts, &meta),
+        extra,
+    };
+    let plan = FilePlan::new(&listed)?;
+    let needed = plan.file_len() as usize;
     if out.len() < needed {
         return Err(WriteError::BufferTooSmall {
             needed,
@@ -136,40 +218,11 @@ pub fn write_into(
         });
     }
     let out = &mut out[..needed];
-    out.fill(0);
-    let known = plan(parts, &meta);
-    let all = known
-        .iter()
-        .map(|s| (s.tag, s.record_size, s.bytes))
-        .chain(extra.iter().map(|s| (s.tag, s.record_size, s.bytes)));
-    let count = KNOWN + extra.len();
-    let table_at = core::mem::size_of::<FileHeader>();
-    let mut at = align_up(table_at + count * core::mem::size_of::<SectionEntry>());
-    for (i, (tag, record_size, bytes)) in all.enumerate() {
-        let entry = SectionEntry {
-            tag,
-            record_size,
-            offset: at as u64,
-            record_count: (bytes.len() / record_size as usize) as u64,
-        };
-        let e_at = table_at + i * core::mem::size_of::<SectionEntry>();
-        out[e_at..e_at + core::mem::size_of::<SectionEntry>()]
-            .copy_from_slice(bytemuck::bytes_of(&entry));
-        out[at..at + bytes.len()].copy_from_slice(bytes);
-        at = align_up(at + bytes.len());
+    let mut w = SectionWriter::new(plan, SliceSink { out, at: 0 }).map_err(flatten)?;
+    for i in 0..listed.count() {
+        w.put(listed.bytes(i)).map_err(flatten)?;
     }
-    let checksum = checksum64(&out[table_at..]);
-    let header = FileHeader {
-        magic: MAGIC,
-        version_major: VERSION_MAJOR,
-        version_minor: VERSION_MINOR,
-        header_len: core::mem::size_of::<FileHeader>() as u32,
-        file_len: needed as u64,
-        section_count: count as u32,
-        flags: 0,
-        checksum,
-        reserved: [0; 6],
-    };
-    out[..table_at].copy_from_slice(bytemuck::bytes_of(&header));
+    let (header, sink) = w.finish().map_err(flatten)?;
+    sink.out[..core::mem::size_of::<FileHeader>()].copy_from_slice(bytemuck::bytes_of(&header));
     Ok(needed)
 }

@@ -1,0 +1,165 @@
+//! Writing a `.clod` file one section at a time, never holding the whole file's bytes.
+//!
+//! The sections are planned from their lengths ([`FilePlan`]), then their bytes pass through
+//! a [`SectionWriter`] and a buffered writer into a temporary file beside the target; the
+//! header, which carries the checksum of everything after it, is written over the start
+//! last. The temporary file replaces the target by a rename only once it is complete, synced
+//! and, when asked, read back and validated; on any failure it is removed and the target is
+//! left as it was.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use bytemuck::Pod;
+use caveclod_core::format::{FilePlan, SectionSpec, SectionWriter, Sink, StreamError, WriteError};
+use caveclod_core::Hierarchy;
+
+use crate::baked::BakeWriteError;
+
+/// Size of the buffer between the section writer and the file.
+const BUFFER: usize = 1 << 20;
+
+/// The buffered temporary file, as a [`Sink`].
+struct FileSink(BufWriter<File>);
+
+impl Sink for FileSink {
+    type Error = std::io::Error;
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.0.write_all(bytes)
+    }
+}
+
+/// The sections of a file being written, handed to the caller's fill step: each call gives
+/// the next bytes of the sections in file order.
+pub struct Sections<'s> {
+    writer: SectionWriter<'s, FileSink>,
+}
+
+impl Sections<'_> {
+    /// The next records of the current section.
+    pub fn put<T: Pod>(&mut self, records: &[T]) -> Result<(), BakeWriteError> {
+        self.writer
+            .put(bytemuck::cast_slice(records))
+            .map_err(stream_error)
+    }
+}
+
+/// What a failed step of the section writer becomes; the caller adds the path to an I/O error.
+enum Failure {
+    Io(std::io::Error),
+    Bake(BakeWriteError),
+}
+
+fn stream_error(e: StreamError<std::io::Error>) -> BakeWriteError {
+    match e {
+        StreamError::Sink(source) => BakeWriteError::Io {
+            path: PathBuf::new(),
+            source,
+        },
+        StreamError::Plan(e) => BakeWriteError::Invalid(e),
+    }
+}
+
+/// Whether the written file is read back and validated before it replaces the target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Check {
+    /// The sections were validated before writing ([`caveclod_core::format::validate_parts`]).
+    Validated,
+    /// Validate the written file ([`Hierarchy::from_bytes`]: checksum, section table, every
+    /// record) before the rename.
+    ReadBack,
+}
+
+/// Writes the file planned by `specs` at `path`: `fill` gives every section's bytes in
+/// order ([`Sections::put`]); then the header goes at the start, the file is synced,
+/// validated if `check` asks, and renamed over `path`. Returns the file's length. On any
+/// failure the temporary file is removed and `path` is untouched.
+pub fn write_sections(
+    path: &Path,
+    specs: &[SectionSpec],
+    check: Check,
+    fill: impl FnOnce(&mut Sections<'_>) -> Result<(), BakeWriteError>,
+) -> Result<u64, BakeWriteError> {
+    let plan = FilePlan::new(specs).map_err(BakeWriteError::Invalid)?;
+    let tmp = temporary_sibling(path);
+    let result = (|| {
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)
+            .map_err(Failure::Io)?;
+        let sink = FileSink(BufWriter::with_capacity(BUFFER, file));
+        let writer = SectionWriter::new(plan, sink).map_err(|e| Failure::Bake(stream_error(e)))?;
+        let mut sections = Sections { writer };
+        fill(&mut sections).map_err(Failure::Bake)?;
+        let (header, FileSink(buffered)) = sections
+            .writer
+            .finish()
+            .map_err(|e| Failure::Bake(stream_error(e)))?;
+        let mut file = buffered
+            .into_inner()
+            .map_err(|e| Failure::Io(e.into_error()))?;
+        file.seek(SeekFrom::Start(0)).map_err(Failure::Io)?;
+        file.write_all(bytemuck::bytes_of(&header))
+            .map_err(Failure::Io)?;
+        file.sync_all().map_err(Failure::Io)?;
+        if check == Check::ReadBack {
+            validate_written(&mut file)?;
+        }
+        std::fs::rename(&tmp, path).map_err(Failure::Io)?;
+        Ok(plan.file_len())
+    })();
+    result.map_err(|f| {
+        let _ = std::fs::remove_file(&tmp);
+        let with_path = |source| BakeWriteError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        match f {
+            Failure::Io(source) => with_path(source),
+            Failure::Bake(BakeWriteError::Io { source, .. }) => with_path(source),
+            Failure::Bake(e) => e,
+        }
+    })
+}
+
+/// The temporary file `path` is written as before the rename: a hidden sibling, so the
+/// rename stays within one file system.
+pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Validates the written file as a reader would: mapped (page aligned) when the system
+/// allows, otherwise read into an aligned buffer.
+fn validate_written(file: &mut File) -> Result<(), Failure> {
+    // SAFETY: the map is read-only and private; the file is this process's own temporary
+    // file, which nothing else writes while it is mapped.
+    match unsafe { memmap2::Mmap::map(&*file) } {
+        Ok(map) => check(&map),
+        Err(_) => {
+            let len = file.metadata().map_err(Failure::Io)?.len() as usize;
+            let mut words = vec![0u64; len.div_ceil(8)];
+            let bytes = &mut bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..len];
+            file.seek(SeekFrom::Start(0)).map_err(Failure::Io)?;
+            file.read_exact(bytes).map_err(Failure::Io)?;
+            check(bytes)
+        }
+    }
+}
+
+fn check(bytes: &[u8]) -> Result<(), Failure> {
+    Hierarchy::from_bytes(bytes)
+        .map(|_| ())
+        .map_err(|e| Failure::Bake(BakeWriteError::Invalid(WriteError::Invalid(e))))
+}

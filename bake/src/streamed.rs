@@ -1,0 +1,94 @@
+//! Writing a `.clod` file straight from the welded mesh and its collapses, one array at a
+//! time: each array is made (as [`Baked::new`](crate::baked::Baked::new) makes it), written
+//! and dropped before the next, so the write step holds the inputs, the numbering tables and
+//! the largest array, never every array (as a [`Baked`](crate::baked::Baked) does) nor the
+//! file's bytes.
+//!
+//! The arrays are never all in memory at once, so they cannot be validated before writing as
+//! [`Baked::write`](crate::baked::Baked::write) validates its own; the written temporary file
+//! is read back and validated instead
+//! ([`Hierarchy::from_bytes`](caveclod_core::Hierarchy::from_bytes)) before the rename, so an
+//! invalid file never replaces the target. The bytes are those `Baked::new(w, h)` followed by
+//! `Baked::write` writes.
+
+use std::path::Path;
+
+use caveclod_core::format::{
+    BaseFace, ExtraSection, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
+};
+use caveclod_core::NodeId;
+
+use crate::arrays::{self, NodeIds, PolygonOrder};
+use crate::baked::{
+    appearance_then, material_sections, section_specs, spec_of_len, BakeWriteError,
+};
+use crate::clod_file::{write_sections, Check};
+use crate::hierarchy::Hierarchy as Collapses;
+use crate::materials::{has_materials, TexturePaths};
+use crate::mesh::Surface;
+use crate::weld::Welded;
+
+/// Writes the `.clod` file of the welded mesh `w` and its collapses `h`, with the surfaces'
+/// materials (texture paths relative to `texture_dir`, stored relative to `path`'s
+/// directory) and `extra` sections, at `path`, one array at a time. The mesh and the
+/// collapses are dropped once the last array is written, before the written temporary file
+/// is validated and renamed over `path`. Returns the file's length.
+pub fn write(
+    w: Welded,
+    h: Collapses,
+    surfaces: &[Surface],
+    texture_dir: &Path,
+    path: &Path,
+    extra: &[ExtraSection<'_>],
+) -> Result<u64, BakeWriteError> {
+    let out_dir = path.parent().unwrap_or(Path::new(""));
+    let paths = TexturePaths::new(texture_dir, out_dir);
+    let materials = if has_materials(surfaces) {
+        material_sections(surfaces, &|p| paths.rewrite(p), path)?
+    } else {
+        None
+    };
+    // The colours are the last array of the vertex table; small beside the vertices, they
+    // are made with the other appearance sections, whose lengths the plan needs.
+    let colours = arrays::vertex_colours(&w);
+    let sections = appearance_then(materials.as_ref(), &colours, extra);
+
+    let ids = NodeIds::number(w.positions.len(), &h);
+    let polys = PolygonOrder::number(w.triangles.len(), &h, &ids);
+    let meta = arrays::meta(&w, &h, &ids, &polys);
+    let specs = section_specs(
+        &[
+            spec_of_len::<Meta>(1),
+            spec_of_len::<Position>(meta.position_count as usize),
+            spec_of_len::<Node>(meta.node_count as usize),
+            spec_of_len::<Split>(meta.split_count as usize),
+            spec_of_len::<SplitBounds>(meta.split_count as usize),
+            spec_of_len::<Polygon>(meta.polygon_count as usize),
+            spec_of_len::<NodeId>(meta.root_count as usize),
+            spec_of_len::<BaseFace>(meta.base_polygon_count as usize),
+            spec_of_len::<u32>(meta.position_count as usize + 1),
+            spec_of_len::<VertexKey>(meta.vertex_key_count as usize),
+            spec_of_len::<Vertex>(meta.vertex_count as usize),
+        ],
+        &sections,
+    );
+    write_sections(path, &specs, Check::ReadBack, move |out| {
+        out.put(std::slice::from_ref(&meta))?;
+        out.put(&arrays::positions(&w))?;
+        out.put(&ids.nodes(&h))?;
+        out.put(&arrays::splits(&h, &ids, &polys))?;
+        out.put(&arrays::bounds(&w, &h, &ids))?;
+        out.put(&polys.polygons(&w, &ids))?;
+        out.put(&ids.roots(&h))?;
+        out.put(&polys.base_faces(&h, &ids))?;
+        drop((h, ids, polys));
+        out.put(&arrays::vertex_table_offsets(&w))?;
+        out.put(&arrays::vertex_table(&w))?;
+        out.put(&arrays::vertices(&w))?;
+        drop(w);
+        for e in &sections {
+            out.put(e.bytes)?;
+        }
+        Ok(())
+    })
+}
