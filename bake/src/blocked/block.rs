@@ -71,12 +71,7 @@ pub(super) fn extract(
         has_colors: w.has_colors,
         vertices: positions
             .iter()
-            .map(|&x| {
-                w.vertices[x as usize]
-                    .iter()
-                    .map(|&(g, a)| (g, attr(a)))
-                    .collect()
-            })
+            .map(|&x| w.vertices[x as usize].iter().map(|&(g, a)| (g, attr(a))))
             .collect(),
         repairs: Default::default(),
     };

@@ -258,7 +258,7 @@ fn position_info(w: &Welded, frozen: &[bool]) -> Vec<PosInfo> {
         .map(|(x, (&class, vs))| PosInfo {
             class,
             frozen: frozen.get(x).copied().unwrap_or(false),
-            group: match vs.as_slice() {
+            group: match vs {
                 [(g, _)] => *g,
                 _ => NONE,
             },

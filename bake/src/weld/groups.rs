@@ -4,7 +4,7 @@
 use caveclod_core::format::PositionClass;
 
 use super::repair::Kept;
-use super::{ek, NONE};
+use super::{ek, VertexLists, NONE};
 use crate::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 
@@ -121,23 +121,13 @@ pub(super) fn classify(
 }
 
 /// Step 6: the `(group, attribute id)` of each group with a vertex at every position, by group.
-pub(super) fn vertices_per_position(
-    vertex_of: &VertexOf,
-    positions: usize,
-) -> Vec<Vec<(u32, u32)>> {
-    let mut vertices: Vec<Vec<(u32, u32)>> = vec![Vec::new(); positions];
-    for (g, p, a) in vertex_of.entries() {
-        vertices[p as usize].push((g, a));
-    }
-    for v in &mut vertices {
-        v.sort_unstable();
-    }
-    vertices
+pub(super) fn vertices_per_position(vertex_of: &VertexOf, positions: usize) -> VertexLists {
+    VertexLists::from_entries(positions, vertex_of.entries())
 }
 
 /// The colouring of groups: groups that share no position may share an id (greedy, the
 /// largest groups first). Returns every group's id and the number of ids.
-pub(super) fn colour_groups(vertices: &[Vec<(u32, u32)>], groups: &Groups) -> (Vec<u32>, u32) {
+pub(super) fn colour_groups(vertices: &VertexLists, groups: &Groups) -> (Vec<u32>, u32) {
     let (group_count, group_size) = (groups.count, &groups.size);
     let mut order: Vec<u32> = (0..group_count).collect();
     order.sort_unstable_by_key(|&g| std::cmp::Reverse(group_size[g as usize]));
@@ -200,7 +190,7 @@ impl VertexOf {
     }
 
     /// `(group, position, attribute id)` of every vertex.
-    pub(super) fn entries(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+    pub(super) fn entries(&self) -> impl Iterator<Item = (u32, u32, u32)> + Clone + '_ {
         let first = self
             .first
             .iter()

@@ -23,11 +23,14 @@
 //! [`weld`] runs these steps in order, one module each: `repair` (1–4), `groups` (5–6),
 //! and between them `attributes` (the corners' attributes, deduplicated).
 
+pub use vertex_lists::VertexLists;
+
 mod attributes;
 mod groups;
 mod repair;
 #[cfg(test)]
 mod tests;
+mod vertex_lists;
 
 use caveclod_core::format::PositionClass;
 
@@ -147,7 +150,7 @@ pub struct Welded {
     /// had none) and the `.clod` file gets a colour per vertex.
     pub has_colors: bool,
     /// Per position: `(group, attribute id)` of each group with a vertex there, by group.
-    pub vertices: Vec<Vec<(u32, u32)>>,
+    pub vertices: VertexLists,
     /// What was repaired.
     pub repairs: Repairs,
 }
