@@ -273,7 +273,7 @@ fn each_vertex(w: &Welded, mut f: impl FnMut(usize, u16, u32)) {
 
 /// Vertices (and vertex-table entries) of the welded mesh.
 pub(crate) fn vertex_count(w: &Welded) -> usize {
-    w.vertices.iter().map(Vec::len).sum()
+    w.vertices.iter().map(<[_]>::len).sum()
 }
 
 /// Where each position's vertex-table entries start, and the end.
