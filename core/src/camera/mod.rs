@@ -4,6 +4,7 @@
 mod certificate;
 mod compact;
 mod compact_step;
+mod criterion;
 mod emit;
 mod index_cache;
 mod lag;
