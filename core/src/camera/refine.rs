@@ -10,6 +10,9 @@
 //! [`RefineParams::max_visits`]): it looks at part of the list and the next one resumes where
 //! it stopped, so a call's work is bounded by the caller. All other work is proportional to the front, not the hierarchy (temporal
 //! coherence).
+//!
+//! Whether a node wants its split is the criterion's answer (see `criterion`); this module
+//! holds the pass's parameters and statistics and the walk itself.
 
 use super::certificate::{own_holds, parent_says};
 use super::criterion::Criterion;
