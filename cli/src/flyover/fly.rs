@@ -1,6 +1,10 @@
 //! Flights of several cameras over one hierarchy, measured per frame: a state per camera
 //! (one thread, or one thread per camera) or the paper's baseline of one shared state
 //! re-refined to each camera's view in turn.
+//!
+//! This module holds what every flight shares: the per-frame records and their summary, one
+//! camera's frame, the index lists and the cores camera threads are pinned to. The flights
+//! are in `per_camera`, `shared` and `interleaved` (several flights segment by segment).
 
 use std::time::{Duration, Instant};
 
@@ -8,9 +12,16 @@ use caveclod_core::{
     CameraConfig, CameraState, FrontLag, Hierarchy, RefineParams, RefineStats, View,
 };
 
-use super::gate::FrameGate;
 use super::placement::{balance, Cores};
 use crate::aligned::CameraPool;
+
+mod interleaved;
+mod per_camera;
+mod shared;
+
+pub use interleaved::{fly_interleaved, Group};
+pub use per_camera::fly_per_camera;
+pub use shared::fly_shared;
 
 /// Per-frame figures of one camera.
 #[derive(Clone, Debug, Default)]
@@ -346,260 +357,6 @@ pub(super) fn compact_now(n: usize, c: Compaction) -> CompactNow {
     }
 }
 
-/// One flight of every camera, each with its own state of capacity `config`, over every
-/// `stride`-th frame; `emit` also writes the index lists each frame, into one of
-/// `in_flight` lists per camera in turn (frames in flight, see `gate`), and with `threads`
-/// a camera's thread runs at most `in_flight - 1` frames ahead of the slowest, pinned to a
-/// core when `pin_by` gives the cameras' costs to balance the cores by (see `placement`);
-/// each state compacts as `compaction` says.
-#[allow(clippy::too_many_arguments)]
-pub fn fly_per_camera(
-    h: &Hierarchy<'_>,
-    views: &[Vec<View>],
-    params: &RefineParams,
-    config: &CameraConfig,
-    stride: usize,
-    emit: bool,
-    threads: bool,
-    in_flight: usize,
-    compaction: Compaction,
-    pin_by: Option<&[f64]>,
-) -> Result<Flight, String> {
-    let in_flight = in_flight.max(1);
-    let start = Instant::now();
-    let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), views.len());
-    let mut cams = cameras(h, &mut pool, config)?;
-    let (camera_bytes, morph_bytes) = state_bytes(cams.first());
-    let mut outs: Vec<Vec<IndexBuffers>> = views
-        .iter()
-        .map(|_| index_lists(h, config, if emit { in_flight } else { 0 }))
-        .collect();
-    let frames = views.first().map_or(0, Vec::len).div_ceil(stride);
-    let records = if threads {
-        let gate = FrameGate::new(views.len(), in_flight);
-        let (cores, core_of) = placement(pin_by);
-        let (cores, core_of) = (&cores, &core_of);
-        std::thread::scope(|scope| {
-            let handles: Vec<_> = cams
-                .into_iter()
-                .zip(outs.iter_mut())
-                .zip(views)
-                .enumerate()
-                .map(|(c, ((mut cam, out), cam_views))| {
-                    let gate = &gate;
-                    // The camera state moves to its thread (`Send`); every thread reads the
-                    // one hierarchy (`Sync`). Frames stay within the frames in flight of
-                    // each other, as a renderer's would.
-                    scope.spawn(move || -> Result<Record, String> {
-                        pin(cores, core_of, c);
-                        let mut rec = Record::with_capacity(frames);
-                        let mut failed = Ok(());
-                        for (n, view) in cam_views.iter().step_by(stride).enumerate() {
-                            gate.enter(n);
-                            if failed.is_ok() {
-                                failed = frame(
-                                    h,
-                                    &mut cam,
-                                    view,
-                                    params,
-                                    out.get_mut(n % in_flight),
-                                    &mut rec,
-                                    compact_now(n, compaction),
-                                );
-                            }
-                            gate.leave(c);
-                        }
-                        failed.map(|()| rec)
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|t| t.join().map_err(|_| "camera thread panicked".to_string())?)
-                .collect::<Result<Vec<_>, _>>()
-        })?
-    } else {
-        let mut records: Vec<Record> = views
-            .iter()
-            .map(|_| Record::with_capacity(frames))
-            .collect();
-        for (n, f) in (0..views.first().map_or(0, Vec::len))
-            .step_by(stride)
-            .enumerate()
-        {
-            for c in camera_order(n, cams.len()) {
-                frame(
-                    h,
-                    &mut cams[c],
-                    &views[c][f],
-                    params,
-                    outs[c].get_mut(n % in_flight),
-                    &mut records[c],
-                    compact_now(n, compaction),
-                )?;
-            }
-        }
-        records
-    };
-    Ok(Flight {
-        records,
-        camera_bytes,
-        morph_bytes,
-        wall: start.elapsed(),
-        segment_walls: Vec::new(),
-    })
-}
-
-/// The paper's baseline: one state of capacity `config`, re-refined to each camera's view in
-/// turn every frame; it compacts as `compaction` says too (before the first camera's
-/// turn).
-pub fn fly_shared(
-    h: &Hierarchy<'_>,
-    views: &[Vec<View>],
-    params: &RefineParams,
-    config: &CameraConfig,
-    compaction: Compaction,
-) -> Result<Flight, String> {
-    let start = Instant::now();
-    let mut pool = CameraPool::new(CameraState::words_needed_for(h, config), 1);
-    let memory = pool.memories().next().ok_or("no camera memory")?;
-    let mut cam = CameraState::with_config(h, memory, config).map_err(|e| e.to_string())?;
-    let mut out = IndexBuffers::new(h, cam.max_pairs());
-    let frames = views.first().map_or(0, Vec::len);
-    let mut records: Vec<Record> = views
-        .iter()
-        .map(|_| Record::with_capacity(frames))
-        .collect();
-    for f in 0..frames {
-        for c in 0..views.len() {
-            frame(
-                h,
-                &mut cam,
-                &views[c][f],
-                params,
-                Some(&mut out),
-                &mut records[c],
-                if c == 0 {
-                    compact_now(f, compaction)
-                } else {
-                    CompactNow::NONE
-                },
-            )?;
-        }
-    }
-    Ok(Flight {
-        records,
-        camera_bytes: cam.bytes() - cam.morph_bytes(),
-        morph_bytes: cam.morph_bytes(),
-        wall: start.elapsed(),
-        segment_walls: Vec::new(),
-    })
-}
-
-/// One of the flights [`fly_interleaved`] flies: its cameras' views, their capacity, and
-/// whether each camera has a thread.
-pub struct Group<'v> {
-    /// Per camera, its views.
-    pub views: &'v [Vec<View>],
-    /// The capacity of every camera of the group.
-    pub config: CameraConfig,
-    /// A thread per camera (frames within the frames in flight, as in [`fly_per_camera`]).
-    pub threads: bool,
-    /// Frames in flight: index lists per camera, and how far apart camera threads may run
-    /// (0 counts as 1).
-    pub in_flight: usize,
-    /// Refinement knobs.
-    pub params: RefineParams,
-    /// How each state compacts.
-    pub compaction: Compaction,
-    /// With threads, pin each camera's thread to a core, the cameras shared out by their
-    /// cost over the previous segment (see `placement`), or in the first segment by these
-    /// costs (from a sizing flight; equal costs without).
-    pub pin: bool,
-    /// Each camera's cost before the flight, for pinning its first segment.
-    pub first_costs: Option<&'v [f64]>,
-}
-
-/// Camera states, index lists and records of one group.
-struct Flying<'m> {
-    cams: Vec<CameraState<'m>>,
-    /// Per camera, its index lists (one per frame in flight).
-    outs: Vec<Vec<IndexBuffers>>,
-    records: Vec<Record>,
-    walls: Vec<Duration>,
-}
-
-/// Frames `frames` of one group: each camera refines, emits and records its frame; with
-/// threads, a thread per camera, frames within the group's frames in flight.
-fn fly_segment(
-    h: &Hierarchy<'_>,
-    g: &mut Flying<'_>,
-    group: &Group<'_>,
-    frames: std::ops::Range<usize>,
-) -> Result<(), String> {
-    let (views, params, compaction) = (group.views, &group.params, group.compaction);
-    let in_flight = group.in_flight.max(1);
-    if !group.threads {
-        for f in frames {
-            for c in camera_order(f, g.cams.len()) {
-                frame(
-                    h,
-                    &mut g.cams[c],
-                    &views[c][f],
-                    params,
-                    g.outs[c].get_mut(f % in_flight),
-                    &mut g.records[c],
-                    compact_now(f, compaction),
-                )?;
-            }
-        }
-        return Ok(());
-    }
-    let gate = FrameGate::new(g.cams.len(), in_flight);
-    let costs = group.pin.then(|| match group.first_costs {
-        Some(first) if frames.start == 0 => first.to_vec(),
-        _ => recent_costs(&g.records, frames.start),
-    });
-    let (cores, core_of) = placement(costs.as_deref());
-    let (cores, core_of) = (&cores, &core_of);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = g
-            .cams
-            .iter_mut()
-            .zip(g.outs.iter_mut())
-            .zip(g.records.iter_mut())
-            .zip(views)
-            .enumerate()
-            .map(|(c, (((cam, out), rec), cam_views))| {
-                let (gate, frames) = (&gate, frames.clone());
-                scope.spawn(move || -> Result<(), String> {
-                    pin(cores, core_of, c);
-                    let mut failed = Ok(());
-                    for (n, f) in frames.enumerate() {
-                        gate.enter(n);
-                        if failed.is_ok() {
-                            failed = frame(
-                                h,
-                                cam,
-                                &cam_views[f],
-                                params,
-                                out.get_mut(f % in_flight),
-                                rec,
-                                compact_now(f, compaction),
-                            );
-                        }
-                        gate.leave(c);
-                    }
-                    failed
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .try_for_each(|t| t.join().map_err(|_| "camera thread panicked".to_string())?)
-    })
-}
-
 /// The cores to pin camera threads to and each camera's core, balanced by `costs` (none
 /// without costs, or with fewer than two cores).
 fn placement(costs: Option<&[f64]>) -> (Option<Cores>, Vec<usize>) {
@@ -618,99 +375,6 @@ fn pin(cores: &Option<Cores>, core_of: &[usize], c: usize) {
         // A refusal leaves the thread where the system puts it; the flight is still valid.
         let _ = cores.pin(k);
     }
-}
-
-/// Each camera's refinement and emission time over its last `SEGMENT_COST_FRAMES` frames
-/// before frame `before` (equal costs before any frame was flown).
-fn recent_costs(records: &[Record], before: usize) -> Vec<f64> {
-    records
-        .iter()
-        .map(|r| {
-            let end = before.min(r.refine_ns.len()).min(r.emit_ns.len());
-            let start = end.saturating_sub(SEGMENT_COST_FRAMES);
-            (start..end)
-                .map(|i| (r.refine_ns[i] + r.emit_ns[i]) as f64)
-                .sum::<f64>()
-                .max(1.0)
-        })
-        .collect()
-}
-
-/// Frames of each camera's recent past that its cost is measured over, for pinning.
-const SEGMENT_COST_FRAMES: usize = 30;
-
-/// Flies several groups of cameras over the same frames, interleaved: every group flies
-/// frames `0..segment`, then every group `segment..2 * segment`, and so on, each group with
-/// its own states and index lists, refining and emitting every frame.
-///
-/// Flights measured one after the other on a shared machine are compared across whatever
-/// else ran meanwhile, which can move a ratio of two flights more than the effect measured.
-/// Interleaved, the flights compared see the same load within a segment (a second or less).
-/// A group's cameras still run only their own frames in a row within a segment, so a camera
-/// flown alone keeps its caches to itself as it would alone; only the first frame of a
-/// segment starts after the other groups, and the per-frame figures are middle values, which
-/// one such frame in a segment barely moves.
-pub fn fly_interleaved(
-    h: &Hierarchy<'_>,
-    groups: &[Group<'_>],
-    segment: usize,
-) -> Result<Vec<Flight>, String> {
-    let segment = segment.max(1);
-    // Every group's cameras in one pool, so that all of them, the cameras flown alone too,
-    // get the same kind of pages.
-    let words = groups
-        .iter()
-        .map(|g| CameraState::words_needed_for(h, &g.config))
-        .max()
-        .unwrap_or(0);
-    let mut pool = CameraPool::new(words, groups.iter().map(|g| g.views.len()).sum());
-    let mut memories = pool.memories();
-    let mut flying = Vec::with_capacity(groups.len());
-    for g in groups {
-        let frames = g.views.first().map_or(0, Vec::len);
-        let mut cams = Vec::with_capacity(g.views.len());
-        for _ in g.views {
-            let m = memories.next().ok_or("the camera pool is short")?;
-            cams.push(CameraState::with_config(h, m, &g.config).map_err(|e| e.to_string())?);
-        }
-        flying.push(Flying {
-            cams,
-            outs: g
-                .views
-                .iter()
-                .map(|_| index_lists(h, &g.config, g.in_flight.max(1)))
-                .collect(),
-            records: g
-                .views
-                .iter()
-                .map(|_| Record::with_capacity(frames))
-                .collect(),
-            walls: Vec::new(),
-        });
-    }
-    let frames = groups
-        .iter()
-        .map(|g| g.views.first().map_or(0, Vec::len))
-        .min()
-        .unwrap_or(0);
-    for start in (0..frames).step_by(segment) {
-        let end = (start + segment).min(frames);
-        for (g, fl) in groups.iter().zip(flying.iter_mut()) {
-            let t = Instant::now();
-            fly_segment(h, fl, g, start..end)?;
-            fl.walls.push(t.elapsed());
-        }
-    }
-    Ok(flying
-        .into_iter()
-        .map(|fl| Flight {
-            camera_bytes: state_bytes(fl.cams.first()).0,
-            morph_bytes: state_bytes(fl.cams.first()).1,
-            records: fl.records,
-            wall: fl.walls.iter().sum(),
-            segment_walls: fl.walls,
-        })
-        .collect())
 }
 
 /// Summary over all cameras of one flight.

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use super::refine::Criterion;
+use super::criterion::Criterion;
 use super::{CameraState, FREE};
 use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;

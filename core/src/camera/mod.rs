@@ -4,6 +4,8 @@
 mod certificate;
 mod compact;
 mod compact_step;
+mod config;
+mod criterion;
 mod emit;
 mod index_cache;
 mod lag;
@@ -13,9 +15,11 @@ mod morph_map;
 mod morph_pool;
 mod ops;
 mod pair_map;
+mod queries;
 mod refine;
 
 pub use compact_step::CompactProgress;
+pub use config::{CameraConfig, CameraError};
 pub use emit::EmitError;
 pub use lag::FrontLag;
 pub use morph::MorphVertex;
@@ -25,7 +29,7 @@ pub use refine::{RefineParams, RefineStats};
 use bytemuck::{Pod, Zeroable};
 
 use crate::hierarchy::Hierarchy;
-use crate::ids::{NodeId, PolyId, PolyKey};
+use crate::ids::NodeId;
 use certificate::{Odometer, UNKNOWN};
 pub(crate) use layout::{Layout, Scalars};
 use morph_pool::Morphs;
@@ -106,135 +110,6 @@ impl ActiveVertex {
         }
     }
 }
-
-/// How much a camera can hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CameraConfig {
-    /// Most splits that may be applied at once. Each adds one active node and one or two
-    /// active polygons; the full hierarchy needs `split_count`.
-    pub max_pairs: u32,
-    /// Entries of the forced-split stack.
-    pub stack_len: u32,
-    /// Keep each active polygon's vertex indices between frames, so emission copies them
-    /// instead of looking every polygon up in the hierarchy (16 bytes per polygon slot; see
-    /// the [`CameraState`] docs). On in [`full`](Self::full) and
-    /// [`with_polygon_budget`](Self::with_polygon_budget).
-    pub index_cache: bool,
-    /// Keep only the split nodes in the map from split to pair, hashed, where that is smaller
-    /// than an array over every splittable node (a budget of fewer than about a sixth of the
-    /// hierarchy's splits; see `pair_map`). Off in [`full`](Self::full) and
-    /// [`with_polygon_budget`](Self::with_polygon_budget): it saves memory on a budgeted camera
-    /// but makes refinement slower, because the array keeps the entries of nearby nodes
-    /// together and the table scatters them.
-    pub hashed_pair_map: bool,
-    /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the [`CameraState`]
-    /// docs): each moves a split's floating child, one or two vertices, between its parent's
-    /// position and its own over [`RefineParams::refine_morph_s`] or
-    /// [`coarsen_morph_s`](RefineParams::coarsen_morph_s). 72 bytes per morph, and a bit per
-    /// vertex of the hierarchy and per pair; 0 in
-    /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
-    /// camera without morphs splits and collapses at once.
-    pub max_morphs: u32,
-}
-
-impl CameraConfig {
-    /// Room for every split of `h`: the camera can reach full resolution anywhere.
-    pub fn full(h: &Hierarchy<'_>) -> Self {
-        Self {
-            max_pairs: h.splits().len() as u32,
-            stack_len: Self::default_stack(h),
-            index_cache: true,
-            hashed_pair_map: false,
-            max_morphs: 0,
-        }
-    }
-
-    /// Room for at most `max_active_polygons` active polygons (at least the base mesh).
-    pub fn with_polygon_budget(h: &Hierarchy<'_>, max_active_polygons: u32) -> Self {
-        // Each split adds at most two polygons.
-        let extra = max_active_polygons.saturating_sub(h.base_polygon_count() as u32) / 2;
-        Self {
-            max_pairs: extra.min(h.splits().len() as u32),
-            stack_len: Self::default_stack(h),
-            index_cache: true,
-            hashed_pair_map: false,
-            max_morphs: 0,
-        }
-    }
-
-    /// This configuration with room for `max_morphs` geomorphs at once: enough for the
-    /// splits and collapses of visible nodes the camera makes within one morph's duration.
-    /// When the room is taken, a split happens at once ([`RefineStats::morphs_dropped`]).
-    pub fn with_morphs(self, max_morphs: u32) -> Self {
-        Self { max_morphs, ..self }
-    }
-
-    /// A forced split pushes at most a few nodes per level; 32 per level of depth (and at
-    /// least 256) has never been exceeded in our tests. Overflow is reported, not fatal.
-    pub fn default_stack(h: &Hierarchy<'_>) -> u32 {
-        (h.meta().max_depth + 1).saturating_mul(32).max(256)
-    }
-}
-
-/// Why a camera could not be created.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CameraError {
-    /// The memory given is too small.
-    Capacity {
-        /// Words needed.
-        needed: usize,
-        /// Words given.
-        given: usize,
-    },
-    /// The configuration asks for more splits than the hierarchy has.
-    TooManyPairs {
-        /// Asked for.
-        max_pairs: u32,
-        /// Splits in the hierarchy.
-        split_count: u32,
-    },
-    /// The configuration asks for more morphs than indices can name: morphed emission
-    /// writes `vertex_count + slot`, two slots per morph, which must stay below `u32::MAX`.
-    TooManyMorphs {
-        /// Asked for.
-        max_morphs: u32,
-        /// Vertices of the hierarchy.
-        vertex_count: u32,
-    },
-}
-
-impl core::fmt::Display for CameraError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Capacity { needed, given } => {
-                write!(
-                    f,
-                    "camera memory too small: {needed} words needed, {given} given"
-                )
-            }
-            Self::TooManyPairs {
-                max_pairs,
-                split_count,
-            } => {
-                write!(
-                    f,
-                    "max_pairs {max_pairs} exceeds the hierarchy's {split_count} splits"
-                )
-            }
-            Self::TooManyMorphs {
-                max_morphs,
-                vertex_count,
-            } => write!(
-                f,
-                "max_morphs {max_morphs}: two slots per morph after {vertex_count} vertices \
-                 exceed 32-bit indices"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for CameraError {}
-
 /// The active front of one camera over a shared hierarchy, in caller-owned memory.
 ///
 /// One [`CameraState`] is the paper's "camera refinement" structure: the active front of one
@@ -464,185 +339,5 @@ impl<'m> CameraState<'m> {
         f.compaction = compact_step::Progress::IDLE;
         f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);
-    }
-
-    /// `true` if this camera was made for `h`.
-    pub fn is_for(&self, h: &Hierarchy<'_>) -> bool {
-        self.front.hierarchy == h.checksum()
-    }
-
-    /// Number of active nodes.
-    pub fn active_node_count(&self) -> u32 {
-        self.front.active_nodes
-    }
-
-    /// Number of active polygons.
-    pub fn active_polygon_count(&self) -> u32 {
-        self.front.active_polygons
-    }
-
-    /// Number of splits currently applied.
-    pub fn split_count(&self) -> u32 {
-        self.front.pairs
-    }
-
-    /// Most splits this camera can hold at once.
-    pub fn max_pairs(&self) -> u32 {
-        self.front.owner.len() as u32
-    }
-
-    /// Active polygons per surface: index list `s` needs `3 * surface_polygons()[s]` indices.
-    pub fn surface_polygons(&self) -> &[u32] {
-        self.front.surface_polygons
-    }
-
-    /// Bytes this camera occupies: its words plus the struct itself.
-    pub fn bytes(&self) -> usize {
-        let f = &self.front;
-        f.pair_of.bytes()
-            + 4 * (f.owner.len() + f.surface_polygons.len() + f.refused.len() + self.stack.len())
-            + core::mem::size_of_val(&*f.active)
-            + core::mem::size_of_val(&*f.slots)
-            + core::mem::size_of_val(&*f.triangles)
-            + core::mem::size_of_val(&*f.morphs.vertices)
-            + core::mem::size_of_val(&*f.morphs.states)
-            + f.morphs.map.bytes()
-            + core::mem::size_of_val(&*f.morphs.coarsening)
-            + core::mem::size_of_val(&*f.morphs.free)
-            + core::mem::size_of::<Self>()
-    }
-
-    /// Bytes of this camera's morph memory (part of [`bytes`](Self::bytes)): 0 without
-    /// morphs ([`CameraConfig::max_morphs`]).
-    pub fn morph_bytes(&self) -> usize {
-        let m = &self.front.morphs;
-        core::mem::size_of_val(&*m.vertices)
-            + core::mem::size_of_val(&*m.states)
-            + m.map.bytes()
-            + core::mem::size_of_val(&*m.coarsening)
-            + core::mem::size_of_val(&*m.free)
-    }
-
-    /// `true` if `node` is on this camera's active front (O(1)).
-    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
-        self.front.is_node_active(h, node)
-    }
-
-    /// `true` if `node`'s split is applied in this camera (O(1)).
-    pub fn is_split(&self, node: NodeId) -> bool {
-        self.front.is_split(node)
-    }
-
-    /// `true` if `poly` is active in this camera (O(1)).
-    pub fn is_polygon_active(&self, h: &Hierarchy<'_>, poly: PolyId) -> bool {
-        self.front.slot_of(h, poly).is_some()
-    }
-
-    /// The active nodes, in active-list order.
-    pub fn active_nodes(&self) -> impl Iterator<Item = NodeId> + '_ {
-        self.front.active[..self.front.active_len as usize]
-            .iter()
-            .filter(|a| a.node & FREE == 0)
-            .map(|a| NodeId(a.node))
-    }
-
-    /// The active polygons, in slot (emission) order.
-    pub fn active_polygons<'s>(
-        &'s self,
-        h: &'s Hierarchy<'_>,
-    ) -> impl Iterator<Item = PolyId> + 's {
-        let f = &self.front;
-        (0..f.base + 2 * f.pairs).filter_map(move |s| f.poly_at(h, s))
-    }
-
-    /// The current corners of an active polygon, in the polygon's order; `None` if inactive.
-    pub fn polygon_corners(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[NodeId; 3]> {
-        let f = &self.front;
-        let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
-        let mut out = [NodeId::NONE; 3];
-        for k in 0..3 {
-            out[k] = f.node_of(s.corners[k])?;
-        }
-        Some(out)
-    }
-
-    /// The current neighbours of an active polygon (`neighbours[j]` across the edge opposite
-    /// corner `j`, `NONE` on a border); `None` if inactive.
-    pub fn polygon_neighbours(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[PolyId; 3]> {
-        let f = &self.front;
-        let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
-        let mut out = [PolyId::NONE; 3];
-        for k in 0..3 {
-            if s.neighbours[k] != NONE {
-                out[k] = f.poly_at(h, s.neighbours[k])?;
-            }
-        }
-        Some(out)
-    }
-}
-
-impl Front<'_> {
-    #[inline]
-    pub fn is_split(&self, node: NodeId) -> bool {
-        self.pair_of.get(node.index()).is_some_and(|p| p != NONE)
-    }
-
-    #[inline]
-    pub fn is_created(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
-        match h.node(node) {
-            Some(n) => n.parent.is_none() || self.is_split(n.parent),
-            None => false,
-        }
-    }
-
-    #[inline]
-    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
-        self.is_created(h, node) && !self.is_split(node)
-    }
-
-    /// The slot of an active polygon: base polygons sit in the first slots, others in their
-    /// creator's pair (two reads: the polygon's creator and the camera's `pair_of`).
-    #[inline]
-    pub fn slot_of(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<u32> {
-        self.slot_of_key(h.key_of(poly)?)
-    }
-
-    /// The slot of an active polygon named by its [`PolyKey`]: a base polygon's key is its
-    /// slot; any other's says its creator and side, so one read of the camera's `pair_of`
-    /// answers.
-    #[inline]
-    pub fn slot_of_key(&self, key: PolyKey) -> Option<u32> {
-        let Some((node, right)) = key.creator(self.base) else {
-            // A base polygon's key is its slot (`NONE` is no base polygon's).
-            return (key.0 < self.base).then_some(key.0);
-        };
-        let pair = self.pair_of.get(node.index())?;
-        if pair == NONE {
-            return None;
-        }
-        Some(self.base + 2 * pair + right as u32)
-    }
-
-    /// The polygon in a slot, if the slot is live.
-    #[inline]
-    pub fn poly_at(&self, h: &Hierarchy<'_>, slot: u32) -> Option<PolyId> {
-        if slot < self.base {
-            return Some(PolyId(slot));
-        }
-        let rel = slot - self.base;
-        let (pair, side) = (rel / 2, rel % 2);
-        if pair >= self.pairs {
-            return None;
-        }
-        let s = h.split(*self.owner.get(pair as usize)?)?;
-        let p = if side == 0 { s.f_l } else { s.f_r };
-        p.get()
-    }
-
-    /// The node an active-vertex record holds.
-    #[inline]
-    pub fn node_of(&self, record: u32) -> Option<NodeId> {
-        let a = self.active.get(record as usize)?.node;
-        (a & FREE == 0).then_some(NodeId(a))
     }
 }

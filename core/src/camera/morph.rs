@@ -54,9 +54,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::criterion::Criterion;
 use super::morph_map::MorphMap;
 use super::morph_pool::{MorphState, Morphs, COARSENING, REFINING, VERTICES_PER_MORPH};
-use super::refine::{Criterion, RefineParams, RefineStats};
+use super::refine::{RefineParams, RefineStats};
 use super::{CameraState, Front, OpError, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;

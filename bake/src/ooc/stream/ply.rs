@@ -6,12 +6,16 @@ use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
 use std::os::unix::fs::FileExt;
 use std::path::PathBuf;
 
-use super::ply_format::{slot, with_bytes, Element, Field, Format, ItemReader, Property, Scalar};
+use super::ply_format::{with_bytes, Field, Format, ItemReader, Property, Scalar};
 use super::{BlockCache, RecordSource, SoupSink, StreamReport};
 use crate::mesh::{Surface, Texture};
-use crate::ooc::soup::{encode_normal, Corner, Cube, HAS_COLOR, HAS_NORMAL, HAS_UV};
+use crate::ooc::soup::{encode_normal, Corner, Cube};
 use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
+
+mod header;
+
+use header::{Header, Layout};
 
 /// A PLY file whose vertices are in a temporary file: the faces can be read any number of
 /// times, from their offset in the file.
@@ -135,185 +139,6 @@ fn bad(name: &str, at: &str, message: String) -> OocError {
         file: name.to_string(),
         at: at.to_string(),
         message,
-    }
-}
-
-/// The header: the format, the elements and a texture named in a comment.
-struct Header {
-    format: Format,
-    elements: Vec<Element>,
-    texture: Option<String>,
-}
-
-impl Header {
-    /// Reads the header, up to and with its `end_header` line.
-    fn read(r: &mut BufReader<File>, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
-        let mut line = Vec::new();
-        let mut lines = 0;
-        let mut format = None;
-        let mut elements: Vec<Element> = Vec::new();
-        let mut texture = None;
-        loop {
-            line.clear();
-            let n = r
-                .read_until(b'\n', &mut line)
-                .map_err(|e| OocError::io(name, "cannot read", e))?;
-            lines += 1;
-            if n == 0 {
-                return Err(bad("header", "the file ends before 'end_header'".into()));
-            }
-            let text = String::from_utf8_lossy(&line);
-            let words: Vec<&str> = text.split_ascii_whitespace().collect();
-            let at = || format!("header line {lines}");
-            match words.as_slice() {
-                ["ply"] if lines == 1 => {}
-                _ if lines == 1 => {
-                    return Err(bad(
-                        "header",
-                        "not a PLY file (no 'ply' magic line); expected the first line 'ply'"
-                            .into(),
-                    ))
-                }
-                ["format", f, _] => {
-                    format = Some(match *f {
-                        "ascii" => Format::Ascii,
-                        "binary_little_endian" => Format::Binary { big: false },
-                        "binary_big_endian" => Format::Binary { big: true },
-                        _ => return Err(bad(&at(), format!("unknown format '{f}'"))),
-                    })
-                }
-                ["comment", "TextureFile", t, ..] => texture = Some(t.to_string()),
-                ["comment", ..] | ["obj_info", ..] | [] => {}
-                ["element", n, c] => elements.push(Element {
-                    name: n.to_string(),
-                    count: c
-                        .parse()
-                        .map_err(|_| bad(&at(), format!("bad element count '{c}'")))?,
-                    properties: Vec::new(),
-                }),
-                ["property", "list", ct, ty, n] => {
-                    let el = elements
-                        .last_mut()
-                        .ok_or_else(|| bad(&at(), "property before any element".into()))?;
-                    let (Some(ct), Some(ty)) = (Scalar::parse(ct), Scalar::parse(ty)) else {
-                        return Err(bad(&at(), format!("unknown type in '{}'", text.trim())));
-                    };
-                    el.properties.push(Property {
-                        name: n.to_string(),
-                        list: Some(ct),
-                        ty,
-                    });
-                }
-                ["property", ty, n] => {
-                    let el = elements
-                        .last_mut()
-                        .ok_or_else(|| bad(&at(), "property before any element".into()))?;
-                    let ty = Scalar::parse(ty)
-                        .ok_or_else(|| bad(&at(), format!("unknown type '{ty}'")))?;
-                    el.properties.push(Property {
-                        name: n.to_string(),
-                        list: None,
-                        ty,
-                    });
-                }
-                ["end_header"] => break,
-                _ => return Err(bad(&at(), format!("cannot read '{}'", text.trim()))),
-            }
-        }
-        let format = format.ok_or_else(|| bad("header", "no 'format' line".into()))?;
-        Ok(Self {
-            format,
-            elements,
-            texture,
-        })
-    }
-}
-
-/// Where the header puts what the reader needs.
-struct Layout {
-    /// The vertex element.
-    vi: usize,
-    /// The face element (after the vertex element).
-    fi: usize,
-    /// The vertex slot of each vertex property (`None` for lists and unknown names).
-    vslots: Vec<Option<usize>>,
-    /// What the triangles carry: `HAS_NORMAL`, `HAS_UV`, `HAS_COLOR`.
-    flags: u16,
-    /// What each vertex property's colour values are divided by.
-    color_scale: Vec<f64>,
-    /// The face property with the vertex indices.
-    face_list: usize,
-}
-
-impl Layout {
-    fn of(header: &Header, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
-        let elements = &header.elements;
-        let vi = elements
-            .iter()
-            .position(|e| e.name == "vertex")
-            .ok_or_else(|| bad("header", "no vertex element".into()))?;
-        let fi = elements
-            .iter()
-            .position(|e| e.name == "face")
-            .ok_or_else(|| bad("header", "no face element".into()))?;
-        if fi < vi {
-            return Err(OocError::Unsupported {
-                file: name.to_string(),
-                message: "faces before vertices cannot be streamed".into(),
-            });
-        }
-        let vslots: Vec<Option<usize>> = elements[vi]
-            .properties
-            .iter()
-            .map(|p| {
-                if p.list.is_some() {
-                    None
-                } else {
-                    slot(&p.name)
-                }
-            })
-            .collect();
-        let has = |s: usize| vslots.contains(&Some(s));
-        if !(has(0) && has(1) && has(2)) {
-            return Err(bad("header", "the vertex element lacks x, y or z".into()));
-        }
-        let mut flags = 0;
-        if has(3) && has(4) && has(5) {
-            flags |= HAS_NORMAL;
-        }
-        if has(6) && has(7) {
-            flags |= HAS_UV;
-        }
-        if has(8) && has(9) && has(10) {
-            flags |= HAS_COLOR;
-        }
-        let color_scale: Vec<f64> = elements[vi]
-            .properties
-            .iter()
-            .map(|p| p.ty.color_scale())
-            .collect();
-        let face_list = elements[fi]
-            .properties
-            .iter()
-            .position(|p| {
-                p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index")
-            })
-            .ok_or_else(|| {
-                bad(
-                    "header",
-                    "the face element has no vertex_indices list".into(),
-                )
-            })?;
-        Ok(Self {
-            vi,
-            fi,
-            vslots,
-            flags,
-            color_scale,
-            face_list,
-        })
     }
 }
 

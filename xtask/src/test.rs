@@ -1,0 +1,194 @@
+//! `cargo xtask test`: its steps in order, each timed, and the interactive viewer's check
+//! under Xvfb.
+
+use std::env;
+use std::time::{Duration, Instant};
+
+use crate::setup::{install_miri, miri_installed, setup};
+use crate::{capi, check_shaders, cmd, run, NIGHTLY, NO_STD_TARGET};
+
+/// The mesh the viewer check opens (baked on the fly; its material names its texture) and
+/// the image it writes.
+const VIEWER_INPUT: &str = "data/spot/spot_triangulated.obj";
+const VIEWER_SCREENSHOT: &str = "caveclod-viewer-check.png";
+
+/// Features for the miri run. libm (through glam) computes `sqrtf` with inline `sqrtss` on
+/// x86, which miri cannot interpret; its `force-soft-floats` feature selects the portable
+/// implementation. Only the miri build uses it.
+const MIRI_FEATURES: &str = "libm/force-soft-floats";
+
+type Step = Box<dyn Fn() -> Result<(), String>>;
+
+/// The steps of `cargo xtask test`, in order.
+fn test_steps() -> Vec<(String, Step)> {
+    let step = |title: &str, args: &'static [&'static str]| -> (String, Step) {
+        (title.to_string(), Box::new(move || run(cmd("cargo", args))))
+    };
+    vec![
+        ("setup".to_string(), Box::new(|| setup(false))),
+        (
+            "check-shaders (manifest hash, spirv-val)".to_string(),
+            Box::new(check_shaders),
+        ),
+        step(
+            "cargo fmt --all -- --check",
+            &["fmt", "--all", "--", "--check"],
+        ),
+        step(
+            "cargo clippy --workspace --all-targets -- -D warnings",
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        // The debug profile: the whole suite runs in well under a minute in debug, while a
+        // release build of the workspace and its dev-dependencies takes longer to compile
+        // than the tests take to run. `--no-fail-fast` reports every failing test binary.
+        step(
+            "cargo test --workspace",
+            &["test", "--workspace", "--no-fail-fast"],
+        ),
+        // Thousands of imports of megabyte inputs need an optimised build (the sweep is
+        // ignored in debug builds).
+        step(
+            "reader sweep: truncations and byte flips of ../shared/data through the in-memory bake (release)",
+            &[
+                "test",
+                "--release",
+                "-p",
+                "caveclod-bake",
+                "--test",
+                "reader_sweep",
+            ],
+        ),
+        (
+            "C interface: refine.c and arena.c (C99), the C++17 test (sanitizers), against the Rust API"
+                .to_string(),
+            Box::new(capi::check),
+        ),
+        step(
+            "cargo build -p caveclod-core --target thumbv7em-none-eabihf",
+            &["build", "-p", "caveclod-core", "--target", NO_STD_TARGET],
+        ),
+        (
+            "viewer under Xvfb (4 cameras, 300 frames, resize storm, screenshot coverage, no validation messages)"
+                .to_string(),
+            Box::new(viewer_check),
+        ),
+        // Without its default `prefetch` feature the core crate forbids `unsafe`.
+        step(
+            "cargo clippy -p caveclod-core --no-default-features -- -D warnings",
+            &[
+                "clippy",
+                "-p",
+                "caveclod-core",
+                "--no-default-features",
+                "--",
+                "-D",
+                "warnings",
+            ],
+        ),
+        (
+            format!("cargo +{NIGHTLY} miri test -p caveclod-core"),
+            Box::new(|| {
+                if !miri_installed() {
+                    install_miri()?;
+                }
+                let nightly = format!("+{NIGHTLY}");
+                run(cmd(
+                    "cargo",
+                    &[
+                        &nightly,
+                        "miri",
+                        "test",
+                        "-p",
+                        "caveclod-core",
+                        "--no-fail-fast",
+                        "--features",
+                        MIRI_FEATURES,
+                    ],
+                ))
+            }),
+        ),
+    ]
+}
+
+/// Runs every step (a failure does not stop the others), timing each; `Err` if any failed.
+pub(crate) fn test() -> Result<(), String> {
+    let total = Instant::now();
+    let mut results: Vec<(String, Duration, bool)> = Vec::new();
+    for (title, step) in test_steps() {
+        println!("\n==> {title}");
+        let start = Instant::now();
+        let outcome = step();
+        let took = start.elapsed();
+        match &outcome {
+            Ok(()) => println!("<== ok in {}", secs(took)),
+            Err(e) => println!("<== FAILED in {}: {e}", secs(took)),
+        }
+        results.push((title, took, outcome.is_ok()));
+    }
+    println!("\nsteps:");
+    for (title, took, ok) in &results {
+        let mark = if *ok { "ok    " } else { "FAILED" };
+        println!("  {mark} {:>8}  {title}", secs(*took));
+    }
+    println!("  total  {:>8}", secs(total.elapsed()));
+    let passed = results.iter().filter(|r| r.2).count();
+    let failed = results.len() - passed;
+    println!("{passed} passed, {failed} failed");
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(format!("{failed} step(s) failed"))
+    }
+}
+
+fn secs(d: Duration) -> String {
+    format!("{:.1}s", d.as_secs_f64())
+}
+
+/// Runs the interactive viewer in a virtual X server on lavapipe: 4 cameras, 300 animated
+/// frames, validation on, and a resize storm (the window resizes itself every 12 frames,
+/// back to its size before the end). The viewer itself writes the last frame, checks that
+/// every camera's viewport is at least 10% non-background outside its panel and that every
+/// size asked for got a swapchain, and exits non-zero on a validation message (this tool
+/// stays std-only, so it cannot decode the PNG).
+fn viewer_check() -> Result<(), String> {
+    let shot = env::temp_dir().join(VIEWER_SCREENSHOT);
+    let shot = shot.to_string_lossy();
+    run(cmd(
+        "xvfb-run",
+        &[
+            "-a",
+            "-s",
+            "-screen 0 1280x720x24",
+            "cargo",
+            "run",
+            "--quiet",
+            "-p",
+            "caveclod-examples",
+            "--example",
+            "viewer",
+            "--",
+            VIEWER_INPUT,
+            "--cameras",
+            "4",
+            "--frames",
+            "300",
+            "--validation",
+            "--screenshot",
+            &shot,
+            "--min-coverage",
+            "0.1",
+            "--resize-every",
+            "12",
+        ],
+    ))?;
+    println!("viewer screenshot: {shot}");
+    Ok(())
+}
