@@ -41,6 +41,9 @@ use repair::FacesOf;
 /// No triangle.
 const NONE: u32 = u32::MAX;
 
+/// The most triangles a mesh may have: every corner (`3 f + k`) has a 32-bit id.
+pub const MAX_TRIANGLES: usize = (NONE as usize - 1) / 3;
+
 /// Directed edge `a → b` as a map key.
 #[inline]
 fn ek(a: u32, b: u32) -> u64 {
@@ -169,8 +172,9 @@ pub enum WeldError {
     /// More surface-group ids than the format's 16 bits.
     #[error("{0} surface-group ids needed, at most 65535 supported")]
     TooManyGroups(u32),
-    /// More triangles or points than the format's 32-bit ids number.
-    #[error("{triangles} triangles and {points} points: at most {} of each supported", u32::MAX - 1)]
+    /// More triangles or points than 32-bit ids number: the format's ids, and the weld's
+    /// corner ids (three per triangle).
+    #[error("{triangles} triangles and {points} points: at most {MAX_TRIANGLES} triangles and {} points supported", NONE - 1)]
     TooLarge {
         /// Triangles of the mesh.
         triangles: usize,
@@ -195,7 +199,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
     }
     let (triangles, points) = (mesh.triangles.len(), mesh.positions.len());
-    if triangles >= NONE as usize || points >= NONE as usize {
+    if triangles > MAX_TRIANGLES || points >= NONE as usize {
         return Err(WeldError::TooLarge { triangles, points });
     }
     let mut repairs = Repairs::default();
