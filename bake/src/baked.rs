@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use caveclod_core::format::materials::vertex_colour_section;
 use caveclod_core::format::{
-    serialized_len, validate_parts, write_into, BaseFace, ExtraSection, HierarchyParts, Node,
+    serialized_len, validate_parts, write_into, BaseFace, ExtraSection, HierarchyParts, Meta, Node,
     Polygon, Position, SectionSpec, Split, SplitBounds, Tag, Vertex, VertexKey, WriteError,
     KNOWN_SECTIONS,
 };
@@ -202,22 +202,7 @@ impl Baked {
         let sections = self.extra_sections(materials.as_ref(), extra);
         let parts = self.parts();
         let meta = validate_parts(&parts, &sections)?;
-        let specs = section_specs(
-            &[
-                spec_of(core::slice::from_ref(&meta)),
-                spec_of(parts.positions),
-                spec_of(parts.nodes),
-                spec_of(parts.splits),
-                spec_of(parts.bounds),
-                spec_of(parts.polygons),
-                spec_of(parts.roots),
-                spec_of(parts.base),
-                spec_of(parts.vertex_table_offsets),
-                spec_of(parts.vertex_table),
-                spec_of(parts.vertices),
-            ],
-            &sections,
-        );
+        let specs = section_specs(&meta, &sections);
         write_sections(path, &specs, Check::Validated, |out| {
             out.put(core::slice::from_ref(&meta))?;
             out.put(parts.positions)?;
@@ -274,23 +259,34 @@ pub(crate) fn appearance_then<'a>(
     sections
 }
 
-/// The length and record size of the hierarchy section of `records` (its tag set by
-/// [`section_specs`]).
-pub(crate) fn spec_of<T: bytemuck::Pod>(records: &[T]) -> (u32, u64) {
-    spec_of_len::<T>(records.len())
-}
-
-/// [`spec_of`] for `count` records of `T` not yet made.
-pub(crate) fn spec_of_len<T>(count: usize) -> (u32, u64) {
+/// The record size and byte length of `count` records of `T`.
+fn spec_of_len<T>(count: usize) -> (u32, u64) {
     let size = std::mem::size_of::<T>();
     (size as u32, (count * size) as u64)
 }
 
-/// Every section of a file: the hierarchy's, in [`KNOWN_SECTIONS`] order, then `extra`.
-pub(crate) fn section_specs(
-    known: &[(u32, u64); 11],
-    extra: &[ExtraSection<'_>],
-) -> Vec<SectionSpec> {
+/// The hierarchy's sections, in [`KNOWN_SECTIONS`] order, sized from the counts of `meta`
+/// (the one list both writers plan from, whether the arrays exist yet or not).
+fn known_specs(meta: &Meta) -> [(u32, u64); 11] {
+    let n = |c: u32| c as usize;
+    [
+        spec_of_len::<Meta>(1),
+        spec_of_len::<Position>(n(meta.position_count)),
+        spec_of_len::<Node>(n(meta.node_count)),
+        spec_of_len::<Split>(n(meta.split_count)),
+        spec_of_len::<SplitBounds>(n(meta.split_count)),
+        spec_of_len::<Polygon>(n(meta.polygon_count)),
+        spec_of_len::<NodeId>(n(meta.root_count)),
+        spec_of_len::<BaseFace>(n(meta.base_polygon_count)),
+        spec_of_len::<u32>(n(meta.position_count) + 1),
+        spec_of_len::<VertexKey>(n(meta.vertex_key_count)),
+        spec_of_len::<Vertex>(n(meta.vertex_count)),
+    ]
+}
+
+/// Every section of a file: the hierarchy's ([`known_specs`]), then `extra`.
+pub(crate) fn section_specs(meta: &Meta, extra: &[ExtraSection<'_>]) -> Vec<SectionSpec> {
+    let known = known_specs(meta);
     let spec = |tag: Tag, (record_size, byte_len): (u32, u64)| SectionSpec {
         tag,
         record_size,
@@ -299,7 +295,7 @@ pub(crate) fn section_specs(
     KNOWN_SECTIONS
         .iter()
         .zip(known)
-        .map(|(&tag, &k)| spec(tag, k))
+        .map(|(&tag, k)| spec(tag, k))
         .chain(
             extra
                 .iter()

@@ -13,15 +13,10 @@
 
 use std::path::Path;
 
-use caveclod_core::format::{
-    BaseFace, ExtraSection, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
-};
-use caveclod_core::NodeId;
+use caveclod_core::format::ExtraSection;
 
 use crate::arrays::{self, NodeIds, PolygonOrder};
-use crate::baked::{
-    appearance_then, material_sections, section_specs, spec_of_len, BakeWriteError,
-};
+use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
 use crate::clod_file::{write_sections, Check};
 use crate::hierarchy::Hierarchy as Collapses;
 use crate::materials::{has_materials, TexturePaths};
@@ -56,22 +51,7 @@ pub fn write(
     let ids = NodeIds::number(w.positions.len(), &h);
     let polys = PolygonOrder::number(w.triangles.len(), &h, &ids);
     let meta = arrays::meta(&w, &h, &ids, &polys);
-    let specs = section_specs(
-        &[
-            spec_of_len::<Meta>(1),
-            spec_of_len::<Position>(meta.position_count as usize),
-            spec_of_len::<Node>(meta.node_count as usize),
-            spec_of_len::<Split>(meta.split_count as usize),
-            spec_of_len::<SplitBounds>(meta.split_count as usize),
-            spec_of_len::<Polygon>(meta.polygon_count as usize),
-            spec_of_len::<NodeId>(meta.root_count as usize),
-            spec_of_len::<BaseFace>(meta.base_polygon_count as usize),
-            spec_of_len::<u32>(meta.position_count as usize + 1),
-            spec_of_len::<VertexKey>(meta.vertex_key_count as usize),
-            spec_of_len::<Vertex>(meta.vertex_count as usize),
-        ],
-        &sections,
-    );
+    let specs = section_specs(&meta, &sections);
     write_sections(path, &specs, Check::ReadBack, move |out| {
         out.put(std::slice::from_ref(&meta))?;
         out.put(&arrays::positions(&w))?;

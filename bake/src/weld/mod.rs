@@ -23,7 +23,7 @@
 //! [`weld`] runs these steps in order, one module each: `repair` (1–4), `groups` (5–6),
 //! and between them `attributes` (the corners' attributes, deduplicated).
 
-pub use vertex_lists::VertexLists;
+pub use vertex_lists::{Lists, VertexLists};
 
 mod attributes;
 mod groups;

@@ -63,12 +63,39 @@ impl VertexLists {
     }
 
     /// Each position's list, in position order.
-    pub fn iter(&self) -> impl ExactSizeIterator<Item = &[(u32, u32)]> + '_ {
-        self.start
-            .windows(2)
-            .map(|w| &self.entries[w[0] as usize..w[1] as usize])
+    pub fn iter(&self) -> Lists<'_> {
+        Lists {
+            lists: self,
+            next: 0,
+        }
     }
 }
+
+/// The lists of a [`VertexLists`], in position order.
+#[derive(Clone, Debug)]
+pub struct Lists<'a> {
+    lists: &'a VertexLists,
+    next: usize,
+}
+
+impl<'a> Iterator for Lists<'a> {
+    type Item = &'a [(u32, u32)];
+
+    fn next(&mut self) -> Option<&'a [(u32, u32)]> {
+        let p = self.next;
+        (p < self.lists.len()).then(|| {
+            self.next += 1;
+            &self.lists[p]
+        })
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.lists.len() - self.next;
+        (left, Some(left))
+    }
+}
+
+impl ExactSizeIterator for Lists<'_> {}
 
 impl Index<usize> for VertexLists {
     type Output = [(u32, u32)];
@@ -80,10 +107,10 @@ impl Index<usize> for VertexLists {
 
 impl<'a> IntoIterator for &'a VertexLists {
     type Item = &'a [(u32, u32)];
-    type IntoIter = Box<dyn ExactSizeIterator<Item = &'a [(u32, u32)]> + 'a>;
+    type IntoIter = Lists<'a>;
 
-    fn into_iter(self) -> Self::IntoIter {
-        Box::new(self.iter())
+    fn into_iter(self) -> Lists<'a> {
+        self.iter()
     }
 }
 

@@ -51,6 +51,12 @@ pub struct Record {
 }
 
 impl Record {
+    /// An empty record per camera of `views`, each with room for the flight's frames.
+    pub fn per_camera(views: &[Vec<View>]) -> Vec<Self> {
+        let frames = views.first().map_or(0, Vec::len);
+        views.iter().map(|_| Self::with_capacity(frames)).collect()
+    }
+
     pub fn with_capacity(frames: usize) -> Self {
         Self {
             ops: Vec::with_capacity(frames),

@@ -164,10 +164,7 @@ pub fn fly_piloted(
         .map(|_| fly::index_lists(h, config, in_flight))
         .collect();
     let frames = views.first().map_or(0, Vec::len);
-    let mut records: Vec<Record> = views
-        .iter()
-        .map(|_| Record::with_capacity(frames))
-        .collect();
+    let mut records = Record::per_camera(views);
     for f in 0..frames {
         for k in 0..cams.len() {
             // Forwards in even frames, backwards in odd ones, as the fly-over's one thread.

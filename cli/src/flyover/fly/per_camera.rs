@@ -85,10 +85,7 @@ pub fn fly_per_camera(
                 .collect::<Result<Vec<_>, _>>()
         })?
     } else {
-        let mut records: Vec<Record> = views
-            .iter()
-            .map(|_| Record::with_capacity(frames))
-            .collect();
+        let mut records = Record::per_camera(views);
         for (n, f) in (0..views.first().map_or(0, Vec::len))
             .step_by(stride)
             .enumerate()

@@ -24,10 +24,7 @@ pub fn fly_shared(
     let mut cam = CameraState::with_config(h, memory, config).map_err(|e| e.to_string())?;
     let mut out = IndexBuffers::new(h, cam.max_pairs());
     let frames = views.first().map_or(0, Vec::len);
-    let mut records: Vec<Record> = views
-        .iter()
-        .map(|_| Record::with_capacity(frames))
-        .collect();
+    let mut records = Record::per_camera(views);
     for f in 0..frames {
         for c in 0..views.len() {
             frame(
