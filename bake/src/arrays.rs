@@ -16,7 +16,7 @@ use caveclod_core::format::{
 };
 use caveclod_core::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
-use crate::hierarchy::Hierarchy as Collapses;
+use crate::hierarchy::{Collapse, Hierarchy as Collapses};
 use crate::materials::encode_colour;
 use crate::weld::Welded;
 
@@ -138,32 +138,47 @@ pub(crate) struct PolygonOrder {
 
 impl PolygonOrder {
     pub(crate) fn number(nt: usize, h: &Collapses, ids: &NodeIds) -> Self {
+        let mut order = Self::base(&h.alive);
+        for c in ids.collapses_in_order() {
+            order.add_split(NodeId(ids.split_new[c]), &h.collapses[c]);
+        }
+        debug_assert_eq!(order.poly_new.len(), nt);
+        order
+    }
+
+    /// The base polygons: the triangles alive at the end, in triangle order.
+    pub(crate) fn base(alive: &[bool]) -> Self {
+        let nt = alive.len();
         let mut poly_new = vec![NONE; nt];
-        let base: Vec<u32> = (0..nt as u32).filter(|&f| h.alive[f as usize]).collect();
+        let base: Vec<u32> = (0..nt as u32).filter(|&f| alive[f as usize]).collect();
         for (i, &f) in base.iter().enumerate() {
             poly_new[f as usize] = i as u32;
-        }
-        let mut next = base.len() as u32;
-        let mut creator = vec![Creator::BASE; nt];
-        for c in ids.collapses_in_order() {
-            let col = h.collapses[c];
-            let s = NodeId(ids.split_new[c]);
-            poly_new[col.fl as usize] = next;
-            next += 1;
-            creator[col.fl as usize] = Creator::new(s, false);
-            if col.fr != NONE {
-                poly_new[col.fr as usize] = next;
-                next += 1;
-                creator[col.fr as usize] = Creator::new(s, true);
-            }
         }
         PolygonOrder {
             poly_new,
             base_count: base.len(),
+            count: base.len(),
             base,
-            count: next as usize,
-            creator,
+            creator: vec![Creator::BASE; nt],
         }
+    }
+
+    /// Numbers the polygons of the next split in split order, `s`, which collapse `col`
+    /// undoes: its `f_l`, then its `f_r` if it has one.
+    pub(crate) fn add_split(&mut self, s: NodeId, col: &Collapse) {
+        self.poly_new[col.fl as usize] = self.count as u32;
+        self.creator[col.fl as usize] = Creator::new(s, false);
+        self.count += 1;
+        if col.fr != NONE {
+            self.poly_new[col.fr as usize] = self.count as u32;
+            self.creator[col.fr as usize] = Creator::new(s, true);
+            self.count += 1;
+        }
+    }
+
+    /// The base triangles, in triangle order.
+    pub(crate) fn base_triangles(&self) -> &[u32] {
+        &self.base
     }
 
     /// Triangle and stored rotation of each polygon, in new-id order.
@@ -181,7 +196,7 @@ impl PolygonOrder {
     }
 
     /// The new id of welded triangle `f` (`NONE`: none).
-    fn pid(&self, f: u32) -> PolyId {
+    pub(crate) fn pid(&self, f: u32) -> PolyId {
         if f == NONE {
             PolyId::NONE
         } else {
@@ -196,16 +211,41 @@ impl PolygonOrder {
         h: &'a Collapses,
         ids: &'a NodeIds,
     ) -> impl Iterator<Item = Polygon> + 'a {
-        self.order(h, ids).map(move |(f, rot)| {
-            let t = &w.triangles[f as usize];
-            let k = rot as usize;
-            Polygon {
-                nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(ids.of(p))),
-                creator: self.creator[f as usize],
-                surface: SurfaceId(t.surface),
-                group: SurfaceGroupId(w.group_ids[t.group as usize]),
-            }
-        })
+        self.order(h, ids)
+            .map(move |(f, rot)| self.polygon(w, f, rot, |p| ids.of(p)))
+    }
+
+    /// The polygon of welded triangle `f`, its corners rotated by `rot` and named by the
+    /// new ids `of` their leaves.
+    pub(crate) fn polygon(&self, w: &Welded, f: u32, rot: u8, of: impl Fn(u32) -> u32) -> Polygon {
+        let t = &w.triangles[f as usize];
+        let k = rot as usize;
+        Polygon {
+            nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(of(p))),
+            creator: self.creator[f as usize],
+            surface: SurfaceId(t.surface),
+            group: SurfaceGroupId(w.group_ids[t.group as usize]),
+        }
+    }
+
+    /// The key a split names welded triangle `f` by (`PolyKey`): a base polygon by its id,
+    /// the others by creator and side.
+    fn key(&self, f: u32) -> PolyKey {
+        match self.pid(f).get() {
+            None => PolyKey::NONE,
+            Some(p) => self.creator[f as usize].key(self.base_count as u32, p),
+        }
+    }
+
+    /// The split record of collapse `col`, its nodes named by their new ids `of`.
+    pub(crate) fn split(&self, col: &Collapse, of: impl Fn(u32) -> u32) -> Split {
+        Split {
+            stationary: NodeId(of(col.t)),
+            floating: NodeId(of(col.u)),
+            f_l: self.pid(col.fl),
+            f_r: self.pid(col.fr),
+            neighbours: col.neighbours.map(|f| self.key(f)),
+        }
     }
 
     /// [`polygon_records`](Self::polygon_records) collected.
@@ -215,19 +255,29 @@ impl PolygonOrder {
 
     /// The base mesh with its adjacency, from the final corners.
     pub(crate) fn base_faces(&self, h: &Collapses, ids: &NodeIds) -> Vec<BaseFace> {
+        self.base_faces_by(|f| h.corners[f as usize], |x| ids.of(x))
+    }
+
+    /// The base mesh with its adjacency, from the final corners `corners` of each base
+    /// triangle (nodes), named by their new ids `of`.
+    pub(crate) fn base_faces_by(
+        &self,
+        corners: impl Fn(u32) -> [u32; 3],
+        of: impl Fn(u32) -> u32,
+    ) -> Vec<BaseFace> {
         let base = &self.base;
         let mut directed = std::collections::HashMap::with_capacity(3 * self.base_count);
         for &f in base {
-            let c = h.corners[f as usize];
+            let c = corners(f);
             for k in 0..3 {
                 directed.insert((c[k], c[(k + 1) % 3]), f);
             }
         }
         base.iter()
             .map(|&f| {
-                let c = h.corners[f as usize];
+                let c = corners(f);
                 BaseFace {
-                    corners: c.map(|x| NodeId(ids.of(x))),
+                    corners: c.map(|x| NodeId(of(x))),
                     neighbours: [0, 1, 2].map(|k| {
                         let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
                         directed.get(&(b, a)).map_or(PolyId::NONE, |&g| self.pid(g))
@@ -245,22 +295,8 @@ pub(crate) fn split_records<'a>(
     ids: &'a NodeIds,
     polys: &'a PolygonOrder,
 ) -> impl Iterator<Item = Split> + 'a {
-    let base_keys = polys.base_count as u32;
-    // A welded triangle's key: its polygon id's creator is the triangle's own.
-    let key = move |f: u32| match polys.pid(f).get() {
-        None => PolyKey::NONE,
-        Some(p) => polys.creator[f as usize].key(base_keys, p),
-    };
-    ids.collapses_in_order().map(move |c| {
-        let col = h.collapses[c];
-        Split {
-            stationary: NodeId(ids.of(col.t)),
-            floating: NodeId(ids.of(col.u)),
-            f_l: polys.pid(col.fl),
-            f_r: polys.pid(col.fr),
-            neighbours: col.neighbours.map(key),
-        }
-    })
+    ids.collapses_in_order()
+        .map(move |c| polys.split(&h.collapses[c], |x| ids.of(x)))
 }
 
 /// [`split_records`] collected.
@@ -276,21 +312,36 @@ pub(crate) fn bound_records<'a>(
 ) -> impl Iterator<Item = SplitBounds> + 'a {
     ids.collapses_in_order().map(move |c| {
         let old = ids.np + c;
-        let (axis, angle) = h.cone[old];
-        let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
-            1.0
-        } else {
-            angle.sin() * angle.sin()
-        };
-        SplitBounds::new(
+        split_bounds(
             w.positions[h.node_position[old] as usize],
             h.radius[old],
-            if sin2 >= 1.0 { [0.0; 3] } else { axis },
-            sin2,
+            h.cone[old],
             h.error[old],
-            0.0,
         )
     })
+}
+
+/// The refinement bounds of a split whose node stands at `position` with sphere `radius`,
+/// normal cone `(axis, half angle)` and `error`.
+pub(crate) fn split_bounds(
+    position: [f32; 3],
+    radius: f32,
+    (axis, angle): ([f32; 3], f32),
+    error: f32,
+) -> SplitBounds {
+    let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
+        1.0
+    } else {
+        angle.sin() * angle.sin()
+    };
+    SplitBounds::new(
+        position,
+        radius,
+        if sin2 >= 1.0 { [0.0; 3] } else { axis },
+        sin2,
+        error,
+        0.0,
+    )
 }
 
 /// [`bound_records`] collected.
@@ -428,6 +479,27 @@ pub(crate) fn positions(w: &Welded) -> Vec<Position> {
 /// The `META` record of the arrays, from the welded mesh and the collapses (what validating
 /// the arrays computes: counts, the positions' bounds, the deepest leaf).
 pub(crate) fn meta(w: &Welded, h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Meta {
+    let counts = Counts {
+        nodes: ids.total(),
+        splits: h.collapses.len(),
+        roots: ids.root_count(h),
+        max_depth: max_depth(h, ids),
+    };
+    meta_of(w, &counts, polys)
+}
+
+/// What the `META` record counts of the hierarchy.
+pub(crate) struct Counts {
+    pub(crate) nodes: usize,
+    pub(crate) splits: usize,
+    pub(crate) roots: usize,
+    /// The longest root-to-leaf path in edges.
+    pub(crate) max_depth: u32,
+}
+
+/// The `META` record of the welded mesh `w` with a hierarchy of `counts` and the polygons
+/// `polys`.
+pub(crate) fn meta_of(w: &Welded, counts: &Counts, polys: &PolygonOrder) -> Meta {
     let mut bounds_min = [f32::INFINITY; 3];
     let mut bounds_max = [f32::NEG_INFINITY; 3];
     for p in &w.positions {
@@ -441,9 +513,9 @@ pub(crate) fn meta(w: &Welded, h: &Collapses, ids: &NodeIds, polys: &PolygonOrde
     }
     let vertices = vertex_count(w) as u32;
     Meta {
-        node_count: ids.total() as u32,
-        split_count: h.collapses.len() as u32,
-        root_count: ids.root_count(h) as u32,
+        node_count: counts.nodes as u32,
+        split_count: counts.splits as u32,
+        root_count: counts.roots as u32,
         polygon_count: polys.count as u32,
         base_polygon_count: polys.base_count as u32,
         position_count: w.positions.len() as u32,
@@ -451,7 +523,7 @@ pub(crate) fn meta(w: &Welded, h: &Collapses, ids: &NodeIds, polys: &PolygonOrde
         vertex_key_count: vertices,
         surface_count: w.surface_count,
         surface_group_count: w.group_id_count,
-        max_depth: max_depth(h, ids),
+        max_depth: counts.max_depth,
         flags: 0,
         bounds_min,
         bounds_max,
