@@ -86,7 +86,7 @@ pub fn write(
     write_sections(path, &specs, Check::ReadBack, move |out| {
         out.put(std::slice::from_ref(&meta))?;
         out.put_iter(arrays::position_records(&w))?;
-        put_records(out, &h, |r| node(ids, r.position, r.parent))?;
+        put_records(out, &h, |r| node(ids, r.record.position, r.parent))?;
         out.put_iter((0..ids.positions).map(|x| node(ids, x, h.parent[x as usize])))?;
         put_records(out, &h, |r| -> Split {
             polys.split(&r.record.collapse(), |x| ids.of(x))
@@ -140,7 +140,6 @@ pub fn write(
 /// A record as a split's arrays read it: with the parent of the node it creates.
 struct WithParent<'r> {
     record: &'r Record,
-    position: u32,
     parent: u32,
 }
 
@@ -158,7 +157,6 @@ fn put_records<T: bytemuck::Pod>(
                 let c = last - i;
                 make(WithParent {
                     record: r,
-                    position: r.position,
                     parent: h.parent[h.positions + c],
                 })
             })
