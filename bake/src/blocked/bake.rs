@@ -36,7 +36,7 @@ pub struct SpilledBuild {
 
 impl SpilledBuild {
     /// Writes the `.clod` file at `path` with `extra` sections from the welded mesh and the
-    /// spilled collapses, splits in reverse creation order ([`super::write`]); the written
+    /// spilled collapses, splits in reverse creation order (`blocked::write`); the written
     /// file is validated before it replaces `path`. Returns the file's length.
     pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
         super::write::write(

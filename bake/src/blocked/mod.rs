@@ -17,14 +17,16 @@
 //!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
 //!    are threads;
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
-//!    mesh's nodes and triangles;
+//!    mesh's nodes and triangles, each appended to a temporary file as it joins (`spill`):
+//!    the whole keeps in memory only what the next collapses read;
 //! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
 //!    from what the last one left, their old borders no longer frozen; the level of a single
 //!    block, nothing frozen, ends it, as the in-core build ends.
 //!
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
-//! `0..positions` the leaves, collapse `c` creating node `positions + c`, so
-//! [`crate::baked::Baked::new`] turns it into a `.clod` as it does an in-core build. A
+//! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
+//! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
+//! in-core build; [`SpilledBuild::write`] writes it from the temporary file (`write`). A
 //! node's bounds hold everything below it across the levels: its radius holds its
 //! children's spheres, its cone their cones, and its error adds the block's own measure
 //! (the distance of the level's positions from the triangles that replace them) to the

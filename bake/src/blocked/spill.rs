@@ -17,8 +17,6 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::hierarchy::{Collapse, Hierarchy};
 
-const NONE: u32 = u32::MAX;
-
 /// Records read at once.
 const CHUNK: usize = 1 << 16;
 
@@ -214,8 +212,9 @@ impl Spilled {
     }
 
     /// The hierarchy in memory, as [`crate::hierarchy::build`] hands one over. The file holds
-    /// no bounds for leaves (it has no use for them), so the leaves have [`Bounds::LEAF`]'s;
-    /// the corners of triangles that died are their leaves'.
+    /// no bounds for leaves (it has no use for them), so the leaves have none (zero radius and
+    /// error, a cone of no spread about +z); the corners of triangles that died are their
+    /// leaves'.
     pub fn into_hierarchy(self) -> std::io::Result<Hierarchy> {
         let np = self.positions;
         let total = np + self.count;
@@ -258,9 +257,7 @@ impl Spilled {
             })
             .collect();
         h.alive = self.alive;
-        debug_assert!(
-            h.parent.len() == total && h.parent.iter().all(|&p| p == NONE || (p as usize) < total)
-        );
+        debug_assert_eq!(h.parent.len(), total);
         Ok(h)
     }
 }
