@@ -1,7 +1,9 @@
 //! The `.clod` arrays computed from a welded mesh and its collapses, one array at a time:
-//! the numbering of nodes and polygons into file order (the small tables every array needs),
-//! then each array from the numbering. [`crate::baked::Baked::new`] keeps them all;
-//! [`crate::streamed`] writes each as soon as it is made and drops it.
+//! the numbering of nodes and polygons into file order (the small tables every array needs,
+//! `u32` per node, split or triangle), then each array from the numbering as an iterator of
+//! its records in file order. [`crate::baked::Baked::new`] collects each into a `Vec`;
+//! [`crate::streamed`] writes the records in bounded chunks as they are made, so no array is
+//! ever whole in memory.
 //!
 //! Node ids: splittable nodes first, in depth-first preorder (stationary child first, roots
 //! in position order), so a subtree is one id range and a stationary child sits next to its
@@ -14,7 +16,7 @@ use caveclod_core::format::{
 };
 use caveclod_core::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
-use crate::hierarchy::Hierarchy as Collapses;
+use crate::hierarchy::{Collapse, Hierarchy as Collapses};
 use crate::materials::encode_colour;
 use crate::weld::Welded;
 
@@ -29,7 +31,7 @@ pub(crate) struct NodeIds {
     /// The new id of each collapse's node.
     split_new: Vec<u32>,
     /// Collapses in new-id (split) order.
-    by_new: Vec<usize>,
+    by_new: Vec<u32>,
 }
 
 impl NodeIds {
@@ -44,7 +46,7 @@ impl NodeIds {
         while let Some(o) = stack.pop() {
             let c = o as usize - np;
             split_new[c] = by_new.len() as u32;
-            by_new.push(c);
+            by_new.push(c as u32);
             for child in [h.collapses[c].u, h.collapses[c].t] {
                 if child as usize >= np {
                     stack.push(child);
@@ -71,27 +73,32 @@ impl NodeIds {
         self.np + self.split_new.len()
     }
 
-    /// Every node with its parent and position, at its new id.
-    pub(crate) fn nodes(&self, h: &Collapses) -> Vec<Node> {
-        let mut nodes = vec![
-            Node {
-                parent: NodeId::NONE,
-                position: PositionId(0)
-            };
-            self.total()
-        ];
-        for old in 0..self.total() as u32 {
+    /// The collapses (indices into `h.collapses`) in split order.
+    pub(crate) fn collapses_in_order(&self) -> impl Iterator<Item = usize> + '_ {
+        self.by_new.iter().map(|&c| c as usize)
+    }
+
+    /// Every node with its parent and position, in new-id order: the splits' nodes, then
+    /// the leaves.
+    pub(crate) fn node_records<'a>(&'a self, h: &'a Collapses) -> impl Iterator<Item = Node> + 'a {
+        let np = self.np as u32;
+        let splits = self.by_new.iter().map(move |&c| np + c);
+        splits.chain(0..np).map(move |old| {
             let p = h.parent[old as usize];
-            nodes[self.of(old) as usize] = Node {
+            Node {
                 parent: if p == NONE {
                     NodeId::NONE
                 } else {
                     NodeId(self.of(p))
                 },
                 position: PositionId(h.node_position[old as usize]),
-            };
-        }
-        nodes
+            }
+        })
+    }
+
+    /// [`node_records`](Self::node_records) collected.
+    pub(crate) fn nodes(&self, h: &Collapses) -> Vec<Node> {
+        self.node_records(h).collect()
     }
 
     /// Nodes without a parent.
@@ -114,51 +121,82 @@ impl NodeIds {
 }
 
 /// Polygon ids in file order: the base (surviving) triangles in triangle order, then each
-/// split's `f_l` and `f_r` in split order, each with the corner rotation it is stored with.
+/// split's `f_l` and `f_r` in split order, each with the corner rotation it is stored with
+/// (none for a base triangle, the collapse's `rot_l` / `rot_r` for the others). Only the
+/// base triangles are listed; the created ones follow from the split order.
 pub(crate) struct PolygonOrder {
     /// The new id of each welded triangle.
     poly_new: Vec<u32>,
-    /// Triangle and rotation of each new id.
-    order: Vec<(u32, u8)>,
+    /// The base triangles, in triangle order (their new ids).
+    base: Vec<u32>,
     pub(crate) base_count: usize,
+    /// Polygons in all.
+    pub(crate) count: usize,
     /// The split that creates each triangle (`BASE` for base triangles).
     creator: Vec<Creator>,
 }
 
 impl PolygonOrder {
     pub(crate) fn number(nt: usize, h: &Collapses, ids: &NodeIds) -> Self {
-        let mut poly_new = vec![NONE; nt];
-        let mut order: Vec<(u32, u8)> = Vec::with_capacity(nt);
-        for f in 0..nt {
-            if h.alive[f] {
-                poly_new[f] = order.len() as u32;
-                order.push((f as u32, 0));
-            }
+        let mut order = Self::base(&h.alive);
+        for c in ids.collapses_in_order() {
+            order.add_split(NodeId(ids.split_new[c]), &h.collapses[c]);
         }
-        let base_count = order.len();
-        let mut creator = vec![Creator::BASE; nt];
-        for &c in &ids.by_new {
-            let col = h.collapses[c];
-            let s = NodeId(ids.split_new[c]);
-            poly_new[col.fl as usize] = order.len() as u32;
-            order.push((col.fl, col.rot_l));
-            creator[col.fl as usize] = Creator::new(s, false);
-            if col.fr != NONE {
-                poly_new[col.fr as usize] = order.len() as u32;
-                order.push((col.fr, col.rot_r));
-                creator[col.fr as usize] = Creator::new(s, true);
-            }
+        debug_assert_eq!(order.poly_new.len(), nt);
+        order
+    }
+
+    /// The base polygons: the triangles alive at the end, in triangle order.
+    pub(crate) fn base(alive: &[bool]) -> Self {
+        let nt = alive.len();
+        let mut poly_new = vec![NONE; nt];
+        let base: Vec<u32> = (0..nt as u32).filter(|&f| alive[f as usize]).collect();
+        for (i, &f) in base.iter().enumerate() {
+            poly_new[f as usize] = i as u32;
         }
         PolygonOrder {
             poly_new,
-            order,
-            base_count,
-            creator,
+            base_count: base.len(),
+            count: base.len(),
+            base,
+            creator: vec![Creator::BASE; nt],
         }
     }
 
+    /// Numbers the polygons of the next split in split order, `s`, which collapse `col`
+    /// undoes: its `f_l`, then its `f_r` if it has one.
+    pub(crate) fn add_split(&mut self, s: NodeId, col: &Collapse) {
+        self.poly_new[col.fl as usize] = self.count as u32;
+        self.creator[col.fl as usize] = Creator::new(s, false);
+        self.count += 1;
+        if col.fr != NONE {
+            self.poly_new[col.fr as usize] = self.count as u32;
+            self.creator[col.fr as usize] = Creator::new(s, true);
+            self.count += 1;
+        }
+    }
+
+    /// The base triangles, in triangle order.
+    pub(crate) fn base_triangles(&self) -> &[u32] {
+        &self.base
+    }
+
+    /// Triangle and stored rotation of each polygon, in new-id order.
+    fn order<'a>(
+        &'a self,
+        h: &'a Collapses,
+        ids: &'a NodeIds,
+    ) -> impl Iterator<Item = (u32, u8)> + 'a {
+        let created = ids.collapses_in_order().flat_map(move |c| {
+            let col = h.collapses[c];
+            let right = (col.fr != NONE).then_some((col.fr, col.rot_r));
+            std::iter::once((col.fl, col.rot_l)).chain(right)
+        });
+        self.base.iter().map(|&f| (f, 0)).chain(created)
+    }
+
     /// The new id of welded triangle `f` (`NONE`: none).
-    fn pid(&self, f: u32) -> PolyId {
+    pub(crate) fn pid(&self, f: u32) -> PolyId {
         if f == NONE {
             PolyId::NONE
         } else {
@@ -167,37 +205,79 @@ impl PolygonOrder {
     }
 
     /// The polygons in file order, corners rotated as stored.
-    pub(crate) fn polygons(&self, w: &Welded, ids: &NodeIds) -> Vec<Polygon> {
-        self.order
-            .iter()
-            .map(|&(f, rot)| {
-                let t = &w.triangles[f as usize];
-                let k = rot as usize;
-                Polygon {
-                    nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(ids.of(p))),
-                    creator: self.creator[f as usize],
-                    surface: SurfaceId(t.surface),
-                    group: SurfaceGroupId(w.group_ids[t.group as usize]),
-                }
-            })
-            .collect()
+    pub(crate) fn polygon_records<'a>(
+        &'a self,
+        w: &'a Welded,
+        h: &'a Collapses,
+        ids: &'a NodeIds,
+    ) -> impl Iterator<Item = Polygon> + 'a {
+        self.order(h, ids)
+            .map(move |(f, rot)| self.polygon(w, f, rot, |p| ids.of(p)))
+    }
+
+    /// The polygon of welded triangle `f`, its corners rotated by `rot` and named by the
+    /// new ids `of` their leaves.
+    pub(crate) fn polygon(&self, w: &Welded, f: u32, rot: u8, of: impl Fn(u32) -> u32) -> Polygon {
+        let t = &w.triangles[f as usize];
+        let k = rot as usize;
+        Polygon {
+            nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(of(p))),
+            creator: self.creator[f as usize],
+            surface: SurfaceId(t.surface),
+            group: SurfaceGroupId(w.group_ids[t.group as usize]),
+        }
+    }
+
+    /// The key a split names welded triangle `f` by (`PolyKey`): a base polygon by its id,
+    /// the others by creator and side.
+    fn key(&self, f: u32) -> PolyKey {
+        match self.pid(f).get() {
+            None => PolyKey::NONE,
+            Some(p) => self.creator[f as usize].key(self.base_count as u32, p),
+        }
+    }
+
+    /// The split record of collapse `col`, its nodes named by their new ids `of`.
+    pub(crate) fn split(&self, col: &Collapse, of: impl Fn(u32) -> u32) -> Split {
+        Split {
+            stationary: NodeId(of(col.t)),
+            floating: NodeId(of(col.u)),
+            f_l: self.pid(col.fl),
+            f_r: self.pid(col.fr),
+            neighbours: col.neighbours.map(|f| self.key(f)),
+        }
+    }
+
+    /// [`polygon_records`](Self::polygon_records) collected.
+    pub(crate) fn polygons(&self, w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<Polygon> {
+        self.polygon_records(w, h, ids).collect()
     }
 
     /// The base mesh with its adjacency, from the final corners.
     pub(crate) fn base_faces(&self, h: &Collapses, ids: &NodeIds) -> Vec<BaseFace> {
-        let base = &self.order[..self.base_count];
+        self.base_faces_by(|f| h.corners[f as usize], |x| ids.of(x))
+    }
+
+    /// The base mesh with its adjacency, from the final corners `corners` of each base
+    /// triangle (nodes), named by their new ids `of`.
+    pub(crate) fn base_faces_by(
+        &self,
+        corners: impl Fn(u32) -> [u32; 3],
+        of: impl Fn(u32) -> u32,
+    ) -> Vec<BaseFace> {
+        let base = &self.base;
         let mut directed = std::collections::HashMap::with_capacity(3 * self.base_count);
-        for &(f, _) in base {
-            let c = h.corners[f as usize];
+        for &f in base {
+            let c = corners(f);
             for k in 0..3 {
                 directed.insert((c[k], c[(k + 1) % 3]), f);
             }
         }
         base.iter()
-            .map(|&(f, _)| {
-                let c = h.corners[f as usize];
+            .map(|&f| {
+                let c = corners(f);
                 BaseFace {
-                    corners: c.map(|x| NodeId(ids.of(x))),
+                    corners: c.map(|x| NodeId(of(x))),
                     neighbours: [0, 1, 2].map(|k| {
                         let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
                         directed.get(&(b, a)).map_or(PolyId::NONE, |&g| self.pid(g))
@@ -208,66 +288,112 @@ impl PolygonOrder {
     }
 }
 
-/// The split record of every collapse, at its split id. Splits name their neighbours by key
+/// The split record of every collapse, in split order. Splits name their neighbours by key
 /// (`PolyKey`): base polygons by id, the others by creator and side.
-pub(crate) fn splits(h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Vec<Split> {
-    let polygons_creator: Vec<Creator> = polys
-        .order
-        .iter()
-        .map(|&(f, _)| polys.creator[f as usize])
-        .collect();
-    let base_keys = polys.base_count as u32;
-    let key = |p: PolyId| match p.get() {
-        None => PolyKey::NONE,
-        Some(p) => polygons_creator[p.index()].key(base_keys, p),
-    };
-    let mut splits = vec![bytemuck::Zeroable::zeroed(); h.collapses.len()];
-    for (c, col) in h.collapses.iter().enumerate() {
-        splits[ids.split_new[c] as usize] = Split {
-            stationary: NodeId(ids.of(col.t)),
-            floating: NodeId(ids.of(col.u)),
-            f_l: polys.pid(col.fl),
-            f_r: polys.pid(col.fr),
-            neighbours: col.neighbours.map(|f| key(polys.pid(f))),
-        };
-    }
-    splits
+pub(crate) fn split_records<'a>(
+    h: &'a Collapses,
+    ids: &'a NodeIds,
+    polys: &'a PolygonOrder,
+) -> impl Iterator<Item = Split> + 'a {
+    ids.collapses_in_order()
+        .map(move |c| polys.split(&h.collapses[c], |x| ids.of(x)))
 }
 
-/// The refinement bounds of every collapse, at its split id.
-pub(crate) fn bounds(w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<SplitBounds> {
-    let mut bounds = vec![bytemuck::Zeroable::zeroed(); h.collapses.len()];
-    for c in 0..h.collapses.len() {
+/// [`split_records`] collected.
+pub(crate) fn splits(h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Vec<Split> {
+    split_records(h, ids, polys).collect()
+}
+
+/// The refinement bounds of every collapse, in split order.
+pub(crate) fn bound_records<'a>(
+    w: &'a Welded,
+    h: &'a Collapses,
+    ids: &'a NodeIds,
+) -> impl Iterator<Item = SplitBounds> + 'a {
+    ids.collapses_in_order().map(move |c| {
         let old = ids.np + c;
-        let (axis, angle) = h.cone[old];
-        let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
-            1.0
-        } else {
-            angle.sin() * angle.sin()
-        };
-        bounds[ids.split_new[c] as usize] = SplitBounds::new(
+        split_bounds(
             w.positions[h.node_position[old] as usize],
             h.radius[old],
-            if sin2 >= 1.0 { [0.0; 3] } else { axis },
-            sin2,
+            h.cone[old],
             h.error[old],
-            0.0,
-        );
-    }
-    bounds
+        )
+    })
 }
 
-/// Visits the vertex table in file order: per position, its vertices sorted by surface-group
-/// id, each as (position, group id, attribute index).
-fn each_vertex(w: &Welded, mut f: impl FnMut(usize, u16, u32)) {
-    let mut keys: Vec<(u16, u32)> = Vec::new();
-    for (p, vs) in w.vertices.iter().enumerate() {
-        keys.clear();
-        keys.extend(vs.iter().map(|&(g, a)| (w.group_ids[g as usize], a)));
-        keys.sort_unstable();
-        for &(group, a) in &keys {
-            f(p, group, a);
+/// The refinement bounds of a split whose node stands at `position` with sphere `radius`,
+/// normal cone `(axis, half angle)` and `error`.
+pub(crate) fn split_bounds(
+    position: [f32; 3],
+    radius: f32,
+    (axis, angle): ([f32; 3], f32),
+    error: f32,
+) -> SplitBounds {
+    let sin2 = if angle >= std::f32::consts::FRAC_PI_2 {
+        1.0
+    } else {
+        angle.sin() * angle.sin()
+    };
+    SplitBounds::new(
+        position,
+        radius,
+        if sin2 >= 1.0 { [0.0; 3] } else { axis },
+        sin2,
+        error,
+        0.0,
+    )
+}
+
+/// [`bound_records`] collected.
+pub(crate) fn bounds(w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<SplitBounds> {
+    bound_records(w, h, ids).collect()
+}
+
+/// The vertex table in file order: per position, its vertices sorted by surface-group id,
+/// each as (position, group id, attribute index).
+struct EachVertex<'a> {
+    w: &'a Welded,
+    /// The next position to sort.
+    next: usize,
+    /// The current position and its sorted keys, and the next key of them.
+    position: usize,
+    keys: Vec<(u16, u32)>,
+    k: usize,
+}
+
+impl<'a> EachVertex<'a> {
+    fn new(w: &'a Welded) -> Self {
+        Self {
+            w,
+            next: 0,
+            position: 0,
+            keys: Vec::new(),
+            k: 0,
         }
+    }
+}
+
+impl Iterator for EachVertex<'_> {
+    type Item = (usize, u16, u32);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        while self.k == self.keys.len() {
+            if self.next == self.w.vertices.len() {
+                return None;
+            }
+            let vs = &self.w.vertices[self.next];
+            self.position = self.next;
+            self.next += 1;
+            self.keys.clear();
+            let ids = &self.w.group_ids;
+            self.keys
+                .extend(vs.iter().map(|&(g, a)| (ids[g as usize], a)));
+            self.keys.sort_unstable();
+            self.k = 0;
+        }
+        let (group, a) = self.keys[self.k];
+        self.k += 1;
+        Some((self.position, group, a))
     }
 }
 
@@ -277,43 +403,51 @@ pub(crate) fn vertex_count(w: &Welded) -> usize {
 }
 
 /// Where each position's vertex-table entries start, and the end.
+pub(crate) fn vertex_table_offset_records(w: &Welded) -> impl Iterator<Item = u32> + '_ {
+    let ends = w.vertices.iter().scan(0u32, |at, vs| {
+        *at += vs.len() as u32;
+        Some(*at)
+    });
+    std::iter::once(0).chain(ends)
+}
+
+/// [`vertex_table_offset_records`] collected.
 pub(crate) fn vertex_table_offsets(w: &Welded) -> Vec<u32> {
-    let mut offsets = Vec::with_capacity(w.vertices.len() + 1);
-    let mut at = 0u32;
-    offsets.push(at);
-    for vs in &w.vertices {
-        at += vs.len() as u32;
-        offsets.push(at);
-    }
-    offsets
+    vertex_table_offset_records(w).collect()
 }
 
 /// The vertex table: per position, its vertices sorted by surface-group id, each a key into
 /// the vertex buffer, which holds them in the same order.
-pub(crate) fn vertex_table(w: &Welded) -> Vec<VertexKey> {
-    let mut table = Vec::with_capacity(vertex_count(w));
-    each_vertex(w, |_, group, _| {
-        table.push(VertexKey {
+pub(crate) fn vertex_table_records(w: &Welded) -> impl Iterator<Item = VertexKey> + '_ {
+    EachVertex::new(w)
+        .enumerate()
+        .map(|(i, (_, group, _))| VertexKey {
             group: SurfaceGroupId(group),
             reserved: 0,
-            vertex: table.len() as u32,
+            vertex: i as u32,
         })
-    });
-    table
+}
+
+/// [`vertex_table_records`] collected.
+pub(crate) fn vertex_table(w: &Welded) -> Vec<VertexKey> {
+    vertex_table_records(w).collect()
 }
 
 /// The vertex buffer, in vertex-table order.
-pub(crate) fn vertices(w: &Welded) -> Vec<Vertex> {
-    let mut vertices = Vec::with_capacity(vertex_count(w));
-    each_vertex(w, |p, _, a| {
+pub(crate) fn vertex_records(w: &Welded) -> impl Iterator<Item = Vertex> + '_ {
+    EachVertex::new(w).map(|(p, _, a)| {
         let attrs = &w.attributes[a as usize];
-        vertices.push(Vertex {
+        Vertex {
             position: w.positions[p],
             normal: attrs.normal,
             uv: attrs.uv,
-        })
-    });
-    vertices
+        }
+    })
+}
+
+/// [`vertex_records`] collected.
+pub(crate) fn vertices(w: &Welded) -> Vec<Vertex> {
+    vertex_records(w).collect()
 }
 
 /// The vertices' colours in vertex-table order; empty when the mesh has none.
@@ -321,15 +455,13 @@ pub(crate) fn vertex_colours(w: &Welded) -> Vec<[u8; 4]> {
     if !w.has_colors {
         return Vec::new();
     }
-    let mut colours = Vec::with_capacity(vertex_count(w));
-    each_vertex(w, |_, _, a| {
-        colours.push(encode_colour(w.attributes[a as usize].color))
-    });
-    colours
+    EachVertex::new(w)
+        .map(|(_, _, a)| encode_colour(w.attributes[a as usize].color))
+        .collect()
 }
 
 /// Welded positions with their classes.
-pub(crate) fn positions(w: &Welded) -> Vec<Position> {
+pub(crate) fn position_records(w: &Welded) -> impl Iterator<Item = Position> + '_ {
     w.positions
         .iter()
         .zip(&w.classes)
@@ -337,12 +469,37 @@ pub(crate) fn positions(w: &Welded) -> Vec<Position> {
             xyz,
             class: c as u32,
         })
-        .collect()
+}
+
+/// [`position_records`] collected.
+pub(crate) fn positions(w: &Welded) -> Vec<Position> {
+    position_records(w).collect()
 }
 
 /// The `META` record of the arrays, from the welded mesh and the collapses (what validating
 /// the arrays computes: counts, the positions' bounds, the deepest leaf).
 pub(crate) fn meta(w: &Welded, h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Meta {
+    let counts = Counts {
+        nodes: ids.total(),
+        splits: h.collapses.len(),
+        roots: ids.root_count(h),
+        max_depth: max_depth(h, ids),
+    };
+    meta_of(w, &counts, polys)
+}
+
+/// What the `META` record counts of the hierarchy.
+pub(crate) struct Counts {
+    pub(crate) nodes: usize,
+    pub(crate) splits: usize,
+    pub(crate) roots: usize,
+    /// The longest root-to-leaf path in edges.
+    pub(crate) max_depth: u32,
+}
+
+/// The `META` record of the welded mesh `w` with a hierarchy of `counts` and the polygons
+/// `polys`.
+pub(crate) fn meta_of(w: &Welded, counts: &Counts, polys: &PolygonOrder) -> Meta {
     let mut bounds_min = [f32::INFINITY; 3];
     let mut bounds_max = [f32::NEG_INFINITY; 3];
     for p in &w.positions {
@@ -356,17 +513,17 @@ pub(crate) fn meta(w: &Welded, h: &Collapses, ids: &NodeIds, polys: &PolygonOrde
     }
     let vertices = vertex_count(w) as u32;
     Meta {
-        node_count: ids.total() as u32,
-        split_count: h.collapses.len() as u32,
-        root_count: ids.root_count(h) as u32,
-        polygon_count: polys.order.len() as u32,
+        node_count: counts.nodes as u32,
+        split_count: counts.splits as u32,
+        root_count: counts.roots as u32,
+        polygon_count: polys.count as u32,
         base_polygon_count: polys.base_count as u32,
         position_count: w.positions.len() as u32,
         vertex_count: vertices,
         vertex_key_count: vertices,
         surface_count: w.surface_count,
         surface_group_count: w.group_id_count,
-        max_depth: max_depth(h, ids),
+        max_depth: counts.max_depth,
         flags: 0,
         bounds_min,
         bounds_max,
@@ -385,7 +542,7 @@ fn max_depth(h: &Collapses, ids: &NodeIds) -> u32 {
             depth[ids.of(p) as usize] + 1
         }
     };
-    for (s, &c) in ids.by_new.iter().enumerate() {
+    for (s, c) in ids.collapses_in_order().enumerate() {
         depth[s] = below(&depth, h.parent[ids.np + c]);
     }
     (0..ids.np)

@@ -97,7 +97,7 @@ impl Baked {
             nodes: ids.nodes(h),
             splits: arrays::splits(h, &ids, &polys),
             bounds: arrays::bounds(w, h, &ids),
-            polygons: polys.polygons(w, &ids),
+            polygons: polys.polygons(w, h, &ids),
             roots: ids.roots(h),
             base: polys.base_faces(h, &ids),
             vertex_table_offsets: arrays::vertex_table_offsets(w),

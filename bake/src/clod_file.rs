@@ -20,6 +20,9 @@ use crate::baked::BakeWriteError;
 /// Size of the buffer between the section writer and the file.
 const BUFFER: usize = 1 << 20;
 
+/// Records [`Sections::put_iter`] gathers before passing them on.
+pub const CHUNK_RECORDS: usize = 1 << 16;
+
 /// The buffered temporary file, as a [`Sink`].
 struct FileSink(BufWriter<File>);
 
@@ -42,6 +45,23 @@ impl Sections<'_> {
         self.writer
             .put(bytemuck::cast_slice(records))
             .map_err(stream_error)
+    }
+
+    /// The records of `records`, in order, passed on in chunks of [`CHUNK_RECORDS`]: the
+    /// section is written without ever being whole in memory.
+    pub fn put_iter<T: Pod>(
+        &mut self,
+        records: impl IntoIterator<Item = T>,
+    ) -> Result<(), BakeWriteError> {
+        let mut chunk = Vec::with_capacity(CHUNK_RECORDS);
+        for r in records {
+            chunk.push(r);
+            if chunk.len() == CHUNK_RECORDS {
+                self.put(&chunk)?;
+                chunk.clear();
+            }
+        }
+        self.put(&chunk)
     }
 }
 

@@ -236,14 +236,7 @@ pub(crate) fn built(
     input_triangles: usize,
     start: Instant,
 ) -> Built {
-    let info = BakeInfo {
-        input_triangles: input_triangles as u64,
-        surface_groups: w.group_count as u64,
-        repairs: w.repairs,
-        bake_seconds: start.elapsed().as_secs_f64(),
-        passes: h.passes,
-        notes: Vec::new(),
-    };
+    let info = bake_info(&w, h.passes, input_triangles, start);
     Built {
         welded: w,
         collapses: h,
@@ -251,6 +244,23 @@ pub(crate) fn built(
         texture_dir: PathBuf::new(),
         info,
         start,
+    }
+}
+
+/// About a bake of the welded mesh `w` whose hierarchy took `passes` passes.
+pub(crate) fn bake_info(
+    w: &weld::Welded,
+    passes: u32,
+    input_triangles: usize,
+    start: Instant,
+) -> BakeInfo {
+    BakeInfo {
+        input_triangles: input_triangles as u64,
+        surface_groups: w.group_count as u64,
+        repairs: w.repairs,
+        bake_seconds: start.elapsed().as_secs_f64(),
+        passes,
+        notes: Vec::new(),
     }
 }
 

@@ -1,8 +1,10 @@
 //! Writing a `.clod` file straight from the welded mesh and its collapses, one array at a
-//! time: each array is made (as [`Baked::new`](crate::baked::Baked::new) makes it), written
-//! and dropped before the next, so the write step holds the inputs, the numbering tables and
-//! the largest array, never every array (as a [`Baked`](crate::baked::Baked) does) nor the
-//! file's bytes.
+//! time and each array in chunks: its records are made in file order (as
+//! [`Baked::new`](crate::baked::Baked::new) collects them) and written a chunk at a time
+//! ([`Sections::put_iter`](crate::clod_file::Sections::put_iter)), so the write step holds
+//! the inputs, the numbering tables (`u32` per node, split and triangle) and one chunk,
+//! never an array whole (as a [`Baked`](crate::baked::Baked) does) nor the file's bytes. Only
+//! the roots and the base mesh, both as small as the coarsest mesh, are made whole.
 //!
 //! The arrays are never all in memory at once, so they cannot be validated before writing as
 //! [`Baked::write`](crate::baked::Baked::write) validates its own; the written temporary file
@@ -54,17 +56,17 @@ pub fn write(
     let specs = section_specs(&meta, &sections);
     write_sections(path, &specs, Check::ReadBack, move |out| {
         out.put(std::slice::from_ref(&meta))?;
-        out.put(&arrays::positions(&w))?;
-        out.put(&ids.nodes(&h))?;
-        out.put(&arrays::splits(&h, &ids, &polys))?;
-        out.put(&arrays::bounds(&w, &h, &ids))?;
-        out.put(&polys.polygons(&w, &ids))?;
+        out.put_iter(arrays::position_records(&w))?;
+        out.put_iter(ids.node_records(&h))?;
+        out.put_iter(arrays::split_records(&h, &ids, &polys))?;
+        out.put_iter(arrays::bound_records(&w, &h, &ids))?;
+        out.put_iter(polys.polygon_records(&w, &h, &ids))?;
         out.put(&ids.roots(&h))?;
         out.put(&polys.base_faces(&h, &ids))?;
         drop((h, ids, polys));
-        out.put(&arrays::vertex_table_offsets(&w))?;
-        out.put(&arrays::vertex_table(&w))?;
-        out.put(&arrays::vertices(&w))?;
+        out.put_iter(arrays::vertex_table_offset_records(&w))?;
+        out.put_iter(arrays::vertex_table_records(&w))?;
+        out.put_iter(arrays::vertex_records(&w))?;
         drop(w);
         for e in &sections {
             out.put(e.bytes)?;

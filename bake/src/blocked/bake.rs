@@ -1,17 +1,81 @@
 //! A whole bake in blocks: import, weld, the blocked hierarchy, the `.clod` arrays and
-//! their validation, as [`crate::pipeline::bake_file`] does in one build.
+//! their validation, as [`crate::pipeline::bake_file`] does in one build. The hierarchy's
+//! collapses are on disk ([`SpilledBuild`]) until written ([`SpilledBuild::write`]) or read
+//! back into memory ([`SpilledBuild::into_built`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::{build, BlockedError, BlockedOptions, LevelStats};
-use crate::baked::Baked;
+use caveclod_core::format::ExtraSection;
+
+use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
+use crate::baked::{BakeWriteError, Baked};
 use crate::hierarchy::AttributeWeights;
 use crate::import::{self, ImportOptions};
 use crate::mesh::{Mesh, Surface};
-use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
+use crate::pipeline::{bake_info, built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
 use crate::weld;
+
+/// A blocked bake up to its arrays: the welded mesh and its hierarchy, the collapses on
+/// disk.
+#[derive(Debug)]
+pub struct SpilledBuild {
+    /// The welded mesh.
+    pub welded: weld::Welded,
+    /// Its hierarchy.
+    pub spilled: Spilled,
+    /// The input's surfaces with their materials.
+    pub surfaces: Vec<Surface>,
+    /// The directory the surfaces' texture paths are relative to.
+    pub texture_dir: PathBuf,
+    /// About the bake so far.
+    pub info: BakeInfo,
+    start: Instant,
+}
+
+impl SpilledBuild {
+    /// Writes the `.clod` file at `path` with `extra` sections from the welded mesh and the
+    /// spilled collapses, splits in reverse creation order (`blocked::write`); the written
+    /// file is validated before it replaces `path`. Returns the file's length.
+    pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
+        super::write::write(
+            self.welded,
+            self.spilled,
+            &self.surfaces,
+            &self.texture_dir,
+            path,
+            extra,
+        )
+    }
+
+    /// The hierarchy read back into memory ([`Spilled::into_hierarchy`]), as an in-core
+    /// bake's [`Built`] (whose arrays number the splits depth-first).
+    pub fn into_built(self, name: &str) -> Result<Built, BlockedBakeError> {
+        let h = self
+            .spilled
+            .into_hierarchy()
+            .map_err(|e| BlockedBakeError::Blocked {
+                path: name.to_string(),
+                source: BlockedError::Spill(e.to_string()),
+            })?;
+        let mut b = built(
+            self.welded,
+            h,
+            self.surfaces,
+            self.info.input_triangles as usize,
+            self.start,
+        );
+        b.texture_dir = self.texture_dir;
+        b.info = self.info;
+        Ok(b)
+    }
+
+    /// Seconds since the bake started.
+    pub fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
 
 /// Why a blocked bake failed.
 #[derive(Debug, thiserror::Error)]
@@ -41,14 +105,27 @@ pub fn bake_file_blocked(
     Ok((baked, info, levels))
 }
 
-/// [`bake_file_blocked`] up to the arrays ([`Built`]). The imported mesh is dropped once
-/// welded (only its surfaces are kept), so the two never take memory at once.
+/// [`bake_file_blocked`] up to the arrays ([`Built`]): [`build_file_spilled`], the
+/// hierarchy read back into memory.
 pub fn build_file_blocked(
     path: &Path,
     import_options: &ImportOptions,
     options: &BlockedOptions,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(Built, Vec<LevelStats>), BlockedBakeError> {
+    let (spilled, levels) = build_file_spilled(path, import_options, options, progress)?;
+    Ok((spilled.into_built(&path.display().to_string())?, levels))
+}
+
+/// Imports `path` and builds its hierarchy in blocks, the collapses on disk. The imported
+/// mesh is dropped once welded (only its surfaces are kept), so the two never take memory
+/// at once.
+pub fn build_file_spilled(
+    path: &Path,
+    import_options: &ImportOptions,
+    options: &BlockedOptions,
+    progress: &mut dyn FnMut(Stage),
+) -> Result<(SpilledBuild, Vec<LevelStats>), BlockedBakeError> {
     let start = Instant::now();
     progress(Stage::Import);
     let (mut mesh, report) =
@@ -57,9 +134,24 @@ pub fn build_file_blocked(
     let w = weld_mesh(&mesh, &name, progress)?;
     let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
     drop(mesh);
-    let (mut built, levels) =
-        build_welded(w, surfaces, triangles, &name, options, start, progress)?;
-    built.texture_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (spilled, levels) = build_spilled(
+        &w,
+        &AttributeWeights::default(),
+        options,
+        &mut |done, most| progress(Stage::Collapse(done, most)),
+    )
+    .map_err(|source| BlockedBakeError::Blocked {
+        path: name.clone(),
+        source,
+    })?;
+    let mut built = SpilledBuild {
+        info: bake_info(&w, spilled.passes, triangles, start),
+        welded: w,
+        spilled,
+        surfaces,
+        texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        start,
+    };
     built.info.repairs.skipped_primitives = report.skipped_primitives as u64;
     built.info.notes = report.notes;
     Ok((built, levels))

@@ -15,17 +15,11 @@ pub(super) struct Block {
     pub(super) frozen: Vec<bool>,
 }
 
-/// The block of the triangles `tris` of `w` as their corners stand now (`corners`, node
-/// ids, at the positions `node_position`); `shared[x]` says that position `x` has
-/// triangles in other blocks too.
-pub(super) fn extract(
-    w: &Welded,
-    corners: &[[u32; 3]],
-    node_position: &[u32],
-    tris: Vec<u32>,
-    shared: &[bool],
-) -> Block {
-    let at = |f: u32, k: usize| node_position[corners[f as usize][k] as usize];
+/// The block of the triangles `tris` of `w` as their corners stand now (`corners`, the
+/// positions of the nodes at them); `shared[x]` says that position `x` has triangles in
+/// other blocks too.
+pub(super) fn extract(w: &Welded, corners: &[[u32; 3]], tris: Vec<u32>, shared: &[bool]) -> Block {
+    let at = |f: u32, k: usize| corners[f as usize][k];
     let mut positions: Vec<u32> = tris
         .iter()
         .flat_map(|&f| (0..3).map(move |k| at(f, k)))

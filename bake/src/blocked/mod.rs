@@ -17,14 +17,16 @@
 //!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
 //!    are threads;
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
-//!    mesh's nodes and triangles;
+//!    mesh's nodes and triangles, each appended to a temporary file as it joins (`spill`):
+//!    the whole keeps in memory only what the next collapses read;
 //! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
 //!    from what the last one left, their old borders no longer frozen; the level of a single
 //!    block, nothing frozen, ends it, as the in-core build ends.
 //!
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
-//! `0..positions` the leaves, collapse `c` creating node `positions + c`, so
-//! [`crate::baked::Baked::new`] turns it into a `.clod` as it does an in-core build. A
+//! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
+//! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
+//! in-core build; [`SpilledBuild::write`] writes it from the temporary file (`write`). A
 //! node's bounds hold everything below it across the levels: its radius holds its
 //! children's spheres, its cone their cones, and its error adds the block's own measure
 //! (the distance of the level's positions from the triangles that replace them) to the
@@ -33,10 +35,16 @@
 mod bake;
 mod block;
 mod replay;
+mod spill;
 mod stitch;
 mod tiles;
+pub(crate) mod write;
 
-pub use bake::{bake_file_blocked, bake_mesh_blocked, build_file_blocked, BlockedBakeError};
+pub use bake::{
+    bake_file_blocked, bake_mesh_blocked, build_file_blocked, build_file_spilled, BlockedBakeError,
+    SpilledBuild,
+};
+pub use spill::Spilled;
 
 use rayon::prelude::*;
 
@@ -85,7 +93,8 @@ pub struct LevelStats {
 /// The whole hierarchy and the levels that built it.
 #[derive(Clone, Debug)]
 pub struct Blocked {
-    /// The hierarchy, as [`crate::hierarchy::build`] would hand it over.
+    /// The hierarchy, as [`crate::hierarchy::build`] would hand it over, read back from the
+    /// spill file ([`Spilled::into_hierarchy`]: the leaves carry no bounds).
     pub hierarchy: Hierarchy,
     /// Per level, from the first.
     pub levels: Vec<LevelStats>,
@@ -100,16 +109,34 @@ pub enum BlockedError {
     /// A block's hierarchy did not fit the whole (a baker bug).
     #[error("internal error: a block's hierarchy does not join the whole: {0}")]
     Stitch(&'static str),
+    /// Writing or reading the collapses' temporary file failed.
+    #[error("the temporary file of the collapses: {0}")]
+    Spill(String),
 }
 
-/// Builds the hierarchy of `w` in blocks; `progress` gets `(collapses so far, at most
-/// collapsible)` after each level.
+/// [`build_spilled`], the hierarchy read back into memory.
 pub fn build(
     w: &Welded,
     weights: &AttributeWeights,
     options: &BlockedOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Blocked, BlockedError> {
+    let (spilled, levels) = build_spilled(w, weights, options, progress)?;
+    let hierarchy = spilled
+        .into_hierarchy()
+        .map_err(|e| BlockedError::Spill(e.to_string()))?;
+    Ok(Blocked { hierarchy, levels })
+}
+
+/// Builds the hierarchy of `w` in blocks, its collapses on disk, and the levels that built
+/// it; `progress` gets `(collapses so far, at most collapsible)` after each level.
+pub fn build_spilled(
+    w: &Welded,
+    weights: &AttributeWeights,
+    options: &BlockedOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(Spilled, Vec<LevelStats>), BlockedError> {
+    let spill_error = |e: std::io::Error| BlockedError::Spill(e.to_string());
     let np = w.positions.len();
     let most = np.saturating_sub(1) as u64;
     let grid = tiles::Grid::new(
@@ -122,16 +149,17 @@ pub fn build(
         .map(|t| grid.tile_of(t.p.map(|x| w.positions[x as usize])))
         .collect();
     let mut side = grid.side;
-    let mut whole = stitch::Whole::new(np, w.triangles.iter().map(|t| t.p).collect());
+    let mut whole =
+        stitch::Whole::new(np, w.triangles.iter().map(|t| t.p).collect()).map_err(spill_error)?;
     let mut levels = Vec::new();
     loop {
-        let blocks = blocks_of(&tile, &whole.h.alive, side);
-        let frozen = shared_positions(&blocks, &whole.h, np);
+        let blocks = blocks_of(&tile, &whole.alive, side);
+        let frozen = shared_positions(&blocks, &whole.corners, np);
         let mut stats = LevelStats {
             blocks: blocks.len(),
             largest_block: blocks.iter().map(Vec::len).max().unwrap_or(0),
             triangles: blocks.iter().map(Vec::len).sum(),
-            collapses: whole.h.collapses.len(),
+            collapses: whole.collapses(),
         };
         for b in &blocks {
             whole.add_border(b, &frozen);
@@ -148,13 +176,7 @@ pub fn build(
             let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = chunk
                 .par_iter()
                 .map(|tris| {
-                    let b = block::extract(
-                        w,
-                        &whole.h.corners,
-                        &whole.h.node_position,
-                        tris.clone(),
-                        &frozen,
-                    );
+                    let b = block::extract(w, &whole.corners, tris.clone(), &frozen);
                     // The level keeps only the collapses down to its share; the passes
                     // after it would be thrown away.
                     let stop_at = match keep {
@@ -172,10 +194,10 @@ pub fn build(
             }
         }
         whole.clear_border();
-        whole.h.passes += passes;
-        stats.collapses = whole.h.collapses.len() - stats.collapses;
+        whole.passes += passes;
+        stats.collapses = whole.collapses() - stats.collapses;
         levels.push(stats);
-        progress(whole.h.collapses.len() as u64, most);
+        progress(whole.collapses() as u64, most);
         if side == 1 {
             break;
         }
@@ -184,10 +206,7 @@ pub fn build(
         }
         side /= 2;
     }
-    Ok(Blocked {
-        hierarchy: whole.h,
-        levels,
-    })
+    Ok((whole.finish().map_err(spill_error)?, levels))
 }
 
 /// The live triangles of each non-empty tile of a grid of side `side`, by tile.
@@ -202,15 +221,16 @@ fn blocks_of(tile: &[u32], alive: &[bool], side: u32) -> Vec<Vec<u32>> {
     by_tile
 }
 
-/// Per position: whether triangles of more than one block touch it.
-fn shared_positions(blocks: &[Vec<u32>], h: &Hierarchy, positions: usize) -> Vec<bool> {
+/// Per position: whether triangles of more than one block touch it (`corners`: the
+/// positions of each triangle's corners).
+fn shared_positions(blocks: &[Vec<u32>], corners: &[[u32; 3]], positions: usize) -> Vec<bool> {
     const UNSEEN: u32 = u32::MAX;
     let mut owner = vec![UNSEEN; positions];
     let mut shared = vec![false; positions];
     for (i, b) in blocks.iter().enumerate() {
         for &f in b {
-            for v in h.corners[f as usize] {
-                let x = h.node_position[v as usize] as usize;
+            for x in corners[f as usize] {
+                let x = x as usize;
                 if owner[x] == UNSEEN {
                     owner[x] = i as u32;
                 } else if owner[x] != i as u32 {

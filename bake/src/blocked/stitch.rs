@@ -3,6 +3,11 @@
 //! neighbours its border hid found across that border, and bounds that hold everything below
 //! a node, earlier levels included.
 //!
+//! The whole keeps in memory only what stitching needs — per node its parent, per position
+//! the node standing there and that node's bounds, per triangle the positions of its corners
+//! and whether it lives; each collapse goes to the spill file ([`super::spill`]) as it is
+//! stitched.
+//!
 //! The order of the whole: a level's blocks one after another, the levels in turn. The
 //! blocks of a level share only frozen positions, which no collapse removes, so each block's
 //! collapses change only its own triangles and the order within a level is free. The one
@@ -15,6 +20,7 @@ use std::collections::HashMap;
 
 use super::block::Block;
 use super::replay::Replay;
+use super::spill::{Bounds, Record, SpillWriter, Spilled};
 use super::BlockedError;
 use crate::hierarchy::{merge_cones, Collapse, Hierarchy};
 
@@ -22,9 +28,20 @@ const NONE: u32 = u32::MAX;
 
 /// The hierarchy of the whole mesh so far, and the node standing at each position.
 pub(super) struct Whole {
-    pub(super) h: Hierarchy,
+    /// Parent of every node so far, `NONE` for roots.
+    parent: Vec<u32>,
+    /// Per triangle, the positions of its corners now.
+    pub(super) corners: Vec<[u32; 3]>,
+    /// Per triangle, whether it lives.
+    pub(super) alive: Vec<bool>,
+    /// Batches (passes) of the blocks' builds so far.
+    pub(super) passes: u32,
     /// The node at each position now (its latest).
     current: Vec<u32>,
+    /// The bounds of the node at each position now.
+    bounds: Vec<Bounds>,
+    /// The collapses so far.
+    spill: SpillWriter,
     /// Per position: a leaf's bounds were set by a block.
     leaf_set: Vec<bool>,
     /// The triangle holding each directed edge `(a, b)` between two frozen positions, as the
@@ -33,25 +50,37 @@ pub(super) struct Whole {
 }
 
 impl Whole {
-    /// The leaves of `positions` positions over the triangles `corners`, all alive.
-    pub(super) fn new(positions: usize, corners: Vec<[u32; 3]>) -> Self {
+    /// The leaves of `positions` positions under the triangles `corners`, all alive.
+    pub(super) fn new(positions: usize, corners: Vec<[u32; 3]>) -> std::io::Result<Self> {
         let nt = corners.len();
-        Self {
-            h: Hierarchy {
-                collapses: Vec::new(),
-                parent: vec![NONE; positions],
-                node_position: (0..positions as u32).collect(),
-                radius: vec![0.0; positions],
-                cone: vec![([0.0, 0.0, 1.0], 0.0); positions],
-                error: vec![0.0; positions],
-                corners,
-                alive: vec![true; nt],
-                passes: 0,
-            },
+        Ok(Self {
+            parent: vec![NONE; positions],
+            corners,
+            alive: vec![true; nt],
+            passes: 0,
             current: (0..positions as u32).collect(),
+            bounds: vec![Bounds::LEAF; positions],
+            spill: SpillWriter::new()?,
             leaf_set: vec![false; positions],
             border: HashMap::new(),
-        }
+        })
+    }
+
+    /// Collapses so far.
+    pub(super) fn collapses(&self) -> usize {
+        self.spill.len()
+    }
+
+    /// The hierarchy, its collapses on disk.
+    pub(super) fn finish(self) -> std::io::Result<Spilled> {
+        Spilled::new(
+            self.spill,
+            self.parent,
+            self.corners,
+            self.alive,
+            self.current,
+            self.passes,
+        )
     }
 
     /// Records the border edges of the live triangles `tris` (both ends frozen).
@@ -71,7 +100,7 @@ impl Whole {
         frozen: &[bool],
         mut op: impl FnMut(&mut HashMap<(u32, u32), u32>, (u32, u32)),
     ) {
-        let c = self.h.corners[f as usize].map(|v| self.h.node_position[v as usize]);
+        let c = self.corners[f as usize];
         for k in 0..3 {
             let (a, b) = (c[k], c[(k + 1) % 3]);
             if frozen[a as usize] && frozen[b as usize] {
@@ -107,10 +136,14 @@ impl Whole {
         }
         // Per local node: the largest error of the whole's nodes this level started from
         // below it (the errors the block's own bounds, measured on its level, add to).
-        let mut below: Vec<f32> = node.iter().map(|&v| self.h.error[v as usize]).collect();
+        let mut below: Vec<f32> = b
+            .positions
+            .iter()
+            .map(|&x| self.bounds[x as usize].error)
+            .collect();
         for f in &b.tris {
             let f = *f as usize;
-            if !self.h.alive[f] {
+            if !self.alive[f] {
                 return Err(BlockedError::Stitch("a block holds a dead triangle"));
             }
         }
@@ -128,6 +161,8 @@ impl Whole {
             Keep::All => 0,
             Keep::Share(share) => (b.tris.len() as f64 * share) as usize,
         };
+        // The whole mesh's position of a local node.
+        let pos_of = |v: u32| b.positions[local.node_position[v as usize] as usize];
         for (i, c) in local.collapses.iter().enumerate() {
             if replay.live <= stop {
                 break;
@@ -136,7 +171,6 @@ impl Whole {
             let (t, u) = (node[c.t as usize], node[c.u as usize]);
             let tri = |f: u32| if f == NONE { NONE } else { b.tris[f as usize] };
             let mut neighbours = c.neighbours.map(tri);
-            let pos_of = |v: u32| b.positions[local.node_position[v as usize] as usize];
             let corner = |f: u32, k: usize| pos_of(replay.corners[f as usize][k]);
             if replay.corners[c.fl as usize][c.rot_l as usize] != c.t {
                 return Err(BlockedError::Stitch("a collapse's f_l does not hold its t"));
@@ -151,32 +185,28 @@ impl Whole {
                 let y = corner(c.fr, (c.rot_r as usize + 1) % 3);
                 neighbours[2] = self.border.get(&(y, pt)).copied().unwrap_or(NONE);
             }
-            let created = self.h.parent.len() as u32;
-            let (ti, ui) = (t as usize, u as usize);
+            let created = self.parent.len() as u32;
+            let (bt, bu) = (self.bounds[pt as usize], self.bounds[pos_of(c.u) as usize]);
             let d = distance(b, local, c.t, c.u);
             let from_below = below[c.t as usize].max(below[c.u as usize]);
             below.push(from_below);
-            let radius = (local.radius[n_local])
-                .max(self.h.radius[ti])
-                .max((d + f64::from(self.h.radius[ui])) as f32);
-            let cone = merge_cones(
-                local.cone[n_local],
-                merge_cones(self.h.cone[ti], self.h.cone[ui]),
-            );
-            let error = (local.error[n_local] + from_below)
-                .max(self.h.error[ti])
-                .max(self.h.error[ui]);
-            self.h.parent.push(NONE);
-            self.h.node_position.push(self.h.node_position[ti]);
-            self.h.radius.push(radius);
-            self.h.cone.push(cone);
-            self.h.error.push(error);
-            self.h.parent[ti] = created;
-            self.h.parent[ui] = created;
+            let made = Bounds {
+                radius: (local.radius[n_local])
+                    .max(bt.radius)
+                    .max((d + f64::from(bu.radius)) as f32),
+                cone: merge_cones(local.cone[n_local], merge_cones(bt.cone, bu.cone)),
+                error: (local.error[n_local] + from_below)
+                    .max(bt.error)
+                    .max(bu.error),
+            };
+            self.parent.push(NONE);
+            self.parent[t as usize] = created;
+            self.parent[u as usize] = created;
             self.current[pt as usize] = created;
+            self.bounds[pt as usize] = made;
             node.push(created);
             replay.apply(local, nl, i);
-            self.h.collapses.push(Collapse {
+            let collapse = Collapse {
                 t,
                 u,
                 fl: tri(c.fl),
@@ -184,11 +214,14 @@ impl Whole {
                 neighbours,
                 rot_l: c.rot_l,
                 rot_r: c.rot_r,
-            });
+            };
+            self.spill
+                .push(&Record::new(&collapse, pt, &made))
+                .map_err(|e| BlockedError::Spill(e.to_string()))?;
         }
         for (i, &f) in b.tris.iter().enumerate() {
-            self.h.corners[f as usize] = replay.corners[i].map(|v| node[v as usize]);
-            self.h.alive[f as usize] = replay.alive[i];
+            self.corners[f as usize] = replay.corners[i].map(pos_of);
+            self.alive[f as usize] = replay.alive[i];
         }
         for (i, &f) in b.tris.iter().enumerate() {
             if replay.alive[i] {
@@ -204,12 +237,13 @@ impl Whole {
     fn leaf_bounds(&mut self, b: &Block, local: &Hierarchy) {
         for (i, &x) in b.positions.iter().enumerate() {
             let x = x as usize;
+            let leaf = &mut self.bounds[x];
             if self.leaf_set[x] {
-                self.h.radius[x] = self.h.radius[x].max(local.radius[i]);
-                self.h.cone[x] = merge_cones(self.h.cone[x], local.cone[i]);
+                leaf.radius = leaf.radius.max(local.radius[i]);
+                leaf.cone = merge_cones(leaf.cone, local.cone[i]);
             } else {
-                self.h.radius[x] = local.radius[i];
-                self.h.cone[x] = local.cone[i];
+                leaf.radius = local.radius[i];
+                leaf.cone = local.cone[i];
                 self.leaf_set[x] = true;
             }
         }

@@ -2,7 +2,7 @@
 //! levels, write the .clod file and print its report.
 
 use caveclod_bake::baked::{BakeWriteError, Baked};
-use caveclod_bake::blocked::{build_file_blocked, BlockedOptions, LevelStats};
+use caveclod_bake::blocked::{build_file_spilled, BlockedOptions, LevelStats, SpilledBuild};
 use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
@@ -20,9 +20,52 @@ use crate::args::BakeArgs;
 
 /// What a bake made, in core or out of core, up to the arrays.
 struct Made {
-    built: Built,
+    built: Build,
     /// What the report adds.
     extras: Extras,
+}
+
+/// A bake up to the arrays: its hierarchy in memory, or a blocked build's with the
+/// collapses on disk.
+enum Build {
+    InMemory(Built),
+    Spilled(SpilledBuild),
+}
+
+impl Build {
+    fn info(&self) -> &BakeInfo {
+        match self {
+            Build::InMemory(b) => &b.info,
+            Build::Spilled(b) => &b.info,
+        }
+    }
+
+    fn seconds(&self) -> f64 {
+        match self {
+            Build::InMemory(b) => b.seconds(),
+            Build::Spilled(b) => b.seconds(),
+        }
+    }
+
+    /// Writes the file one array at a time, from the collapses in memory or on disk.
+    fn write(
+        self,
+        path: &std::path::Path,
+        extra: &[ExtraSection<'_>],
+    ) -> Result<u64, BakeWriteError> {
+        match self {
+            Build::InMemory(b) => b.write(path, extra),
+            Build::Spilled(b) => b.write(path, extra),
+        }
+    }
+
+    /// The hierarchy in memory (a spilled one read back).
+    fn into_built(self, name: &str) -> Result<Built, String> {
+        match self {
+            Build::InMemory(b) => Ok(b),
+            Build::Spilled(b) => b.into_built(name).map_err(|e| e.to_string()),
+        }
+    }
 }
 
 /// What a bake's report adds to the file's, and the extra sections besides the hierarchy.
@@ -58,7 +101,7 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
             &mut on_stage,
         )
         .map(|built| Made {
-            built,
+            built: Build::InMemory(built),
             extras: Extras {
                 ooc_stats: None,
                 octree: None,
@@ -147,7 +190,7 @@ fn bake_streamed(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, 
     ooc_bar.finish();
     let o = r.map_err(|e| e.to_string())?;
     Ok(Made {
-        built: o.built,
+        built: Build::InMemory(o.built),
         extras: Extras {
             ooc_stats: Some(o.stats),
             octree: o.octree,
@@ -163,9 +206,10 @@ const BLOCK_BYTES_PER_TRIANGLE: u64 = 1024;
 /// Bakes the input in blocks ([`caveclod_bake::blocked`]), the blocks sized so that as
 /// many builds as run at once fit the memory budget.
 fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, String> {
+    fixed_mmap_threshold();
     let options =
         BlockedOptions::for_budget(a.memory_budget, rayon_threads(), BLOCK_BYTES_PER_TRIANGLE);
-    let (built, levels) = build_file_blocked(
+    let (built, levels) = build_file_spilled(
         &a.input,
         &ImportOptions { spacing: a.spacing },
         &options,
@@ -173,7 +217,7 @@ fn bake_blocked(a: &BakeArgs, on_stage: &mut dyn FnMut(Stage)) -> Result<Made, S
     )
     .map_err(|e| e.to_string())?;
     Ok(Made {
-        built,
+        built: Build::Spilled(built),
         extras: Extras {
             ooc_stats: None,
             octree: None,
@@ -191,7 +235,9 @@ fn rayon_threads() -> usize {
 /// out-of-core bake allocates and frees buffers of many megabytes (sort chunks, clusters
 /// growing on several threads); glibc raises its threshold for that to the largest buffer
 /// freed so far, after which freed buffers stay resident in its arenas: about 100 MB more
-/// peak memory for the 20M-triangle terrain at a 256 MiB budget.
+/// peak memory for the 20M-triangle terrain at a 256 MiB budget. A blocked bake frees its
+/// blocks' builds level after level and the welded mesh before the written file is mapped
+/// for validation, which then finds them still resident.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn fixed_mmap_threshold() {
     // SAFETY: `mallopt` sets a parameter of glibc's allocator, which takes its own lock; it
@@ -216,10 +262,11 @@ fn gmesh_levels(baked: &Baked, min_polygons: Option<u32>) -> Result<GMeshData, S
 }
 
 /// Writes the file from the welded mesh and the collapses one array at a time
-/// ([`Built::write`]), with the bake's report and the multiresolution octree (if any) as
-/// extra sections; the mesh and the collapses are dropped once written. Returns the report.
-fn write_streamed(a: &BakeArgs, built: Built, extras: &Extras) -> Result<BakeInfo, String> {
-    let mut info = built.info.clone();
+/// ([`Built::write`], [`SpilledBuild::write`]), with the bake's report and the
+/// multiresolution octree (if any) as extra sections; the mesh and the collapses are dropped
+/// once written. Returns the report.
+fn write_streamed(a: &BakeArgs, built: Build, extras: &Extras) -> Result<BakeInfo, String> {
+    let mut info = built.info().clone();
     info.bake_seconds = built.seconds();
     write_with(extras, &info, None, |sections| {
         built.write(&a.output, sections)
@@ -231,11 +278,12 @@ fn write_streamed(a: &BakeArgs, built: Built, extras: &Extras) -> Result<BakeInf
 /// levels, the bake's report and the multiresolution octree (if any). Returns the report.
 fn write_with_gmesh(
     a: &BakeArgs,
-    built: Built,
+    built: Build,
     extras: &Extras,
     bar: &Progress,
 ) -> Result<BakeInfo, String> {
     let (baked, info) = built
+        .into_built(&a.input.display().to_string())?
         .assemble(&mut |s| show_stage(bar, s))
         .map_err(|e| e.to_string())?;
     bar.show("building g-mesh levels", None);
