@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::geometry::corner_of;
 use super::legality::Verdict;
-use super::rank::{order_key, rank_all, Candidate, Ranked, Slot};
+use super::rank::{order_key, rank_all, Ranked, Slot};
 use super::work::Work;
 use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 
@@ -79,8 +79,6 @@ struct Passes {
     live: Vec<u32>,
     /// The ranking of every triangle's three edge slots.
     slots: Vec<[Slot; 3]>,
-    /// The pass's ranked collapses, in slot order.
-    cands: Vec<Candidate>,
     ranked: Ranked,
     /// Other directions of edges whose cheaper one was illegal: `(cost key, slot)`.
     later: BinaryHeap<Reverse<(u64, usize)>>,
@@ -103,7 +101,6 @@ impl Passes {
         Self {
             live: (0..triangles as u32).collect(),
             slots: vec![[Slot::default(); 3]; triangles],
-            cands: Vec::new(),
             ranked: Ranked::default(),
             later: BinaryHeap::new(),
             rings: [Vec::new(), Vec::new()],
@@ -133,14 +130,13 @@ impl Passes {
         self.live.retain(|&f| work.alive[f as usize]);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
         // slots per triangle, in order).
-        rank_all(work, &self.live, &mut self.slots, &mut self.cands, threads);
+        let count = rank_all(work, &self.live, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
-        let limit = self
-            .ranked
-            .start(&self.cands, if full { 1.0 } else { PASS_SHARE });
+        let share = if full { 1.0 } else { PASS_SHARE };
+        let limit = self.ranked.start(&self.slots, &self.live, count, share);
         let mut applied = 0u64;
         self.later.clear();
-        let max_tries = 2 * self.cands.len() as u64;
+        let max_tries = 2 * count as u64;
         let mut tries = 0u64;
         loop {
             let (t, u, from_later) = match self.next(work, pass, limit) {
@@ -180,7 +176,7 @@ impl Passes {
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
     fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
-        let next_cand = self.ranked.peek(&work.stamp, pass);
+        let next_cand = self.ranked.peek(&self.slots, &work.stamp, pass);
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,

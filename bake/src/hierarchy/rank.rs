@@ -65,11 +65,12 @@ pub(super) fn order_key(x: f64) -> u64 {
 /// The ranked collapses of a pass, handed out by cost, equal costs in the order they were
 /// ranked. They are bucketed by the top bits of their cost first, and a bucket is sorted
 /// only when reached, after dropping those whose ends are taken by then (which the pass
-/// would skip wherever they stood).
+/// would skip wherever they stood). The buckets hold slot numbers (`3 × triangle + slot`),
+/// not the collapses: the slots hold the rest for the whole pass.
 #[derive(Default)]
 pub(super) struct Ranked {
-    /// The candidates, bucket after bucket, each in ranking order.
-    by_bucket: Vec<Candidate>,
+    /// The candidates' slot numbers, bucket after bucket, each in ranking order.
+    by_bucket: Vec<u32>,
     /// Where each bucket starts in `by_bucket`, and the end.
     bounds: Vec<u32>,
     /// The next bucket.
@@ -86,19 +87,40 @@ const BUCKET_BITS: u32 = 16;
 /// Candidates below which a pass sorts them all at once.
 const BUCKET_MIN: usize = 4096;
 
+/// The ranked collapses of the triangles `live` in `slots`, in slot order, each with its
+/// slot number.
+pub(super) fn candidates<'a>(
+    slots: &'a [[Slot; 3]],
+    live: &'a [u32],
+) -> impl Iterator<Item = (u32, Candidate)> + 'a {
+    live.iter().flat_map(move |&f| {
+        slots[f as usize]
+            .iter()
+            .enumerate()
+            .filter_map(move |(k, slot)| Some((3 * f + k as u32, candidate(slot)?)))
+    })
+}
+
 impl Ranked {
-    /// Takes a pass's candidates, of which the pass means to apply the cheapest `share`;
-    /// returns the [`order_key`] of the dearest cost in that share (for many candidates,
-    /// rounded up to the end of its bucket), or `u64::MAX` when the share is every
-    /// candidate. Only candidates up to it are handed out, and the pass cuts what is dearer,
-    /// the other directions it queues included: a share of everything cuts nothing.
-    pub(super) fn start(&mut self, cands: &[Candidate], share: f64) -> u64 {
+    /// Takes a pass's `count` candidates (those of the triangles `live` in `slots`), of
+    /// which the pass means to apply the cheapest `share`; returns the [`order_key`] of the
+    /// dearest cost in that share (for many candidates, rounded up to the end of its bucket),
+    /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
+    /// out, and the pass cuts what is dearer, the other directions it queues included: a
+    /// share of everything cuts nothing.
+    pub(super) fn start(
+        &mut self,
+        slots: &[[Slot; 3]],
+        live: &[u32],
+        count: usize,
+        share: f64,
+    ) -> u64 {
         self.chunk.clear();
         self.pos = 0;
-        let want = ((cands.len() as f64 * share).ceil() as usize).clamp(1, cands.len().max(1));
-        let everything = want >= cands.len();
-        if cands.len() < BUCKET_MIN {
-            self.chunk.extend_from_slice(cands);
+        let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
+        let everything = want >= count;
+        if count < BUCKET_MIN {
+            self.chunk.extend(candidates(slots, live).map(|(_, c)| c));
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
             return match self.chunk.get(want - 1) {
@@ -109,8 +131,8 @@ impl Ranked {
         let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
         self.bounds.clear();
         self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        for c in cands {
-            self.bounds[bucket(c) + 1] += 1;
+        for (_, c) in candidates(slots, live) {
+            self.bounds[bucket(&c) + 1] += 1;
         }
         for i in 0..1 << BUCKET_BITS {
             self.bounds[i + 1] += self.bounds[i];
@@ -125,12 +147,12 @@ impl Ranked {
         let kept = self.bounds[last + 1] as usize;
         self.bounds.truncate(last + 2);
         self.by_bucket.clear();
-        self.by_bucket.resize(kept, (0.0, 0, 0));
+        self.by_bucket.resize(kept, 0);
         let mut fill = self.bounds.clone();
-        for c in cands {
-            let b = bucket(c);
+        for (i, c) in candidates(slots, live) {
+            let b = bucket(&c);
             if b <= last {
-                self.by_bucket[fill[b] as usize] = *c;
+                self.by_bucket[fill[b] as usize] = i;
                 fill[b] += 1;
             }
         }
@@ -139,7 +161,12 @@ impl Ranked {
     }
 
     /// The next candidate whose ends were free when its bucket was reached.
-    pub(super) fn peek(&mut self, stamp: &[u32], pass: u32) -> Option<Candidate> {
+    pub(super) fn peek(
+        &mut self,
+        slots: &[[Slot; 3]],
+        stamp: &[u32],
+        pass: u32,
+    ) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
                 return None;
@@ -157,6 +184,7 @@ impl Ranked {
             self.chunk.extend(
                 self.by_bucket[a..b]
                     .iter()
+                    .filter_map(|&i| candidate(&slots[i as usize / 3][i as usize % 3]))
                     .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
             );
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -206,27 +234,27 @@ impl Work<'_> {
 }
 
 /// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
-/// (each slot's ranking depends on the mesh alone, so the split does not change it), and
-/// lists each edge's cheaper allowed direction in `cands`, in slot order.
-///
-/// The parts count their candidates while ranking, then write them straight into their
-/// stretch of `cands`: the list is never held twice.
+/// (each slot's ranking depends on the mesh alone, so the split does not change it);
+/// returns how many slots list a collapse (have an allowed direction), which
+/// [`candidates`] hands out in slot order.
 pub(super) fn rank_all(
     work: &Work<'_>,
     live: &[u32],
     slots: &mut [[Slot; 3]],
-    cands: &mut Vec<Candidate>,
     threads: usize,
-) {
-    cands.clear();
-    if threads <= 1 || live.len() < PARALLEL_MIN {
-        for &f in live {
-            for (k, slot) in slots[f as usize].iter_mut().enumerate() {
+) -> usize {
+    let rank_part = |part: &[u32], first: usize, mine: &mut [[Slot; 3]]| {
+        let mut count = 0;
+        for &f in part {
+            for (k, slot) in mine[f as usize - first].iter_mut().enumerate() {
                 work.rank(f, k, slot);
-                cands.extend(candidate(slot));
+                count += usize::from(slot.dir() != 0);
             }
         }
-        return;
+        count
+    };
+    if threads <= 1 || live.len() < PARALLEL_MIN {
+        return rank_part(live, 0, slots);
     }
     // Each part's triangles and their slots (`slots` from triangle `first` on), up to the
     // next part's first triangle.
@@ -242,38 +270,9 @@ pub(super) fn rank_all(
         jobs.push((part, first, mine));
         first = end;
     }
-    let counts: Vec<usize> = jobs
-        .par_iter_mut()
-        .map(|(part, first, mine)| {
-            let mut count = 0;
-            for &f in part.iter() {
-                for (k, slot) in mine[f as usize - *first].iter_mut().enumerate() {
-                    work.rank(f, k, slot);
-                    count += usize::from(slot.dir() != 0);
-                }
-            }
-            count
-        })
-        .collect();
-    cands.resize(counts.iter().sum(), (0.0, 0, 0));
-    let mut outs = Vec::with_capacity(jobs.len());
-    let mut free = &mut cands[..];
-    for &n in &counts {
-        let (out, others) = free.split_at_mut(n);
-        outs.push(out);
-        free = others;
-    }
     jobs.into_par_iter()
-        .zip(outs)
-        .for_each(|((part, first, mine), out)| {
-            let found = part
-                .iter()
-                .flat_map(|&f| &mine[f as usize - first])
-                .filter_map(candidate);
-            for (o, c) in out.iter_mut().zip(found) {
-                *o = c;
-            }
-        });
+        .map(|(part, first, mine)| rank_part(part, first, mine))
+        .sum()
 }
 
 /// The collapse a ranked slot lists: its cheaper allowed direction, if any.

@@ -99,13 +99,24 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
 /// cutting one was repeated forever).
 #[test]
 fn a_full_share_cuts_nothing() {
-    use super::rank::{order_key, Ranked};
+    use super::rank::{order_key, Ranked, Slot};
     for n in [100usize, 10_000] {
-        let cands: Vec<_> = (0..n).map(|i| (1.0 + i as f64, 0, 1)).collect();
+        // A triangle per candidate, its first slot allowed in one direction.
+        let slots: Vec<[Slot; 3]> = (0..n)
+            .map(|i| {
+                let mut row = [Slot::default(); 3];
+                row[0] = Slot {
+                    ends: [0, 1],
+                    costs: [1.0 + i as f64, f64::INFINITY],
+                };
+                row
+            })
+            .collect();
+        let live: Vec<u32> = (0..n as u32).collect();
         let mut ranked = Ranked::default();
-        assert_eq!(ranked.start(&cands, 1.0), u64::MAX, "{n} candidates");
+        assert_eq!(ranked.start(&slots, &live, n, 1.0), u64::MAX, "{n} candidates");
         // Half: the limit covers the cheapest half and leaves out the dearest.
-        let half = ranked.start(&cands, PASS_SHARE);
+        let half = ranked.start(&slots, &live, n, PASS_SHARE);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
         assert!(half < order_key(n as f64), "{n} candidates");
     }
