@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::geometry::corner_of;
 use super::legality::Verdict;
-use super::rank::{order_key, rank_all, Ranked, Slot};
+use super::rank::{order_key, rank_all, Ranked, Slots};
 use super::work::Work;
 use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 
@@ -78,7 +78,7 @@ struct Passes {
     /// The live triangles, in order.
     live: Vec<u32>,
     /// The ranking of every triangle's three edge slots.
-    slots: Vec<[Slot; 3]>,
+    slots: Slots,
     ranked: Ranked,
     /// Other directions of edges whose cheaper one was illegal: `(cost key, slot)`.
     later: BinaryHeap<Reverse<(u64, usize)>>,
@@ -100,7 +100,7 @@ impl Passes {
     fn new(triangles: usize) -> Self {
         Self {
             live: (0..triangles as u32).collect(),
-            slots: vec![[Slot::default(); 3]; triangles],
+            slots: Slots::new(triangles),
             ranked: Ranked::default(),
             later: BinaryHeap::new(),
             rings: [Vec::new(), Vec::new()],
@@ -198,7 +198,7 @@ impl Passes {
             let Some(Reverse((_, i))) = self.later.pop() else {
                 return Next::Done;
             };
-            let slot = &self.slots[i / 3][i % 3];
+            let slot = self.slots.get(i);
             let [a, b] = slot.ends;
             let (t, u) = if slot.dir() == 1 { (a, b) } else { (b, a) };
             Next::Try {
@@ -222,7 +222,7 @@ impl Passes {
     /// Queues the other direction of the edge `t`–`u` at its own cost, if allowed.
     fn queue_other_direction(&mut self, work: &Work<'_>, t: u32, u: u32) {
         let i = slot_of(work, t, u);
-        let other = self.slots[i / 3][i % 3].other();
+        let other = self.slots.get(i).other();
         if other.is_finite() {
             self.later.push(Reverse((order_key(other), i)));
         }

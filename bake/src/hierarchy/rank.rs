@@ -9,7 +9,7 @@ use rayon::prelude::*;
 /// A collapse as a pass ranks it: `(cost, t, u)`.
 pub(super) type Candidate = (f64, u32, u32);
 
-/// The ranking of one edge slot (3 per triangle) in the current pass.
+/// The ranking of one edge slot (3 per triangle) in the current pass, as [`Slots`] holds it.
 #[derive(Clone, Copy)]
 pub(super) struct Slot {
     /// The edge's ends, first and second corner of the slot, at the start of the pass.
@@ -21,17 +21,10 @@ pub(super) struct Slot {
 
 impl Slot {
     /// The cheaper allowed direction (the first on a tie), 0 for none: read from the
-    /// costs rather than stored, which keeps a slot at 24 bytes.
+    /// costs rather than stored.
     #[inline]
     pub(super) fn dir(&self) -> u8 {
-        let [cx, cy] = self.costs;
-        if cy < cx {
-            2
-        } else if cx.is_finite() {
-            1
-        } else {
-            0
-        }
+        dir(self.costs)
     }
 
     /// The cheaper allowed direction's cost.
@@ -45,12 +38,52 @@ impl Slot {
     }
 }
 
-impl Default for Slot {
-    fn default() -> Self {
+/// The cheaper allowed direction of a slot's `costs` (the first on a tie), 0 for none.
+#[inline]
+fn dir([cx, cy]: [f64; 2]) -> u8 {
+    if cy < cx {
+        2
+    } else if cx.is_finite() {
+        1
+    } else {
+        0
+    }
+}
+
+/// The rankings of every triangle's three edge slots: the corners the triangle had when
+/// they were ranked (a slot's ends are two of them) and the slots' costs, 60 bytes a
+/// triangle where a slot holding its own ends would take 72.
+pub(super) struct Slots {
+    /// Per triangle, its corners when its slots were last ranked (`NONE` before).
+    corners: Vec<[u32; 3]>,
+    /// Per triangle, the costs of its slots ([`Slot::costs`]).
+    costs: Vec<[[f64; 2]; 3]>,
+}
+
+impl Slots {
+    /// Slots of `triangles` triangles, none ranked.
+    pub(super) fn new(triangles: usize) -> Self {
         Self {
-            ends: [NONE; 2],
-            costs: [f64::INFINITY; 2],
+            corners: vec![[NONE; 3]; triangles],
+            costs: vec![[[f64::INFINITY; 2]; 3]; triangles],
         }
+    }
+
+    /// Slot `i` (`3 × triangle + slot`).
+    #[inline]
+    pub(super) fn get(&self, i: usize) -> Slot {
+        let (f, k) = (i / 3, i % 3);
+        let c = self.corners[f];
+        Slot {
+            ends: [c[k], c[next(k)]],
+            costs: self.costs[f][k],
+        }
+    }
+
+    /// Sets the slots of triangle `f` (for tests).
+    #[cfg(test)]
+    pub(super) fn set(&mut self, f: usize, corners: [u32; 3], costs: [[f64; 2]; 3]) {
+        (self.corners[f], self.costs[f]) = (corners, costs);
     }
 }
 
@@ -90,14 +123,14 @@ const BUCKET_MIN: usize = 4096;
 /// The ranked collapses of the triangles `live` in `slots`, in slot order, each with its
 /// slot number.
 pub(super) fn candidates<'a>(
-    slots: &'a [[Slot; 3]],
+    slots: &'a Slots,
     live: &'a [u32],
 ) -> impl Iterator<Item = (u32, Candidate)> + 'a {
     live.iter().flat_map(move |&f| {
-        slots[f as usize]
-            .iter()
-            .enumerate()
-            .filter_map(move |(k, slot)| Some((3 * f + k as u32, candidate(slot)?)))
+        (0..3).filter_map(move |k| {
+            let i = 3 * f + k;
+            Some((i, candidate(&slots.get(i as usize))?))
+        })
     })
 }
 
@@ -110,7 +143,7 @@ impl Ranked {
     /// share of everything cuts nothing.
     pub(super) fn start(
         &mut self,
-        slots: &[[Slot; 3]],
+        slots: &Slots,
         live: &[u32],
         count: usize,
         share: f64,
@@ -163,7 +196,7 @@ impl Ranked {
     /// The next candidate whose ends were free when its bucket was reached.
     pub(super) fn peek(
         &mut self,
-        slots: &[[Slot; 3]],
+        slots: &Slots,
         stamp: &[u32],
         pass: u32,
     ) -> Option<Candidate> {
@@ -184,7 +217,7 @@ impl Ranked {
             self.chunk.extend(
                 self.by_bucket[a..b]
                     .iter()
-                    .filter_map(|&i| candidate(&slots[i as usize / 3][i as usize % 3]))
+                    .filter_map(|&i| candidate(&slots.get(i as usize)))
                     .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
             );
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -198,25 +231,35 @@ impl Ranked {
 }
 
 impl Work<'_> {
-    /// Ranks the edge in slot `k` of triangle `f` if the slot stands for its edge (the
-    /// lower-numbered end first, or a border edge): the quadric costs of the directions
-    /// the surface-group rules allow, the cheaper first (the first on a tie).
+    /// Ranks the slots of triangle `f` whose edges changed since `corners` (the triangle's
+    /// corners when they were last ranked; `costs` their rankings), and brings `corners` up
+    /// to date; returns how many of its slots list a collapse.
     ///
     /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
     /// and positions (a node's never change), the groups of the triangles on the edge, and
     /// which those are (they change only by a collapse that also changes an end).
-    pub(super) fn rank(&self, f: u32, k: usize, slot: &mut Slot) {
+    fn rank_triangle(&self, f: u32, corners: &mut [u32; 3], costs: &mut [[f64; 2]; 3]) -> usize {
+        let c = self.tris[f as usize].c;
+        let mut count = 0;
+        for k in 0..3 {
+            if [corners[k], corners[next(k)]] != [c[k], c[next(k)]] {
+                costs[k] = self.rank(f, k);
+            }
+            count += usize::from(dir(costs[k]) != 0);
+        }
+        *corners = c;
+        count
+    }
+
+    /// The costs of the edge in slot `k` of triangle `f` if the slot stands for its edge
+    /// (the lower-numbered end first, or a border edge): the quadric costs of the directions
+    /// the surface-group rules allow, infinite where not allowed (both, for a slot that does
+    /// not stand for its edge).
+    fn rank(&self, f: u32, k: usize) -> [f64; 2] {
         let tri = &self.tris[f as usize];
         let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
-        if slot.ends == [a, b] {
-            return;
-        }
-        *slot = Slot {
-            ends: [a, b],
-            ..Slot::default()
-        };
         if !(a < b || g == NONE) {
-            return;
+            return [f64::INFINITY; 2];
         }
         // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
         let cx = if g != NONE && self.groups_ok(b, a, g, f) {
@@ -229,7 +272,7 @@ impl Work<'_> {
         } else {
             f64::INFINITY
         };
-        slot.costs = [cx, cy];
+        [cx, cy]
     }
 }
 
@@ -237,41 +280,36 @@ impl Work<'_> {
 /// (each slot's ranking depends on the mesh alone, so the split does not change it);
 /// returns how many slots list a collapse (have an allowed direction), which
 /// [`candidates`] hands out in slot order.
-pub(super) fn rank_all(
-    work: &Work<'_>,
-    live: &[u32],
-    slots: &mut [[Slot; 3]],
-    threads: usize,
-) -> usize {
-    let rank_part = |part: &[u32], first: usize, mine: &mut [[Slot; 3]]| {
-        let mut count = 0;
-        for &f in part {
-            for (k, slot) in mine[f as usize - first].iter_mut().enumerate() {
-                work.rank(f, k, slot);
-                count += usize::from(slot.dir() != 0);
-            }
-        }
-        count
-    };
+pub(super) fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut Slots, threads: usize) -> usize {
+    let rank_part =
+        |part: &[u32], first: usize, corners: &mut [[u32; 3]], costs: &mut [[[f64; 2]; 3]]| {
+            part.iter()
+                .map(|&f| {
+                    let i = f as usize - first;
+                    work.rank_triangle(f, &mut corners[i], &mut costs[i])
+                })
+                .sum::<usize>()
+        };
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        return rank_part(live, 0, slots);
+        return rank_part(live, 0, &mut slots.corners, &mut slots.costs);
     }
-    // Each part's triangles and their slots (`slots` from triangle `first` on), up to the
-    // next part's first triangle.
+    // Each part's triangles and their slots (from triangle `first` on), up to the next
+    // part's first triangle.
     let per = live.len().div_ceil(threads);
     let mut jobs = Vec::with_capacity(threads);
-    let (mut rest, mut first) = (slots, 0);
+    let (mut corners, mut costs, mut first) = (&mut slots.corners[..], &mut slots.costs[..], 0);
     for (i, part) in live.chunks(per).enumerate() {
         let end = live
             .get((i + 1) * per)
-            .map_or(first + rest.len(), |&f| f as usize);
-        let (mine, others) = rest.split_at_mut(end - first);
-        rest = others;
-        jobs.push((part, first, mine));
+            .map_or(first + corners.len(), |&f| f as usize);
+        let (my_corners, other_corners) = corners.split_at_mut(end - first);
+        let (my_costs, other_costs) = costs.split_at_mut(end - first);
+        (corners, costs) = (other_corners, other_costs);
+        jobs.push((part, first, my_corners, my_costs));
         first = end;
     }
     jobs.into_par_iter()
-        .map(|(part, first, mine)| rank_part(part, first, mine))
+        .map(|(part, first, corners, costs)| rank_part(part, first, corners, costs))
         .sum()
 }
 

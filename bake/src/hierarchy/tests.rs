@@ -99,19 +99,14 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
 /// cutting one was repeated forever).
 #[test]
 fn a_full_share_cuts_nothing() {
-    use super::rank::{order_key, Ranked, Slot};
+    use super::rank::{order_key, Ranked, Slots};
     for n in [100usize, 10_000] {
         // A triangle per candidate, its first slot allowed in one direction.
-        let slots: Vec<[Slot; 3]> = (0..n)
-            .map(|i| {
-                let mut row = [Slot::default(); 3];
-                row[0] = Slot {
-                    ends: [0, 1],
-                    costs: [1.0 + i as f64, f64::INFINITY],
-                };
-                row
-            })
-            .collect();
+        let mut slots = Slots::new(n);
+        for i in 0..n {
+            let none = [f64::INFINITY; 2];
+            slots.set(i, [0, 1, 2], [[1.0 + i as f64, f64::INFINITY], none, none]);
+        }
         let live: Vec<u32> = (0..n as u32).collect();
         let mut ranked = Ranked::default();
         assert_eq!(ranked.start(&slots, &live, n, 1.0), u64::MAX, "{n} candidates");
