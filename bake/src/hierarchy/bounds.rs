@@ -75,8 +75,8 @@ impl Work<'_> {
     /// is a corner of (its first).
     pub(super) fn place_points(&mut self) {
         self.pts_head = vec![NONE; self.tris.len()];
-        self.pts_next = vec![NONE; self.p.len()];
-        for (x, faces) in self.faces_of[..self.p.len()].iter().enumerate() {
+        self.pts_next = vec![NONE; self.positions()];
+        for (x, faces) in self.faces_of[..self.positions()].iter().enumerate() {
             if let Some(&f) = faces.first() {
                 self.pts_next[x] = std::mem::replace(&mut self.pts_head[f as usize], x as u32);
             }
@@ -87,7 +87,7 @@ impl Work<'_> {
     /// (ample for an error bound), relative to the centre.
     #[inline]
     fn point(&self, x: u32) -> V3 {
-        self.p[x as usize].map(|c| c as f32 as f64)
+        self.at(x as usize).map(|c| c as f32 as f64)
     }
 
     /// The nearest triangle of `star` to each of `points` and the squared distance, into

@@ -28,7 +28,7 @@ impl Work<'_> {
         self.wedges_at(pu)
             .iter()
             .map(|wu| match at.iter().find(|wt| wt.group == wu.group) {
-                Some(wt) => wu.q.eval(self.p[pt], &self.attrs_of(wt)),
+                Some(wt) => wu.q.eval(self.at(pt), &self.attrs_of(wt)),
                 None => f64::INFINITY,
             })
             .sum()

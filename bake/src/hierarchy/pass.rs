@@ -24,7 +24,7 @@ pub(super) fn collapse_all(
     progress: Progress<'_>,
 ) -> Result<(), BuildError> {
     let mut passes = Passes::new(work.tris.len());
-    let most = work.p.len().saturating_sub(1) as u64;
+    let most = work.positions().saturating_sub(1) as u64;
     let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
     // its cheapest share).
@@ -150,7 +150,7 @@ impl Passes {
                     stage: BuildStage::Pass,
                     pass,
                     collapses: work.h.collapses.len() as u64,
-                    most: work.p.len().saturating_sub(1) as u64,
+                    most: work.positions().saturating_sub(1) as u64,
                     invariant: "a pass tried more collapses than it ranked and queued",
                 });
             }

@@ -2,7 +2,7 @@
 //! boundary planes'), the triangles with their neighbours, and the leaves' bounds.
 
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
-use super::work::{NodeOut, PosInfo, Tri, Wedge, Work};
+use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
@@ -23,7 +23,9 @@ struct Setup<'a> {
     threads: usize,
     /// The bounding box's diagonal, which scales the attributes.
     diagonal: f64,
-    /// Every position relative to the bounding box's centre, in f64.
+    /// The bounding box's centre.
+    centre: V3,
+    /// Every position relative to the centre, in f64 ([`centred`]), while setting up.
     p: Vec<V3>,
     /// Positions split into ranges, one per thread, for adding to their wedges in order.
     ranges: Vec<(usize, usize)>,
@@ -46,13 +48,13 @@ pub(super) fn work<'w>(
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
     let info = position_info(w, frozen);
-    let diagonal = s.diagonal;
-    let p = s.p;
+    let (diagonal, centre) = (s.diagonal, s.centre);
+    drop(s);
     let mut work = Work {
         w,
         weights: *weights,
         diagonal,
-        p,
+        centre,
         info,
         tris,
         alive: vec![true; nt],
@@ -96,7 +98,7 @@ impl<'a> Setup<'a> {
         let p: Vec<V3> = w
             .positions
             .iter()
-            .map(|q| sub(q.map(f64::from), centre))
+            .map(|&q| centred(q, centre))
             .collect();
         let np = w.positions.len();
         let per = if threads <= 1 || np < PARALLEL_MIN {
@@ -113,6 +115,7 @@ impl<'a> Setup<'a> {
             weights,
             threads,
             diagonal,
+            centre,
             p,
             ranges,
         }
@@ -270,7 +273,7 @@ impl Work<'_> {
     /// Room for every node a build can add (a collapse per position but one), so the
     /// per-node arrays never grow by doubling past what they need.
     fn reserve_nodes(&mut self) {
-        let more = self.p.len().saturating_sub(1);
+        let more = self.positions().saturating_sub(1);
         self.faces_of.reserve_exact(more);
         self.node_pos.reserve_exact(more);
         self.stamp.reserve_exact(more);
@@ -282,7 +285,7 @@ impl Work<'_> {
     /// The leaves' valences, normal cones and bounding radii (to their ring), on all
     /// threads.
     fn add_leaves(&mut self, threads: usize) {
-        let np = self.p.len();
+        let np = self.positions();
         let leaves = par_map(np, threads, |v| self.leaf(v as u32));
         self.valence.reserve(2 * np);
         self.nodes.reserve(2 * np);

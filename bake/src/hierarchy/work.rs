@@ -56,8 +56,8 @@ pub(super) struct Work<'w> {
     pub(super) weights: AttributeWeights,
     /// The bounding box's diagonal, which scales the attributes.
     pub(super) diagonal: f64,
-    /// Point of every position.
-    pub(super) p: Vec<V3>,
+    /// The bounding box's centre, which [`Work::at`] takes the positions relative to.
+    pub(super) centre: V3,
     pub(super) info: Vec<PosInfo>,
     pub(super) tris: Vec<Tri>,
     pub(super) alive: Vec<bool>,
@@ -140,7 +140,20 @@ impl Work<'_> {
     /// The point of node `v` (its position's).
     #[inline]
     pub(super) fn pos(&self, v: u32) -> V3 {
-        self.p[self.node_pos[v as usize] as usize]
+        self.at(self.node_pos[v as usize] as usize)
+    }
+
+    /// The point of position `x`, relative to the centre in f64: computed where read (the
+    /// same bits every time) rather than kept, which saves 24 bytes a position.
+    #[inline]
+    pub(super) fn at(&self, x: usize) -> V3 {
+        centred(self.w.positions[x], self.centre)
+    }
+
+    /// The number of positions (leaves).
+    #[inline]
+    pub(super) fn positions(&self) -> usize {
+        self.w.positions.len()
     }
 
     #[inline]
@@ -159,6 +172,12 @@ impl Work<'_> {
         let c = self.tris[f as usize].c;
         c[next(corner_of(c, v))]
     }
+}
+
+/// Position `q` relative to `centre`, in f64.
+#[inline]
+pub(super) fn centred(q: [f32; 3], centre: V3) -> V3 {
+    sub(q.map(f64::from), centre)
 }
 
 impl Work<'_> {
