@@ -76,8 +76,8 @@ impl Work<'_> {
     pub(super) fn place_points(&mut self) {
         self.pts_head = vec![NONE; self.tris.len()];
         self.pts_next = vec![NONE; self.positions()];
-        for (x, faces) in self.faces_of[..self.positions()].iter().enumerate() {
-            if let Some(&f) = faces.first() {
+        for x in 0..self.positions() {
+            if let Some(&f) = self.faces_of.of(x as u32).first() {
                 self.pts_next[x] = std::mem::replace(&mut self.pts_head[f as usize], x as u32);
             }
         }
@@ -144,7 +144,7 @@ impl Work<'_> {
             let (mut out, mut probes) = (Vec::with_capacity(part.len()), Vec::new());
             for points in part.chunk_by(|a, b| a.1 == b.1) {
                 let s = points[0].1 as usize;
-                let star = &this.faces_of[s];
+                let star = this.faces_of.of(s as u32);
                 let from_kept = this.from_kept[s - first_node] as usize;
                 let moved_ones = if from_kept < star.len() {
                     &star[from_kept..]

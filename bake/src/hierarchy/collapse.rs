@@ -30,7 +30,7 @@ impl Work<'_> {
     /// around the new node.
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
-        for &f in &self.faces_of[c.u as usize] {
+        for &f in self.faces_of.of(c.u) {
             let mut x = std::mem::replace(&mut self.pts_head[f as usize], NONE);
             while x != NONE {
                 self.moved.push((x, s));
@@ -106,7 +106,7 @@ impl Work<'_> {
             }
         }
         for x in fc {
-            self.faces_of[x as usize].retain(|&g| g != f);
+            self.faces_of.remove(x, f);
         }
     }
 
@@ -114,10 +114,9 @@ impl Work<'_> {
     /// first, which [`Work::settle`] relies on).
     fn move_star(&mut self, c: Collapse, s: u32) {
         let (t, u) = (c.t, c.u);
-        let mut star = std::mem::take(&mut self.faces_of[t as usize]);
-        self.from_kept.push(star.len() as u32);
-        star.append(&mut std::mem::take(&mut self.faces_of[u as usize]));
-        for &f in &star {
+        self.from_kept.push(self.faces_of.of(t).len() as u32);
+        self.faces_of.push_merged(t, u);
+        for &f in self.faces_of.of(s) {
             let mut tri = self.tris[f as usize];
             for x in tri.c.iter_mut() {
                 if *x == t || *x == u {
@@ -126,7 +125,6 @@ impl Work<'_> {
             }
             self.tris[f as usize] = tri;
         }
-        self.faces_of.push(star);
         self.stamp.push(0);
         self.shrunk.push(0);
         self.start_valence.push(0);

@@ -117,7 +117,7 @@ impl Work<'_> {
             }
         }
         let p_t = self.pos(t);
-        for &f in &self.faces_of[u as usize] {
+        for &f in self.faces_of.of(u) {
             if f == fl || f == fr {
                 continue;
             }

@@ -5,6 +5,7 @@ use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::setup::scaled_attributes;
+use super::stars::Stars;
 use super::{AttributeWeights, Hierarchy, NONE};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
@@ -62,7 +63,7 @@ pub(super) struct Work<'w> {
     pub(super) tris: Vec<Tri>,
     pub(super) alive: Vec<bool>,
     /// Triangles around every node.
-    pub(super) faces_of: Vec<Vec<u32>>,
+    pub(super) faces_of: Stars,
     /// Number of distinct neighbours of every live node.
     pub(super) valence: Vec<u32>,
     pub(super) node_pos: Vec<u32>,
@@ -107,7 +108,7 @@ impl Work<'_> {
     /// The triangle with the directed edge `a → b` and the corner of `a` in it.
     #[inline]
     pub(super) fn dir_face(&self, a: u32, b: u32) -> Option<(u32, usize)> {
-        for &f in &self.faces_of[a as usize] {
+        for &f in self.faces_of.of(a) {
             let c = self.tris[f as usize].c;
             let j = corner_of(c, a);
             if c[next(j)] == b {
@@ -124,7 +125,7 @@ impl Work<'_> {
     pub(super) fn find_ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
         out.clear();
         let mut border = false;
-        for &f in &self.faces_of[v as usize] {
+        for &f in self.faces_of.of(v) {
             let t = &self.tris[f as usize];
             let j = corner_of(t.c, v);
             out.push(t.c[next(j)]);
