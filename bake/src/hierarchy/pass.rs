@@ -200,7 +200,7 @@ impl Passes {
             };
             let slot = self.slots.get(i);
             let [a, b] = slot.ends;
-            let (t, u) = if slot.dir() == 1 { (a, b) } else { (b, a) };
+            let (t, u) = if slot.dir == 1 { (a, b) } else { (b, a) };
             Next::Try {
                 t,
                 u,
@@ -222,7 +222,7 @@ impl Passes {
     /// Queues the other direction of the edge `t`–`u` at its own cost, if allowed.
     fn queue_other_direction(&mut self, work: &Work<'_>, t: u32, u: u32) {
         let i = slot_of(work, t, u);
-        let other = self.slots.get(i).other();
+        let other = work.other_cost(i);
         if other.is_finite() {
             self.later.push(Reverse((order_key(other), i)));
         }

@@ -14,33 +14,18 @@ pub(super) type Candidate = (f64, u32, u32);
 pub(super) struct Slot {
     /// The edge's ends, first and second corner of the slot, at the start of the pass.
     pub(super) ends: [u32; 2],
-    /// Quadric costs of the two directions for these ends (direction 1 moves the first end
-    /// onto the second, direction 2 the reverse), infinite where not allowed.
-    pub(super) costs: [f64; 2],
+    /// The cost of the cheaper allowed direction, infinite for none.
+    pub(super) cost: f64,
+    /// The cheaper allowed direction ([`dir`]): 1 moves the first end onto the second, 2 the
+    /// reverse, 0 for none.
+    pub(super) dir: u8,
 }
 
-impl Slot {
-    /// The cheaper allowed direction (the first on a tie), 0 for none: read from the
-    /// costs rather than stored.
-    #[inline]
-    pub(super) fn dir(&self) -> u8 {
-        dir(self.costs)
-    }
-
-    /// The cheaper allowed direction's cost.
-    pub(super) fn cost(&self) -> f64 {
-        self.costs[self.dir() as usize - 1]
-    }
-
-    /// The other direction's cost, infinite where not allowed.
-    pub(super) fn other(&self) -> f64 {
-        self.costs[2 - self.dir() as usize]
-    }
-}
-
-/// The cheaper allowed direction of a slot's `costs` (the first on a tie), 0 for none.
+/// The cheaper allowed direction of a slot's quadric costs `[cx, cy]` (direction 1 moves
+/// the first end onto the second, direction 2 the reverse; infinite where not allowed):
+/// the first on a tie, 0 for none.
 #[inline]
-fn dir([cx, cy]: [f64; 2]) -> u8 {
+pub(super) fn dir([cx, cy]: [f64; 2]) -> u8 {
     if cy < cx {
         2
     } else if cx.is_finite() {
@@ -50,40 +35,75 @@ fn dir([cx, cy]: [f64; 2]) -> u8 {
     }
 }
 
-/// The rankings of every triangle's three edge slots: the corners the triangle had when
-/// they were ranked (a slot's ends are two of them) and the slots' costs, 60 bytes a
-/// triangle where a slot holding its own ends would take 72.
+/// The rankings of one triangle's three edge slots: their cheaper allowed directions and
+/// those directions' costs, and the triangle's corners when they were ranked (a slot's
+/// ends are two of them). A slot keeps one cost, 40 bytes a triangle where both costs and
+/// each slot's ends would take 72: the other direction's cost is ranked again where a pass
+/// needs it ([`Work::other_cost`]), and comes out the same.
+#[derive(Clone, Copy)]
+struct Row {
+    cost: [f64; 3],
+    corners: [u32; 3],
+    /// Slot `k`'s direction in bits `2k..2k + 2`.
+    dirs: u8,
+}
+
+impl Row {
+    const NONE: Self = Self {
+        cost: [f64::INFINITY; 3],
+        corners: [NONE; 3],
+        dirs: 0,
+    };
+
+    fn dir(&self, k: usize) -> u8 {
+        (self.dirs >> (2 * k)) & 3
+    }
+
+    /// Sets slot `k` from its costs.
+    fn set(&mut self, k: usize, costs: [f64; 2]) {
+        let d = dir(costs);
+        self.dirs = (self.dirs & !(3 << (2 * k))) | (d << (2 * k));
+        self.cost[k] = if d == 0 {
+            f64::INFINITY
+        } else {
+            costs[d as usize - 1]
+        };
+    }
+}
+
+/// The rankings of every triangle's three edge slots.
 pub(super) struct Slots {
-    /// Per triangle, its corners when its slots were last ranked (`NONE` before).
-    corners: Vec<[u32; 3]>,
-    /// Per triangle, the costs of its slots ([`Slot::costs`]).
-    costs: Vec<[[f64; 2]; 3]>,
+    rows: Vec<Row>,
 }
 
 impl Slots {
     /// Slots of `triangles` triangles, none ranked.
     pub(super) fn new(triangles: usize) -> Self {
         Self {
-            corners: vec![[NONE; 3]; triangles],
-            costs: vec![[[f64::INFINITY; 2]; 3]; triangles],
+            rows: vec![Row::NONE; triangles],
         }
     }
 
     /// Slot `i` (`3 × triangle + slot`).
     #[inline]
     pub(super) fn get(&self, i: usize) -> Slot {
-        let (f, k) = (i / 3, i % 3);
-        let c = self.corners[f];
+        let (row, k) = (&self.rows[i / 3], i % 3);
+        let c = row.corners;
         Slot {
             ends: [c[k], c[next(k)]],
-            costs: self.costs[f][k],
+            cost: row.cost[k],
+            dir: row.dir(k),
         }
     }
 
-    /// Sets the slots of triangle `f` (for tests).
+    /// Sets the slots of triangle `f` from their corners and costs (for tests).
     #[cfg(test)]
     pub(super) fn set(&mut self, f: usize, corners: [u32; 3], costs: [[f64; 2]; 3]) {
-        (self.corners[f], self.costs[f]) = (corners, costs);
+        let row = &mut self.rows[f];
+        row.corners = corners;
+        for (k, c) in costs.into_iter().enumerate() {
+            row.set(k, c);
+        }
     }
 }
 
@@ -231,23 +251,23 @@ impl Ranked {
 }
 
 impl Work<'_> {
-    /// Ranks the slots of triangle `f` whose edges changed since `corners` (the triangle's
-    /// corners when they were last ranked; `costs` their rankings), and brings `corners` up
-    /// to date; returns how many of its slots list a collapse.
+    /// Ranks the slots of triangle `f` whose edges changed since `row.corners` (the
+    /// triangle's corners when they were last ranked), and brings the corners up to date;
+    /// returns how many of its slots list a collapse.
     ///
     /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
     /// and positions (a node's never change), the groups of the triangles on the edge, and
     /// which those are (they change only by a collapse that also changes an end).
-    fn rank_triangle(&self, f: u32, corners: &mut [u32; 3], costs: &mut [[f64; 2]; 3]) -> usize {
+    fn rank_triangle(&self, f: u32, row: &mut Row) -> usize {
         let c = self.tris[f as usize].c;
         let mut count = 0;
         for k in 0..3 {
-            if [corners[k], corners[next(k)]] != [c[k], c[next(k)]] {
-                costs[k] = self.rank(f, k);
+            if [row.corners[k], row.corners[next(k)]] != [c[k], c[next(k)]] {
+                row.set(k, self.rank(f, k));
             }
-            count += usize::from(dir(costs[k]) != 0);
+            count += usize::from(row.dir(k) != 0);
         }
-        *corners = c;
+        row.corners = c;
         count
     }
 
@@ -274,6 +294,18 @@ impl Work<'_> {
         };
         [cx, cy]
     }
+
+    /// The cost of the other direction than the cheaper of slot `i` (`3 × triangle +
+    /// slot`), infinite where not allowed, ranked again: during a pass, while neither end
+    /// of the slot's edge is stamped, the edge, its ends and its triangles are those it was
+    /// ranked with, so this is the cost the ranking found.
+    pub(super) fn other_cost(&self, i: usize) -> f64 {
+        let costs = self.rank((i / 3) as u32, i % 3);
+        match dir(costs) {
+            0 => f64::INFINITY,
+            d => costs[2 - d as usize],
+        }
+    }
 }
 
 /// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
@@ -281,44 +313,39 @@ impl Work<'_> {
 /// returns how many slots list a collapse (have an allowed direction), which
 /// [`candidates`] hands out in slot order.
 pub(super) fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut Slots, threads: usize) -> usize {
-    let rank_part =
-        |part: &[u32], first: usize, corners: &mut [[u32; 3]], costs: &mut [[[f64; 2]; 3]]| {
-            part.iter()
-                .map(|&f| {
-                    let i = f as usize - first;
-                    work.rank_triangle(f, &mut corners[i], &mut costs[i])
-                })
-                .sum::<usize>()
-        };
+    let rank_part = |part: &[u32], first: usize, rows: &mut [Row]| {
+        part.iter()
+            .map(|&f| work.rank_triangle(f, &mut rows[f as usize - first]))
+            .sum::<usize>()
+    };
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        return rank_part(live, 0, &mut slots.corners, &mut slots.costs);
+        return rank_part(live, 0, &mut slots.rows);
     }
     // Each part's triangles and their slots (from triangle `first` on), up to the next
     // part's first triangle.
     let per = live.len().div_ceil(threads);
     let mut jobs = Vec::with_capacity(threads);
-    let (mut corners, mut costs, mut first) = (&mut slots.corners[..], &mut slots.costs[..], 0);
+    let (mut rest, mut first) = (&mut slots.rows[..], 0);
     for (i, part) in live.chunks(per).enumerate() {
         let end = live
             .get((i + 1) * per)
-            .map_or(first + corners.len(), |&f| f as usize);
-        let (my_corners, other_corners) = corners.split_at_mut(end - first);
-        let (my_costs, other_costs) = costs.split_at_mut(end - first);
-        (corners, costs) = (other_corners, other_costs);
-        jobs.push((part, first, my_corners, my_costs));
+            .map_or(first + rest.len(), |&f| f as usize);
+        let (mine, others) = rest.split_at_mut(end - first);
+        rest = others;
+        jobs.push((part, first, mine));
         first = end;
     }
     jobs.into_par_iter()
-        .map(|(part, first, corners, costs)| rank_part(part, first, corners, costs))
+        .map(|(part, first, rows)| rank_part(part, first, rows))
         .sum()
 }
 
 /// The collapse a ranked slot lists: its cheaper allowed direction, if any.
 fn candidate(slot: &Slot) -> Option<Candidate> {
     let [a, b] = slot.ends;
-    match slot.dir() {
-        1 => Some((slot.cost(), b, a)),
-        2 => Some((slot.cost(), a, b)),
+    match slot.dir {
+        1 => Some((slot.cost, b, a)),
+        2 => Some((slot.cost, a, b)),
         _ => None,
     }
 }
