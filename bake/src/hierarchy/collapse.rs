@@ -14,14 +14,16 @@ impl Work<'_> {
         let l = self.tris[c.fl as usize].c[prev(c.rot_l as usize)];
         let r = self.third(c.fr, c.t);
         for x in [l, r] {
-            if x != NONE && self.shrunk[x as usize] != pass {
-                self.shrunk[x as usize] = pass;
-                self.start_valence[x as usize] = self.valence[x as usize];
+            if x != NONE && self.shrunk[self.at_node(x)] != pass {
+                let px = self.at_node(x);
+                self.shrunk[px] = pass;
+                self.start_valence[px] = self.valence[px];
             }
         }
         let s = self.apply(c);
         for &v in rings.iter().flatten().chain(&[c.t, c.u, s]) {
-            self.stamp[v as usize] = pass;
+            let pv = self.at_node(v);
+            self.stamp[pv] = pass;
         }
     }
 
@@ -125,9 +127,6 @@ impl Work<'_> {
             }
             self.tris[f as usize] = tri;
         }
-        self.stamp.push(0);
-        self.shrunk.push(0);
-        self.start_valence.push(0);
     }
 
     /// The ends' rings share just `l` and `r` (the link condition): the new node has the
@@ -138,11 +137,13 @@ impl Work<'_> {
             self.third(c.fr, c.t),
         );
         let shared = 1 + u32::from(r != NONE);
-        self.valence
-            .push(self.valence[c.t as usize] + self.valence[c.u as usize] - 2 - shared);
+        // The new node is at the kept child's position.
+        let (pt, pu) = (self.at_node(c.t), self.at_node(c.u));
+        self.valence[pt] = self.valence[pt] + self.valence[pu] - 2 - shared;
         for x in [l, r] {
             if x != NONE {
-                self.valence[x as usize] -= 1;
+                let px = self.at_node(x);
+                self.valence[px] -= 1;
             }
         }
     }
@@ -155,7 +156,7 @@ impl Work<'_> {
         let mut around = Vec::new();
         for x in std::iter::once(s).chain(ring.iter().copied()) {
             self.find_ring(x, &mut around);
-            debug_assert_eq!(self.valence[x as usize] as usize, around.len(), "{x}");
+            debug_assert_eq!(self.valence[self.at_node(x)] as usize, around.len(), "{x}");
         }
     }
 }

@@ -57,10 +57,11 @@ impl Work<'_> {
     /// Number of neighbours of `x` at the start of pass `pass`.
     #[inline]
     pub(super) fn valence_at_start(&self, x: u32, pass: u32) -> usize {
-        if self.shrunk[x as usize] == pass {
-            self.start_valence[x as usize] as usize
+        let px = self.at_node(x);
+        if self.shrunk[px] == pass {
+            self.start_valence[px] as usize
         } else {
-            self.valence[x as usize] as usize
+            self.valence[px] as usize
         }
     }
 
@@ -175,7 +176,7 @@ impl Work<'_> {
         };
         if opposite
             .iter()
-            .all(|&x| x == NONE || self.valence[x as usize] > 3)
+            .all(|&x| x == NONE || self.valence[self.at_node(x)] > 3)
         {
             Verdict::Legal(c)
         } else {

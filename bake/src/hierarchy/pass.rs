@@ -176,7 +176,9 @@ impl Passes {
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
     fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
-        let next_cand = self.ranked.peek(&self.slots, &work.stamp, pass);
+        let next_cand = self
+            .ranked
+            .peek(&self.slots, |v| work.stamp[work.at_node(v)] == pass);
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,
@@ -231,7 +233,7 @@ impl Passes {
 
 /// Whether an earlier collapse of pass `pass` took a neighbourhood `t` or `u` is in.
 fn stamped(work: &Work<'_>, pass: u32, t: u32, u: u32) -> bool {
-    work.stamp[t as usize] == pass || work.stamp[u as usize] == pass
+    work.stamp[work.at_node(t)] == pass || work.stamp[work.at_node(u)] == pass
 }
 
 /// The number of the slot standing for the edge of free ends `t`, `u`.

@@ -213,12 +213,11 @@ impl Ranked {
         limit
     }
 
-    /// The next candidate whose ends were free when its bucket was reached.
+    /// The next candidate whose ends were free (not `taken`) when its bucket was reached.
     pub(super) fn peek(
         &mut self,
         slots: &Slots,
-        stamp: &[u32],
-        pass: u32,
+        taken: impl Fn(u32) -> bool,
     ) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
@@ -238,7 +237,7 @@ impl Ranked {
                 self.by_bucket[a..b]
                     .iter()
                     .filter_map(|&i| candidate(&slots.get(i as usize)))
-                    .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
+                    .filter(|c| !taken(c.1) && !taken(c.2)),
             );
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
         }

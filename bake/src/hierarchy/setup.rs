@@ -253,9 +253,6 @@ impl Work<'_> {
         let more = self.positions().saturating_sub(1);
         self.faces_of.reserve_nodes(more);
         self.node_pos.reserve_exact(more);
-        self.stamp.reserve_exact(more);
-        self.shrunk.reserve_exact(more);
-        self.start_valence.reserve_exact(more);
         self.h.collapses.reserve_exact(more);
     }
 
@@ -264,7 +261,7 @@ impl Work<'_> {
     fn add_leaves(&mut self, threads: usize) {
         let np = self.positions();
         let leaves = par_map(np, threads, |v| self.leaf(v as u32));
-        self.valence.reserve(2 * np);
+        self.valence.reserve_exact(np);
         self.nodes.reserve(2 * np);
         for (valence, cone, radius) in leaves {
             self.valence.push(valence);

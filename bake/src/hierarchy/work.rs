@@ -64,7 +64,8 @@ pub(super) struct Work<'w> {
     pub(super) alive: Vec<bool>,
     /// Triangles around every node.
     pub(super) faces_of: Stars,
-    /// Number of distinct neighbours of every live node.
+    /// Number of distinct neighbours of every live node, by its position
+    /// ([`Work::at_node`]).
     pub(super) valence: Vec<u32>,
     pub(super) node_pos: Vec<u32>,
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
@@ -73,11 +74,17 @@ pub(super) struct Work<'w> {
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
-    /// Pass in which a node's neighbourhood was last taken by a collapse.
+    /// Pass in which a node's neighbourhood was last taken by a collapse, by its position.
+    /// The live node at a position is the last made there (the kept child's parent is at
+    /// its position): a collapse stamps both children and the new node, so a position
+    /// stamped in a pass is one whose node, live at the start of the pass or made in it, was
+    /// stamped.
     pub(super) stamp: Vec<u32>,
-    /// Pass in which a node last lost a neighbour.
+    /// Pass in which a node last lost a neighbour, by its position: a node losing one is
+    /// stamped by that collapse, so no new node of the same pass is made at its position.
     pub(super) shrunk: Vec<u32>,
-    /// A node's number of neighbours at the start of the pass it last lost one in.
+    /// A node's number of neighbours at the start of the pass it last lost one in, by its
+    /// position.
     pub(super) start_valence: Vec<u32>,
     /// The input's positions each triangle stands for (nearest to it when it last
     /// changed), which the error bounds measure, as a list per triangle: its first
@@ -136,6 +143,13 @@ impl Work<'_> {
             border |= t.o[j] == NONE;
         }
         border
+    }
+
+    /// Where the live node `v`'s per-node figures are kept (`valence`, `stamp`, `shrunk`,
+    /// `start_valence`): at its position, which only one live node holds at a time.
+    #[inline]
+    pub(super) fn at_node(&self, v: u32) -> usize {
+        self.node_pos[v as usize] as usize
     }
 
     /// The point of node `v` (its position's).
