@@ -82,7 +82,7 @@ impl Work<'_> {
         match iu.class {
             PositionClass::Rigid => return false,
             PositionClass::Sharp => {
-                let group = |f: u32| self.tris[f as usize].group;
+                let group = |f: u32| self.w.triangles[f as usize].group;
                 let boundary = fr == NONE || group(fl) != group(fr);
                 if !boundary || it.class == PositionClass::Free {
                     return false;

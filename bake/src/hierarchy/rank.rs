@@ -161,13 +161,7 @@ impl Ranked {
     /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
     /// out, and the pass cuts what is dearer, the other directions it queues included: a
     /// share of everything cuts nothing.
-    pub(super) fn start(
-        &mut self,
-        slots: &Slots,
-        live: &[u32],
-        count: usize,
-        share: f64,
-    ) -> u64 {
+    pub(super) fn start(&mut self, slots: &Slots, live: &[u32], count: usize, share: f64) -> u64 {
         self.chunk.clear();
         self.pos = 0;
         let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
@@ -214,11 +208,7 @@ impl Ranked {
     }
 
     /// The next candidate whose ends were free (not `taken`) when its bucket was reached.
-    pub(super) fn peek(
-        &mut self,
-        slots: &Slots,
-        taken: impl Fn(u32) -> bool,
-    ) -> Option<Candidate> {
+    pub(super) fn peek(&mut self, slots: &Slots, taken: impl Fn(u32) -> bool) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
                 return None;

@@ -96,11 +96,7 @@ impl<'a> Setup<'a> {
             (lo[2] + hi[2]) / 2.0,
         ];
         let diagonal = len(sub(hi, lo)).max(f64::MIN_POSITIVE);
-        let p: Vec<V3> = w
-            .positions
-            .iter()
-            .map(|&q| centred(q, centre))
-            .collect();
+        let p: Vec<V3> = w.positions.iter().map(|&q| centred(q, centre)).collect();
         let np = w.positions.len();
         let per = if threads <= 1 || np < PARALLEL_MIN {
             np.max(1)
@@ -188,11 +184,7 @@ impl<'a> Setup<'a> {
         w.triangles
             .iter()
             .zip(&opp)
-            .map(|(t, &o)| Tri {
-                c: t.p,
-                o,
-                group: t.group,
-            })
+            .map(|(t, &o)| Tri { c: t.p, o })
             .collect()
     }
 

@@ -109,7 +109,11 @@ fn a_full_share_cuts_nothing() {
         }
         let live: Vec<u32> = (0..n as u32).collect();
         let mut ranked = Ranked::default();
-        assert_eq!(ranked.start(&slots, &live, n, 1.0), u64::MAX, "{n} candidates");
+        assert_eq!(
+            ranked.start(&slots, &live, n, 1.0),
+            u64::MAX,
+            "{n} candidates"
+        );
         // Half: the limit covers the cheapest half and leaves out the dearest.
         let half = ranked.start(&slots, &live, n, PASS_SHARE);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");

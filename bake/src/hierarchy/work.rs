@@ -19,8 +19,9 @@ pub(super) struct Wedge {
     pub(super) q: Quadric,
 }
 
-/// A triangle of the mesh being simplified: 28 bytes (its normal is computed where a
-/// check reads it, from the corners, rather than kept).
+/// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
+/// check reads it, from the corners, and its surface group read from the welded mesh,
+/// rather than kept).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Tri {
     /// Current corners (nodes), counter-clockwise.
@@ -28,8 +29,6 @@ pub(super) struct Tri {
     /// `o[k]`: the triangle across the edge `c[k] → c[k + 1]`, or `NONE`. The mesh stays
     /// an oriented manifold, so that triangle holds the edge the other way round.
     pub(super) o: [u32; 3],
-    /// Surface group.
-    pub(super) group: u32,
 }
 
 /// What the hierarchy records of a node.
