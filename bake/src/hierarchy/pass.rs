@@ -75,9 +75,7 @@ fn live_triangles(work: &Work<'_>) -> usize {
 
 /// What the passes keep from one to the next.
 struct Passes {
-    /// The live triangles, in order.
-    live: Vec<u32>,
-    /// The ranking of every triangle's three edge slots.
+    /// The live triangles and the ranking of their three edge slots.
     slots: Slots,
     ranked: Ranked,
     /// Other directions of edges whose cheaper one was illegal: `(cost key, slot)`.
@@ -99,7 +97,6 @@ enum Next {
 impl Passes {
     fn new(triangles: usize) -> Self {
         Self {
-            live: (0..triangles as u32).collect(),
             slots: Slots::new(triangles),
             ranked: Ranked::default(),
             later: BinaryHeap::new(),
@@ -127,13 +124,13 @@ impl Passes {
         threads: usize,
     ) -> Result<(u64, bool), BuildError> {
         // Drop the triangles the last pass removed (keeping the order).
-        self.live.retain(|&f| work.alive[f as usize]);
+        self.slots.retain_alive(&work.alive);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
         // slots per triangle, in order).
-        let count = rank_all(work, &self.live, &mut self.slots, threads);
+        let count = rank_all(work, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
         let share = if full { 1.0 } else { PASS_SHARE };
-        let limit = self.ranked.start(&self.slots, &self.live, count, share);
+        let limit = self.ranked.start(&self.slots, count, share);
         let mut applied = 0u64;
         self.later.clear();
         let max_tries = 2 * count as u64;
@@ -185,7 +182,10 @@ impl Passes {
             (Some(_), None) => false,
             (Some((c, t, u)), Some(&Reverse((key, i)))) => {
                 let own = order_key(c);
-                key < own || (key == own && !stamped(work, pass, t, u) && i < slot_of(work, t, u))
+                key < own
+                    || (key == own
+                        && !stamped(work, pass, t, u)
+                        && i < slot_of(work, &self.slots, t, u))
             }
         };
         let key = if later_first {
@@ -223,8 +223,9 @@ impl Passes {
 
     /// Queues the other direction of the edge `t`–`u` at its own cost, if allowed.
     fn queue_other_direction(&mut self, work: &Work<'_>, t: u32, u: u32) {
-        let i = slot_of(work, t, u);
-        let other = work.other_cost(i);
+        let i = slot_of(work, &self.slots, t, u);
+        let (f, k) = self.slots.slot(i);
+        let other = work.other_cost(f, k);
         if other.is_finite() {
             self.later.push(Reverse((order_key(other), i)));
         }
@@ -237,7 +238,7 @@ fn stamped(work: &Work<'_>, pass: u32, t: u32, u: u32) -> bool {
 }
 
 /// The number of the slot standing for the edge of free ends `t`, `u`.
-fn slot_of(work: &Work<'_>, t: u32, u: u32) -> usize {
+fn slot_of(work: &Work<'_>, slots: &Slots, t: u32, u: u32) -> usize {
     let (fl, jl) = work.dir_face(t, u).unwrap_or((0, 0));
     let fr = work.tris[fl as usize].o[jl];
     let (f, k) = if fr == NONE || t < u {
@@ -245,5 +246,5 @@ fn slot_of(work: &Work<'_>, t: u32, u: u32) -> usize {
     } else {
         (fr, corner_of(work.tris[fr as usize].c, u))
     };
-    3 * f as usize + k
+    slots.number(f, k)
 }

@@ -71,20 +71,58 @@ impl Row {
     }
 }
 
-/// The rankings of every triangle's three edge slots.
+/// The rankings of the three edge slots of every live triangle, by the triangle's place in
+/// the list of live triangles: slot `3 × i + k` is slot `k` of triangle `live[i]`. The
+/// list keeps the triangles' order, so the slots' numbers are in the order of
+/// `3 × triangle + k`, and the rows of the triangles a pass removed are dropped before the
+/// next pass ranks.
 pub(super) struct Slots {
+    /// The live triangles, in order.
+    live: Vec<u32>,
+    /// Their slots' rankings.
     rows: Vec<Row>,
 }
 
 impl Slots {
-    /// Slots of `triangles` triangles, none ranked.
+    /// Slots of `triangles` triangles, all live, none ranked.
     pub(super) fn new(triangles: usize) -> Self {
         Self {
+            live: (0..triangles as u32).collect(),
             rows: vec![Row::NONE; triangles],
         }
     }
 
-    /// Slot `i` (`3 × triangle + slot`).
+    /// Drops the triangles no longer `alive` and their rows, keeping the order; gives
+    /// memory back once less than half of it is used.
+    pub(super) fn retain_alive(&mut self, alive: &[bool]) {
+        let mut kept = 0;
+        for i in 0..self.live.len() {
+            if alive[self.live[i] as usize] {
+                self.live[kept] = self.live[i];
+                self.rows[kept] = self.rows[i];
+                kept += 1;
+            }
+        }
+        self.live.truncate(kept);
+        self.rows.truncate(kept);
+        if 2 * kept < self.rows.capacity() {
+            self.live.shrink_to_fit();
+            self.rows.shrink_to_fit();
+        }
+    }
+
+    /// The number of slot `k` of the live triangle `f`.
+    pub(super) fn number(&self, f: u32, k: usize) -> usize {
+        let (Ok(i) | Err(i)) = self.live.binary_search(&f);
+        3 * i + k
+    }
+
+    /// The triangle and slot of slot number `i`.
+    pub(super) fn slot(&self, i: usize) -> (u32, usize) {
+        (self.live[i / 3], i % 3)
+    }
+
+    /// Slot `i` (`3 × place + slot`).
     #[inline]
     pub(super) fn get(&self, i: usize) -> Slot {
         let (row, k) = (&self.rows[i / 3], i % 3);
@@ -140,34 +178,26 @@ const BUCKET_BITS: u32 = 16;
 /// Candidates below which a pass sorts them all at once.
 const BUCKET_MIN: usize = 4096;
 
-/// The ranked collapses of the triangles `live` in `slots`, in slot order, each with its
+/// The ranked collapses of the live triangles in `slots`, in slot order, each with its
 /// slot number.
-pub(super) fn candidates<'a>(
-    slots: &'a Slots,
-    live: &'a [u32],
-) -> impl Iterator<Item = (u32, Candidate)> + 'a {
-    live.iter().flat_map(move |&f| {
-        (0..3).filter_map(move |k| {
-            let i = 3 * f + k;
-            Some((i, candidate(&slots.get(i as usize))?))
-        })
-    })
+pub(super) fn candidates(slots: &Slots) -> impl Iterator<Item = (u32, Candidate)> + '_ {
+    (0..3 * slots.rows.len() as u32).filter_map(|i| Some((i, candidate(&slots.get(i as usize))?)))
 }
 
 impl Ranked {
-    /// Takes a pass's `count` candidates (those of the triangles `live` in `slots`), of
+    /// Takes a pass's `count` candidates (those of the live triangles in `slots`), of
     /// which the pass means to apply the cheapest `share`; returns the [`order_key`] of the
     /// dearest cost in that share (for many candidates, rounded up to the end of its bucket),
     /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
     /// out, and the pass cuts what is dearer, the other directions it queues included: a
     /// share of everything cuts nothing.
-    pub(super) fn start(&mut self, slots: &Slots, live: &[u32], count: usize, share: f64) -> u64 {
+    pub(super) fn start(&mut self, slots: &Slots, count: usize, share: f64) -> u64 {
         self.chunk.clear();
         self.pos = 0;
         let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
         let everything = want >= count;
         if count < BUCKET_MIN {
-            self.chunk.extend(candidates(slots, live).map(|(_, c)| c));
+            self.chunk.extend(candidates(slots).map(|(_, c)| c));
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
             return match self.chunk.get(want - 1) {
@@ -178,7 +208,7 @@ impl Ranked {
         let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
         self.bounds.clear();
         self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        for (_, c) in candidates(slots, live) {
+        for (_, c) in candidates(slots) {
             self.bounds[bucket(&c) + 1] += 1;
         }
         for i in 0..1 << BUCKET_BITS {
@@ -196,7 +226,7 @@ impl Ranked {
         self.by_bucket.clear();
         self.by_bucket.resize(kept, 0);
         let mut fill = self.bounds.clone();
-        for (i, c) in candidates(slots, live) {
+        for (i, c) in candidates(slots) {
             let b = bucket(&c);
             if b <= last {
                 self.by_bucket[fill[b] as usize] = i;
@@ -284,12 +314,12 @@ impl Work<'_> {
         [cx, cy]
     }
 
-    /// The cost of the other direction than the cheaper of slot `i` (`3 × triangle +
-    /// slot`), infinite where not allowed, ranked again: during a pass, while neither end
-    /// of the slot's edge is stamped, the edge, its ends and its triangles are those it was
-    /// ranked with, so this is the cost the ranking found.
-    pub(super) fn other_cost(&self, i: usize) -> f64 {
-        let costs = self.rank((i / 3) as u32, i % 3);
+    /// The cost of the other direction than the cheaper of slot `k` of triangle `f`,
+    /// infinite where not allowed, ranked again: during a pass, while neither end of the
+    /// slot's edge is stamped, the edge, its ends and its triangles are those it was ranked
+    /// with, so this is the cost the ranking found.
+    pub(super) fn other_cost(&self, f: u32, k: usize) -> f64 {
+        let costs = self.rank(f, k);
         match dir(costs) {
             0 => f64::INFINITY,
             d => costs[2 - d as usize],
@@ -301,31 +331,21 @@ impl Work<'_> {
 /// (each slot's ranking depends on the mesh alone, so the split does not change it);
 /// returns how many slots list a collapse (have an allowed direction), which
 /// [`candidates`] hands out in slot order.
-pub(super) fn rank_all(work: &Work<'_>, live: &[u32], slots: &mut Slots, threads: usize) -> usize {
-    let rank_part = |part: &[u32], first: usize, rows: &mut [Row]| {
+pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> usize {
+    let rank_part = |part: &[u32], rows: &mut [Row]| {
         part.iter()
-            .map(|&f| work.rank_triangle(f, &mut rows[f as usize - first]))
+            .zip(rows)
+            .map(|(&f, row)| work.rank_triangle(f, row))
             .sum::<usize>()
     };
+    let Slots { live, rows } = slots;
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        return rank_part(live, 0, &mut slots.rows);
+        return rank_part(live, rows);
     }
-    // Each part's triangles and their slots (from triangle `first` on), up to the next
-    // part's first triangle.
     let per = live.len().div_ceil(threads);
-    let mut jobs = Vec::with_capacity(threads);
-    let (mut rest, mut first) = (&mut slots.rows[..], 0);
-    for (i, part) in live.chunks(per).enumerate() {
-        let end = live
-            .get((i + 1) * per)
-            .map_or(first + rest.len(), |&f| f as usize);
-        let (mine, others) = rest.split_at_mut(end - first);
-        rest = others;
-        jobs.push((part, first, mine));
-        first = end;
-    }
-    jobs.into_par_iter()
-        .map(|(part, first, rows)| rank_part(part, first, rows))
+    live.par_chunks(per)
+        .zip(rows.par_chunks_mut(per))
+        .map(|(part, rows)| rank_part(part, rows))
         .sum()
 }
 

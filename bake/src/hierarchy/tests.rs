@@ -107,15 +107,10 @@ fn a_full_share_cuts_nothing() {
             let none = [f64::INFINITY; 2];
             slots.set(i, [0, 1, 2], [[1.0 + i as f64, f64::INFINITY], none, none]);
         }
-        let live: Vec<u32> = (0..n as u32).collect();
         let mut ranked = Ranked::default();
-        assert_eq!(
-            ranked.start(&slots, &live, n, 1.0),
-            u64::MAX,
-            "{n} candidates"
-        );
+        assert_eq!(ranked.start(&slots, n, 1.0), u64::MAX, "{n} candidates");
         // Half: the limit covers the cheapest half and leaves out the dearest.
-        let half = ranked.start(&slots, &live, n, PASS_SHARE);
+        let half = ranked.start(&slots, n, PASS_SHARE);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
         assert!(half < order_key(n as f64), "{n} candidates");
     }
