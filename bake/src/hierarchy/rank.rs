@@ -181,7 +181,28 @@ const BUCKET_MIN: usize = 4096;
 /// The ranked collapses of the live triangles in `slots`, in slot order, each with its
 /// slot number.
 pub(super) fn candidates(slots: &Slots) -> impl Iterator<Item = (u32, Candidate)> + '_ {
-    (0..3 * slots.rows.len() as u32).filter_map(|i| Some((i, candidate(&slots.get(i as usize))?)))
+    slots.rows.iter().enumerate().flat_map(|(i, row)| {
+        (0..3).filter_map(move |k| {
+            let (a, b) = (row.corners[k], row.corners[next(k)]);
+            let cost = row.cost[k];
+            let number = (3 * i + k) as u32;
+            match row.dir(k) {
+                1 => Some((number, (cost, b, a))),
+                2 => Some((number, (cost, a, b))),
+                _ => None,
+            }
+        })
+    })
+}
+
+/// The costs of the ranked collapses of `slots` with their slot numbers, in slot order: a
+/// slot lists a collapse exactly when its cost is finite ([`Row::set`]).
+fn costs(slots: &Slots) -> impl Iterator<Item = (u32, f64)> + '_ {
+    slots.rows.iter().enumerate().flat_map(|(i, row)| {
+        (0..3)
+            .map(move |k| ((3 * i + k) as u32, row.cost[k]))
+            .filter(|(_, c)| c.is_finite())
+    })
 }
 
 impl Ranked {
@@ -205,11 +226,11 @@ impl Ranked {
                 _ => u64::MAX,
             };
         }
-        let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
+        let bucket = |c: f64| (order_key(c) >> (64 - BUCKET_BITS)) as usize;
         self.bounds.clear();
         self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        for (_, c) in candidates(slots) {
-            self.bounds[bucket(&c) + 1] += 1;
+        for (_, c) in costs(slots) {
+            self.bounds[bucket(c) + 1] += 1;
         }
         for i in 0..1 << BUCKET_BITS {
             self.bounds[i + 1] += self.bounds[i];
@@ -226,8 +247,8 @@ impl Ranked {
         self.by_bucket.clear();
         self.by_bucket.resize(kept, 0);
         let mut fill = self.bounds.clone();
-        for (i, c) in candidates(slots) {
-            let b = bucket(&c);
+        for (i, c) in costs(slots) {
+            let b = bucket(c);
             if b <= last {
                 self.by_bucket[fill[b] as usize] = i;
                 fill[b] += 1;
