@@ -92,8 +92,9 @@ impl Slots {
         }
     }
 
-    /// Drops the triangles no longer `alive` and their rows, keeping the order; gives
-    /// memory back once less than half of it is used.
+    /// Drops the triangles no longer `alive` and their rows, keeping the order; gives the
+    /// memory back once a ninth of it is free (a large block's tail goes back to the system
+    /// without a copy), so that the rows shrink with the mesh pass by pass.
     pub(super) fn retain_alive(&mut self, alive: &[bool]) {
         let mut kept = 0;
         for i in 0..self.live.len() {
@@ -105,7 +106,7 @@ impl Slots {
         }
         self.live.truncate(kept);
         self.rows.truncate(kept);
-        if 2 * kept < self.rows.capacity() {
+        if kept + kept / 8 < self.rows.capacity() {
             self.live.shrink_to_fit();
             self.rows.shrink_to_fit();
         }
