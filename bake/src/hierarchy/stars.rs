@@ -4,6 +4,7 @@
 //! the pool is compacted when what no list holds outgrows a quarter of what lists hold.
 
 /// The triangles around every node: node `v`'s are `pool[start[v]..][..len[v]]`.
+#[derive(Default)]
 pub(super) struct Stars {
     /// Where each node's list starts in `pool`. The lists lie in the pool in node order.
     start: Vec<u32>,

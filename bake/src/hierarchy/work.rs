@@ -195,15 +195,36 @@ pub(super) fn centred(q: [f32; 3], centre: V3) -> V3 {
 }
 
 impl Work<'_> {
-    /// The hierarchy, with the bounds gathered per node and the triangles as they end.
-    pub(super) fn into_hierarchy(self) -> Hierarchy {
+    /// The hierarchy, with the bounds gathered per node and the triangles as they end. The
+    /// work's tables are freed first, and the nodes and triangles once copied, so that the
+    /// hierarchy's arrays never take memory beside them (the peak of a build would be here).
+    pub(super) fn into_hierarchy(mut self) -> Hierarchy {
+        drop((
+            std::mem::take(&mut self.wedges),
+            std::mem::take(&mut self.wedge_start),
+            std::mem::take(&mut self.faces_of),
+            std::mem::take(&mut self.pts_head),
+            std::mem::take(&mut self.pts_next),
+            std::mem::take(&mut self.info),
+            std::mem::take(&mut self.valence),
+        ));
+        drop((
+            std::mem::take(&mut self.stamp),
+            std::mem::take(&mut self.shrunk),
+            std::mem::take(&mut self.start_valence),
+            std::mem::take(&mut self.moved),
+            std::mem::take(&mut self.from_kept),
+        ));
         let mut h = self.h;
-        h.parent = self.nodes.iter().map(|n| n.parent).collect();
-        h.error = self.nodes.iter().map(|n| n.error).collect();
-        h.radius = self.nodes.iter().map(|n| n.radius).collect();
-        h.cone = self.nodes.iter().map(|n| n.cone).collect();
+        let nodes = self.nodes;
+        h.parent = nodes.iter().map(|n| n.parent).collect();
+        h.error = nodes.iter().map(|n| n.error).collect();
+        h.radius = nodes.iter().map(|n| n.radius).collect();
+        h.cone = nodes.iter().map(|n| n.cone).collect();
+        drop(nodes);
         h.node_position = self.node_pos;
         h.corners = self.tris.iter().map(|t| t.c).collect();
+        drop(self.tris);
         h.alive = self.alive;
         h
     }
