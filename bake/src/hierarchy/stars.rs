@@ -115,3 +115,46 @@ impl Stars {
         self.waste = 0;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Stars;
+
+    /// The pool holds what a vector per node would, through removals, merges and the
+    /// compactions they set off.
+    #[test]
+    fn the_pool_keeps_every_list_through_compactions() {
+        // A strip of triangles over 40 positions: triangle f has corners f, f + 1, f + 2.
+        let corners: Vec<[u32; 3]> = (0..38u32).map(|f| [f, f + 1, f + 2]).collect();
+        let mut stars = Stars::of_triangles(40, corners.iter().copied());
+        let mut model: Vec<Vec<u32>> = vec![Vec::new(); 40];
+        for (f, c) in corners.iter().enumerate() {
+            for &x in c {
+                model[x as usize].push(f as u32);
+            }
+        }
+        let mut compactions = 0;
+        // Merge neighbours pairwise, removing a triangle of each pair first.
+        let mut live: Vec<u32> = (0..40).collect();
+        while live.len() > 1 {
+            let (a, b) = (live.remove(0), live.remove(0));
+            if let Some(&f) = model[a as usize].first() {
+                for x in 0..model.len() as u32 {
+                    stars.remove(x, f);
+                    model[x as usize].retain(|&g| g != f);
+                }
+            }
+            let waste = stars.waste;
+            stars.push_merged(a, b);
+            compactions += usize::from(stars.waste < waste);
+            let mut merged = std::mem::take(&mut model[a as usize]);
+            merged.append(&mut model[b as usize]);
+            model.push(merged);
+            live.push(model.len() as u32 - 1);
+            for (v, list) in model.iter().enumerate() {
+                assert_eq!(stars.of(v as u32), &list[..], "node {v}");
+            }
+        }
+        assert!(compactions > 0, "no compaction happened");
+    }
+}
