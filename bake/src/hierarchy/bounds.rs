@@ -75,9 +75,9 @@ impl Work<'_> {
     /// is a corner of (its first).
     pub(super) fn place_points(&mut self) {
         self.pts_head = vec![NONE; self.tris.len()];
-        self.pts_next = vec![NONE; self.p.len()];
-        for (x, faces) in self.faces_of[..self.p.len()].iter().enumerate() {
-            if let Some(&f) = faces.first() {
+        self.pts_next = vec![NONE; self.positions()];
+        for x in 0..self.positions() {
+            if let Some(&f) = self.faces_of.of(x as u32).first() {
                 self.pts_next[x] = std::mem::replace(&mut self.pts_head[f as usize], x as u32);
             }
         }
@@ -87,7 +87,7 @@ impl Work<'_> {
     /// (ample for an error bound), relative to the centre.
     #[inline]
     fn point(&self, x: u32) -> V3 {
-        self.p[x as usize].map(|c| c as f32 as f64)
+        self.at(x as usize).map(|c| c as f32 as f64)
     }
 
     /// The nearest triangle of `star` to each of `points` and the squared distance, into
@@ -144,7 +144,7 @@ impl Work<'_> {
             let (mut out, mut probes) = (Vec::with_capacity(part.len()), Vec::new());
             for points in part.chunk_by(|a, b| a.1 == b.1) {
                 let s = points[0].1 as usize;
-                let star = &this.faces_of[s];
+                let star = this.faces_of.of(s as u32);
                 let from_kept = this.from_kept[s - first_node] as usize;
                 let moved_ones = if from_kept < star.len() {
                     &star[from_kept..]

@@ -14,14 +14,16 @@ impl Work<'_> {
         let l = self.tris[c.fl as usize].c[prev(c.rot_l as usize)];
         let r = self.third(c.fr, c.t);
         for x in [l, r] {
-            if x != NONE && self.shrunk[x as usize] != pass {
-                self.shrunk[x as usize] = pass;
-                self.start_valence[x as usize] = self.valence[x as usize];
+            if x != NONE && self.shrunk[self.at_node(x)] != pass {
+                let px = self.at_node(x);
+                self.shrunk[px] = pass;
+                self.start_valence[px] = self.valence[px];
             }
         }
         let s = self.apply(c);
         for &v in rings.iter().flatten().chain(&[c.t, c.u, s]) {
-            self.stamp[v as usize] = pass;
+            let pv = self.at_node(v);
+            self.stamp[pv] = pass;
         }
     }
 
@@ -30,7 +32,7 @@ impl Work<'_> {
     /// around the new node.
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
-        for &f in &self.faces_of[c.u as usize] {
+        for &f in self.faces_of.of(c.u) {
             let mut x = std::mem::replace(&mut self.pts_head[f as usize], NONE);
             while x != NONE {
                 self.moved.push((x, s));
@@ -106,7 +108,7 @@ impl Work<'_> {
             }
         }
         for x in fc {
-            self.faces_of[x as usize].retain(|&g| g != f);
+            self.faces_of.remove(x, f);
         }
     }
 
@@ -114,10 +116,9 @@ impl Work<'_> {
     /// first, which [`Work::settle`] relies on).
     fn move_star(&mut self, c: Collapse, s: u32) {
         let (t, u) = (c.t, c.u);
-        let mut star = std::mem::take(&mut self.faces_of[t as usize]);
-        self.from_kept.push(star.len() as u32);
-        star.append(&mut std::mem::take(&mut self.faces_of[u as usize]));
-        for &f in &star {
+        self.from_kept.push(self.faces_of.of(t).len() as u32);
+        self.faces_of.push_merged(t, u);
+        for &f in self.faces_of.of(s) {
             let mut tri = self.tris[f as usize];
             for x in tri.c.iter_mut() {
                 if *x == t || *x == u {
@@ -126,10 +127,6 @@ impl Work<'_> {
             }
             self.tris[f as usize] = tri;
         }
-        self.faces_of.push(star);
-        self.stamp.push(0);
-        self.shrunk.push(0);
-        self.start_valence.push(0);
     }
 
     /// The ends' rings share just `l` and `r` (the link condition): the new node has the
@@ -140,11 +137,13 @@ impl Work<'_> {
             self.third(c.fr, c.t),
         );
         let shared = 1 + u32::from(r != NONE);
-        self.valence
-            .push(self.valence[c.t as usize] + self.valence[c.u as usize] - 2 - shared);
+        // The new node is at the kept child's position.
+        let (pt, pu) = (self.at_node(c.t), self.at_node(c.u));
+        self.valence[pt] = self.valence[pt] + self.valence[pu] - 2 - shared;
         for x in [l, r] {
             if x != NONE {
-                self.valence[x as usize] -= 1;
+                let px = self.at_node(x);
+                self.valence[px] -= 1;
             }
         }
     }
@@ -157,7 +156,7 @@ impl Work<'_> {
         let mut around = Vec::new();
         for x in std::iter::once(s).chain(ring.iter().copied()) {
             self.find_ring(x, &mut around);
-            debug_assert_eq!(self.valence[x as usize] as usize, around.len(), "{x}");
+            debug_assert_eq!(self.valence[self.at_node(x)] as usize, around.len(), "{x}");
         }
     }
 }

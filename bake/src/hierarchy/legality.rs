@@ -28,7 +28,7 @@ impl Work<'_> {
         self.wedges_at(pu)
             .iter()
             .map(|wu| match at.iter().find(|wt| wt.group == wu.group) {
-                Some(wt) => wu.q.eval(self.p[pt], &self.attrs_of(wt)),
+                Some(wt) => wu.q.eval(self.at(pt), &self.attrs_of(wt)),
                 None => f64::INFINITY,
             })
             .sum()
@@ -57,10 +57,11 @@ impl Work<'_> {
     /// Number of neighbours of `x` at the start of pass `pass`.
     #[inline]
     pub(super) fn valence_at_start(&self, x: u32, pass: u32) -> usize {
-        if self.shrunk[x as usize] == pass {
-            self.start_valence[x as usize] as usize
+        let px = self.at_node(x);
+        if self.shrunk[px] == pass {
+            self.start_valence[px] as usize
         } else {
-            self.valence[x as usize] as usize
+            self.valence[px] as usize
         }
     }
 
@@ -81,7 +82,7 @@ impl Work<'_> {
         match iu.class {
             PositionClass::Rigid => return false,
             PositionClass::Sharp => {
-                let group = |f: u32| self.tris[f as usize].group;
+                let group = |f: u32| self.w.triangles[f as usize].group;
                 let boundary = fr == NONE || group(fl) != group(fr);
                 if !boundary || it.class == PositionClass::Free {
                     return false;
@@ -117,7 +118,7 @@ impl Work<'_> {
             }
         }
         let p_t = self.pos(t);
-        for &f in &self.faces_of[u as usize] {
+        for &f in self.faces_of.of(u) {
             if f == fl || f == fr {
                 continue;
             }
@@ -175,7 +176,7 @@ impl Work<'_> {
         };
         if opposite
             .iter()
-            .all(|&x| x == NONE || self.valence[x as usize] > 3)
+            .all(|&x| x == NONE || self.valence[self.at_node(x)] > 3)
         {
             Verdict::Legal(c)
         } else {

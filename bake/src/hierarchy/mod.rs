@@ -68,6 +68,7 @@ mod legality;
 mod pass;
 mod rank;
 mod setup;
+mod stars;
 #[cfg(test)]
 mod tests;
 mod work;

@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::geometry::corner_of;
 use super::legality::Verdict;
-use super::rank::{order_key, rank_all, Candidate, Ranked, Slot};
+use super::rank::{order_key, rank_all, Ranked, Slots};
 use super::work::Work;
 use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 
@@ -24,7 +24,7 @@ pub(super) fn collapse_all(
     progress: Progress<'_>,
 ) -> Result<(), BuildError> {
     let mut passes = Passes::new(work.tris.len());
-    let most = work.p.len().saturating_sub(1) as u64;
+    let most = work.positions().saturating_sub(1) as u64;
     let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
     // its cheapest share).
@@ -75,12 +75,8 @@ fn live_triangles(work: &Work<'_>) -> usize {
 
 /// What the passes keep from one to the next.
 struct Passes {
-    /// The live triangles, in order.
-    live: Vec<u32>,
-    /// The ranking of every triangle's three edge slots.
-    slots: Vec<[Slot; 3]>,
-    /// The pass's ranked collapses, in slot order.
-    cands: Vec<Candidate>,
+    /// The live triangles and the ranking of their three edge slots.
+    slots: Slots,
     ranked: Ranked,
     /// Other directions of edges whose cheaper one was illegal: `(cost key, slot)`.
     later: BinaryHeap<Reverse<(u64, usize)>>,
@@ -101,9 +97,7 @@ enum Next {
 impl Passes {
     fn new(triangles: usize) -> Self {
         Self {
-            live: (0..triangles as u32).collect(),
-            slots: vec![[Slot::default(); 3]; triangles],
-            cands: Vec::new(),
+            slots: Slots::new(triangles),
             ranked: Ranked::default(),
             later: BinaryHeap::new(),
             rings: [Vec::new(), Vec::new()],
@@ -130,17 +124,16 @@ impl Passes {
         threads: usize,
     ) -> Result<(u64, bool), BuildError> {
         // Drop the triangles the last pass removed (keeping the order).
-        self.live.retain(|&f| work.alive[f as usize]);
+        self.slots.retain_alive(&work.alive);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
         // slots per triangle, in order).
-        rank_all(work, &self.live, &mut self.slots, &mut self.cands, threads);
+        let count = rank_all(work, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
-        let limit = self
-            .ranked
-            .start(&self.cands, if full { 1.0 } else { PASS_SHARE });
+        let share = if full { 1.0 } else { PASS_SHARE };
+        let limit = self.ranked.start(&self.slots, count, share);
         let mut applied = 0u64;
         self.later.clear();
-        let max_tries = 2 * self.cands.len() as u64;
+        let max_tries = 2 * count as u64;
         let mut tries = 0u64;
         loop {
             let (t, u, from_later) = match self.next(work, pass, limit) {
@@ -154,7 +147,7 @@ impl Passes {
                     stage: BuildStage::Pass,
                     pass,
                     collapses: work.h.collapses.len() as u64,
-                    most: work.p.len().saturating_sub(1) as u64,
+                    most: work.positions().saturating_sub(1) as u64,
                     invariant: "a pass tried more collapses than it ranked and queued",
                 });
             }
@@ -180,14 +173,19 @@ impl Passes {
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
     fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
-        let next_cand = self.ranked.peek(&work.stamp, pass);
+        let next_cand = self
+            .ranked
+            .peek(&self.slots, |v| work.stamp[work.at_node(v)] == pass);
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,
             (Some(_), None) => false,
             (Some((c, t, u)), Some(&Reverse((key, i)))) => {
                 let own = order_key(c);
-                key < own || (key == own && !stamped(work, pass, t, u) && i < slot_of(work, t, u))
+                key < own
+                    || (key == own
+                        && !stamped(work, pass, t, u)
+                        && i < slot_of(work, &self.slots, t, u))
             }
         };
         let key = if later_first {
@@ -202,9 +200,9 @@ impl Passes {
             let Some(Reverse((_, i))) = self.later.pop() else {
                 return Next::Done;
             };
-            let slot = &self.slots[i / 3][i % 3];
+            let slot = self.slots.get(i);
             let [a, b] = slot.ends;
-            let (t, u) = if slot.dir() == 1 { (a, b) } else { (b, a) };
+            let (t, u) = if slot.dir == 1 { (a, b) } else { (b, a) };
             Next::Try {
                 t,
                 u,
@@ -225,8 +223,9 @@ impl Passes {
 
     /// Queues the other direction of the edge `t`–`u` at its own cost, if allowed.
     fn queue_other_direction(&mut self, work: &Work<'_>, t: u32, u: u32) {
-        let i = slot_of(work, t, u);
-        let other = self.slots[i / 3][i % 3].other();
+        let i = slot_of(work, &self.slots, t, u);
+        let (f, k) = self.slots.slot(i);
+        let other = work.other_cost(f, k);
         if other.is_finite() {
             self.later.push(Reverse((order_key(other), i)));
         }
@@ -235,11 +234,11 @@ impl Passes {
 
 /// Whether an earlier collapse of pass `pass` took a neighbourhood `t` or `u` is in.
 fn stamped(work: &Work<'_>, pass: u32, t: u32, u: u32) -> bool {
-    work.stamp[t as usize] == pass || work.stamp[u as usize] == pass
+    work.stamp[work.at_node(t)] == pass || work.stamp[work.at_node(u)] == pass
 }
 
 /// The number of the slot standing for the edge of free ends `t`, `u`.
-fn slot_of(work: &Work<'_>, t: u32, u: u32) -> usize {
+fn slot_of(work: &Work<'_>, slots: &Slots, t: u32, u: u32) -> usize {
     let (fl, jl) = work.dir_face(t, u).unwrap_or((0, 0));
     let fr = work.tris[fl as usize].o[jl];
     let (f, k) = if fr == NONE || t < u {
@@ -247,5 +246,5 @@ fn slot_of(work: &Work<'_>, t: u32, u: u32) -> usize {
     } else {
         (fr, corner_of(work.tris[fr as usize].c, u))
     };
-    3 * f as usize + k
+    slots.number(f, k)
 }

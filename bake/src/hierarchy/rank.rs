@@ -9,47 +9,139 @@ use rayon::prelude::*;
 /// A collapse as a pass ranks it: `(cost, t, u)`.
 pub(super) type Candidate = (f64, u32, u32);
 
-/// The ranking of one edge slot (3 per triangle) in the current pass.
+/// The ranking of one edge slot (3 per triangle) in the current pass, as [`Slots`] holds it.
 #[derive(Clone, Copy)]
 pub(super) struct Slot {
     /// The edge's ends, first and second corner of the slot, at the start of the pass.
     pub(super) ends: [u32; 2],
-    /// Quadric costs of the two directions for these ends (direction 1 moves the first end
-    /// onto the second, direction 2 the reverse), infinite where not allowed.
-    pub(super) costs: [f64; 2],
+    /// The cost of the cheaper allowed direction, infinite for none.
+    pub(super) cost: f64,
+    /// The cheaper allowed direction ([`dir`]): 1 moves the first end onto the second, 2 the
+    /// reverse, 0 for none.
+    pub(super) dir: u8,
 }
 
-impl Slot {
-    /// The cheaper allowed direction (the first on a tie), 0 for none: read from the
-    /// costs rather than stored, which keeps a slot at 24 bytes.
-    #[inline]
-    pub(super) fn dir(&self) -> u8 {
-        let [cx, cy] = self.costs;
-        if cy < cx {
-            2
-        } else if cx.is_finite() {
-            1
+/// The cheaper allowed direction of a slot's quadric costs `[cx, cy]` (direction 1 moves
+/// the first end onto the second, direction 2 the reverse; infinite where not allowed):
+/// the first on a tie, 0 for none.
+#[inline]
+pub(super) fn dir([cx, cy]: [f64; 2]) -> u8 {
+    if cy < cx {
+        2
+    } else if cx.is_finite() {
+        1
+    } else {
+        0
+    }
+}
+
+/// The rankings of one triangle's three edge slots: their cheaper allowed directions and
+/// those directions' costs, and the triangle's corners when they were ranked (a slot's
+/// ends are two of them). A slot keeps one cost, 40 bytes a triangle where both costs and
+/// each slot's ends would take 72: the other direction's cost is ranked again where a pass
+/// needs it ([`Work::other_cost`]), and comes out the same.
+#[derive(Clone, Copy)]
+struct Row {
+    cost: [f64; 3],
+    corners: [u32; 3],
+    /// Slot `k`'s direction in bits `2k..2k + 2`.
+    dirs: u8,
+}
+
+impl Row {
+    const NONE: Self = Self {
+        cost: [f64::INFINITY; 3],
+        corners: [NONE; 3],
+        dirs: 0,
+    };
+
+    fn dir(&self, k: usize) -> u8 {
+        (self.dirs >> (2 * k)) & 3
+    }
+
+    /// Sets slot `k` from its costs.
+    fn set(&mut self, k: usize, costs: [f64; 2]) {
+        let d = dir(costs);
+        self.dirs = (self.dirs & !(3 << (2 * k))) | (d << (2 * k));
+        self.cost[k] = if d == 0 {
+            f64::INFINITY
         } else {
-            0
+            costs[d as usize - 1]
+        };
+    }
+}
+
+/// The rankings of the three edge slots of every live triangle, by the triangle's place in
+/// the list of live triangles: slot `3 × i + k` is slot `k` of triangle `live[i]`. The
+/// list keeps the triangles' order, so the slots' numbers are in the order of
+/// `3 × triangle + k`, and the rows of the triangles a pass removed are dropped before the
+/// next pass ranks.
+pub(super) struct Slots {
+    /// The live triangles, in order.
+    live: Vec<u32>,
+    /// Their slots' rankings.
+    rows: Vec<Row>,
+}
+
+impl Slots {
+    /// Slots of `triangles` triangles, all live, none ranked.
+    pub(super) fn new(triangles: usize) -> Self {
+        Self {
+            live: (0..triangles as u32).collect(),
+            rows: vec![Row::NONE; triangles],
         }
     }
 
-    /// The cheaper allowed direction's cost.
-    pub(super) fn cost(&self) -> f64 {
-        self.costs[self.dir() as usize - 1]
+    /// Drops the triangles no longer `alive` and their rows, keeping the order; gives the
+    /// memory back once a ninth of it is free (a large block's tail goes back to the system
+    /// without a copy), so that the rows shrink with the mesh pass by pass.
+    pub(super) fn retain_alive(&mut self, alive: &[bool]) {
+        let mut kept = 0;
+        for i in 0..self.live.len() {
+            if alive[self.live[i] as usize] {
+                self.live[kept] = self.live[i];
+                self.rows[kept] = self.rows[i];
+                kept += 1;
+            }
+        }
+        self.live.truncate(kept);
+        self.rows.truncate(kept);
+        if kept + kept / 8 < self.rows.capacity() {
+            self.live.shrink_to_fit();
+            self.rows.shrink_to_fit();
+        }
     }
 
-    /// The other direction's cost, infinite where not allowed.
-    pub(super) fn other(&self) -> f64 {
-        self.costs[2 - self.dir() as usize]
+    /// The number of slot `k` of the live triangle `f`.
+    pub(super) fn number(&self, f: u32, k: usize) -> usize {
+        let (Ok(i) | Err(i)) = self.live.binary_search(&f);
+        3 * i + k
     }
-}
 
-impl Default for Slot {
-    fn default() -> Self {
-        Self {
-            ends: [NONE; 2],
-            costs: [f64::INFINITY; 2],
+    /// The triangle and slot of slot number `i`.
+    pub(super) fn slot(&self, i: usize) -> (u32, usize) {
+        (self.live[i / 3], i % 3)
+    }
+
+    /// Slot `i` (`3 × place + slot`).
+    #[inline]
+    pub(super) fn get(&self, i: usize) -> Slot {
+        let (row, k) = (&self.rows[i / 3], i % 3);
+        let c = row.corners;
+        Slot {
+            ends: [c[k], c[next(k)]],
+            cost: row.cost[k],
+            dir: row.dir(k),
+        }
+    }
+
+    /// Sets the slots of triangle `f` from their corners and costs (for tests).
+    #[cfg(test)]
+    pub(super) fn set(&mut self, f: usize, corners: [u32; 3], costs: [[f64; 2]; 3]) {
+        let row = &mut self.rows[f];
+        row.corners = corners;
+        for (k, c) in costs.into_iter().enumerate() {
+            row.set(k, c);
         }
     }
 }
@@ -65,11 +157,12 @@ pub(super) fn order_key(x: f64) -> u64 {
 /// The ranked collapses of a pass, handed out by cost, equal costs in the order they were
 /// ranked. They are bucketed by the top bits of their cost first, and a bucket is sorted
 /// only when reached, after dropping those whose ends are taken by then (which the pass
-/// would skip wherever they stood).
+/// would skip wherever they stood). The buckets hold slot numbers (`3 × triangle + slot`),
+/// not the collapses: the slots hold the rest for the whole pass.
 #[derive(Default)]
 pub(super) struct Ranked {
-    /// The candidates, bucket after bucket, each in ranking order.
-    by_bucket: Vec<Candidate>,
+    /// The candidates' slot numbers, bucket after bucket, each in ranking order.
+    by_bucket: Vec<u32>,
     /// Where each bucket starts in `by_bucket`, and the end.
     bounds: Vec<u32>,
     /// The next bucket.
@@ -86,19 +179,47 @@ const BUCKET_BITS: u32 = 16;
 /// Candidates below which a pass sorts them all at once.
 const BUCKET_MIN: usize = 4096;
 
+/// The ranked collapses of the live triangles in `slots`, in slot order, each with its
+/// slot number.
+pub(super) fn candidates(slots: &Slots) -> impl Iterator<Item = (u32, Candidate)> + '_ {
+    slots.rows.iter().enumerate().flat_map(|(i, row)| {
+        (0..3).filter_map(move |k| {
+            let (a, b) = (row.corners[k], row.corners[next(k)]);
+            let cost = row.cost[k];
+            let number = (3 * i + k) as u32;
+            match row.dir(k) {
+                1 => Some((number, (cost, b, a))),
+                2 => Some((number, (cost, a, b))),
+                _ => None,
+            }
+        })
+    })
+}
+
+/// The costs of the ranked collapses of `slots` with their slot numbers, in slot order: a
+/// slot lists a collapse exactly when its cost is finite ([`Row::set`]).
+fn costs(slots: &Slots) -> impl Iterator<Item = (u32, f64)> + '_ {
+    slots.rows.iter().enumerate().flat_map(|(i, row)| {
+        (0..3)
+            .map(move |k| ((3 * i + k) as u32, row.cost[k]))
+            .filter(|(_, c)| c.is_finite())
+    })
+}
+
 impl Ranked {
-    /// Takes a pass's candidates, of which the pass means to apply the cheapest `share`;
-    /// returns the [`order_key`] of the dearest cost in that share (for many candidates,
-    /// rounded up to the end of its bucket), or `u64::MAX` when the share is every
-    /// candidate. Only candidates up to it are handed out, and the pass cuts what is dearer,
-    /// the other directions it queues included: a share of everything cuts nothing.
-    pub(super) fn start(&mut self, cands: &[Candidate], share: f64) -> u64 {
+    /// Takes a pass's `count` candidates (those of the live triangles in `slots`), of
+    /// which the pass means to apply the cheapest `share`; returns the [`order_key`] of the
+    /// dearest cost in that share (for many candidates, rounded up to the end of its bucket),
+    /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
+    /// out, and the pass cuts what is dearer, the other directions it queues included: a
+    /// share of everything cuts nothing.
+    pub(super) fn start(&mut self, slots: &Slots, count: usize, share: f64) -> u64 {
         self.chunk.clear();
         self.pos = 0;
-        let want = ((cands.len() as f64 * share).ceil() as usize).clamp(1, cands.len().max(1));
-        let everything = want >= cands.len();
-        if cands.len() < BUCKET_MIN {
-            self.chunk.extend_from_slice(cands);
+        let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
+        let everything = want >= count;
+        if count < BUCKET_MIN {
+            self.chunk.extend(candidates(slots).map(|(_, c)| c));
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
             return match self.chunk.get(want - 1) {
@@ -106,10 +227,10 @@ impl Ranked {
                 _ => u64::MAX,
             };
         }
-        let bucket = |c: &Candidate| (order_key(c.0) >> (64 - BUCKET_BITS)) as usize;
+        let bucket = |c: f64| (order_key(c) >> (64 - BUCKET_BITS)) as usize;
         self.bounds.clear();
         self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        for c in cands {
+        for (_, c) in costs(slots) {
             self.bounds[bucket(c) + 1] += 1;
         }
         for i in 0..1 << BUCKET_BITS {
@@ -125,12 +246,12 @@ impl Ranked {
         let kept = self.bounds[last + 1] as usize;
         self.bounds.truncate(last + 2);
         self.by_bucket.clear();
-        self.by_bucket.resize(kept, (0.0, 0, 0));
+        self.by_bucket.resize(kept, 0);
         let mut fill = self.bounds.clone();
-        for c in cands {
+        for (i, c) in costs(slots) {
             let b = bucket(c);
             if b <= last {
-                self.by_bucket[fill[b] as usize] = *c;
+                self.by_bucket[fill[b] as usize] = i;
                 fill[b] += 1;
             }
         }
@@ -138,8 +259,8 @@ impl Ranked {
         limit
     }
 
-    /// The next candidate whose ends were free when its bucket was reached.
-    pub(super) fn peek(&mut self, stamp: &[u32], pass: u32) -> Option<Candidate> {
+    /// The next candidate whose ends were free (not `taken`) when its bucket was reached.
+    pub(super) fn peek(&mut self, slots: &Slots, taken: impl Fn(u32) -> bool) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
                 return None;
@@ -157,7 +278,8 @@ impl Ranked {
             self.chunk.extend(
                 self.by_bucket[a..b]
                     .iter()
-                    .filter(|c| stamp[c.1 as usize] != pass && stamp[c.2 as usize] != pass),
+                    .filter_map(|&i| candidate(&slots.get(i as usize)))
+                    .filter(|c| !taken(c.1) && !taken(c.2)),
             );
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
@@ -170,25 +292,35 @@ impl Ranked {
 }
 
 impl Work<'_> {
-    /// Ranks the edge in slot `k` of triangle `f` if the slot stands for its edge (the
-    /// lower-numbered end first, or a border edge): the quadric costs of the directions
-    /// the surface-group rules allow, the cheaper first (the first on a tie).
+    /// Ranks the slots of triangle `f` whose edges changed since `row.corners` (the
+    /// triangle's corners when they were last ranked), and brings the corners up to date;
+    /// returns how many of its slots list a collapse.
     ///
     /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
     /// and positions (a node's never change), the groups of the triangles on the edge, and
     /// which those are (they change only by a collapse that also changes an end).
-    pub(super) fn rank(&self, f: u32, k: usize, slot: &mut Slot) {
+    fn rank_triangle(&self, f: u32, row: &mut Row) -> usize {
+        let c = self.tris[f as usize].c;
+        let mut count = 0;
+        for k in 0..3 {
+            if [row.corners[k], row.corners[next(k)]] != [c[k], c[next(k)]] {
+                row.set(k, self.rank(f, k));
+            }
+            count += usize::from(row.dir(k) != 0);
+        }
+        row.corners = c;
+        count
+    }
+
+    /// The costs of the edge in slot `k` of triangle `f` if the slot stands for its edge
+    /// (the lower-numbered end first, or a border edge): the quadric costs of the directions
+    /// the surface-group rules allow, infinite where not allowed (both, for a slot that does
+    /// not stand for its edge).
+    fn rank(&self, f: u32, k: usize) -> [f64; 2] {
         let tri = &self.tris[f as usize];
         let (a, b, g) = (tri.c[k], tri.c[next(k)], tri.o[k]);
-        if slot.ends == [a, b] {
-            return;
-        }
-        *slot = Slot {
-            ends: [a, b],
-            ..Slot::default()
-        };
         if !(a < b || g == NONE) {
-            return;
+            return [f64::INFINITY; 2];
         }
         // Direction 1 moves a onto b across g (t = b, u = a); direction 2 the reverse.
         let cx = if g != NONE && self.groups_ok(b, a, g, f) {
@@ -201,87 +333,50 @@ impl Work<'_> {
         } else {
             f64::INFINITY
         };
-        slot.costs = [cx, cy];
+        [cx, cy]
+    }
+
+    /// The cost of the other direction than the cheaper of slot `k` of triangle `f`,
+    /// infinite where not allowed, ranked again: during a pass, while neither end of the
+    /// slot's edge is stamped, the edge, its ends and its triangles are those it was ranked
+    /// with, so this is the cost the ranking found.
+    pub(super) fn other_cost(&self, f: u32, k: usize) -> f64 {
+        let costs = self.rank(f, k);
+        match dir(costs) {
+            0 => f64::INFINITY,
+            d => costs[2 - d as usize],
+        }
     }
 }
 
 /// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
-/// (each slot's ranking depends on the mesh alone, so the split does not change it), and
-/// lists each edge's cheaper allowed direction in `cands`, in slot order.
-///
-/// The parts count their candidates while ranking, then write them straight into their
-/// stretch of `cands`: the list is never held twice.
-pub(super) fn rank_all(
-    work: &Work<'_>,
-    live: &[u32],
-    slots: &mut [[Slot; 3]],
-    cands: &mut Vec<Candidate>,
-    threads: usize,
-) {
-    cands.clear();
+/// (each slot's ranking depends on the mesh alone, so the split does not change it);
+/// returns how many slots list a collapse (have an allowed direction), which
+/// [`candidates`] hands out in slot order.
+pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> usize {
+    let rank_part = |part: &[u32], rows: &mut [Row]| {
+        part.iter()
+            .zip(rows)
+            .map(|(&f, row)| work.rank_triangle(f, row))
+            .sum::<usize>()
+    };
+    let Slots { live, rows } = slots;
     if threads <= 1 || live.len() < PARALLEL_MIN {
-        for &f in live {
-            for (k, slot) in slots[f as usize].iter_mut().enumerate() {
-                work.rank(f, k, slot);
-                cands.extend(candidate(slot));
-            }
-        }
-        return;
+        return rank_part(live, rows);
     }
-    // Each part's triangles and their slots (`slots` from triangle `first` on), up to the
-    // next part's first triangle.
     let per = live.len().div_ceil(threads);
-    let mut jobs = Vec::with_capacity(threads);
-    let (mut rest, mut first) = (slots, 0);
-    for (i, part) in live.chunks(per).enumerate() {
-        let end = live
-            .get((i + 1) * per)
-            .map_or(first + rest.len(), |&f| f as usize);
-        let (mine, others) = rest.split_at_mut(end - first);
-        rest = others;
-        jobs.push((part, first, mine));
-        first = end;
-    }
-    let counts: Vec<usize> = jobs
-        .par_iter_mut()
-        .map(|(part, first, mine)| {
-            let mut count = 0;
-            for &f in part.iter() {
-                for (k, slot) in mine[f as usize - *first].iter_mut().enumerate() {
-                    work.rank(f, k, slot);
-                    count += usize::from(slot.dir() != 0);
-                }
-            }
-            count
-        })
-        .collect();
-    cands.resize(counts.iter().sum(), (0.0, 0, 0));
-    let mut outs = Vec::with_capacity(jobs.len());
-    let mut free = &mut cands[..];
-    for &n in &counts {
-        let (out, others) = free.split_at_mut(n);
-        outs.push(out);
-        free = others;
-    }
-    jobs.into_par_iter()
-        .zip(outs)
-        .for_each(|((part, first, mine), out)| {
-            let found = part
-                .iter()
-                .flat_map(|&f| &mine[f as usize - first])
-                .filter_map(candidate);
-            for (o, c) in out.iter_mut().zip(found) {
-                *o = c;
-            }
-        });
+    live.par_chunks(per)
+        .zip(rows.par_chunks_mut(per))
+        .map(|(part, rows)| rank_part(part, rows))
+        .sum()
 }
 
 /// The collapse a ranked slot lists: its cheaper allowed direction, if any.
 fn candidate(slot: &Slot) -> Option<Candidate> {
     let [a, b] = slot.ends;
-    match slot.dir() {
-        1 => Some((slot.cost(), b, a)),
-        2 => Some((slot.cost(), a, b)),
+    match slot.dir {
+        1 => Some((slot.cost, b, a)),
+        2 => Some((slot.cost, a, b)),
         _ => None,
     }
 }

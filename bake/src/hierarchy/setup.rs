@@ -2,7 +2,8 @@
 //! boundary planes'), the triangles with their neighbours, and the leaves' bounds.
 
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
-use super::work::{NodeOut, PosInfo, Tri, Wedge, Work};
+use super::stars::Stars;
+use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
@@ -23,7 +24,9 @@ struct Setup<'a> {
     threads: usize,
     /// The bounding box's diagonal, which scales the attributes.
     diagonal: f64,
-    /// Every position relative to the bounding box's centre, in f64.
+    /// The bounding box's centre.
+    centre: V3,
+    /// Every position relative to the centre, in f64 ([`centred`]), while setting up.
     p: Vec<V3>,
     /// Positions split into ranges, one per thread, for adding to their wedges in order.
     ranges: Vec<(usize, usize)>,
@@ -41,18 +44,18 @@ pub(super) fn work<'w>(
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
     let (mut wedges, wedge_start) = s.wedges();
-    let mut faces_of: Vec<Vec<u32>> = vec![Vec::new(); np];
-    s.add_triangle_quadrics(&mut faces_of, &mut wedges, &wedge_start);
+    let faces_of = Stars::of_triangles(np, w.triangles.iter().map(|t| t.p));
+    s.add_triangle_quadrics(&mut wedges, &wedge_start);
     let tris = s.triangles(&faces_of);
-    s.add_boundary_planes(&tris, &mut faces_of, &mut wedges, &wedge_start);
+    s.add_boundary_planes(&tris, &mut wedges, &wedge_start);
     let info = position_info(w, frozen);
-    let diagonal = s.diagonal;
-    let p = s.p;
+    let (diagonal, centre) = (s.diagonal, s.centre);
+    drop(s);
     let mut work = Work {
         w,
         weights: *weights,
         diagonal,
-        p,
+        centre,
         info,
         tris,
         alive: vec![true; nt],
@@ -93,11 +96,7 @@ impl<'a> Setup<'a> {
             (lo[2] + hi[2]) / 2.0,
         ];
         let diagonal = len(sub(hi, lo)).max(f64::MIN_POSITIVE);
-        let p: Vec<V3> = w
-            .positions
-            .iter()
-            .map(|q| sub(q.map(f64::from), centre))
-            .collect();
+        let p: Vec<V3> = w.positions.iter().map(|&q| centred(q, centre)).collect();
         let np = w.positions.len();
         let per = if threads <= 1 || np < PARALLEL_MIN {
             np.max(1)
@@ -113,6 +112,7 @@ impl<'a> Setup<'a> {
             weights,
             threads,
             diagonal,
+            centre,
             p,
             ranges,
         }
@@ -136,15 +136,9 @@ impl<'a> Setup<'a> {
         (wedges, wedge_start)
     }
 
-    /// Each triangle's quadric, added to the wedge of its group at its corners, and the
-    /// triangle to its corners' lists. The quadrics are computed in blocks on all threads
+    /// Each triangle's quadric, added to the wedge of its group at its corners. The quadrics are computed in blocks on all threads
     /// and added in triangle order, so the sums do not depend on the threads.
-    fn add_triangle_quadrics(
-        &self,
-        faces_of: &mut [Vec<u32>],
-        wedges: &mut [Wedge],
-        wedge_start: &[u32],
-    ) {
+    fn add_triangle_quadrics(&self, wedges: &mut [Wedge], wedge_start: &[u32]) {
         let (w, p) = (self.w, &self.p);
         let nt = w.triangles.len();
         for first in (0..nt).step_by(QUADRIC_BLOCK) {
@@ -155,35 +149,29 @@ impl<'a> Setup<'a> {
                     t.a.map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
                 Quadric::triangle(t.p.map(|x| p[x as usize]), s)
             });
-            by_positions(
-                &self.ranges,
-                faces_of,
-                wedges,
-                wedge_start,
-                |lo, hi, faces_of, wedges| {
-                    for (i, q) in block.iter().enumerate() {
-                        let t = &w.triangles[first + i];
-                        for &x in &t.p {
-                            let x = x as usize;
-                            if (lo..hi).contains(&x) {
-                                faces_of[x - lo].push((first + i) as u32);
-                                add_to_wedge(wedges, wedge_start, lo, x, t.group, q);
-                            }
+            by_positions(&self.ranges, wedges, wedge_start, |lo, hi, wedges| {
+                for (i, q) in block.iter().enumerate() {
+                    let t = &w.triangles[first + i];
+                    for &x in &t.p {
+                        let x = x as usize;
+                        if (lo..hi).contains(&x) {
+                            add_to_wedge(wedges, wedge_start, lo, x, t.group, q);
                         }
                     }
-                },
-            );
+                }
+            });
         }
     }
 
     /// The triangles with, across each edge, the triangle with the reverse edge.
-    fn triangles(&self, faces_of: &[Vec<u32>]) -> Vec<Tri> {
+    fn triangles(&self, faces_of: &Stars) -> Vec<Tri> {
         let w = self.w;
         let opp = par_map(w.triangles.len(), self.threads, |f| {
             let c = w.triangles[f].p;
             [0, 1, 2].map(|k| {
                 let (a, b) = (c[k], c[next(k)]);
-                faces_of[b as usize]
+                faces_of
+                    .of(b)
                     .iter()
                     .copied()
                     .find(|&g| {
@@ -196,24 +184,14 @@ impl<'a> Setup<'a> {
         w.triangles
             .iter()
             .zip(&opp)
-            .map(|(t, &o)| Tri {
-                c: t.p,
-                o,
-                group: t.group,
-            })
+            .map(|(t, &o)| Tri { c: t.p, o })
             .collect()
     }
 
     /// Boundary planes: through each border or group-boundary edge, perpendicular to its
     /// triangle, weighted by the edge's squared length, added to the wedges of the
     /// triangle's group at the edge's ends.
-    fn add_boundary_planes(
-        &self,
-        tris: &[Tri],
-        faces_of: &mut [Vec<u32>],
-        wedges: &mut [Wedge],
-        wedge_start: &[u32],
-    ) {
+    fn add_boundary_planes(&self, tris: &[Tri], wedges: &mut [Wedge], wedge_start: &[u32]) {
         let (w, p) = (self.w, &self.p);
         let mut planes = Vec::new();
         for (f, t) in w.triangles.iter().enumerate() {
@@ -230,22 +208,16 @@ impl<'a> Setup<'a> {
                 planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), weight)));
             }
         }
-        by_positions(
-            &self.ranges,
-            faces_of,
-            wedges,
-            wedge_start,
-            |lo, hi, _, wedges| {
-                for (ends, group, q) in &planes {
-                    for &x in ends {
-                        let x = x as usize;
-                        if (lo..hi).contains(&x) {
-                            add_to_wedge(wedges, wedge_start, lo, x, *group, q);
-                        }
+        by_positions(&self.ranges, wedges, wedge_start, |lo, hi, wedges| {
+            for (ends, group, q) in &planes {
+                for &x in ends {
+                    let x = x as usize;
+                    if (lo..hi).contains(&x) {
+                        add_to_wedge(wedges, wedge_start, lo, x, *group, q);
                     }
                 }
-            },
-        );
+            }
+        });
     }
 }
 
@@ -270,21 +242,18 @@ impl Work<'_> {
     /// Room for every node a build can add (a collapse per position but one), so the
     /// per-node arrays never grow by doubling past what they need.
     fn reserve_nodes(&mut self) {
-        let more = self.p.len().saturating_sub(1);
-        self.faces_of.reserve_exact(more);
+        let more = self.positions().saturating_sub(1);
+        self.faces_of.reserve_nodes(more);
         self.node_pos.reserve_exact(more);
-        self.stamp.reserve_exact(more);
-        self.shrunk.reserve_exact(more);
-        self.start_valence.reserve_exact(more);
         self.h.collapses.reserve_exact(more);
     }
 
     /// The leaves' valences, normal cones and bounding radii (to their ring), on all
     /// threads.
     fn add_leaves(&mut self, threads: usize) {
-        let np = self.p.len();
+        let np = self.positions();
         let leaves = par_map(np, threads, |v| self.leaf(v as u32));
-        self.valence.reserve(2 * np);
+        self.valence.reserve_exact(np);
         self.nodes.reserve(2 * np);
         for (valence, cone, radius) in leaves {
             self.valence.push(valence);
@@ -299,7 +268,9 @@ impl Work<'_> {
 
     /// A leaf's number of neighbours, normal cone and bounding radius.
     fn leaf(&self, v: u32) -> (u32, ([f32; 3], f32), f32) {
-        let normals = self.faces_of[v as usize]
+        let normals = self
+            .faces_of
+            .of(v)
             .iter()
             .map(|&f| norm(self.triangle_normal(self.tris[f as usize].c)));
         let axis = norm(
@@ -320,7 +291,7 @@ impl Work<'_> {
         // The ring as `Work::find_ring` lists it, without collecting it.
         let pv = self.pos(v);
         let (mut valence, mut radius) = (0u32, 0.0f64);
-        for &f in &self.faces_of[v as usize] {
+        for &f in self.faces_of.of(v) {
             let t = &self.tris[f as usize];
             let j = corner_of(t.c, v);
             let border = t.o[prev(j)] == NONE;
@@ -375,31 +346,29 @@ pub(super) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T 
         .collect()
 }
 
-/// Runs `f(lo, hi, faces_of, wedges)` for each range `lo..hi` of positions, as a rayon
-/// task each, with the triangle lists and the wedges of those positions.
+/// Runs `f(lo, hi, wedges)` for each range `lo..hi` of positions, as a rayon task each,
+/// with the wedges of those positions.
 pub(super) fn by_positions(
     ranges: &[(usize, usize)],
-    faces_of: &mut [Vec<u32>],
     wedges: &mut [Wedge],
     wedge_start: &[u32],
-    f: impl Fn(usize, usize, &mut [Vec<u32>], &mut [Wedge]) + Sync,
+    f: impl Fn(usize, usize, &mut [Wedge]) + Sync,
 ) {
     if ranges.len() <= 1 {
-        f(0, faces_of.len(), faces_of, wedges);
+        f(0, wedge_start.len() - 1, wedges);
         return;
     }
     let mut parts = Vec::with_capacity(ranges.len());
-    let (mut faces_of, mut wedges) = (faces_of, wedges);
+    let mut wedges = wedges;
     for &(lo, hi) in ranges {
-        let (these_faces, other_faces) = faces_of.split_at_mut(hi - lo);
         let count = (wedge_start[hi] - wedge_start[lo]) as usize;
         let (these_wedges, other_wedges) = wedges.split_at_mut(count);
-        (faces_of, wedges) = (other_faces, other_wedges);
-        parts.push((lo, hi, these_faces, these_wedges));
+        wedges = other_wedges;
+        parts.push((lo, hi, these_wedges));
     }
     parts
         .into_par_iter()
-        .for_each(|(lo, hi, faces, wedges)| f(lo, hi, faces, wedges));
+        .for_each(|(lo, hi, wedges)| f(lo, hi, wedges));
 }
 
 /// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from

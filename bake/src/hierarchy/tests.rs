@@ -99,13 +99,18 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
 /// cutting one was repeated forever).
 #[test]
 fn a_full_share_cuts_nothing() {
-    use super::rank::{order_key, Ranked};
+    use super::rank::{order_key, Ranked, Slots};
     for n in [100usize, 10_000] {
-        let cands: Vec<_> = (0..n).map(|i| (1.0 + i as f64, 0, 1)).collect();
+        // A triangle per candidate, its first slot allowed in one direction.
+        let mut slots = Slots::new(n);
+        for i in 0..n {
+            let none = [f64::INFINITY; 2];
+            slots.set(i, [0, 1, 2], [[1.0 + i as f64, f64::INFINITY], none, none]);
+        }
         let mut ranked = Ranked::default();
-        assert_eq!(ranked.start(&cands, 1.0), u64::MAX, "{n} candidates");
+        assert_eq!(ranked.start(&slots, n, 1.0), u64::MAX, "{n} candidates");
         // Half: the limit covers the cheapest half and leaves out the dearest.
-        let half = ranked.start(&cands, PASS_SHARE);
+        let half = ranked.start(&slots, n, PASS_SHARE);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
         assert!(half < order_key(n as f64), "{n} candidates");
     }

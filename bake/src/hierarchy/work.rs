@@ -5,6 +5,7 @@ use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::setup::scaled_attributes;
+use super::stars::Stars;
 use super::{AttributeWeights, Hierarchy, NONE};
 use crate::quadric::{Quadric, M};
 use crate::weld::Welded;
@@ -18,8 +19,9 @@ pub(super) struct Wedge {
     pub(super) q: Quadric,
 }
 
-/// A triangle of the mesh being simplified: 28 bytes (its normal is computed where a
-/// check reads it, from the corners, rather than kept).
+/// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
+/// check reads it, from the corners, and its surface group read from the welded mesh,
+/// rather than kept).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Tri {
     /// Current corners (nodes), counter-clockwise.
@@ -27,8 +29,6 @@ pub(super) struct Tri {
     /// `o[k]`: the triangle across the edge `c[k] → c[k + 1]`, or `NONE`. The mesh stays
     /// an oriented manifold, so that triangle holds the edge the other way round.
     pub(super) o: [u32; 3],
-    /// Surface group.
-    pub(super) group: u32,
 }
 
 /// What the hierarchy records of a node.
@@ -56,14 +56,15 @@ pub(super) struct Work<'w> {
     pub(super) weights: AttributeWeights,
     /// The bounding box's diagonal, which scales the attributes.
     pub(super) diagonal: f64,
-    /// Point of every position.
-    pub(super) p: Vec<V3>,
+    /// The bounding box's centre, which [`Work::at`] takes the positions relative to.
+    pub(super) centre: V3,
     pub(super) info: Vec<PosInfo>,
     pub(super) tris: Vec<Tri>,
     pub(super) alive: Vec<bool>,
     /// Triangles around every node.
-    pub(super) faces_of: Vec<Vec<u32>>,
-    /// Number of distinct neighbours of every live node.
+    pub(super) faces_of: Stars,
+    /// Number of distinct neighbours of every live node, by its position
+    /// ([`Work::at_node`]).
     pub(super) valence: Vec<u32>,
     pub(super) node_pos: Vec<u32>,
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
@@ -72,11 +73,17 @@ pub(super) struct Work<'w> {
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
-    /// Pass in which a node's neighbourhood was last taken by a collapse.
+    /// Pass in which a node's neighbourhood was last taken by a collapse, by its position.
+    /// The live node at a position is the last made there (the kept child's parent is at
+    /// its position): a collapse stamps both children and the new node, so a position
+    /// stamped in a pass is one whose node, live at the start of the pass or made in it, was
+    /// stamped.
     pub(super) stamp: Vec<u32>,
-    /// Pass in which a node last lost a neighbour.
+    /// Pass in which a node last lost a neighbour, by its position: a node losing one is
+    /// stamped by that collapse, so no new node of the same pass is made at its position.
     pub(super) shrunk: Vec<u32>,
-    /// A node's number of neighbours at the start of the pass it last lost one in.
+    /// A node's number of neighbours at the start of the pass it last lost one in, by its
+    /// position.
     pub(super) start_valence: Vec<u32>,
     /// The input's positions each triangle stands for (nearest to it when it last
     /// changed), which the error bounds measure, as a list per triangle: its first
@@ -107,7 +114,7 @@ impl Work<'_> {
     /// The triangle with the directed edge `a → b` and the corner of `a` in it.
     #[inline]
     pub(super) fn dir_face(&self, a: u32, b: u32) -> Option<(u32, usize)> {
-        for &f in &self.faces_of[a as usize] {
+        for &f in self.faces_of.of(a) {
             let c = self.tris[f as usize].c;
             let j = corner_of(c, a);
             if c[next(j)] == b {
@@ -124,7 +131,7 @@ impl Work<'_> {
     pub(super) fn find_ring(&self, v: u32, out: &mut Vec<u32>) -> bool {
         out.clear();
         let mut border = false;
-        for &f in &self.faces_of[v as usize] {
+        for &f in self.faces_of.of(v) {
             let t = &self.tris[f as usize];
             let j = corner_of(t.c, v);
             out.push(t.c[next(j)]);
@@ -137,10 +144,30 @@ impl Work<'_> {
         border
     }
 
+    /// Where the live node `v`'s per-node figures are kept (`valence`, `stamp`, `shrunk`,
+    /// `start_valence`): at its position, which only one live node holds at a time.
+    #[inline]
+    pub(super) fn at_node(&self, v: u32) -> usize {
+        self.node_pos[v as usize] as usize
+    }
+
     /// The point of node `v` (its position's).
     #[inline]
     pub(super) fn pos(&self, v: u32) -> V3 {
-        self.p[self.node_pos[v as usize] as usize]
+        self.at(self.node_pos[v as usize] as usize)
+    }
+
+    /// The point of position `x`, relative to the centre in f64: computed where read (the
+    /// same bits every time) rather than kept, which saves 24 bytes a position.
+    #[inline]
+    pub(super) fn at(&self, x: usize) -> V3 {
+        centred(self.w.positions[x], self.centre)
+    }
+
+    /// The number of positions (leaves).
+    #[inline]
+    pub(super) fn positions(&self) -> usize {
+        self.w.positions.len()
     }
 
     #[inline]
@@ -161,16 +188,43 @@ impl Work<'_> {
     }
 }
 
+/// Position `q` relative to `centre`, in f64.
+#[inline]
+pub(super) fn centred(q: [f32; 3], centre: V3) -> V3 {
+    sub(q.map(f64::from), centre)
+}
+
 impl Work<'_> {
-    /// The hierarchy, with the bounds gathered per node and the triangles as they end.
-    pub(super) fn into_hierarchy(self) -> Hierarchy {
+    /// The hierarchy, with the bounds gathered per node and the triangles as they end. The
+    /// work's tables are freed first, and the nodes and triangles once copied, so that the
+    /// hierarchy's arrays never take memory beside them (the peak of a build would be here).
+    pub(super) fn into_hierarchy(mut self) -> Hierarchy {
+        drop((
+            std::mem::take(&mut self.wedges),
+            std::mem::take(&mut self.wedge_start),
+            std::mem::take(&mut self.faces_of),
+            std::mem::take(&mut self.pts_head),
+            std::mem::take(&mut self.pts_next),
+            std::mem::take(&mut self.info),
+            std::mem::take(&mut self.valence),
+        ));
+        drop((
+            std::mem::take(&mut self.stamp),
+            std::mem::take(&mut self.shrunk),
+            std::mem::take(&mut self.start_valence),
+            std::mem::take(&mut self.moved),
+            std::mem::take(&mut self.from_kept),
+        ));
         let mut h = self.h;
-        h.parent = self.nodes.iter().map(|n| n.parent).collect();
-        h.error = self.nodes.iter().map(|n| n.error).collect();
-        h.radius = self.nodes.iter().map(|n| n.radius).collect();
-        h.cone = self.nodes.iter().map(|n| n.cone).collect();
+        let nodes = self.nodes;
+        h.parent = nodes.iter().map(|n| n.parent).collect();
+        h.error = nodes.iter().map(|n| n.error).collect();
+        h.radius = nodes.iter().map(|n| n.radius).collect();
+        h.cone = nodes.iter().map(|n| n.cone).collect();
+        drop(nodes);
         h.node_position = self.node_pos;
         h.corners = self.tris.iter().map(|t| t.c).collect();
+        drop(self.tris);
         h.alive = self.alive;
         h
     }
