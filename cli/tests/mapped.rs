@@ -42,3 +42,22 @@ fn a_mapped_file_reports_and_refines_as_a_read_one() {
     }
     assert_eq!(printed["valid"], true);
 }
+
+#[cfg(unix)]
+#[test]
+fn info_ends_quietly_when_its_reader_closes_early() {
+    use std::process::Stdio;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(TERRAIN6);
+    let mut child = common::command()
+        .args(["info", s(&path)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run caveclod");
+    // The reader goes away before the report is printed, as `| head -0` would.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_ne!(out.status.code(), Some(101), "{stderr}");
+}
