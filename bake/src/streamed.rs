@@ -21,7 +21,7 @@ use crate::arrays::{self, NodeIds, PolygonOrder};
 use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
 use crate::clod_file::{write_sections, Check};
 use crate::hierarchy::Hierarchy as Collapses;
-use crate::materials::{has_materials, TexturePaths};
+use crate::materials::{has_materials, MaterialSections, TexturePaths};
 use crate::mesh::Surface;
 use crate::weld::Welded;
 
@@ -38,17 +38,8 @@ pub fn write(
     path: &Path,
     extra: &[ExtraSection<'_>],
 ) -> Result<u64, BakeWriteError> {
-    let out_dir = path.parent().unwrap_or(Path::new(""));
-    let paths = TexturePaths::new(texture_dir, out_dir);
-    let materials = if has_materials(surfaces) {
-        material_sections(surfaces, &|p| paths.rewrite(p), path)?
-    } else {
-        None
-    };
-    // The colours are the last array of the vertex table; small beside the vertices, they
-    // are made with the other appearance sections, whose lengths the plan needs.
-    let colours = arrays::vertex_colours(&w);
-    let sections = appearance_then(materials.as_ref(), &colours, extra);
+    let appearance = Appearance::new(&w, surfaces, texture_dir, path)?;
+    let sections = appearance.then(extra);
 
     let ids = NodeIds::number(w.positions.len(), &h);
     let polys = PolygonOrder::number(w.triangles.len(), &h, &ids);
@@ -73,4 +64,41 @@ pub fn write(
         }
         Ok(())
     })
+}
+
+/// The sections a file's appearance adds after the hierarchy's: the surfaces' materials
+/// (texture paths relative to `texture_dir`, stored relative to the written file's
+/// directory) and the vertex colours. The colours are the last array of the vertex table;
+/// small beside the vertices, they are made with the other appearance sections, whose
+/// lengths the plan needs before anything is written.
+pub(crate) struct Appearance {
+    materials: Option<MaterialSections>,
+    colours: Vec<[u8; 4]>,
+}
+
+impl Appearance {
+    /// The appearance of `w` with `surfaces`, for a file written at `path`.
+    pub(crate) fn new(
+        w: &Welded,
+        surfaces: &[Surface],
+        texture_dir: &Path,
+        path: &Path,
+    ) -> Result<Self, BakeWriteError> {
+        let out_dir = path.parent().unwrap_or(Path::new(""));
+        let paths = TexturePaths::new(texture_dir, out_dir);
+        let materials = if has_materials(surfaces) {
+            material_sections(surfaces, &|p| paths.rewrite(p), path)?
+        } else {
+            None
+        };
+        Ok(Self {
+            materials,
+            colours: arrays::vertex_colours(w),
+        })
+    }
+
+    /// The appearance's sections, then `extra`.
+    pub(crate) fn then<'a>(&'a self, extra: &[ExtraSection<'a>]) -> Vec<ExtraSection<'a>> {
+        appearance_then(self.materials.as_ref(), &self.colours, extra)
+    }
 }

@@ -17,10 +17,10 @@ use caveclod_core::{NodeId, PositionId};
 
 use super::spill::{Record, Spilled};
 use crate::arrays::{self, Counts, PolygonOrder};
-use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
+use crate::baked::{section_specs, BakeWriteError};
 use crate::clod_file::{write_sections, Check, Sections};
-use crate::materials::{has_materials, TexturePaths};
 use crate::mesh::Surface;
+use crate::streamed::Appearance;
 use crate::weld::Welded;
 
 const NONE: u32 = u32::MAX;
@@ -60,15 +60,8 @@ pub fn write(
     path: &Path,
     extra: &[ExtraSection<'_>],
 ) -> Result<u64, BakeWriteError> {
-    let out_dir = path.parent().unwrap_or(Path::new(""));
-    let paths = TexturePaths::new(texture_dir, out_dir);
-    let materials = if has_materials(surfaces) {
-        material_sections(surfaces, &|p| paths.rewrite(p), path)?
-    } else {
-        None
-    };
-    let colours = arrays::vertex_colours(&w);
-    let sections = appearance_then(materials.as_ref(), &colours, extra);
+    let appearance = Appearance::new(&w, surfaces, texture_dir, path)?;
+    let sections = appearance.then(extra);
 
     let ids = ReverseIds {
         positions: h.positions as u32,
