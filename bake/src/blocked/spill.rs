@@ -15,10 +15,8 @@ use std::os::unix::fs::FileExt;
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::clod_file::CHUNK_RECORDS as CHUNK;
 use crate::hierarchy::{Collapse, Hierarchy};
-
-/// Records read at once.
-const CHUNK: usize = 1 << 16;
 
 /// A node's refinement bounds: sphere radius, normal cone, error.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -215,12 +213,12 @@ impl Spilled {
     /// no bounds for leaves (it has no use for them), so the leaves have none (zero radius and
     /// error, a cone of no spread about +z); the corners of triangles that died are their
     /// leaves'.
-    pub fn into_hierarchy(self) -> std::io::Result<Hierarchy> {
+    pub fn into_hierarchy(mut self) -> std::io::Result<Hierarchy> {
         let np = self.positions;
         let total = np + self.count;
         let mut h = Hierarchy {
             collapses: Vec::with_capacity(self.count),
-            parent: self.parent.clone(),
+            parent: std::mem::take(&mut self.parent),
             node_position: Vec::with_capacity(total),
             radius: vec![Bounds::LEAF.radius; np],
             cone: vec![Bounds::LEAF.cone; np],

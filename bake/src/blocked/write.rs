@@ -68,10 +68,15 @@ pub fn write(
         splits: h.len() as u32,
     };
     let polys = number_polygons(&h, ids)?;
+    let mut roots: Vec<NodeId> = (0..h.parent.len() as u32)
+        .filter(|&o| h.parent[o as usize] == NONE)
+        .map(|o| NodeId(ids.of(o)))
+        .collect();
+    roots.sort_unstable();
     let counts = Counts {
         nodes: h.positions + h.len(),
         splits: h.len(),
-        roots: h.parent.iter().filter(|&&p| p == NONE).count(),
+        roots: roots.len(),
         max_depth: max_depth(&h, ids),
     };
     let meta = arrays::meta_of(&w, &counts, &polys);
@@ -110,11 +115,6 @@ pub fn write(
             }
             out.put(&made)
         })?;
-        let mut roots: Vec<NodeId> = (0..h.parent.len() as u32)
-            .filter(|&o| h.parent[o as usize] == NONE)
-            .map(|o| NodeId(ids.of(o)))
-            .collect();
-        roots.sort_unstable();
         out.put(&roots)?;
         let base_corners = |f: u32| h.corners[f as usize].map(|x| h.current[x as usize]);
         out.put(&polys.base_faces_by(base_corners, of))?;
