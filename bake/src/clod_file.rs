@@ -160,13 +160,17 @@ pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
     dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// How often the pages of the mapped file the validation has read are handed back
+/// ([`check_released`]).
+const RELEASE_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
 /// Validates the written file as a reader would: mapped (page aligned) when the system
 /// allows, otherwise read into an aligned buffer.
 fn validate_written(file: &mut File) -> Result<(), Failure> {
-    // SAFETY: the map is read-only and private; the file is this process's own temporary
+    // SAFETY: the map is read-only and shared; the file is this process's own temporary
     // file, which nothing else writes while it is mapped.
     match unsafe { memmap2::Mmap::map(&*file) } {
-        Ok(map) => check(&map),
+        Ok(map) => check_released(&map),
         Err(_) => {
             let len = file.metadata().map_err(Failure::Io)?.len() as usize;
             let mut words = vec![0u64; len.div_ceil(8)];
@@ -176,6 +180,32 @@ fn validate_written(file: &mut File) -> Result<(), Failure> {
             check(bytes)
         }
     }
+}
+
+/// [`check`] of a mapped file whose pages leave the process as the check goes: every
+/// [`RELEASE_EVERY`] a second thread tells the system the mapping's pages are not needed
+/// (`MADV_DONTNEED`). They stay in the page cache, where the check's next read of them finds
+/// them again, but no longer count in the process's resident memory, so a file of any
+/// length is validated in the memory its reads touch within one period.
+fn check_released(map: &memmap2::Mmap) -> Result<(), Failure> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let releaser = s.spawn(|| {
+            while !done.load(Ordering::Relaxed) {
+                std::thread::park_timeout(RELEASE_EVERY);
+                // SAFETY: the mapping is a read-only shared map of a file nothing writes
+                // while it is mapped, so a page read again after being dropped holds the
+                // same bytes: the check on the other thread reads what it would have read.
+                // A failed advice only leaves the pages resident.
+                let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+            }
+        });
+        let result = check(map);
+        done.store(true, Ordering::Relaxed);
+        releaser.thread().unpark();
+        result
+    })
 }
 
 fn check(bytes: &[u8]) -> Result<(), Failure> {
