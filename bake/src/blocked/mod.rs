@@ -6,12 +6,13 @@
 //!   terrain rendering. 1998 (blocks simplified with their borders frozen, then merged with
 //!   their neighbours and simplified across the old borders, level by level)
 //!
-//! The steps ([`build`]):
+//! The steps ([`build_spilled`]):
 //! 1. the blocks of the first level: square tiles over the mesh's two widest axes
 //!    (`tiles`), a triangle in the tile of its centroid, as many tiles as keep a block near
-//!    [`BlockedOptions::block_triangles`];
-//! 2. each block of a level becomes a mesh of its own (`block`) whose positions shared
-//!    with another block are frozen, and is built on its own
+//!    [`BlockedOptions::block_triangles`]. The welded mesh is on disk in the tiles' Z order
+//!    ([`crate::weld_store`]), so every block of every level is one range of triangles;
+//! 2. each block of a level becomes a mesh of its own (`block`, read from the store) whose
+//!    positions shared with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
 //!    frozen position, down to a quarter of its triangles on every level but the last
 //!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
@@ -19,16 +20,17 @@
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
 //!    mesh's nodes and triangles, each appended to a temporary file as it joins (`spill`):
 //!    the whole keeps in memory only what the next collapses read;
-//! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
-//!    from what the last one left, their old borders no longer frozen; the level of a single
-//!    block, nothing frozen, ends it, as the in-core build ends.
+//! 4. the tiles merge two by two on each axis (four consecutive tiles of the Z order), and
+//!    the next level builds the merged blocks from what the last one left, their old borders
+//!    no longer frozen; the level of a single block, nothing frozen, ends it, as the in-core
+//!    build ends.
 //!
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
 //! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
 //! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
-//! in-core build; [`SpilledBuild::write`] writes it from the temporary file (`write`). A
-//! node's bounds hold everything below it across the levels: its radius holds its
-//! children's spheres, its cone their cones, and its error adds the block's own measure
+//! in-core build; [`SpilledBuild::write`] writes it from the temporary file and the store
+//! (`write`). A node's bounds hold everything below it across the levels: its radius holds
+//! its children's spheres, its cone their cones, and its error adds the block's own measure
 //! (the distance of the level's positions from the triangles that replace them) to the
 //! largest error of the nodes the level started from below it.
 
@@ -152,6 +154,8 @@ pub fn build_spilled(
     weights: &AttributeWeights,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(Spilled, Vec<LevelStats>), BlockedError> {
+    // What made the store (a weld, its tables) is freed by now.
+    release_freed();
     let spill_error = |e: std::io::Error| BlockedError::Spill(e.to_string());
     let np = store.positions();
     let most = np.saturating_sub(1) as u64;
@@ -214,6 +218,7 @@ pub fn build_spilled(
         whole.passes += passes;
         stats.collapses = whole.collapses() - stats.collapses;
         levels.push(stats);
+        release_freed();
         progress(whole.collapses() as u64, most);
     }
     Ok((whole.finish().map_err(spill_error)?, levels))
@@ -266,3 +271,24 @@ fn shared_positions(
     }
     shared
 }
+
+/// Hands the allocator's free memory back to the system (glibc's `malloc_trim`). The blocked
+/// bake frees large working sets between its phases (the weld's tables once the mesh is
+/// stored, a level's block builds, the writer's tables before the written file is
+/// validated); glibc keeps the freed blocks under its mapping threshold resident in its
+/// heaps, where they would count in each later phase's peak.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn release_freed() {
+    extern "C" {
+        fn malloc_trim(pad: usize) -> i32;
+    }
+    // SAFETY: `malloc_trim` takes glibc's allocator locks and only returns free memory to
+    // the system; no memory in use moves.
+    unsafe {
+        malloc_trim(0);
+    }
+}
+
+/// Other allocators are left as they are.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn release_freed() {}

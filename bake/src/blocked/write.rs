@@ -141,6 +141,7 @@ pub fn write(
         drop((h, polys));
         store_arrays::put_vertex_tables(out, &store)?;
         drop(store);
+        super::release_freed();
         for e in &sections {
             out.put(e.bytes)?;
         }
