@@ -111,9 +111,12 @@ fn a_triangle_naming_a_missing_position_is_refused_with_its_index() {
         ..StoredTri::default()
     }])
     .expect("push");
-    let e = out
-        .finish(StoreInfo::default(), 100, false)
-        .expect_err("invalid");
+    let info = StoreInfo {
+        group_count: 1,
+        surface_count: 1,
+        ..StoreInfo::default()
+    };
+    let e = out.finish(info, 100, false).expect_err("invalid");
     assert!(
         e.to_string().contains("triangle 0 names position 7 of 1"),
         "{e}"

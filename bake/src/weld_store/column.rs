@@ -17,6 +17,10 @@ const BUFFER: usize = 1 << 20;
 /// between): a positioned read costs a system call, reading a few pages more costs less.
 const GAP_BYTES: usize = 16 << 10;
 
+/// Most bytes one read of [`Column::gather`] takes: sparse ids over a long range (the few
+/// triangles left alive across a whole late level) are read a bounded run at a time.
+const RUN_BYTES: usize = 1 << 20;
+
 /// Records appended to an unlinked temporary file.
 pub(crate) struct ColumnWriter<T> {
     out: BufWriter<File>,
@@ -97,17 +101,22 @@ impl<T: Pod> Column<T> {
     }
 
     /// The records of `ids` (ascending, each once), in that order: the ids split into runs
-    /// whose gaps are under [`GAP_BYTES`], one read a run.
+    /// whose gaps are under [`GAP_BYTES`] and whose length is under [`RUN_BYTES`], one read
+    /// a run.
     pub(crate) fn gather(&self, ids: &[u32]) -> std::io::Result<Vec<T>> {
         debug_assert!(ids.windows(2).all(|w| w[0] < w[1]));
-        let gap = (GAP_BYTES / std::mem::size_of::<T>().max(1)).max(1);
+        let size = std::mem::size_of::<T>().max(1);
+        let (gap, longest) = ((GAP_BYTES / size).max(1), (RUN_BYTES / size).max(1));
         let mut out = Vec::with_capacity(ids.len());
         let mut run = Vec::new();
         let mut i = 0;
         while i < ids.len() {
             let first = ids[i] as usize;
             let mut j = i + 1;
-            while j < ids.len() && (ids[j] - ids[j - 1]) as usize <= gap {
+            while j < ids.len()
+                && (ids[j] - ids[j - 1]) as usize <= gap
+                && ids[j] as usize - first < longest
+            {
                 j += 1;
             }
             let last = ids[j - 1] as usize;

@@ -130,14 +130,14 @@ pub struct Origins {
 /// Some positions' vertex lists: position `i`'s entries are
 /// `entries[start[i]..start[i + 1]]`, `[group, attribute set]` by group.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Lists {
+pub struct PositionLists {
     /// Where each position's entries start, and the end.
     pub start: Vec<u32>,
     /// `[group, attribute set]`.
     pub entries: Vec<[u32; 2]>,
 }
 
-impl Lists {
+impl PositionLists {
     /// Position `i`'s entries.
     pub fn of(&self, i: usize) -> &[[u32; 2]] {
         &self.entries[self.start[i] as usize..self.start[i + 1] as usize]
@@ -201,8 +201,7 @@ impl WeldedStore {
             out.push_attributes(a)?;
         }
         drop(attributes);
-        let stored: Vec<StoredTri> = Vec::with_capacity(1 << 16);
-        let mut stored = stored;
+        let mut stored = Vec::with_capacity(1 << 16);
         for chunk in triangles.chunks(1 << 16) {
             stored.clear();
             stored.extend(chunk.iter().map(StoredTri::from));
@@ -303,7 +302,7 @@ impl WeldedStore {
     }
 
     /// The vertex lists of positions `ids` (ascending, each once).
-    pub fn gather_vertex_lists(&self, ids: &[u32]) -> std::io::Result<Lists> {
+    pub fn gather_vertex_lists(&self, ids: &[u32]) -> std::io::Result<PositionLists> {
         let mut starts = Vec::with_capacity(2 * ids.len());
         for &x in ids {
             starts.extend([x, x + 1]);
@@ -322,11 +321,11 @@ impl WeldedStore {
             start.push(wanted.len() as u32);
         }
         let entries = self.vertices.gather(&wanted)?;
-        Ok(Lists { start, entries })
+        Ok(PositionLists { start, entries })
     }
 
     /// The vertex lists of positions `range`.
-    pub fn read_vertex_lists(&self, range: Range<u32>) -> std::io::Result<Lists> {
+    pub fn read_vertex_lists(&self, range: Range<u32>) -> std::io::Result<PositionLists> {
         let at = self
             .vertex_start
             .read(range.start as usize..range.end as usize + 1)?;
@@ -334,7 +333,7 @@ impl WeldedStore {
             .vertices
             .read(at[0] as usize..at[at.len() - 1] as usize)?;
         let start = at.iter().map(|&s| s - at[0]).collect();
-        Ok(Lists { start, entries })
+        Ok(PositionLists { start, entries })
     }
 
     /// Where the vertex lists of positions `range` start in the store's list of all
@@ -392,7 +391,7 @@ impl WeldedStore {
 
 /// The attribute set of a corner at position `x` (of `lists`) of a triangle of `group`: the
 /// position's vertex of that group (its first if it has none, which a weld never leaves).
-pub fn corner_attributes(lists: &Lists, x: u32, group: u32) -> u32 {
+pub fn corner_attributes(lists: &PositionLists, x: u32, group: u32) -> u32 {
     let vs = lists.of(x as usize);
     vs.iter()
         .find(|&&[g, _]| g == group)

@@ -113,14 +113,19 @@ impl StoreWriter {
         let side = side_for(triangles.len(), block_triangles);
         let grid = Grid::new(bounds.0, bounds.1, side);
         let xyz = positions.read_all()?;
-        let (tile, tile_start) = tiles(&triangles, &xyz, &grid)?;
+        let (tile, tile_start) = tiles(&triangles, &xyz, &grid, &info)?;
         let placed = place_triangles(&triangles, &tile, &tile_start, xyz.len(), keep_origins)?;
         drop((tile, triangles));
         let order = position_order(&placed.new_position);
         let (positions, classes) = positions_in_order(&xyz, &classes, &order)?;
         drop(xyz);
-        let (vertex_start, vertices, new_attribute) =
-            lists_in_order(&list_lens, &lists, &order, attributes.len())?;
+        let (vertex_start, vertices, new_attribute) = lists_in_order(
+            &list_lens,
+            &lists,
+            &order,
+            attributes.len(),
+            info.group_count,
+        )?;
         drop((list_lens, lists));
         let attributes = attributes_in_order(&attributes, &new_attribute)?;
         Ok(WeldedStore {
@@ -142,22 +147,30 @@ impl StoreWriter {
     }
 }
 
-/// Each triangle's tile (Z order) and where each tile's triangles start in the result.
+/// Each triangle's tile (Z order) and where each tile's triangles start in the result; a
+/// triangle naming a position, group or surface that `info` does not have is an error.
 fn tiles(
     triangles: &Column<StoredTri>,
     xyz: &[[f32; 3]],
     grid: &Grid,
+    info: &StoreInfo,
 ) -> std::io::Result<(Vec<u32>, Vec<u32>)> {
     let mut tile = Vec::with_capacity(triangles.len());
     let mut count = vec![0u32; (grid.side * grid.side) as usize + 1];
     triangles.for_each_chunk::<std::io::Error>(CHUNK, |start, chunk| {
         for (i, t) in chunk.iter().enumerate() {
+            let f = start + i;
+            if t.group >= info.group_count || u32::from(t.surface) >= info.surface_count {
+                return Err(invalid(format!(
+                    "triangle {f} has group {} of {} and surface {} of {}",
+                    t.group, info.group_count, t.surface, info.surface_count
+                )));
+            }
             let mut p = [[0.0; 3]; 3];
             for k in 0..3 {
                 p[k] = *xyz.get(t.p[k] as usize).ok_or_else(|| {
                     invalid(format!(
-                        "triangle {} names position {} of {}",
-                        start + i,
+                        "triangle {f} names position {} of {}",
                         t.p[k],
                         xyz.len()
                     ))
@@ -277,13 +290,15 @@ fn positions_in_order(
 }
 
 /// The vertex lists in the new position order, the attribute sets renamed by first use in
-/// them; the new id of each pushed attribute set (`NONE`: no list names it).
+/// them; the new id of each pushed attribute set (those no list names last). A list naming
+/// an attribute set or a group (of `groups`) that does not exist is an error.
 #[allow(clippy::type_complexity)]
 fn lists_in_order(
     lens: &Column<u32>,
     lists: &Column<[u32; 2]>,
     order: &[u32],
     attributes: usize,
+    groups: u32,
 ) -> std::io::Result<(Column<u32>, Column<[u32; 2]>, Vec<u32>)> {
     let mut start = Vec::with_capacity(lens.len() + 1);
     start.push(0u32);
@@ -304,6 +319,11 @@ fn lists_in_order(
         let list = &entries[start[old as usize] as usize..start[old as usize + 1] as usize];
         let mut renamed = Vec::with_capacity(list.len());
         for &[g, a] in list {
+            if g >= groups {
+                return Err(invalid(format!(
+                    "position {old} (stored {x}) has a vertex of group {g} of {groups}"
+                )));
+            }
             let id = new_attribute.get_mut(a as usize).ok_or_else(|| {
                 invalid(format!(
                     "position {old} (stored {x}) names attribute set {a} of {attributes}"
