@@ -219,12 +219,27 @@ impl PolygonOrder {
     /// new ids `of` their leaves.
     pub(crate) fn polygon(&self, w: &Welded, f: u32, rot: u8, of: impl Fn(u32) -> u32) -> Polygon {
         let t = &w.triangles[f as usize];
+        let group = SurfaceGroupId(w.group_ids[t.group as usize]);
+        self.polygon_of(f, t.p, SurfaceId(t.surface), group, rot, of)
+    }
+
+    /// The polygon of welded triangle `f` with positions `p`, `surface` and `group`, its
+    /// corners rotated by `rot` and named by the new ids `of` their leaves.
+    pub(crate) fn polygon_of(
+        &self,
+        f: u32,
+        p: [u32; 3],
+        surface: SurfaceId,
+        group: SurfaceGroupId,
+        rot: u8,
+        of: impl Fn(u32) -> u32,
+    ) -> Polygon {
         let k = rot as usize;
         Polygon {
-            nodes: [t.p[k], t.p[(k + 1) % 3], t.p[(k + 2) % 3]].map(|p| NodeId(of(p))),
+            nodes: [p[k], p[(k + 1) % 3], p[(k + 2) % 3]].map(|p| NodeId(of(p))),
             creator: self.creator[f as usize],
-            surface: SurfaceId(t.surface),
-            group: SurfaceGroupId(w.group_ids[t.group as usize]),
+            surface,
+            group,
         }
     }
 
@@ -497,36 +512,65 @@ pub(crate) struct Counts {
     pub(crate) max_depth: u32,
 }
 
+/// What the `META` record counts of the welded mesh.
+pub(crate) struct MeshCounts {
+    /// The positions' bounding box (zero when there is none).
+    pub(crate) bounds: ([f32; 3], [f32; 3]),
+    pub(crate) positions: usize,
+    pub(crate) vertices: usize,
+    pub(crate) surfaces: u32,
+    pub(crate) group_ids: u32,
+}
+
+impl MeshCounts {
+    /// The counts of `w`.
+    fn of(w: &Welded) -> Self {
+        let mut bounds_min = [f32::INFINITY; 3];
+        let mut bounds_max = [f32::NEG_INFINITY; 3];
+        for p in &w.positions {
+            for k in 0..3 {
+                bounds_min[k] = bounds_min[k].min(p[k]);
+                bounds_max[k] = bounds_max[k].max(p[k]);
+            }
+        }
+        if w.positions.is_empty() {
+            (bounds_min, bounds_max) = ([0.0; 3], [0.0; 3]);
+        }
+        Self {
+            bounds: (bounds_min, bounds_max),
+            positions: w.positions.len(),
+            vertices: vertex_count(w),
+            surfaces: w.surface_count,
+            group_ids: w.group_id_count,
+        }
+    }
+}
+
 /// The `META` record of the welded mesh `w` with a hierarchy of `counts` and the polygons
 /// `polys`.
 pub(crate) fn meta_of(w: &Welded, counts: &Counts, polys: &PolygonOrder) -> Meta {
-    let mut bounds_min = [f32::INFINITY; 3];
-    let mut bounds_max = [f32::NEG_INFINITY; 3];
-    for p in &w.positions {
-        for k in 0..3 {
-            bounds_min[k] = bounds_min[k].min(p[k]);
-            bounds_max[k] = bounds_max[k].max(p[k]);
-        }
-    }
-    if w.positions.is_empty() {
-        (bounds_min, bounds_max) = ([0.0; 3], [0.0; 3]);
-    }
-    let vertices = vertex_count(w) as u32;
+    meta_from(&MeshCounts::of(w), counts, polys)
+}
+
+/// The `META` record of a welded mesh of `mesh` with a hierarchy of `counts` and the
+/// polygons `polys`.
+pub(crate) fn meta_from(mesh: &MeshCounts, counts: &Counts, polys: &PolygonOrder) -> Meta {
+    let vertices = mesh.vertices as u32;
     Meta {
         node_count: counts.nodes as u32,
         split_count: counts.splits as u32,
         root_count: counts.roots as u32,
         polygon_count: polys.count as u32,
         base_polygon_count: polys.base_count as u32,
-        position_count: w.positions.len() as u32,
+        position_count: mesh.positions as u32,
         vertex_count: vertices,
         vertex_key_count: vertices,
-        surface_count: w.surface_count,
-        surface_group_count: w.group_id_count,
+        surface_count: mesh.surfaces,
+        surface_group_count: mesh.group_ids,
         max_depth: counts.max_depth,
         flags: 0,
-        bounds_min,
-        bounds_max,
+        bounds_min: mesh.bounds.0,
+        bounds_max: mesh.bounds.1,
         reserved: [0; 4],
     }
 }

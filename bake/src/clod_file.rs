@@ -160,13 +160,17 @@ pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
     dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// How often the pages of a mapped file read so far are handed back
+/// ([`with_pages_released`]).
+const RELEASE_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
 /// Validates the written file as a reader would: mapped (page aligned) when the system
 /// allows, otherwise read into an aligned buffer.
 fn validate_written(file: &mut File) -> Result<(), Failure> {
-    // SAFETY: the map is read-only and private; the file is this process's own temporary
+    // SAFETY: the map is read-only and shared; the file is this process's own temporary
     // file, which nothing else writes while it is mapped.
     match unsafe { memmap2::Mmap::map(&*file) } {
-        Ok(map) => check(&map),
+        Ok(map) => check_released(&map),
         Err(_) => {
             let len = file.metadata().map_err(Failure::Io)?.len() as usize;
             let mut words = vec![0u64; len.div_ceil(8)];
@@ -176,6 +180,39 @@ fn validate_written(file: &mut File) -> Result<(), Failure> {
             check(bytes)
         }
     }
+}
+
+/// [`check`] of a mapped file whose pages leave the process as the check goes
+/// ([`with_pages_released`]).
+fn check_released(map: &memmap2::Mmap) -> Result<(), Failure> {
+    with_pages_released(map, || check(map))
+}
+
+/// Runs `f`, which reads the mapped file `map`, while a second thread tells the system every
+/// 10 ms that the mapping's pages are not needed (`MADV_DONTNEED`). They stay in
+/// the page cache, where `f`'s next read of them finds them again, but no longer count in
+/// the process's resident memory, so reading a file of any length (validating it, reporting
+/// on it) takes the memory its reads touch within one period. The file must not change while
+/// mapped, as for any map of it.
+pub fn with_pages_released<R>(map: &memmap2::Mmap, f: impl FnOnce() -> R) -> R {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let releaser = s.spawn(|| {
+            while !done.load(Ordering::Relaxed) {
+                std::thread::park_timeout(RELEASE_EVERY);
+                // SAFETY: the mapping is a read-only shared map of a file nothing writes
+                // while it is mapped, so a page read again after being dropped holds the
+                // same bytes: `f` on the other thread reads what it would have read. A
+                // failed advice only leaves the pages resident.
+                let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+            }
+        });
+        let result = f();
+        done.store(true, Ordering::Relaxed);
+        releaser.thread().unpark();
+        result
+    })
 }
 
 fn check(bytes: &[u8]) -> Result<(), Failure> {

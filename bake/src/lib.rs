@@ -28,3 +28,4 @@ pub mod quadric;
 pub mod report;
 pub mod streamed;
 pub mod weld;
+pub mod weld_store;

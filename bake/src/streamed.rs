@@ -84,6 +84,17 @@ impl Appearance {
         texture_dir: &Path,
         path: &Path,
     ) -> Result<Self, BakeWriteError> {
+        Self::with_colours(arrays::vertex_colours(w), surfaces, texture_dir, path)
+    }
+
+    /// The appearance of a mesh whose vertex colours in vertex-table order are `colours`
+    /// (empty: none), with `surfaces`, for a file written at `path`.
+    pub(crate) fn with_colours(
+        colours: Vec<[u8; 4]>,
+        surfaces: &[Surface],
+        texture_dir: &Path,
+        path: &Path,
+    ) -> Result<Self, BakeWriteError> {
         let out_dir = path.parent().unwrap_or(Path::new(""));
         let paths = TexturePaths::new(texture_dir, out_dir);
         let materials = if has_materials(surfaces) {
@@ -91,10 +102,7 @@ impl Appearance {
         } else {
             None
         };
-        Ok(Self {
-            materials,
-            colours: arrays::vertex_colours(w),
-        })
+        Ok(Self { materials, colours })
     }
 
     /// The appearance's sections, then `extra`.

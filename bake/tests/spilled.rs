@@ -1,6 +1,7 @@
 //! A blocked build's collapses spilled to disk and written from there, splits in reverse
 //! creation order: the file validates and holds the same hierarchy as the same build read
-//! back into memory and written depth-first, up to the numbering of the splits.
+//! back into memory and written depth-first, up to the numbering of the splits, and its bytes
+//! do not depend on how many threads built the blocks.
 
 use caveclod_bake::blocked::{build_file_spilled, BlockedOptions, SpilledBuild};
 use caveclod_bake::import::ImportOptions;
@@ -103,4 +104,22 @@ fn a_spilled_blocked_bake_writes_the_in_memory_hierarchy_renumbered() {
     // Not the same numbering: the orders differ, the hierarchies do not.
     assert_ne!(spilled.splits(), in_memory.splits());
     assert_eq!(renumbered(&spilled), renumbered(&in_memory));
+}
+
+#[test]
+fn a_spilled_blocked_bake_writes_the_same_bytes_on_one_thread_and_on_two() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("terrain.ply");
+    generate::terrain(&input, 20_000, &mut |_, _| {}).unwrap();
+    let bytes = |threads: usize| {
+        let path = dir.path().join(format!("on_{threads}.clod"));
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| build(&input).write(&path, &[]))
+            .expect("spilled write");
+        std::fs::read(&path).unwrap()
+    };
+    assert!(bytes(1) == bytes(2), "the files differ");
 }

@@ -16,13 +16,13 @@ use crate::mesh::{Mesh, Surface};
 use crate::pipeline::{bake_info, built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
 use crate::weld;
+use crate::weld_store::WeldedStore;
 
-/// A blocked bake up to its arrays: the welded mesh and its hierarchy, the collapses on
-/// disk.
+/// A blocked bake up to its arrays: the welded mesh and its hierarchy, both on disk.
 #[derive(Debug)]
 pub struct SpilledBuild {
-    /// The welded mesh.
-    pub welded: weld::Welded,
+    /// The welded mesh, in block order (the hierarchy's ids are the store's).
+    pub store: WeldedStore,
     /// Its hierarchy.
     pub spilled: Spilled,
     /// The input's surfaces with their materials.
@@ -40,7 +40,7 @@ impl SpilledBuild {
     /// file is validated before it replaces `path`. Returns the file's length.
     pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
         super::write::write(
-            self.welded,
+            self.store,
             self.spilled,
             &self.surfaces,
             &self.texture_dir,
@@ -49,18 +49,24 @@ impl SpilledBuild {
         )
     }
 
-    /// The hierarchy read back into memory ([`Spilled::into_hierarchy`]), as an in-core
-    /// bake's [`Built`] (whose arrays number the splits depth-first).
+    /// The hierarchy and the welded mesh read back into memory
+    /// ([`Spilled::into_hierarchy`], [`WeldedStore::into_welded`]: the store's order), as an
+    /// in-core bake's [`Built`] (whose arrays number the splits depth-first).
     pub fn into_built(self, name: &str) -> Result<Built, BlockedBakeError> {
+        let failed = |source| BlockedBakeError::Blocked {
+            path: name.to_string(),
+            source,
+        };
         let h = self
             .spilled
             .into_hierarchy()
-            .map_err(|e| BlockedBakeError::Blocked {
-                path: name.to_string(),
-                source: BlockedError::Spill(e.to_string()),
-            })?;
+            .map_err(|e| failed(BlockedError::Spill(e.to_string())))?;
+        let welded = self
+            .store
+            .into_welded()
+            .map_err(|e| failed(BlockedError::Store(e.to_string())))?;
         let mut b = built(
-            self.welded,
+            welded,
             h,
             self.surfaces,
             self.info.input_triangles as usize,
@@ -117,9 +123,11 @@ pub fn build_file_blocked(
     Ok((spilled.into_built(&path.display().to_string())?, levels))
 }
 
-/// Imports `path` and builds its hierarchy in blocks, the collapses on disk. The imported
-/// mesh is dropped once welded (only its surfaces are kept), so the two never take memory
-/// at once.
+/// Imports `path` and builds its hierarchy in blocks, the welded mesh and the collapses on
+/// disk. The imported mesh is dropped once welded (only its surfaces are kept), and the
+/// welded mesh once stored in block order ([`WeldedStore::from_welded`]), so no two of them
+/// take memory at once and the build holds only the blocks in flight and what stitching
+/// needs.
 pub fn build_file_spilled(
     path: &Path,
     import_options: &ImportOptions,
@@ -134,19 +142,23 @@ pub fn build_file_spilled(
     let w = weld_mesh(&mesh, &name, progress)?;
     let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
     drop(mesh);
-    let (spilled, levels) = build_spilled(
-        &w,
-        &AttributeWeights::default(),
-        options,
-        &mut |done, most| progress(Stage::Collapse(done, most)),
-    )
-    .map_err(|source| BlockedBakeError::Blocked {
+    let failed = |source| BlockedBakeError::Blocked {
         path: name.clone(),
         source,
-    })?;
+    };
+    let mut info = bake_info(&w, 0, triangles, start);
+    let store = WeldedStore::from_welded(w, options.block_triangles, false)
+        .map_err(|e| failed(BlockedError::Store(e.to_string())))?;
+    let (spilled, levels) =
+        build_spilled(&store, &AttributeWeights::default(), &mut |done, most| {
+            progress(Stage::Collapse(done, most))
+        })
+        .map_err(failed)?;
+    info.passes = spilled.passes;
+    info.bake_seconds = start.elapsed().as_secs_f64();
     let mut built = SpilledBuild {
-        info: bake_info(&w, spilled.passes, triangles, start),
-        welded: w,
+        info,
+        store,
         spilled,
         surfaces,
         texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),

@@ -1,7 +1,8 @@
 //! One block of a level: its triangles as a welded mesh of their own, positions renumbered,
-//! with the positions it shares with other blocks frozen.
+//! with the positions it shares with other blocks frozen, read from the welded store.
 
-use crate::weld::Welded;
+use crate::weld::{VertexLists, Welded, WeldedTri};
+use crate::weld_store::WeldedStore;
 
 /// A block's mesh and how it maps to the whole.
 pub(super) struct Block {
@@ -15,10 +16,16 @@ pub(super) struct Block {
     pub(super) frozen: Vec<bool>,
 }
 
-/// The block of the triangles `tris` of `w` as their corners stand now (`corners`, the
-/// positions of the nodes at them); `shared[x]` says that position `x` has triangles in
-/// other blocks too.
-pub(super) fn extract(w: &Welded, corners: &[[u32; 3]], tris: Vec<u32>, shared: &[bool]) -> Block {
+/// The block of the triangles `tris` (ascending) of `store` as their corners stand now
+/// (`corners`, the positions of the nodes at them); `shared[x]` says that position `x` has
+/// triangles in other blocks too. Its triangles, positions and attribute sets are read from
+/// the store, near ids in one read.
+pub(super) fn extract(
+    store: &WeldedStore,
+    corners: &[[u32; 3]],
+    tris: Vec<u32>,
+    shared: &[bool],
+) -> std::io::Result<Block> {
     let at = |f: u32, k: usize| corners[f as usize][k];
     let mut positions: Vec<u32> = tris
         .iter()
@@ -27,25 +34,25 @@ pub(super) fn extract(w: &Welded, corners: &[[u32; 3]], tris: Vec<u32>, shared: 
     positions.sort_unstable();
     positions.dedup();
     let local = |x: u32| positions.binary_search(&x).unwrap_or(0) as u32;
-    let mut attrs: Vec<u32> = positions
-        .iter()
-        .flat_map(|&x| w.vertices[x as usize].iter().map(|&(_, a)| a))
-        .collect();
+    let lists = store.gather_vertex_lists(&positions)?;
+    let mut attrs: Vec<u32> = lists.entries.iter().map(|&[_, a]| a).collect();
     attrs.sort_unstable();
     attrs.dedup();
     let attr = |a: u32| attrs.binary_search(&a).unwrap_or(0) as u32;
+    let stored = store.gather_triangles(&tris)?;
     let triangles = tris
         .iter()
-        .map(|&f| {
-            let t = w.triangles[f as usize];
+        .zip(&stored)
+        .map(|(&f, t)| {
             let p = [0, 1, 2].map(|k| at(f, k));
             // A corner's attributes are its position's vertex of the triangle's group.
             let a = [0, 1, 2].map(|k| {
-                let vs = &w.vertices[p[k] as usize];
-                let found = vs.iter().find(|&&(g, _)| g == t.group);
-                attr(found.map_or(vs[0].1, |&(_, a)| a))
+                let x = local(p[k]) as usize;
+                attr(crate::weld_store::corner_attributes(
+                    &lists, x as u32, t.group,
+                ))
             });
-            crate::weld::WeldedTri {
+            WeldedTri {
                 p: p.map(local),
                 a,
                 surface: t.surface,
@@ -53,26 +60,27 @@ pub(super) fn extract(w: &Welded, corners: &[[u32; 3]], tris: Vec<u32>, shared: 
             }
         })
         .collect();
+    let info = store.info();
+    let vertices: VertexLists = (0..lists.len())
+        .map(|x| lists.of(x).iter().map(|&[g, a]| (g, attr(a))))
+        .collect();
     let welded = Welded {
-        positions: positions.iter().map(|&x| w.positions[x as usize]).collect(),
-        classes: positions.iter().map(|&x| w.classes[x as usize]).collect(),
-        attributes: attrs.iter().map(|&a| w.attributes[a as usize]).collect(),
+        positions: store.gather_positions(&positions)?,
+        classes: store.gather_classes(&positions)?,
+        attributes: store.gather_attributes(&attrs)?,
         triangles,
-        group_count: w.group_count,
-        group_ids: w.group_ids.clone(),
-        group_id_count: w.group_id_count,
-        surface_count: w.surface_count,
-        has_colors: w.has_colors,
-        vertices: positions
-            .iter()
-            .map(|&x| w.vertices[x as usize].iter().map(|&(g, a)| (g, attr(a))))
-            .collect(),
+        group_count: info.group_count,
+        group_ids: info.group_ids.clone(),
+        group_id_count: info.group_id_count,
+        surface_count: info.surface_count,
+        has_colors: info.has_colors,
+        vertices,
         repairs: Default::default(),
     };
-    Block {
+    Ok(Block {
         frozen: positions.iter().map(|&x| shared[x as usize]).collect(),
         tris,
         positions,
         welded,
-    }
+    })
 }

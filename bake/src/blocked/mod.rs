@@ -6,12 +6,13 @@
 //!   terrain rendering. 1998 (blocks simplified with their borders frozen, then merged with
 //!   their neighbours and simplified across the old borders, level by level)
 //!
-//! The steps ([`build`]):
+//! The steps ([`build_spilled`]):
 //! 1. the blocks of the first level: square tiles over the mesh's two widest axes
 //!    (`tiles`), a triangle in the tile of its centroid, as many tiles as keep a block near
-//!    [`BlockedOptions::block_triangles`];
-//! 2. each block of a level becomes a mesh of its own (`block`) whose positions shared
-//!    with another block are frozen, and is built on its own
+//!    [`BlockedOptions::block_triangles`]. The welded mesh is on disk in the tiles' Z order
+//!    ([`crate::weld_store`]), so every block of every level is one range of triangles;
+//! 2. each block of a level becomes a mesh of its own (`block`, read from the store) whose
+//!    positions shared with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
 //!    frozen position, down to a quarter of its triangles on every level but the last
 //!    (`LEVEL_SHARE`). The blocks are independent jobs; here as many run at once as there
@@ -19,25 +20,28 @@
 //! 3. each block's collapses join the whole hierarchy (`stitch`), renamed to the whole
 //!    mesh's nodes and triangles, each appended to a temporary file as it joins (`spill`):
 //!    the whole keeps in memory only what the next collapses read;
-//! 4. the tiles merge two by two on each axis, and the next level builds the merged blocks
-//!    from what the last one left, their old borders no longer frozen; the level of a single
-//!    block, nothing frozen, ends it, as the in-core build ends.
+//! 4. the tiles merge two by two on each axis (four consecutive tiles of the Z order), and
+//!    the next level builds the merged blocks from what the last one left, their old borders
+//!    no longer frozen; the level of a single block, nothing frozen, ends it, as the in-core
+//!    build ends.
 //!
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
 //! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
 //! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
-//! in-core build; [`SpilledBuild::write`] writes it from the temporary file (`write`). A
-//! node's bounds hold everything below it across the levels: its radius holds its
-//! children's spheres, its cone their cones, and its error adds the block's own measure
+//! in-core build; [`SpilledBuild::write`] writes it from the temporary file and the store
+//! (`write`). A node's bounds hold everything below it across the levels: its radius holds
+//! its children's spheres, its cone their cones, and its error adds the block's own measure
 //! (the distance of the level's positions from the triangles that replace them) to the
 //! largest error of the nodes the level started from below it.
 
 mod bake;
 mod block;
+mod renumber;
 mod replay;
 mod spill;
 mod stitch;
-mod tiles;
+mod store_arrays;
+pub(crate) mod tiles;
 pub(crate) mod write;
 
 pub use bake::{
@@ -46,10 +50,13 @@ pub use bake::{
 };
 pub use spill::Spilled;
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
 use crate::weld::Welded;
+use crate::weld_store::WeldedStore;
 
 /// Share of a block's triangles a level leaves (all but the last, which collapses all it
 /// can): four blocks merged into one of the next level hold about as many triangles as one
@@ -112,76 +119,90 @@ pub enum BlockedError {
     /// Writing or reading the collapses' temporary file failed.
     #[error("the temporary file of the collapses: {0}")]
     Spill(String),
+    /// Writing or reading the welded mesh's temporary files failed.
+    #[error("the welded mesh's temporary files: {0}")]
+    Store(String),
 }
 
-/// [`build_spilled`], the hierarchy read back into memory.
+/// [`build_spilled`] of `w` stored in block order ([`WeldedStore::from_welded`]), the
+/// hierarchy read back into memory and named by `w`'s positions and triangles.
 pub fn build(
     w: &Welded,
     weights: &AttributeWeights,
     options: &BlockedOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Blocked, BlockedError> {
-    let (spilled, levels) = build_spilled(w, weights, options, progress)?;
+    let store =
+        WeldedStore::from_welded(w.clone(), options.block_triangles, true).map_err(store_error)?;
+    let (spilled, levels) = build_spilled(&store, weights, progress)?;
     let hierarchy = spilled
         .into_hierarchy()
         .map_err(|e| BlockedError::Spill(e.to_string()))?;
+    let hierarchy = match store.origins() {
+        Some(origins) => renumber::to_origins(hierarchy, origins),
+        None => hierarchy,
+    };
     Ok(Blocked { hierarchy, levels })
 }
 
-/// Builds the hierarchy of `w` in blocks, its collapses on disk, and the levels that built
-/// it; `progress` gets `(collapses so far, at most collapsible)` after each level.
+/// Builds the hierarchy of the welded mesh in `store` in blocks (the store's first-level
+/// tiles, merged two by two per level), its collapses on disk, and the levels that built it;
+/// `progress` gets `(collapses so far, at most collapsible)` after each level. The ids are
+/// the store's.
 pub fn build_spilled(
-    w: &Welded,
+    store: &WeldedStore,
     weights: &AttributeWeights,
-    options: &BlockedOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(Spilled, Vec<LevelStats>), BlockedError> {
+    // What made the store (a weld, its tables) is freed by now.
+    release_freed();
     let spill_error = |e: std::io::Error| BlockedError::Spill(e.to_string());
-    let np = w.positions.len();
+    let np = store.positions();
     let most = np.saturating_sub(1) as u64;
-    let grid = tiles::Grid::new(
-        w,
-        tiles::side_for(w.triangles.len(), options.block_triangles),
-    );
-    let mut tile: Vec<u32> = w
-        .triangles
-        .iter()
-        .map(|t| grid.tile_of(t.p.map(|x| w.positions[x as usize])))
-        .collect();
-    let mut side = grid.side;
     let mut whole =
-        stitch::Whole::new(np, w.triangles.iter().map(|t| t.p).collect()).map_err(spill_error)?;
+        stitch::Whole::new(np, corners_of(store).map_err(store_error)?).map_err(spill_error)?;
     let mut levels = Vec::new();
-    loop {
-        let blocks = blocks_of(&tile, &whole.alive, side);
-        let frozen = shared_positions(&blocks, &whole.corners, np);
+    let top = store.side().trailing_zeros();
+    for level in 0..=top {
+        let blocks: Vec<Range<u32>> = (0..store.blocks(level))
+            .map(|code| store.block(level, code))
+            .filter(|r| live(r, &whole.alive).next().is_some())
+            .collect();
+        let sizes: Vec<usize> = blocks
+            .iter()
+            .map(|r| live(r, &whole.alive).count())
+            .collect();
+        let frozen = shared_positions(&blocks, &whole.alive, &whole.corners, np);
         let mut stats = LevelStats {
             blocks: blocks.len(),
-            largest_block: blocks.iter().map(Vec::len).max().unwrap_or(0),
-            triangles: blocks.iter().map(Vec::len).sum(),
+            largest_block: sizes.iter().copied().max().unwrap_or(0),
+            triangles: sizes.iter().sum(),
             collapses: whole.collapses(),
         };
         for b in &blocks {
-            whole.add_border(b, &frozen);
+            let tris: Vec<u32> = live(b, &whole.alive).collect();
+            whole.add_border(&tris, &frozen);
         }
         // As many blocks at once as there are threads, stitched in block order before the
         // next ones are built: a level holds only the builds in flight, not all its blocks'.
         let mut passes = 0;
-        let keep = if side == 1 {
+        let keep = if level == top {
             stitch::Keep::All
         } else {
             stitch::Keep::Share(LEVEL_SHARE)
         };
         for chunk in blocks.chunks(rayon::current_num_threads().max(1)) {
-            let built: Vec<Result<(block::Block, Hierarchy), BuildError>> = chunk
+            let built: Vec<Result<(block::Block, Hierarchy), BlockedError>> = chunk
                 .par_iter()
-                .map(|tris| {
-                    let b = block::extract(w, &whole.corners, tris.clone(), &frozen);
+                .map(|range| {
+                    let tris: Vec<u32> = live(range, &whole.alive).collect();
+                    let b = block::extract(store, &whole.corners, tris, &frozen)
+                        .map_err(store_error)?;
                     // The level keeps only the collapses down to its share; the passes
                     // after it would be thrown away.
                     let stop_at = match keep {
                         stitch::Keep::All => 0,
-                        stitch::Keep::Share(share) => (tris.len() as f64 * share) as usize,
+                        stitch::Keep::Share(share) => (b.tris.len() as f64 * share) as usize,
                     };
                     let h = build_frozen(&b.welded, weights, &b.frozen, stop_at, &mut |_, _| {})?;
                     Ok((b, h))
@@ -197,38 +218,47 @@ pub fn build_spilled(
         whole.passes += passes;
         stats.collapses = whole.collapses() - stats.collapses;
         levels.push(stats);
+        release_freed();
         progress(whole.collapses() as u64, most);
-        if side == 1 {
-            break;
-        }
-        for t in &mut tile {
-            *t = tiles::merged(*t, side);
-        }
-        side /= 2;
     }
     Ok((whole.finish().map_err(spill_error)?, levels))
 }
 
-/// The live triangles of each non-empty tile of a grid of side `side`, by tile.
-fn blocks_of(tile: &[u32], alive: &[bool], side: u32) -> Vec<Vec<u32>> {
-    let mut by_tile: Vec<Vec<u32>> = vec![Vec::new(); (side * side) as usize];
-    for (f, (&t, &a)) in tile.iter().zip(alive).enumerate() {
-        if a {
-            by_tile[t as usize].push(f as u32);
-        }
-    }
-    by_tile.retain(|b| !b.is_empty());
-    by_tile
+/// A failed read or write of the welded store.
+fn store_error(e: std::io::Error) -> BlockedError {
+    BlockedError::Store(e.to_string())
 }
 
-/// Per position: whether triangles of more than one block touch it (`corners`: the
+/// The corners (positions) of every triangle of `store`, read a chunk at a time.
+fn corners_of(store: &WeldedStore) -> std::io::Result<Vec<[u32; 3]>> {
+    const CHUNK: u32 = 1 << 16;
+    let nt = store.triangles() as u32;
+    let mut corners = Vec::with_capacity(nt as usize);
+    for start in (0..nt).step_by(CHUNK as usize) {
+        let tris = store.read_triangles(start..nt.min(start + CHUNK))?;
+        corners.extend(tris.iter().map(|t| t.p));
+    }
+    Ok(corners)
+}
+
+/// The live triangles of `range`.
+fn live<'a>(range: &Range<u32>, alive: &'a [bool]) -> impl Iterator<Item = u32> + 'a {
+    range.clone().filter(move |&f| alive[f as usize])
+}
+
+/// Per position: whether live triangles of more than one block touch it (`corners`: the
 /// positions of each triangle's corners).
-fn shared_positions(blocks: &[Vec<u32>], corners: &[[u32; 3]], positions: usize) -> Vec<bool> {
+fn shared_positions(
+    blocks: &[Range<u32>],
+    alive: &[bool],
+    corners: &[[u32; 3]],
+    positions: usize,
+) -> Vec<bool> {
     const UNSEEN: u32 = u32::MAX;
     let mut owner = vec![UNSEEN; positions];
     let mut shared = vec![false; positions];
     for (i, b) in blocks.iter().enumerate() {
-        for &f in b {
+        for f in live(b, alive) {
             for x in corners[f as usize] {
                 let x = x as usize;
                 if owner[x] == UNSEEN {
@@ -241,3 +271,24 @@ fn shared_positions(blocks: &[Vec<u32>], corners: &[[u32; 3]], positions: usize)
     }
     shared
 }
+
+/// Hands the allocator's free memory back to the system (glibc's `malloc_trim`). The blocked
+/// bake frees large working sets between its phases (the weld's tables once the mesh is
+/// stored, a level's block builds, the writer's tables before the written file is
+/// validated); glibc keeps the freed blocks under its mapping threshold resident in its
+/// heaps, where they would count in each later phase's peak.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn release_freed() {
+    extern "C" {
+        fn malloc_trim(pad: usize) -> i32;
+    }
+    // SAFETY: `malloc_trim` takes glibc's allocator locks and only returns free memory to
+    // the system; no memory in use moves.
+    unsafe {
+        malloc_trim(0);
+    }
+}
+
+/// Other allocators are left as they are.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn release_freed() {}

@@ -1,6 +1,7 @@
 //! Writing the `.clod` file of a blocked build from its spilled collapses
-//! ([`super::Spilled`]), the records read back from disk a chunk at a time, so that neither
-//! the hierarchy nor any array is ever whole in memory.
+//! ([`super::Spilled`]) and its welded store ([`WeldedStore`]), both read back from disk a
+//! chunk at a time, so that neither the hierarchy, nor the welded mesh, nor any array is
+//! ever whole in memory.
 //!
 //! Splits are numbered in reverse creation order: split `s` undoes the collapse created
 //! `s`-th from the last, so a node's parent, created after it, comes before it, which is all
@@ -12,16 +13,17 @@
 
 use std::path::Path;
 
-use caveclod_core::format::{ExtraSection, Node, Split, SplitBounds};
-use caveclod_core::{NodeId, PositionId};
+use caveclod_core::format::{ExtraSection, Node, Polygon, Split, SplitBounds};
+use caveclod_core::{NodeId, PositionId, SurfaceGroupId, SurfaceId};
 
 use super::spill::{Record, Spilled};
-use crate::arrays::{self, Counts, PolygonOrder};
+use super::store_arrays::{self, Gathered};
+use crate::arrays::{self, Counts, MeshCounts, PolygonOrder};
 use crate::baked::{section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check, Sections};
+use crate::clod_file::{write_sections, Check, Sections, CHUNK_RECORDS as CHUNK};
 use crate::mesh::Surface;
 use crate::streamed::Appearance;
-use crate::weld::Welded;
+use crate::weld_store::{StoredTri, WeldedStore};
 
 const NONE: u32 = u32::MAX;
 
@@ -49,18 +51,20 @@ impl ReverseIds {
     }
 }
 
-/// Writes the `.clod` file of the welded mesh `w` and the spilled hierarchy `h` at `path`,
-/// as [`crate::streamed::write`] writes an in-memory one, with splits in reverse creation
-/// order. Returns the file's length.
+/// Writes the `.clod` file of the welded store `store` and the spilled hierarchy `h` at
+/// `path`, as [`crate::streamed::write`] writes an in-memory one, with splits in reverse
+/// creation order; the welded data is read from the store a chunk at a time. Returns the
+/// file's length.
 pub fn write(
-    w: Welded,
+    store: WeldedStore,
     h: Spilled,
     surfaces: &[Surface],
     texture_dir: &Path,
     path: &Path,
     extra: &[ExtraSection<'_>],
 ) -> Result<u64, BakeWriteError> {
-    let appearance = Appearance::new(&w, surfaces, texture_dir, path)?;
+    let colours = store_arrays::colours(&store)?;
+    let appearance = Appearance::with_colours(colours, surfaces, texture_dir, path)?;
     let sections = appearance.then(extra);
 
     let ids = ReverseIds {
@@ -79,50 +83,65 @@ pub fn write(
         roots: roots.len(),
         max_depth: max_depth(&h, ids),
     };
-    let meta = arrays::meta_of(&w, &counts, &polys);
+    let info = store.info();
+    let group_ids = info.group_ids.clone();
+    let mesh = MeshCounts {
+        bounds: store.bounds(),
+        positions: store.positions(),
+        vertices: store.vertices(),
+        surfaces: info.surface_count,
+        group_ids: info.group_id_count,
+    };
+    let meta = arrays::meta_from(&mesh, &counts, &polys);
     let specs = section_specs(&meta, &sections);
     write_sections(path, &specs, Check::ReadBack, move |out| {
         out.put(std::slice::from_ref(&meta))?;
-        out.put_iter(arrays::position_records(&w))?;
+        store_arrays::put_positions(out, &store)?;
         put_records(out, &h, |r| node(ids, r.record.position, r.parent))?;
         out.put_iter((0..ids.positions).map(|x| node(ids, x, h.parent[x as usize])))?;
         put_records(out, &h, |r| -> Split {
             polys.split(&r.record.collapse(), |x| ids.of(x))
         })?;
-        put_records(out, &h, |r| -> SplitBounds {
-            let r = r.record;
-            arrays::split_bounds(
-                w.positions[r.position as usize],
-                r.radius,
-                (r.axis, r.angle),
-                r.error,
-            )
-        })?;
-        let of = |x| ids.of(x);
-        out.put_iter(
-            polys
-                .base_triangles()
-                .iter()
-                .map(|&f| polys.polygon(&w, f, 0, of)),
-        )?;
         h.for_each_chunk(true, spill_io, |_, chunk| {
+            let at = store_arrays::positions(&store, chunk.iter().map(|r| r.position))?;
+            let made: Vec<SplitBounds> = chunk
+                .iter()
+                .map(|r| {
+                    let (position, cone) = (at.get(r.position), (r.axis, r.angle));
+                    arrays::split_bounds(position, r.radius, cone, r.error)
+                })
+                .collect();
+            out.put(&made)
+        })?;
+        let polygon = |tris: &Gathered<StoredTri>, f: u32, rot: u8| {
+            let t = tris.get(f);
+            let group = SurfaceGroupId(group_ids[t.group as usize]);
+            polys.polygon_of(f, t.p, SurfaceId(t.surface), group, rot, |x| ids.of(x))
+        };
+        for base in polys.base_triangles().chunks(CHUNK) {
+            let tris = store_arrays::triangles(&store, base.iter().copied())?;
+            let made: Vec<Polygon> = base.iter().map(|&f| polygon(&tris, f, 0)).collect();
+            out.put(&made)?;
+        }
+        h.for_each_chunk(true, spill_io, |_, chunk| {
+            let named = chunk.iter().flat_map(|r| [r.fl, r.fr]);
+            let tris = store_arrays::triangles(&store, named)?;
             let mut made = Vec::with_capacity(2 * chunk.len());
             for r in chunk {
-                made.push(polys.polygon(&w, r.fl, r.rot[0], of));
+                made.push(polygon(&tris, r.fl, r.rot[0]));
                 if r.fr != NONE {
-                    made.push(polys.polygon(&w, r.fr, r.rot[1], of));
+                    made.push(polygon(&tris, r.fr, r.rot[1]));
                 }
             }
             out.put(&made)
         })?;
         out.put(&roots)?;
         let base_corners = |f: u32| h.corners[f as usize].map(|x| h.current[x as usize]);
-        out.put(&polys.base_faces_by(base_corners, of))?;
+        out.put(&polys.base_faces_by(base_corners, |x| ids.of(x)))?;
         drop((h, polys));
-        out.put_iter(arrays::vertex_table_offset_records(&w))?;
-        out.put_iter(arrays::vertex_table_records(&w))?;
-        out.put_iter(arrays::vertex_records(&w))?;
-        drop(w);
+        store_arrays::put_vertex_tables(out, &store)?;
+        drop(store);
+        super::release_freed();
         for e in &sections {
             out.put(e.bytes)?;
         }
@@ -160,10 +179,7 @@ fn put_records<T: bytemuck::Pod>(
 
 /// A failed read of the spill file; [`write_sections`] names the target with it.
 fn spill_io(source: std::io::Error) -> BakeWriteError {
-    BakeWriteError::Io {
-        path: std::path::PathBuf::new(),
-        source,
-    }
+    store_arrays::io(source)
 }
 
 /// The node record of a node at `position` under `parent` (old ids).

@@ -15,8 +15,9 @@ use caveclod_core::Hierarchy;
 use serde_json::{json, Map, Value};
 
 use super::progress::Progress;
-use super::with_hierarchy;
 use crate::args::BakeArgs;
+use caveclod_cli::mapped::ClodBytes;
+use std::path::Path;
 
 /// What a bake made, in core or out of core, up to the arrays.
 struct Made {
@@ -119,7 +120,7 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
         show_stage(&bar, Stage::Assemble);
         write_streamed(a, built, &extras)?
     };
-    with_hierarchy(&a.output, |h| {
+    report_released(&a.output, |h| {
         let r = bake_report(h, &info, &extras, a.memory_budget);
         if a.json {
             println!("{}", Value::Object(r));
@@ -133,6 +134,27 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
         }
         Ok(())
     })
+}
+
+/// [`super::with_hierarchy`] for the report on a file just written, as large as the bake made it:
+/// a mapped file's pages are handed back as the validation and the report read them
+/// ([`caveclod_bake::clod_file::with_pages_released`]), so the report does not hold the
+/// whole file resident.
+fn report_released(
+    path: &Path,
+    f: impl FnOnce(&Hierarchy<'_>) -> Result<(), String>,
+) -> Result<(), String> {
+    let file = ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let report = || {
+        let h = file
+            .hierarchy()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        f(&h)
+    };
+    match &file {
+        ClodBytes::Mapped(map) => caveclod_bake::clod_file::with_pages_released(map, report),
+        ClodBytes::Owned(_) => report(),
+    }
 }
 
 /// The output and the out-of-core temporary directory checked before the bake starts.
