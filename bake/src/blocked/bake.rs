@@ -11,11 +11,12 @@ use caveclod_core::format::ExtraSection;
 use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
 use crate::baked::{BakeWriteError, Baked};
 use crate::hierarchy::AttributeWeights;
-use crate::import::{self, ImportOptions};
+use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};
 use crate::pipeline::{bake_info, built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
 use crate::weld;
+use crate::weld::tiled::{WeldedBuilder, WeldedMesh};
 
 /// A blocked bake up to its arrays: the welded mesh and its hierarchy, the collapses on
 /// disk.
@@ -117,9 +118,10 @@ pub fn build_file_blocked(
     Ok((spilled.into_built(&path.display().to_string())?, levels))
 }
 
-/// Imports `path` and builds its hierarchy in blocks, the collapses on disk. The imported
-/// mesh is dropped once welded (only its surfaces are kept), so the two never take memory
-/// at once.
+/// Imports `path` and builds its hierarchy in blocks, the collapses on disk. A PLY file is
+/// streamed and welded tile by tile ([`weld::tiled::import_and_weld`]), never held whole;
+/// other files are imported and welded in core, the imported mesh dropped once welded (only
+/// its surfaces are kept), so the two never take memory at once.
 pub fn build_file_spilled(
     path: &Path,
     import_options: &ImportOptions,
@@ -127,13 +129,13 @@ pub fn build_file_spilled(
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(SpilledBuild, Vec<LevelStats>), BlockedBakeError> {
     let start = Instant::now();
-    progress(Stage::Import);
-    let (mut mesh, report) =
-        import::import_with_report(path, import_options).map_err(BakeError::from)?;
     let name = path.display().to_string();
-    let w = weld_mesh(&mesh, &name, progress)?;
-    let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
-    drop(mesh);
+    let mut builder = WeldedBuilder::default();
+    let file = weld::tiled::import_and_weld(path, import_options, &mut builder, progress)?;
+    let w = match file.welded {
+        WeldedMesh::Streamed(summary) => builder.finish(summary),
+        WeldedMesh::InCore(w) => w,
+    };
     let (spilled, levels) = build_spilled(
         &w,
         &AttributeWeights::default(),
@@ -145,15 +147,15 @@ pub fn build_file_spilled(
         source,
     })?;
     let mut built = SpilledBuild {
-        info: bake_info(&w, spilled.passes, triangles, start),
+        info: bake_info(&w, spilled.passes, file.input_triangles, start),
         welded: w,
         spilled,
-        surfaces,
+        surfaces: file.surfaces,
         texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
         start,
     };
-    built.info.repairs.skipped_primitives = report.skipped_primitives as u64;
-    built.info.notes = report.notes;
+    built.info.repairs.skipped_primitives = file.skipped_primitives;
+    built.info.notes = file.notes;
     Ok((built, levels))
 }
 

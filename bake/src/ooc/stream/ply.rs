@@ -435,6 +435,9 @@ pub struct IndexedHeader {
     pub flags: u16,
     /// The texture a `comment TextureFile` line names.
     pub texture: Option<String>,
+    /// What the file has that the in-core importer reads and this reader does not (a
+    /// `tristrips` element, a per-corner `texcoord` list), if anything.
+    pub unread: Option<String>,
 }
 
 /// Receives a PLY file as [`read_indexed`] reads it.
@@ -476,6 +479,7 @@ pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Resul
         faces: reader.header.elements[fi].count,
         flags: reader.layout.flags,
         texture: reader.header.texture.clone(),
+        unread: unread(&reader.header, fi),
     })?;
     reader.skip(0..vi)?;
     let fixed = reader.fixed_vertex();
@@ -546,6 +550,18 @@ pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Resul
         sink.face(f, &indices)?;
     }
     Ok(skipped)
+}
+
+/// What of the file the in-core importer reads and [`read_indexed`] does not.
+fn unread(header: &Header, fi: usize) -> Option<String> {
+    if header.elements.iter().any(|e| e.name == "tristrips") {
+        return Some("a 'tristrips' element".into());
+    }
+    let corner_uvs = header.elements[fi]
+        .properties
+        .iter()
+        .any(|p| p.list.is_some() && p.name == "texcoord");
+    corner_uvs.then(|| "a per-corner 'texcoord' list".into())
 }
 
 /// The vertex slots before a vertex is read: what a property the file lacks reads as.

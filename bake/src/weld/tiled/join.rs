@@ -1,15 +1,35 @@
 //! The tiles' welds joined into one: positions and copies numbered over the whole mesh,
 //! attribute sets made distinct, the groups joined across borders (union-find), the classes
-//! of the watched positions counted from the joined groups, and the colouring.
+//! of the watched positions counted from the joined groups, and the colouring; the result
+//! handed to a [`WeldSink`] piece by piece. Triangles and vertices wait in spools on disk
+//! until their groups are known; in memory stay a byte per position (its class), the
+//! distinct attribute sets, and what the borders need.
 
+use std::io;
+
+use bytemuck::{Pod, Zeroable};
 use caveclod_core::format::PositionClass;
 use hashbrown::hash_table::{Entry, HashTable};
 
 use super::super::groups::{colour_groups, Groups, VertexOf};
-use super::super::{Attributes, Repairs, VertexLists, WeldError, Welded, WeldedTri};
+use super::super::{Attributes, Repairs, VertexLists, WeldError, WeldedTri};
+use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
-use super::{add_repairs, TiledMesh};
+use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink, WeldSummary};
 use crate::fxhash::{hash_of, map_with_capacity, FxHashMap};
+
+/// A triangle waiting for its group.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct SpooledTri {
+    p: [u32; 3],
+    a: [u32; 3],
+    node: u32,
+    surface: u32,
+}
+
+/// Triangles handed to the sink at a time.
+const PUSH: usize = 1 << 14;
 
 /// What lies across a watched edge, over the whole mesh.
 #[derive(Clone, Copy, Debug)]
@@ -22,19 +42,21 @@ enum Other {
 /// The tiles' welds so far. A *node* is a tile's local group (`(tile, group)`, numbered in
 /// the order the tiles come); the joined groups are sets of nodes.
 pub(super) struct Joiner {
-    positions: Vec<[f32; 3]>,
+    /// Welded positions (copies follow).
+    welded: u32,
+    /// Coordinates of the copies.
+    copy_positions: Vec<[f32; 3]>,
     classes: Vec<PositionClass>,
     /// The id of every copy by its key.
     copies: FxHashMap<u64, u32>,
     attributes: Vec<Attributes>,
     by_value: HashTable<u32>,
-    /// Triangles, `group` the node.
-    triangles: Vec<WeldedTri>,
-    /// The input number of each triangle.
-    index: Vec<u32>,
+    triangles: Spool<SpooledTri>,
+    /// Per node, the first of its triangles in input order.
+    first: Vec<u32>,
     nodes: u32,
-    /// `(node, position, attribute id)` of every vertex (repeats where tiles meet).
-    vertices: Vec<(u32, u32, u32)>,
+    /// `[node, position, attribute id]` of every vertex (repeats where tiles meet).
+    vertices: Spool<[u32; 3]>,
     /// Boundary edges at each watched position.
     watched: FxHashMap<u32, u32>,
     /// Per node, `(position, attribute id)` of its vertices at watched positions.
@@ -48,30 +70,34 @@ pub(super) struct Joiner {
 }
 
 impl Joiner {
-    pub(super) fn new(mesh: &TiledMesh) -> Self {
-        Self {
-            positions: mesh.positions.clone(),
+    pub(super) fn new(mesh: &TiledMesh) -> io::Result<Self> {
+        Ok(Self {
+            welded: mesh.positions.len() as u32,
+            copy_positions: Vec::new(),
             classes: vec![PositionClass::Free; mesh.positions.len()],
             copies: map_with_capacity(0),
-            attributes: Vec::new(),
-            by_value: HashTable::new(),
-            triangles: Vec::new(),
-            index: Vec::new(),
+            // A mesh has about an attribute set per position: room for that up front, so the
+            // table never holds its old and new buckets at once while it grows.
+            attributes: Vec::with_capacity(mesh.positions.len()),
+            by_value: HashTable::with_capacity(mesh.positions.len()),
+            triangles: Spool::new()?,
+            first: Vec::new(),
             nodes: 0,
-            vertices: Vec::new(),
+            vertices: Spool::new()?,
             watched: map_with_capacity(0),
             watched_vertices: map_with_capacity(0),
             class_edges: Vec::new(),
             joins: Vec::new(),
             band_nodes: map_with_capacity(0),
             repairs: Repairs::default(),
-        }
+        })
     }
 
     /// Adds one tile's weld.
-    pub(super) fn add(&mut self, t: TileWeld) {
+    pub(super) fn add(&mut self, t: TileWeld) -> io::Result<()> {
         let node0 = self.nodes;
         self.nodes += t.group_count;
+        self.first.resize(self.nodes as usize, u32::MAX);
         let position: Vec<u32> = t
             .positions
             .iter()
@@ -95,20 +121,21 @@ impl Joiner {
                     watched_here.push((node, p[k], a[k]));
                 }
             }
-            self.index.push(tri.index);
-            self.triangles.push(WeldedTri {
+            let first = &mut self.first[node as usize];
+            *first = (*first).min(tri.index);
+            self.triangles.push(SpooledTri {
                 p,
                 a,
-                surface: tri.surface,
-                group: node,
-            });
+                node,
+                surface: u32::from(tri.surface),
+            })?;
         }
         watched_here.sort_unstable();
         watched_here.dedup();
         for &(node, p, a) in &watched_here {
             self.watched.entry(p).or_insert(0);
             self.watched_vertices.entry(node).or_default().push((p, a));
-            self.vertices.push((node, p, a));
+            self.vertices.push([node, p, a])?;
         }
         for (x, lp) in t.positions.iter().enumerate() {
             match lp {
@@ -117,7 +144,7 @@ impl Joiner {
                     self.classes[p as usize] = t.classes[x];
                     for &(g, a) in &t.vertices[x] {
                         let a = self.attribute_id(&t.attributes, &mut attribute, a);
-                        self.vertices.push((node0 + g, p, a));
+                        self.vertices.push([node0 + g, p, a])?;
                     }
                 }
                 _ => {}
@@ -137,6 +164,7 @@ impl Joiner {
         self.band_nodes
             .extend(t.band_groups.iter().map(|&(i, g)| (i, node0 + g)));
         add_repairs(&mut self.repairs, &t.repairs);
+        Ok(())
     }
 
     /// The id of the position with key `key`: a welded id, or a copy numbered when first met.
@@ -147,8 +175,8 @@ impl Joiner {
         if let Some(&id) = self.copies.get(&key) {
             return id;
         }
-        let id = self.positions.len() as u32;
-        self.positions.push(position);
+        let id = self.welded + self.copy_positions.len() as u32;
+        self.copy_positions.push(position);
         self.classes.push(PositionClass::Free);
         self.copies.insert(key, id);
         if split {
@@ -188,13 +216,19 @@ impl Joiner {
         id
     }
 
-    /// The joined mesh.
-    pub(super) fn finish(mut self, mesh: &TiledMesh) -> Result<Welded, WeldError> {
-        if self.triangles.is_empty() {
+    /// Joins the groups, counts the watched classes, colours the groups and hands the
+    /// mesh to `sink`.
+    pub(super) fn finish(
+        mut self,
+        mesh: &TiledMesh,
+        sink: &mut dyn WeldSink,
+    ) -> Result<WeldSummary, TiledWeldError> {
+        if self.triangles.len() == 0 {
             return Err(WeldError::Empty {
                 degenerate: self.repairs.degenerate_triangles,
                 duplicate: self.repairs.duplicate_triangles,
-            });
+            }
+            .into());
         }
         let mut sets = Sets::new(self.nodes, std::mem::take(&mut self.watched_vertices));
         for &(node, i) in &self.joins {
@@ -206,36 +240,31 @@ impl Joiner {
         // numbers them (each group grows from the first triangle no group has yet), so the
         // colouring sees them in the same order.
         let mut first = vec![u32::MAX; self.nodes as usize];
-        for (t, &i) in self.triangles.iter().zip(&self.index) {
-            let root = sets.find(t.group) as usize;
-            first[root] = first[root].min(i);
+        for n in 0..self.nodes {
+            let root = sets.find(n) as usize;
+            first[root] = first[root].min(self.first[n as usize]);
         }
         let mut roots: Vec<u32> = (0..self.nodes)
             .filter(|&n| first[n as usize] != u32::MAX)
             .collect();
         roots.sort_unstable_by_key(|&n| first[n as usize]);
-        let mut group_of = vec![u32::MAX; self.nodes as usize];
+        let mut group_of_root = vec![u32::MAX; self.nodes as usize];
         for (g, &n) in roots.iter().enumerate() {
-            group_of[n as usize] = g as u32;
+            group_of_root[n as usize] = g as u32;
         }
-        let mut size = vec![0u32; roots.len()];
-        for t in &mut self.triangles {
-            t.group = group_of[sets.find(t.group) as usize];
-            size[t.group as usize] += 1;
-        }
-        self.count_classes(&mut sets);
-        let mut entries: Vec<(u32, u32, u32)> = self
-            .vertices
-            .iter()
-            .map(|&(node, p, a)| (p, group_of[sets.find(node) as usize], a))
+        let group_of: Vec<u32> = (0..self.nodes)
+            .map(|n| group_of_root[sets.find(n) as usize])
             .collect();
-        entries.sort_unstable();
-        entries.dedup();
-        let vertices = VertexLists::from_entries(
-            self.positions.len(),
-            entries.iter().map(|&(p, g, a)| (g, p, a)),
-        );
-        drop(entries);
+        self.count_classes(&mut sets);
+        let positions = self.welded as usize + self.copy_positions.len();
+        let vertices = vertex_lists(&mut self.vertices, &group_of, positions)?;
+        let mut size = vec![0u32; roots.len()];
+        self.triangles.for_each_chunk(|chunk| {
+            for t in chunk {
+                size[group_of[t.node as usize] as usize] += 1;
+            }
+            Ok(())
+        })?;
         let groups = Groups {
             group: Vec::new(),
             count: size.len() as u32,
@@ -244,20 +273,38 @@ impl Joiner {
         };
         let (colour, colour_count) = colour_groups(&vertices, &groups);
         if colour_count > u32::from(u16::MAX) {
-            return Err(WeldError::TooManyGroups(colour_count));
+            return Err(WeldError::TooManyGroups(colour_count).into());
         }
+        sink.push_attributes(&self.attributes)?;
+        let mut list: Vec<[u32; 2]> = Vec::new();
+        for (x, vs) in vertices.iter().enumerate() {
+            let xyz = match x.checked_sub(self.welded as usize) {
+                None => mesh.positions[x],
+                Some(c) => self.copy_positions[c],
+            };
+            list.clear();
+            list.extend(vs.iter().map(|&(g, a)| [g, a]));
+            sink.push_position(xyz, self.classes[x], &list)?;
+        }
+        drop(vertices);
+        let mut batch: Vec<WeldedTri> = Vec::with_capacity(PUSH);
+        self.triangles.for_each_chunk(|chunk| {
+            batch.clear();
+            batch.extend(chunk.iter().map(|t| WeldedTri {
+                p: t.p,
+                a: t.a,
+                surface: t.surface as u16,
+                group: group_of[t.node as usize],
+            }));
+            sink.push_triangles(&batch)
+        })?;
         self.repairs.welded_positions = mesh.welded_positions;
-        Ok(Welded {
-            positions: self.positions,
-            classes: self.classes,
-            attributes: self.attributes,
-            triangles: self.triangles,
+        Ok(WeldSummary {
             group_count: groups.count,
             group_ids: colour.iter().map(|&c| c as u16).collect(),
             group_id_count: colour_count,
             surface_count: mesh.surface_count.max(1),
             has_colors: mesh.has_colors,
-            vertices,
             repairs: self.repairs,
         })
     }
@@ -290,6 +337,57 @@ impl Joiner {
             };
         }
     }
+}
+
+/// Every position's vertices `(group, attribute id)` by group, each once, from the spooled
+/// `[node, position, attribute id]` entries: counted per position, then placed.
+fn vertex_lists(
+    spool: &mut Spool<[u32; 3]>,
+    group_of: &[u32],
+    positions: usize,
+) -> io::Result<VertexLists> {
+    // One array serves as the fill pointers and then the starts: position `p`'s count goes
+    // to `start[p + 2]`, so that summed, `start[p + 1]` is where its list starts; placing an
+    // entry moves that on, to where the list ends, which is where the next one starts.
+    let mut start = vec![0u32; positions + 1];
+    let total = spool.len();
+    spool.for_each_chunk(|chunk| {
+        for e in chunk {
+            if let Some(c) = start.get_mut(e[1] as usize + 2) {
+                *c += 1;
+            }
+        }
+        Ok(())
+    })?;
+    for p in 2..=positions {
+        start[p] += start[p - 1];
+    }
+    let mut entries = vec![(0u32, 0u32); total];
+    spool.for_each_chunk(|chunk| {
+        for &[node, p, a] in chunk {
+            let at = &mut start[p as usize + 1];
+            entries[*at as usize] = (group_of[node as usize], a);
+            *at += 1;
+        }
+        Ok(())
+    })?;
+    // Each list sorted and its repeats dropped, moved down in place.
+    let mut end = 0usize;
+    for p in 0..positions {
+        let (from, to) = (start[p] as usize, start[p + 1] as usize);
+        entries[from..to].sort_unstable();
+        start[p] = end as u32;
+        for i in from..to {
+            if i == from || entries[i] != entries[i - 1] {
+                entries[end] = entries[i];
+                end += 1;
+            }
+        }
+    }
+    start[positions] = end as u32;
+    entries.truncate(end);
+    entries.shrink_to_fit();
+    Ok(VertexLists::from_parts(start, entries))
 }
 
 /// Union-find over the nodes; each set keeps its vertices at watched positions, sorted, so a

@@ -32,8 +32,10 @@
 //! elsewhere it keeps the weld's invariants (every edge at most two triangles, one fan per
 //! position, no group with two attribute sets at one position).
 
+mod file;
 mod join;
 mod mesh_input;
+mod spool;
 mod stream_input;
 #[cfg(test)]
 mod tests;
@@ -43,10 +45,14 @@ use std::io;
 
 use bytemuck::{Pod, Zeroable};
 
+pub use file::{import_and_weld, WeldedFile, WeldedMesh, TILE_TRIANGLES};
 pub use mesh_input::MeshTiles;
 pub use stream_input::{StreamTiles, StreamedReport};
 
-use super::{Repairs, WeldError, Welded, NONE};
+use caveclod_core::format::PositionClass;
+use rayon::prelude::*;
+
+use super::{Attributes, Repairs, VertexLists, WeldError, Welded, WeldedTri, NONE};
 use crate::fxhash::{map_with_capacity, FxHashMap};
 use join::Joiner;
 
@@ -127,22 +133,132 @@ pub enum TiledWeldError {
     Io(#[from] io::Error),
 }
 
-/// Welds, repairs and groups the mesh of `tiles`, tile by tile: [`super::weld`]'s result
-/// (see the module's doc for where it may differ).
-pub fn weld_tiled(tiles: &mut dyn Tiles) -> Result<Welded, TiledWeldError> {
-    let band = Band::collect(tiles)?;
-    let mut joiner = Joiner::new(tiles.mesh());
-    let mut core = Vec::new();
-    for t in 0..tiles.tile_count() {
-        tiles.read(t, &mut core)?;
-        if core.is_empty() {
-            continue;
-        }
-        let halo = band.halo_of(t as u32, &core, &tiles.mesh().owner);
-        let out = tile::weld_tile(tiles.mesh(), &core, &halo)?;
-        joiner.add(out);
+/// Receives a welded mesh piece by piece, as the welded store takes it.
+pub trait WeldSink {
+    /// The next position (ids in push order), its class, and its vertices: `[surface group,
+    /// attribute set]` of each group with a vertex there, by group, each group once.
+    fn push_position(
+        &mut self,
+        xyz: [f32; 3],
+        class: PositionClass,
+        vertices: &[[u32; 2]],
+    ) -> io::Result<()>;
+    /// The next attribute sets (ids in push order).
+    fn push_attributes(&mut self, attributes: &[Attributes]) -> io::Result<()>;
+    /// Triangles, in any order.
+    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()>;
+}
+
+/// What a weld tells besides its positions, attribute sets and triangles.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WeldSummary {
+    /// Number of surface groups.
+    pub group_count: u32,
+    /// Surface-group id of each group (the colouring).
+    pub group_ids: Vec<u16>,
+    /// Number of surface-group ids.
+    pub group_id_count: u32,
+    /// Number of surfaces.
+    pub surface_count: u32,
+    /// Whether the mesh has colours.
+    pub has_colors: bool,
+    /// What was repaired.
+    pub repairs: Repairs,
+}
+
+/// A [`WeldSink`] into a [`Welded`] in memory.
+#[derive(Default)]
+pub struct WeldedBuilder {
+    w: Welded,
+    lists: Vec<Vec<(u32, u32)>>,
+}
+
+impl WeldSink for WeldedBuilder {
+    fn push_position(
+        &mut self,
+        xyz: [f32; 3],
+        class: PositionClass,
+        vertices: &[[u32; 2]],
+    ) -> io::Result<()> {
+        self.w.positions.push(xyz);
+        self.w.classes.push(class);
+        self.lists
+            .push(vertices.iter().map(|&[g, a]| (g, a)).collect());
+        Ok(())
     }
-    Ok(joiner.finish(tiles.mesh())?)
+
+    fn push_attributes(&mut self, attributes: &[Attributes]) -> io::Result<()> {
+        self.w.attributes.extend_from_slice(attributes);
+        Ok(())
+    }
+
+    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()> {
+        self.w.triangles.extend_from_slice(triangles);
+        Ok(())
+    }
+}
+
+impl WeldedBuilder {
+    /// The welded mesh, with `summary`.
+    pub fn finish(self, summary: WeldSummary) -> Welded {
+        let mut w = self.w;
+        w.vertices = self
+            .lists
+            .iter()
+            .map(|l| l.iter().copied())
+            .collect::<VertexLists>();
+        w.group_count = summary.group_count;
+        w.group_ids = summary.group_ids;
+        w.group_id_count = summary.group_id_count;
+        w.surface_count = summary.surface_count;
+        w.has_colors = summary.has_colors;
+        w.repairs = summary.repairs;
+        w
+    }
+}
+
+/// Welds, repairs and groups the mesh of `tiles`, tile by tile, into memory: [`super::weld`]'s
+/// result (see the module's doc for where it may differ).
+pub fn weld_tiled(tiles: &mut dyn Tiles) -> Result<Welded, TiledWeldError> {
+    let mut b = WeldedBuilder::default();
+    let summary = weld_tiled_into(tiles, &mut b)?;
+    Ok(b.finish(summary))
+}
+
+/// Welds, repairs and groups the mesh of `tiles`, tile by tile, into `sink`; returns what
+/// else the weld tells.
+pub fn weld_tiled_into(
+    tiles: &mut dyn Tiles,
+    sink: &mut dyn WeldSink,
+) -> Result<WeldSummary, TiledWeldError> {
+    let band = Band::collect(tiles)?;
+    let mut joiner = Joiner::new(tiles.mesh())?;
+    // As many tiles at once as there are threads, joined in tile order.
+    let at_once = rayon::current_num_threads().max(1);
+    let mut tile = 0;
+    while tile < tiles.tile_count() {
+        let mut batch: Vec<(Vec<TileTriangle>, Vec<TileTriangle>)> = Vec::new();
+        while batch.len() < at_once && tile < tiles.tile_count() {
+            let mut core = Vec::new();
+            tiles.read(tile, &mut core)?;
+            if !core.is_empty() {
+                let halo = band.halo_of(tile as u32, &core, &tiles.mesh().owner);
+                batch.push((core, halo));
+            }
+            tile += 1;
+        }
+        let mesh = tiles.mesh();
+        let welds: Vec<Result<tile::TileWeld, WeldError>> = batch
+            .par_iter()
+            .map(|(core, halo)| tile::weld_tile(mesh, core, halo))
+            .collect();
+        drop(batch);
+        for w in welds {
+            joiner.add(w?)?;
+        }
+    }
+    drop(band);
+    joiner.finish(tiles.mesh(), sink)
 }
 
 /// The band: every triangle with a border corner, and the band's triangles at each border

@@ -59,7 +59,9 @@ pub struct StreamedReport {
 
 impl StreamTiles {
     /// Reads the PLY file at `path` (named `name` in errors) into tiles of about
-    /// `tile_triangles` triangles each, in files of `temp`.
+    /// `tile_triangles` triangles each, in files of `temp`. A file with what only the
+    /// in-core importer reads (triangle strips, per-corner texture coordinates) is
+    /// [`OocError::Unsupported`].
     pub fn open(
         path: &Path,
         name: &str,
@@ -85,12 +87,7 @@ impl StreamTiles {
         };
         let skipped = read_indexed(name, file, &mut state)?;
         let header = state.header.take();
-        let header = header.unwrap_or(IndexedHeader {
-            vertices: 0,
-            faces: 0,
-            flags: 0,
-            texture: None,
-        });
+        let (flags, texture) = header.map_or((0, None), |h| (h.flags, h.texture));
         let Reading {
             tiles,
             positions,
@@ -122,12 +119,12 @@ impl StreamTiles {
                 positions,
                 owner,
                 surface_count: 1,
-                has_colors: header.flags & HAS_COLOR != 0,
+                has_colors: flags & HAS_COLOR != 0,
             },
             files,
             report: StreamedReport {
                 surfaces: vec![Surface {
-                    texture: header.texture.map(Texture::File),
+                    texture: texture.map(Texture::File),
                     ..Surface::plain("default")
                 }],
                 triangles,
@@ -195,6 +192,12 @@ struct Reading<'a> {
 
 impl IndexedSink for Reading<'_> {
     fn header(&mut self, h: &IndexedHeader) -> Result<(), OocError> {
+        if let Some(what) = &h.unread {
+            return Err(OocError::Unsupported {
+                file: self.name.to_string(),
+                message: format!("{what} is read by the in-core importer only"),
+            });
+        }
         if h.vertices >= u64::from(NONE) {
             return Err(too_large(self.name, h.faces, h.vertices));
         }
