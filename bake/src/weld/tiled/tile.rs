@@ -135,14 +135,19 @@ pub(super) fn weld_tile(
         }
     }
 
-    // Every edge's triangle, for what lies across the own triangles' edges.
-    let mut by_edge: FxHashMap<(u32, u32), u32> = map_with_capacity(3 * w.triangles.len());
+    let positions = local_positions(&w, &trace, &base, &source, &own_tri, mesh);
+    let watched = |x: u32| positions[x as usize].is_some_and(|p| p.watched);
+    // The triangle of every edge at a watched position: only there does what lies across
+    // an own triangle's edge matter (an edge to another tile's triangle has both ends on
+    // the border, which is watched).
+    let mut by_edge: FxHashMap<(u32, u32), u32> = map_with_capacity(0);
     for (f, t) in w.triangles.iter().enumerate() {
-        for k in 0..3 {
-            by_edge.insert((t.p[k], t.p[(k + 1) % 3]), f as u32);
+        if t.p.iter().any(|&x| watched(x)) {
+            for k in 0..3 {
+                by_edge.insert((t.p[k], t.p[(k + 1) % 3]), f as u32);
+            }
         }
     }
-    let positions = local_positions(&w, &trace, &base, &source, &own_tri, mesh);
     let normals = area_normals(&w);
     let min_cos = GEOMETRIC_NORMAL_DEGREES.to_radians().cos();
     let mut attributes = w.attributes.clone();
@@ -176,6 +181,9 @@ pub(super) fn weld_tile(
         }
         for k in 0..3 {
             let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
+            if !(watched(a) || watched(b)) {
+                continue;
+            }
             let o = by_edge.get(&(b, a)).copied().unwrap_or(NONE);
             let across = if o == NONE {
                 Across::Nothing
@@ -192,12 +200,11 @@ pub(super) fn weld_tile(
                 }
                 Across::Triangle(source[o as usize].index)
             };
-            let watched = |x: u32| positions[x as usize].is_some_and(|p| p.watched);
             let once = match across {
                 Across::Nothing => true,
                 _ => src.index < source[o as usize].index,
             };
-            if once && (watched(a) || watched(b)) {
+            if once {
                 class_edges.push(ClassEdge {
                     ends: [a, b],
                     group: t.group,
