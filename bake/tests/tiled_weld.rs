@@ -357,3 +357,65 @@ fn refused_edges(w: &Welded) -> usize {
     }
     n
 }
+
+/// A PLY with what only the in-core importer reads is imported in core; a bad index is an
+/// error naming the file and the face.
+#[test]
+fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
+    use caveclod_bake::weld::tiled::{import_and_weld, WeldedBuilder, WeldedMesh};
+    let dir = tempfile::tempdir().expect("dir");
+    let header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                  property float z\n";
+    let vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+    let strips = dir.path().join("strips.ply");
+    std::fs::write(
+        &strips,
+        format!(
+            "{header}element face 1\nproperty list uchar int vertex_indices\n\
+             element tristrips 1\nproperty list int int vertex_indices\nend_header\n\
+             {vertices}3 0 1 2\n4 0 1 3 2\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let file = import_and_weld(&strips, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect("in core");
+    match file.welded {
+        // The face and the strip's two triangles.
+        WeldedMesh::InCore(w) => assert_eq!(w.triangles.len(), 3),
+        WeldedMesh::Streamed(_) => panic!("a PLY with strips was streamed"),
+    }
+    let quads = dir.path().join("quads.ply");
+    std::fs::write(
+        &quads,
+        format!(
+            "{header}element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             {vertices}4 0 1 2 3\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let file = import_and_weld(&quads, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect("streamed");
+    match file.welded {
+        WeldedMesh::Streamed(s) => assert_eq!(sink.finish(s).triangles.len(), 2),
+        WeldedMesh::InCore(_) => panic!("a plain PLY was imported in core"),
+    }
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(
+        &bad,
+        format!(
+            "{header}element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+             {vertices}3 0 1 2\n3 0 2 7\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let e = import_and_weld(&bad, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect_err("bad index")
+        .to_string();
+    assert!(
+        e.contains("bad.ply") && e.contains("face 1") && e.contains('7'),
+        "{e}"
+    );
+}

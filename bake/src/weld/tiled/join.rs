@@ -275,7 +275,10 @@ impl Joiner {
         if colour_count > u32::from(u16::MAX) {
             return Err(WeldError::TooManyGroups(colour_count).into());
         }
-        sink.push_attributes(&self.attributes)?;
+        // In batches: a sink may copy what it is handed.
+        for batch in self.attributes.chunks(PUSH) {
+            sink.push_attributes(batch)?;
+        }
         let mut list: Vec<[u32; 2]> = Vec::new();
         for (x, vs) in vertices.iter().enumerate() {
             let xyz = match x.checked_sub(self.welded as usize) {
