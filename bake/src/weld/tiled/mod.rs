@@ -31,6 +31,13 @@
 //! [`super::weld`]'s up to the numbering of positions, attribute sets, triangles and groups;
 //! elsewhere it keeps the weld's invariants (every edge at most two triangles, one fan per
 //! position, no group with two attribute sets at one position).
+//!
+//! The tiles come from a mesh in memory ([`MeshTiles`]) or a PLY file streamed into files
+//! of tiles ([`StreamTiles`]); the result goes to a [`WeldSink`] piece by piece (the welded
+//! store takes it so; [`WeldedBuilder`] makes a [`Welded`] of it), so nothing the size of
+//! the whole mesh's triangles is ever in memory: only per position its coordinates, tile
+//! and class, the distinct attribute sets, the band, and the tiles being welded.
+//! [`import_and_weld`] chooses between this and the in-core import by the file.
 
 mod file;
 mod join;
