@@ -11,12 +11,13 @@ use caveclod_core::format::ExtraSection;
 use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
 use crate::baked::{BakeWriteError, Baked};
 use crate::hierarchy::AttributeWeights;
-use crate::import::{self, ImportOptions};
+use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};
-use crate::pipeline::{bake_info, built, weld_mesh, BakeError, Built, Stage};
+use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
-use crate::weld;
-use crate::weld_store::WeldedStore;
+use crate::weld::tiled::WeldedMesh;
+use crate::weld::{self, Repairs};
+use crate::weld_store::{StoreInfo, StoreWriter, WeldedStore};
 
 /// A blocked bake up to its arrays: the welded mesh and its hierarchy, both on disk.
 #[derive(Debug)]
@@ -124,7 +125,9 @@ pub fn build_file_blocked(
 }
 
 /// Imports `path` and builds its hierarchy in blocks, the welded mesh and the collapses on
-/// disk. The imported mesh is dropped once welded (only its surfaces are kept), and the
+/// disk. A PLY file is streamed and welded tile by tile straight into the store
+/// ([`weld::tiled::import_and_weld`]), never held whole; other files are imported and welded
+/// in core, the imported mesh dropped once welded (only its surfaces are kept) and the
 /// welded mesh once stored in block order ([`WeldedStore::from_welded`]), so no two of them
 /// take memory at once and the build holds only the blocks in flight and what stitching
 /// needs.
@@ -135,37 +138,62 @@ pub fn build_file_spilled(
     progress: &mut dyn FnMut(Stage),
 ) -> Result<(SpilledBuild, Vec<LevelStats>), BlockedBakeError> {
     let start = Instant::now();
-    progress(Stage::Import);
-    let (mut mesh, report) =
-        import::import_with_report(path, import_options).map_err(BakeError::from)?;
     let name = path.display().to_string();
-    let w = weld_mesh(&mesh, &name, progress)?;
-    let (surfaces, triangles) = (std::mem::take(&mut mesh.surfaces), mesh.triangles.len());
-    drop(mesh);
     let failed = |source| BlockedBakeError::Blocked {
         path: name.clone(),
         source,
     };
-    let mut info = bake_info(&w, 0, triangles, start);
-    let store = WeldedStore::from_welded(w, options.block_triangles, false)
-        .map_err(|e| failed(BlockedError::Store(e.to_string())))?;
+    let store_failed = |e: std::io::Error| failed(BlockedError::Store(e.to_string()));
+    let mut writer = StoreWriter::new().map_err(store_failed)?;
+    let file = weld::tiled::import_and_weld(path, import_options, &mut writer, progress)?;
+    let (store, surface_groups, repairs) = match file.welded {
+        WeldedMesh::Streamed(s) => {
+            let (groups, repairs) = (s.group_count, s.repairs);
+            let info = StoreInfo {
+                group_count: s.group_count,
+                group_ids: s.group_ids,
+                group_id_count: s.group_id_count,
+                surface_count: s.surface_count,
+                has_colors: s.has_colors,
+                repairs: s.repairs,
+            };
+            let store = writer
+                .finish(info, options.block_triangles, false)
+                .map_err(store_failed)?;
+            (store, groups, repairs)
+        }
+        WeldedMesh::InCore(w) => {
+            drop(writer);
+            let (groups, repairs) = (w.group_count, w.repairs);
+            let store = WeldedStore::from_welded(w, options.block_triangles, false)
+                .map_err(store_failed)?;
+            (store, groups, repairs)
+        }
+    };
     let (spilled, levels) =
         build_spilled(&store, &AttributeWeights::default(), &mut |done, most| {
             progress(Stage::Collapse(done, most))
         })
         .map_err(failed)?;
-    info.passes = spilled.passes;
-    info.bake_seconds = start.elapsed().as_secs_f64();
-    let mut built = SpilledBuild {
+    let info = BakeInfo {
+        input_triangles: file.input_triangles as u64,
+        surface_groups: u64::from(surface_groups),
+        repairs: Repairs {
+            skipped_primitives: file.skipped_primitives,
+            ..repairs
+        },
+        bake_seconds: start.elapsed().as_secs_f64(),
+        passes: spilled.passes,
+        notes: file.notes,
+    };
+    let built = SpilledBuild {
         info,
         store,
         spilled,
-        surfaces,
+        surfaces: file.surfaces,
         texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
         start,
     };
-    built.info.repairs.skipped_primitives = report.skipped_primitives as u64;
-    built.info.notes = report.notes;
     Ok((built, levels))
 }
 

@@ -30,6 +30,7 @@ mod groups;
 mod repair;
 #[cfg(test)]
 mod tests;
+pub mod tiled;
 mod vertex_lists;
 
 use caveclod_core::format::PositionClass;
@@ -192,6 +193,25 @@ pub enum WeldError {
 
 /// Welds, repairs and groups `mesh`.
 pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
+    weld_traced(mesh).map(|(w, _)| w)
+}
+
+/// Where the weld's triangles and positions came from, for a caller that joins welds of
+/// parts of a mesh ([`tiled`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Trace {
+    /// The mesh triangle of every welded triangle.
+    pub(crate) source: Vec<u32>,
+    /// `(welded triangle, edges cut)` of every triangle step 3 gave copies.
+    pub(crate) cut: Vec<(u32, u8)>,
+    /// Positions after step 1 (the first of step 3's copies).
+    pub(crate) welded_positions: u32,
+    /// Positions after step 3 (the first of step 4's copies).
+    pub(crate) cut_positions: u32,
+}
+
+/// [`weld`], and where its triangles and positions came from.
+pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     mesh.validate()
         .and_then(|()| mesh.check_magnitudes())
         .map_err(WeldError::Invalid)?;
@@ -205,7 +225,9 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
     let mut repairs = Repairs::default();
     let (mut positions, remap) = repair::weld_positions(mesh, &mut repairs);
     let mut kept = repair::drop_degenerate_and_duplicates(mesh, &remap, &positions, &mut repairs)?;
-    repair::cut_non_manifold_edges(&mut kept, &mut positions, &mut repairs);
+    let welded_positions = positions.len() as u32;
+    let cut = repair::cut_non_manifold_edges(&mut kept, &mut positions, &mut repairs);
+    let cut_positions = positions.len() as u32;
     // Now every directed edge has one triangle and every edge at most two: the triangle
     // across each edge, `NONE` on a border. Splitting vertices keeps these pairs (the two
     // triangles on an edge through a vertex are always in the same fan).
@@ -226,6 +248,12 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         return Err(WeldError::TooManyGroups(colour_count));
     }
     let Groups { group, count, .. } = groups;
+    let trace = Trace {
+        source: kept.iter().map(|k| k.1).collect(),
+        cut,
+        welded_positions,
+        cut_positions,
+    };
     let triangles = kept
         .iter()
         .zip(&tri_attrs)
@@ -237,7 +265,7 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
             group: group[f],
         })
         .collect();
-    Ok(Welded {
+    let welded = Welded {
         positions,
         classes,
         attributes,
@@ -253,5 +281,6 @@ pub fn weld(mesh: &Mesh) -> Result<Welded, WeldError> {
         }),
         vertices,
         repairs,
-    })
+    };
+    Ok((welded, trace))
 }

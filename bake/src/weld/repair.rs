@@ -75,12 +75,13 @@ pub(super) fn drop_degenerate_and_duplicates(
 /// triangle gets its own copies of the edge's two positions. Afterwards every directed edge
 /// has one triangle and every edge at most two. (A triangle's edge is cut when the same
 /// directed edge came before: a third triangle on an edge repeats one of the first two's
-/// directions.)
+/// directions.) Returns `(triangle, edges cut)` of each triangle given copies.
 pub(super) fn cut_non_manifold_edges(
     kept: &mut [Kept],
     positions: &mut Vec<[f32; 3]>,
     repairs: &mut Repairs,
-) {
+) -> Vec<(u32, u8)> {
+    let mut cut = Vec::new();
     let mut directed = DirectedEdges::with_capacity(3 * kept.len());
     for f in 0..kept.len() {
         let p = kept[f].0;
@@ -90,6 +91,7 @@ pub(super) fn cut_non_manifold_edges(
         let mut q = p;
         if !conflict.is_empty() {
             repairs.non_manifold_edges += conflict.len() as u64;
+            cut.push((f as u32, conflict.len() as u8));
             // Each of the triangle's positions on a cut edge gets one copy.
             let mut fresh = [u32::MAX; 3];
             for &k in &conflict {
@@ -107,6 +109,7 @@ pub(super) fn cut_non_manifold_edges(
             directed.insert(kept, 3 * f as u32 + k as u32);
         }
     }
+    cut
 }
 
 /// The directed edges of the triangles met so far, as their corners' ids (`3 f + k`: the edge

@@ -52,6 +52,13 @@ impl VertexLists {
         }
     }
 
+    /// The lists of `start.len() - 1` positions: position `p`'s is
+    /// `entries[start[p]..start[p + 1]]`, sorted by group.
+    pub(super) fn from_parts(start: Vec<u32>, entries: Vec<(u32, u32)>) -> Self {
+        debug_assert!(start.first() == Some(&0) && start.last() == Some(&(entries.len() as u32)));
+        Self { start, entries }
+    }
+
     /// Number of positions.
     pub fn len(&self) -> usize {
         self.start.len() - 1

@@ -38,6 +38,7 @@ use std::fs::File;
 use std::path::Path;
 
 pub use cache::{BlockCache, RecordSource};
+pub use ply::{read_indexed, IndexedHeader, IndexedSink};
 
 use super::soup::{Cube, SoupTriangle};
 use super::temp::TempSpace;

@@ -233,7 +233,11 @@ impl Reader<'_> {
                     .items
                     .read(&mut self.r, &self.header.elements[vi], &mut |p, x, _| {
                         if let Some(s) = vslots[p] {
-                            v[s] = if s >= 8 { x / color_scale[p] } else { x };
+                            v[s] = if s >= 8 {
+                                x * (1.0 / color_scale[p])
+                            } else {
+                                x
+                            };
                         }
                     })
                     .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?,
@@ -420,6 +424,146 @@ impl Reader<'_> {
     }
 }
 
+/// What [`read_indexed`] found in the header.
+#[derive(Clone, Debug)]
+pub struct IndexedHeader {
+    /// Vertices.
+    pub vertices: u64,
+    /// Faces (polygons, before triangulation).
+    pub faces: u64,
+    /// What the vertices carry: `HAS_NORMAL`, `HAS_UV`, `HAS_COLOR`.
+    pub flags: u16,
+    /// The texture a `comment TextureFile` line names.
+    pub texture: Option<String>,
+    /// What the file has that the in-core importer reads and this reader does not (a
+    /// `tristrips` element, a per-corner `texcoord` list), if anything.
+    pub unread: Option<String>,
+}
+
+/// Receives a PLY file as [`read_indexed`] reads it.
+pub trait IndexedSink {
+    /// The header, first.
+    fn header(&mut self, header: &IndexedHeader) -> Result<(), OocError>;
+    /// Vertex `i`'s slots: x y z nx ny nz u v r g b a, colours in 0..=1 as stored, `v` not
+    /// flipped; all finite.
+    fn vertex(&mut self, i: u64, slots: &[f64; 12]) -> Result<(), OocError>;
+    /// Face `f`'s vertex indices (three or more, each in range), after every vertex.
+    fn face(&mut self, f: u64, corners: &[u64]) -> Result<(), OocError>;
+}
+
+/// Reads the PLY file `file` (named `name` in errors) once, in file order, into `sink`:
+/// the header, every vertex's slots, every face's vertex indices (faces of fewer than three
+/// corners skipped and counted). For a reader that keeps the attributes at full precision,
+/// where the soup quantises them. Returns the faces skipped.
+pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Result<u64, OocError> {
+    let mut r = BufReader::with_capacity(1 << 20, file);
+    let header = Header::read(&mut r, name)?;
+    let layout = Layout::of(&header, name)?;
+    let mut reader = Reader {
+        name,
+        r,
+        items: ItemReader {
+            format: header.format,
+            bytes: Vec::new(),
+            line: String::new(),
+            list: Vec::new(),
+        },
+        record: Vec::new(),
+        header,
+        layout,
+    };
+    let (vi, fi) = (reader.layout.vi, reader.layout.fi);
+    let vcount = reader.header.elements[vi].count;
+    sink.header(&IndexedHeader {
+        vertices: vcount,
+        faces: reader.header.elements[fi].count,
+        flags: reader.layout.flags,
+        texture: reader.header.texture.clone(),
+        unread: unread(&reader.header, fi),
+    })?;
+    reader.skip(0..vi)?;
+    let fixed = reader.fixed_vertex();
+    let big = reader.header.format == Format::Binary { big: true };
+    for i in 0..vcount {
+        let mut v = NO_SLOTS;
+        let at = || format!("vertex {i}");
+        match &fixed {
+            Some((stride, fields)) => {
+                with_bytes(&mut reader.r, &mut reader.record, *stride, |b| {
+                    decode_fixed(b, fields, big, &mut v);
+                })
+                .map_err(|m| bad(name, &at(), m))?;
+            }
+            None => {
+                let Layout {
+                    vslots,
+                    color_scale,
+                    ..
+                } = &reader.layout;
+                reader
+                    .items
+                    .read(
+                        &mut reader.r,
+                        &reader.header.elements[vi],
+                        &mut |p, x, _| {
+                            if let Some(s) = vslots[p] {
+                                v[s] = if s >= 8 {
+                                    x * (1.0 / color_scale[p])
+                                } else {
+                                    x
+                                };
+                            }
+                        },
+                    )
+                    .map_err(|m| bad(name, &at(), m))?;
+            }
+        }
+        if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+            return Err(bad(name, &at(), format!("{} is {}", SLOT_NAMES[k], v[k])));
+        }
+        sink.vertex(i, &v)?;
+    }
+    if vcount == 0 {
+        return Err(OocError::Empty {
+            file: name.to_string(),
+        });
+    }
+    reader.skip(vi + 1..fi)?;
+    let int_list = reader.int_list();
+    let mut raw: Vec<i64> = Vec::new();
+    let mut indices: Vec<u64> = Vec::new();
+    let mut skipped = 0;
+    for f in 0..reader.header.elements[fi].count {
+        reader.face_indices(f, int_list, &mut raw)?;
+        if raw.len() < 3 {
+            skipped += 1;
+            continue;
+        }
+        if let Some(&i) = raw.iter().find(|&&i| i < 0 || i as u64 >= vcount) {
+            return Err(reader.bad(
+                &format!("face {f}"),
+                format!("vertex index {i} out of range ({vcount} vertices)"),
+            ));
+        }
+        indices.clear();
+        indices.extend(raw.iter().map(|&i| i as u64));
+        sink.face(f, &indices)?;
+    }
+    Ok(skipped)
+}
+
+/// What of the file the in-core importer reads and [`read_indexed`] does not.
+fn unread(header: &Header, fi: usize) -> Option<String> {
+    if header.elements.iter().any(|e| e.name == "tristrips") {
+        return Some("a 'tristrips' element".into());
+    }
+    let corner_uvs = header.elements[fi]
+        .properties
+        .iter()
+        .any(|p| p.list.is_some() && p.name == "texcoord");
+    corner_uvs.then(|| "a per-corner 'texcoord' list".into())
+}
+
 /// The vertex slots before a vertex is read: what a property the file lacks reads as.
 const NO_SLOTS: [f64; 12] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
 
@@ -428,7 +572,7 @@ const NO_SLOTS: [f64; 12] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1
 fn decode_fixed(b: &[u8], fields: &[Field], big: bool, v: &mut [f64; 12]) {
     for &(offset, ty, s, scale) in fields {
         let x = ty.decode(&b[offset..], big);
-        v[s] = if s >= 8 { x / scale } else { x };
+        v[s] = if s >= 8 { x * (1.0 / scale) } else { x };
     }
 }
 

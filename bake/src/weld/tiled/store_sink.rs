@@ -1,0 +1,29 @@
+//! The welded store takes the tiled weld's pieces as they come.
+
+use std::io;
+
+use caveclod_core::format::PositionClass;
+
+use super::WeldSink;
+use crate::weld::{Attributes, WeldedTri};
+use crate::weld_store::{StoreWriter, StoredTri};
+
+impl WeldSink for StoreWriter {
+    fn push_position(
+        &mut self,
+        xyz: [f32; 3],
+        class: PositionClass,
+        vertices: &[[u32; 2]],
+    ) -> io::Result<()> {
+        StoreWriter::push_position(self, xyz, class, vertices)
+    }
+
+    fn push_attributes(&mut self, attributes: &[Attributes]) -> io::Result<()> {
+        StoreWriter::push_attributes(self, attributes)
+    }
+
+    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()> {
+        let stored: Vec<StoredTri> = triangles.iter().map(StoredTri::from).collect();
+        StoreWriter::push_triangles(self, &stored)
+    }
+}

@@ -1,0 +1,421 @@
+//! The tiled weld against the in-core one: the same welded mesh up to numbering, from a mesh
+//! in memory cut into tiles ([`MeshTiles`]) and from a PLY file streamed into tiles on disk
+//! ([`StreamTiles`]), on generated terrains, a PLY with quads and seams, and the shared real
+//! data (each test skips with a note when its file is absent).
+
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::Path;
+
+use caveclod_bake::import::{self, ImportOptions};
+use caveclod_bake::ooc::temp::TempSpace;
+use caveclod_bake::weld::tiled::{weld_tiled, MeshTiles, StreamTiles};
+use caveclod_bake::weld::{weld, Welded};
+use caveclod_core::format::PositionClass;
+use caveclod_tests::generate::{write_terrain, TerrainGrid};
+use caveclod_tests::shared_data;
+
+/// Checks `w` keeps the weld's invariants: every directed edge once, one fan around every
+/// position, each corner's attribute set its group's one vertex at its position, the
+/// classes counted from the mesh borders and group changes, groups meeting at a position
+/// with different ids.
+fn assert_invariants(w: &Welded) {
+    let mut by_edge = HashMap::new();
+    for (f, t) in w.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let e = (t.p[k], t.p[(k + 1) % 3]);
+            assert!(by_edge.insert(e, f).is_none(), "edge {e:?} twice");
+        }
+    }
+    // Fans: corners joined across the edges through their position.
+    let mut parent: Vec<usize> = (0..3 * w.triangles.len()).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let mut boundary = vec![0u32; w.positions.len()];
+    for (f, t) in w.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
+            match by_edge.get(&(b, a)) {
+                Some(&o) => {
+                    let u = w.triangles[o].p;
+                    let at = |x: u32| 3 * o + u.iter().position(|&y| y == x).unwrap();
+                    for (c, x) in [(3 * f + k, a), (3 * f + (k + 1) % 3, b)] {
+                        let (r, s) = (find(&mut parent, c), find(&mut parent, at(x)));
+                        parent[r] = s;
+                    }
+                    if f < o && w.triangles[o].group != t.group {
+                        boundary[a as usize] += 1;
+                        boundary[b as usize] += 1;
+                    }
+                }
+                None => {
+                    boundary[a as usize] += 1;
+                    boundary[b as usize] += 1;
+                }
+            }
+        }
+    }
+    let mut fan_of = vec![usize::MAX; w.positions.len()];
+    let mut entries: Vec<Vec<(u32, u32)>> = vec![Vec::new(); w.positions.len()];
+    for (f, t) in w.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let x = t.p[k] as usize;
+            let r = find(&mut parent, 3 * f + k);
+            assert!(
+                fan_of[x] == usize::MAX || fan_of[x] == r,
+                "position {x} has two fans"
+            );
+            fan_of[x] = r;
+            entries[x].push((t.group, t.a[k]));
+        }
+    }
+    for (x, mut e) in entries.into_iter().enumerate() {
+        e.sort_unstable();
+        e.dedup();
+        assert_eq!(e, w.vertices[x].to_vec(), "vertices at position {x}");
+        let mut ids: Vec<u16> = e.iter().map(|&(g, _)| w.group_ids[g as usize]).collect();
+        ids.dedup();
+        assert_eq!(
+            ids.len(),
+            e.len(),
+            "a group with two attribute sets, or two groups sharing an id, at {x}"
+        );
+        let class = match boundary[x] {
+            0 => PositionClass::Free,
+            2 => PositionClass::Sharp,
+            _ => PositionClass::Rigid,
+        };
+        assert_eq!(w.classes[x], class, "class of position {x}");
+    }
+}
+
+/// Checks that `b` has `a`'s triangles (by corner coordinates), each corner with the same
+/// attribute set, and the same repairs: all but the groups, which a weld growing them in
+/// another order may cut differently where a seam closes on itself.
+fn assert_same_triangles(a: &Welded, b: &Welded) {
+    assert_eq!(a.triangles.len(), b.triangles.len(), "triangles");
+    assert_eq!(a.positions.len(), b.positions.len(), "positions");
+    assert_eq!(a.repairs, b.repairs, "repairs");
+    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
+    let by_coords: HashMap<_, usize> = b
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| (coords(b, t.p), f))
+        .collect();
+    for ta in &a.triangles {
+        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
+        assert_eq!(ta.surface, tb.surface);
+        for k in 0..3 {
+            let (x, y) = (
+                &a.attributes[ta.a[k] as usize],
+                &b.attributes[tb.a[k] as usize],
+            );
+            assert_eq!((x.normal, x.uv, x.color), (y.normal, y.uv, y.color));
+        }
+    }
+}
+
+/// Checks that `b` is `a` up to numbering: triangles matched by their corners' coordinates
+/// (unique once duplicates are dropped), positions and groups mapped one to one, the same
+/// attribute sets per corner, classes, vertices, repairs and group ids.
+fn assert_same(a: &Welded, b: &Welded) {
+    assert_eq!(a.triangles.len(), b.triangles.len(), "triangles");
+    assert_eq!(a.positions.len(), b.positions.len(), "positions");
+    assert_eq!(a.attributes.len(), b.attributes.len(), "attribute sets");
+    assert_eq!(a.repairs, b.repairs, "repairs");
+    assert_eq!(a.group_count, b.group_count, "groups");
+    assert_eq!(a.group_id_count, b.group_id_count, "group ids");
+    assert_eq!(a.has_colors, b.has_colors);
+    assert_eq!(a.surface_count, b.surface_count);
+    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
+    let by_coords: HashMap<_, usize> = b
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| (coords(b, t.p), f))
+        .collect();
+    let mut pos = vec![u32::MAX; a.positions.len()];
+    let mut group = vec![u32::MAX; a.group_count as usize];
+    let map = |m: &mut Vec<u32>, x: u32, y: u32, what: &str| {
+        assert!(
+            m[x as usize] == u32::MAX || m[x as usize] == y,
+            "{what} {x} maps twice"
+        );
+        m[x as usize] = y;
+    };
+    for ta in &a.triangles {
+        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
+        assert_eq!(ta.surface, tb.surface);
+        map(&mut group, ta.group, tb.group, "group");
+        for k in 0..3 {
+            map(&mut pos, ta.p[k], tb.p[k], "position");
+            assert_eq!(
+                a.attributes[ta.a[k] as usize],
+                b.attributes[tb.a[k] as usize]
+            );
+        }
+    }
+    for (x, &y) in pos.iter().enumerate() {
+        if y == u32::MAX {
+            continue;
+        }
+        assert_eq!(a.classes[x], b.classes[y as usize], "class of position {x}");
+        let attrs = |w: &Welded, at: u32| format!("{:?}", w.attributes[at as usize]);
+        let mut va: Vec<_> = a.vertices[x]
+            .iter()
+            .map(|&(g, at)| (group[g as usize], attrs(a, at)))
+            .collect();
+        let mut vb: Vec<_> = b.vertices[y as usize]
+            .iter()
+            .map(|&(g, at)| (g, attrs(b, at)))
+            .collect();
+        va.sort();
+        vb.sort();
+        assert_eq!(va, vb, "vertices at position {x}");
+    }
+    for (g, &h) in group.iter().enumerate() {
+        assert_eq!(a.group_ids[g], b.group_ids[h as usize], "id of group {g}");
+    }
+}
+
+/// The in-core import and weld of `path` against the streamed tiles' weld.
+fn check_streamed(path: &Path, tile_triangles: usize, exact: bool) {
+    let mesh = import::import(path, &ImportOptions::default()).expect("import");
+    let reference = weld(&mesh).expect("weld");
+    let temp = TempSpace::new(None, None).expect("temp");
+    let name = path.display().to_string();
+    let mut tiles = StreamTiles::open(path, &name, &temp, tile_triangles).expect("stream");
+    let tiled = weld_tiled(&mut tiles).expect("tiled weld");
+    compare(&reference, &tiled, exact);
+}
+
+/// `tiled` against the in-core weld `reference`: the same up to numbering when `exact` (the
+/// in-core growth took no order-dependent choice: checked), else the same triangles and the
+/// invariants.
+fn compare(reference: &Welded, tiled: &Welded, exact: bool) {
+    assert_invariants(tiled);
+    assert_same_triangles(reference, tiled);
+    if exact {
+        assert_eq!(
+            refused_edges(reference),
+            0,
+            "the in-core weld took order-dependent choices"
+        );
+        assert_same(reference, tiled);
+    }
+}
+
+/// The in-core import and weld of `path` against its tiles' weld at each side of `sides`.
+fn check_in_memory(path: &Path, sides: &[u32], exact: bool) {
+    let mesh = import::import(path, &ImportOptions::default()).expect("import");
+    let reference = weld(&mesh).expect("weld");
+    for &side in sides {
+        let mut tiles = MeshTiles::new(&mesh, side).expect("tiles");
+        let tiled = weld_tiled(&mut tiles).expect("tiled weld");
+        compare(&reference, &tiled, exact);
+    }
+}
+
+#[test]
+fn a_generated_terrain_streamed_in_tiles_welds_as_in_core() {
+    let dir = tempfile::tempdir().expect("dir");
+    let path = dir.path().join("terrain.ply");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&path).expect("create"));
+    let grid = TerrainGrid::for_triangles(20_000).expect("grid");
+    write_terrain(&mut f, grid, &mut |_, _| {}).expect("write");
+    f.flush().expect("flush");
+    drop(f);
+    for tile_triangles in [1_000_000, 5_000, 700] {
+        check_streamed(&path, tile_triangles, true);
+    }
+}
+
+#[test]
+fn an_ascii_ply_with_quads_seams_and_repeated_vertices_welds_as_in_core() {
+    // A 4 × 3 grid of quads whose column x = 2 is written twice, with two UVs: a seam; a
+    // lone pentagon; a repeated quad; a face of two corners (skipped).
+    let mut vertices = Vec::new();
+    let mut faces = Vec::new();
+    let mut id = HashMap::new();
+    for y in 0..=3 {
+        for x in 0..=4 {
+            for side in 0..2 {
+                if side == 1 && x != 2 {
+                    continue;
+                }
+                id.insert((x, y, side), vertices.len());
+                let h = ((x * 3 + y) % 4) as f32 * 0.5;
+                let u = x as f32 * 0.25 + side as f32;
+                vertices.push(format!("{x} {y} {h} {u} {}", y as f32 * 0.3));
+            }
+        }
+    }
+    for y in 0..3 {
+        for x in 0..4 {
+            let s = |xx: i32| usize::from(x >= 2 && xx == 2);
+            let v = |xx: i32, yy: i32| id[&(xx, yy, s(xx))];
+            faces.push(format!(
+                "4 {} {} {} {}",
+                v(x, y),
+                v(x + 1, y),
+                v(x + 1, y + 1),
+                v(x, y + 1)
+            ));
+        }
+    }
+    faces.push(faces[5].clone());
+    faces.push(format!("2 {} {}", id[&(0, 0, 0)], id[&(1, 0, 0)]));
+    let n = vertices.len();
+    for (k, (x, y)) in [(6.0, 0.0), (7.0, 0.5), (6.8, 1.5), (5.8, 1.7), (5.5, 0.8)]
+        .iter()
+        .enumerate()
+    {
+        vertices.push(format!("{x} {y} {} 0 0", k as f32 * 0.1));
+    }
+    faces.push(format!("5 {} {} {} {} {}", n, n + 1, n + 2, n + 3, n + 4));
+    let text = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nproperty float u\nproperty float v\nelement face {}\n\
+         property list uchar int vertex_indices\nend_header\n{}\n{}\n",
+        vertices.len(),
+        faces.len(),
+        vertices.join("\n"),
+        faces.join("\n")
+    );
+    let dir = tempfile::tempdir().expect("dir");
+    let path = dir.path().join("quads.ply");
+    std::fs::write(&path, text).expect("write");
+    for tile_triangles in [1000, 8, 3] {
+        check_streamed(&path, tile_triangles, true);
+    }
+}
+
+#[test]
+fn lucy_streamed_in_tiles_welds_as_in_core() {
+    let Some(path) = shared_data::file("scans/lucy.ply") else {
+        return;
+    };
+    check_streamed(&path, 10_000, true);
+}
+
+#[test]
+fn spot_in_tiles_welds_as_in_core() {
+    let Some(path) = shared_data::file("spot/spot_triangulated.obj") else {
+        return;
+    };
+    check_in_memory(&path, &[2, 4, 8], true);
+}
+
+#[test]
+fn flight_helmet_in_tiles_keeps_the_welds_invariants() {
+    // Its UV seams close on themselves: where the in-core growth refuses a matching
+    // triangle, the groups depend on the order they grow in.
+    let Some(path) = shared_data::file("FlightHelmet/FlightHelmet.gltf") else {
+        return;
+    };
+    check_in_memory(&path, &[2, 8], false);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "slow in a debug build")]
+fn st_helens_in_tiles_welds_as_in_core() {
+    let Some(path) = shared_data::file("terrain/SainteHelens.dem") else {
+        return;
+    };
+    check_in_memory(&path, &[4, 16], true);
+}
+
+/// Edges across which the in-core growth refused a matching triangle (a seam closing on
+/// itself): there the groups depend on the order the weld grows them in.
+fn refused_edges(w: &Welded) -> usize {
+    let mut by_edge = HashMap::new();
+    for (f, t) in w.triangles.iter().enumerate() {
+        for k in 0..3 {
+            by_edge.insert((t.p[k], t.p[(k + 1) % 3]), (f, k));
+        }
+    }
+    let mut n = 0;
+    for (f, t) in w.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
+            if let Some(&(o, j)) = by_edge.get(&(b, a)) {
+                let u = &w.triangles[o];
+                let matching = u.surface == t.surface
+                    && u.a[(j + 1) % 3] == t.a[k]
+                    && u.a[j] == t.a[(k + 1) % 3];
+                if f < o && matching && u.group != t.group {
+                    n += 1;
+                }
+            }
+        }
+    }
+    n
+}
+
+/// A PLY with what only the in-core importer reads is imported in core; a bad index is an
+/// error naming the file and the face.
+#[test]
+fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
+    use caveclod_bake::weld::tiled::{import_and_weld, WeldedBuilder, WeldedMesh};
+    let dir = tempfile::tempdir().expect("dir");
+    let header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                  property float z\n";
+    let vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+    let strips = dir.path().join("strips.ply");
+    std::fs::write(
+        &strips,
+        format!(
+            "{header}element face 1\nproperty list uchar int vertex_indices\n\
+             element tristrips 1\nproperty list int int vertex_indices\nend_header\n\
+             {vertices}3 0 1 2\n4 0 1 3 2\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let file = import_and_weld(&strips, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect("in core");
+    match file.welded {
+        // The face and the strip's two triangles.
+        WeldedMesh::InCore(w) => assert_eq!(w.triangles.len(), 3),
+        WeldedMesh::Streamed(_) => panic!("a PLY with strips was streamed"),
+    }
+    let quads = dir.path().join("quads.ply");
+    std::fs::write(
+        &quads,
+        format!(
+            "{header}element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             {vertices}4 0 1 2 3\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let file = import_and_weld(&quads, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect("streamed");
+    match file.welded {
+        WeldedMesh::Streamed(s) => assert_eq!(sink.finish(s).triangles.len(), 2),
+        WeldedMesh::InCore(_) => panic!("a plain PLY was imported in core"),
+    }
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(
+        &bad,
+        format!(
+            "{header}element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+             {vertices}3 0 1 2\n3 0 2 7\n"
+        ),
+    )
+    .expect("write");
+    let mut sink = WeldedBuilder::default();
+    let e = import_and_weld(&bad, &ImportOptions::default(), &mut sink, &mut |_| {})
+        .expect_err("bad index")
+        .to_string();
+    assert!(
+        e.contains("bad.ply") && e.contains("face 1") && e.contains('7'),
+        "{e}"
+    );
+}
