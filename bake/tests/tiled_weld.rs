@@ -362,7 +362,7 @@ fn refused_edges(w: &Welded) -> usize {
 /// error naming the file and the face.
 #[test]
 fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
-    use caveclod_bake::weld::tiled::{import_and_weld, WeldedBuilder, WeldedMesh};
+    use caveclod_bake::weld::tiled::{import_and_weld, WeldedBuilder, WeldedMesh, TILE_TRIANGLES};
     let dir = tempfile::tempdir().expect("dir");
     let header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
                   property float z\n";
@@ -378,8 +378,14 @@ fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
     )
     .expect("write");
     let mut sink = WeldedBuilder::default();
-    let file = import_and_weld(&strips, &ImportOptions::default(), &mut sink, &mut |_| {})
-        .expect("in core");
+    let file = import_and_weld(
+        &strips,
+        &ImportOptions::default(),
+        TILE_TRIANGLES,
+        &mut sink,
+        &mut |_| {},
+    )
+    .expect("in core");
     match file.welded {
         // The face and the strip's two triangles.
         WeldedMesh::InCore(w) => assert_eq!(w.triangles.len(), 3),
@@ -395,8 +401,14 @@ fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
     )
     .expect("write");
     let mut sink = WeldedBuilder::default();
-    let file = import_and_weld(&quads, &ImportOptions::default(), &mut sink, &mut |_| {})
-        .expect("streamed");
+    let file = import_and_weld(
+        &quads,
+        &ImportOptions::default(),
+        TILE_TRIANGLES,
+        &mut sink,
+        &mut |_| {},
+    )
+    .expect("streamed");
     match file.welded {
         WeldedMesh::Streamed(s) => assert_eq!(sink.finish(s).triangles.len(), 2),
         WeldedMesh::InCore(_) => panic!("a plain PLY was imported in core"),
@@ -411,9 +423,15 @@ fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
     )
     .expect("write");
     let mut sink = WeldedBuilder::default();
-    let e = import_and_weld(&bad, &ImportOptions::default(), &mut sink, &mut |_| {})
-        .expect_err("bad index")
-        .to_string();
+    let e = import_and_weld(
+        &bad,
+        &ImportOptions::default(),
+        TILE_TRIANGLES,
+        &mut sink,
+        &mut |_| {},
+    )
+    .expect_err("bad index")
+    .to_string();
     assert!(
         e.contains("bad.ply") && e.contains("face 1") && e.contains('7'),
         "{e}"

@@ -145,7 +145,14 @@ pub fn build_file_spilled(
     };
     let store_failed = |e: std::io::Error| failed(BlockedError::Store(e.to_string()));
     let mut writer = StoreWriter::new().map_err(store_failed)?;
-    let file = weld::tiled::import_and_weld(path, import_options, &mut writer, progress)?;
+    // A tile's weld takes no more than a block's build, and as many of each run at once.
+    let file = weld::tiled::import_and_weld(
+        path,
+        import_options,
+        options.block_triangles,
+        &mut writer,
+        progress,
+    )?;
     let (store, surface_groups, repairs) = match file.welded {
         WeldedMesh::Streamed(s) => {
             let (groups, repairs) = (s.group_count, s.repairs);

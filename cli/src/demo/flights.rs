@@ -34,7 +34,7 @@ pub struct Flights {
     pub unmorphed: Flyover,
     /// Four cameras regulated to 20,000 polygons, with geomorphs.
     pub regulated: Flyover,
-    /// Four cameras with geomorphs held to a screen speed ([`SPEED_LIMIT_PX_S`]).
+    /// Four cameras with geomorphs held to a screen speed (`smooth::SPEED_LIMIT_PX_S`).
     pub speed_limited: Flyover,
 }
 

@@ -12,8 +12,9 @@ use crate::ooc::OocError;
 use crate::pipeline::{weld_mesh, BakeError, Stage};
 use crate::weld::Welded;
 
-/// Triangles a tile holds about: its weld (with the mesh it is built from) takes some
-/// hundreds of bytes a triangle, and as many tiles as threads are welded at once.
+/// Triangles a tile holds at most: its weld (with the mesh it is built from) takes some
+/// hundreds of bytes a triangle, and as many tiles as threads are welded at once, so callers
+/// with a memory budget ask for smaller tiles ([`import_and_weld`]'s `tile_triangles`).
 pub const TILE_TRIANGLES: usize = 1 << 17;
 
 /// Where the welded mesh went.
@@ -40,11 +41,13 @@ pub struct WeldedFile {
     pub notes: Vec<String>,
 }
 
-/// Imports and welds `path`: a PLY file streamed into `sink` (see the module's doc), any
-/// other file into memory.
+/// Imports and welds `path`: a PLY file streamed into `sink` (see the module's doc) in tiles
+/// of about `tile_triangles` triangles (at most [`TILE_TRIANGLES`]), as many welded at once as
+/// there are threads; any other file into memory.
 pub fn import_and_weld(
     path: &Path,
     options: &ImportOptions,
+    tile_triangles: usize,
     sink: &mut dyn WeldSink,
     progress: &mut dyn FnMut(Stage),
 ) -> Result<WeldedFile, BakeError> {
@@ -56,7 +59,7 @@ pub fn import_and_weld(
     if is_ply {
         let temp = TempSpace::new(None, None)
             .map_err(|e| OocError::temp("making the temporary directory", e))?;
-        match StreamTiles::open(path, &name, &temp, TILE_TRIANGLES) {
+        match StreamTiles::open(path, &name, &temp, tile_triangles.clamp(1, TILE_TRIANGLES)) {
             Ok(mut tiles) => {
                 progress(Stage::Weld);
                 let summary = weld_tiled_into(&mut tiles, sink).map_err(|e| match e {
