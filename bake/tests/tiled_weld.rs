@@ -15,6 +15,9 @@ use caveclod_core::format::PositionClass;
 use caveclod_tests::generate::{write_terrain, TerrainGrid};
 use caveclod_tests::shared_data;
 
+mod tiled_support;
+use tiled_support::assert_same;
+
 /// Checks `w` keeps the weld's invariants: every directed edge once, one fan around every
 /// position, each corner's attribute set its group's one vertex at its position, the
 /// classes counted from the mesh borders and group changes, groups meeting at a position
@@ -118,69 +121,6 @@ fn assert_same_triangles(a: &Welded, b: &Welded) {
             );
             assert_eq!((x.normal, x.uv, x.color), (y.normal, y.uv, y.color));
         }
-    }
-}
-
-/// Checks that `b` is `a` up to numbering: triangles matched by their corners' coordinates
-/// (unique once duplicates are dropped), positions and groups mapped one to one, the same
-/// attribute sets per corner, classes, vertices, repairs and group ids.
-fn assert_same(a: &Welded, b: &Welded) {
-    assert_eq!(a.triangles.len(), b.triangles.len(), "triangles");
-    assert_eq!(a.positions.len(), b.positions.len(), "positions");
-    assert_eq!(a.attributes.len(), b.attributes.len(), "attribute sets");
-    assert_eq!(a.repairs, b.repairs, "repairs");
-    assert_eq!(a.group_count, b.group_count, "groups");
-    assert_eq!(a.group_id_count, b.group_id_count, "group ids");
-    assert_eq!(a.has_colors, b.has_colors);
-    assert_eq!(a.surface_count, b.surface_count);
-    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
-    let by_coords: HashMap<_, usize> = b
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| (coords(b, t.p), f))
-        .collect();
-    let mut pos = vec![u32::MAX; a.positions.len()];
-    let mut group = vec![u32::MAX; a.group_count as usize];
-    let map = |m: &mut Vec<u32>, x: u32, y: u32, what: &str| {
-        assert!(
-            m[x as usize] == u32::MAX || m[x as usize] == y,
-            "{what} {x} maps twice"
-        );
-        m[x as usize] = y;
-    };
-    for ta in &a.triangles {
-        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
-        assert_eq!(ta.surface, tb.surface);
-        map(&mut group, ta.group, tb.group, "group");
-        for k in 0..3 {
-            map(&mut pos, ta.p[k], tb.p[k], "position");
-            assert_eq!(
-                a.attributes[ta.a[k] as usize],
-                b.attributes[tb.a[k] as usize]
-            );
-        }
-    }
-    for (x, &y) in pos.iter().enumerate() {
-        if y == u32::MAX {
-            continue;
-        }
-        assert_eq!(a.classes[x], b.classes[y as usize], "class of position {x}");
-        let attrs = |w: &Welded, at: u32| format!("{:?}", w.attributes[at as usize]);
-        let mut va: Vec<_> = a.vertices[x]
-            .iter()
-            .map(|&(g, at)| (group[g as usize], attrs(a, at)))
-            .collect();
-        let mut vb: Vec<_> = b.vertices[y as usize]
-            .iter()
-            .map(|&(g, at)| (g, attrs(b, at)))
-            .collect();
-        va.sort();
-        vb.sort();
-        assert_eq!(va, vb, "vertices at position {x}");
-    }
-    for (g, &h) in group.iter().enumerate() {
-        assert_eq!(a.group_ids[g], b.group_ids[h as usize], "id of group {g}");
     }
 }
 

@@ -2,8 +2,9 @@
 //! renumbered (its origins say how), every block of every level is one range of triangles
 //! whose centroids lie in the block's tiles, and positions are numbered by first use.
 
+use caveclod_bake::weld::WeldInfo;
 use caveclod_bake::weld::{self, Welded};
-use caveclod_bake::weld_store::{StoreInfo, StoreWriter, StoredTri, WeldedStore};
+use caveclod_bake::weld_store::{StoreWriter, StoredTri, WeldedStore};
 use caveclod_core::format::PositionClass;
 use caveclod_tests::{meshes, to_mesh};
 
@@ -111,10 +112,10 @@ fn a_triangle_naming_a_missing_position_is_refused_with_its_index() {
         ..StoredTri::default()
     }])
     .expect("push");
-    let info = StoreInfo {
+    let info = WeldInfo {
         group_count: 1,
         surface_count: 1,
-        ..StoreInfo::default()
+        ..WeldInfo::default()
     };
     let e = out.finish(info, 100, false).expect_err("invalid");
     assert!(

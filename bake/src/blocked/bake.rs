@@ -17,7 +17,7 @@ use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
 use crate::weld::tiled::WeldedMesh;
 use crate::weld::{self, Repairs};
-use crate::weld_store::{StoreInfo, StoreWriter, WeldedStore};
+use crate::weld_store::{StoreWriter, WeldedStore};
 
 /// A blocked bake up to its arrays: the welded mesh and its hierarchy, both on disk.
 #[derive(Debug)]
@@ -156,16 +156,8 @@ pub fn build_file_spilled(
     let (store, surface_groups, repairs) = match file.welded {
         WeldedMesh::Streamed(s) => {
             let (groups, repairs) = (s.group_count, s.repairs);
-            let info = StoreInfo {
-                group_count: s.group_count,
-                group_ids: s.group_ids,
-                group_id_count: s.group_id_count,
-                surface_count: s.surface_count,
-                has_colors: s.has_colors,
-                repairs: s.repairs,
-            };
             let store = writer
-                .finish(info, options.block_triangles, false)
+                .finish(s, options.block_triangles, false)
                 .map_err(store_failed)?;
             (store, groups, repairs)
         }

@@ -131,6 +131,39 @@ pub struct WeldedTri {
     pub group: u32,
 }
 
+/// What a welded mesh says besides its arrays (the small fields of [`Welded`]): what a weld
+/// that streams its arrays elsewhere ([`tiled`]) hands over at its end, and what the welded
+/// store ([`crate::weld_store`]) keeps in memory.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WeldInfo {
+    /// Number of surface groups.
+    pub group_count: u32,
+    /// Surface-group id of each group (the colouring).
+    pub group_ids: Vec<u16>,
+    /// Number of surface-group ids.
+    pub group_id_count: u32,
+    /// Number of surfaces.
+    pub surface_count: u32,
+    /// Whether the mesh has vertex colours.
+    pub has_colors: bool,
+    /// What welding repaired.
+    pub repairs: Repairs,
+}
+
+impl WeldInfo {
+    /// The small fields of `w`.
+    pub fn of(w: &Welded) -> Self {
+        Self {
+            group_count: w.group_count,
+            group_ids: w.group_ids.clone(),
+            group_id_count: w.group_id_count,
+            surface_count: w.surface_count,
+            has_colors: w.has_colors,
+            repairs: w.repairs,
+        }
+    }
+}
+
 /// A manifold mesh with surface groups, classes and the vertex table's contents.
 #[derive(Clone, Debug, Default)]
 pub struct Welded {
@@ -210,8 +243,9 @@ pub(crate) struct Trace {
     pub(crate) cut_positions: u32,
 }
 
-/// [`weld`], and where its triangles and positions came from.
-pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
+/// Whether `mesh` is one the weld takes: valid ([`Mesh::validate`]), every value within
+/// [`Mesh::MAX_MAGNITUDE`], its surfaces and sizes within the welded mesh's id ranges.
+pub(crate) fn check_weldable(mesh: &Mesh) -> Result<(), WeldError> {
     mesh.validate()
         .and_then(|()| mesh.check_magnitudes())
         .map_err(WeldError::Invalid)?;
@@ -222,6 +256,12 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     if triangles > MAX_TRIANGLES || points >= NONE as usize {
         return Err(WeldError::TooLarge { triangles, points });
     }
+    Ok(())
+}
+
+/// [`weld`], and where its triangles and positions came from.
+pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
+    check_weldable(mesh)?;
     let mut repairs = Repairs::default();
     let (mut positions, remap) = repair::weld_positions(mesh, &mut repairs);
     let mut kept = repair::drop_degenerate_and_duplicates(mesh, &remap, &positions, &mut repairs)?;

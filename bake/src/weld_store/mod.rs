@@ -25,7 +25,7 @@ use std::ops::Range;
 use bytemuck::{Pod, Zeroable};
 use caveclod_core::format::PositionClass;
 
-use crate::weld::{Attributes, Repairs, VertexLists, Welded, WeldedTri};
+use crate::weld::{Attributes, VertexLists, WeldInfo, Welded, WeldedTri};
 use column::Column;
 
 /// One triangle as stored: its positions (counter-clockwise), surface group and surface.
@@ -85,37 +85,6 @@ impl From<StoredAttributes> for Attributes {
     }
 }
 
-/// What a welded mesh says besides its arrays (the small fields of [`Welded`]).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct StoreInfo {
-    /// Number of surface groups.
-    pub group_count: u32,
-    /// Surface-group id of each group (the colouring).
-    pub group_ids: Vec<u16>,
-    /// Number of surface-group ids.
-    pub group_id_count: u32,
-    /// Number of surfaces.
-    pub surface_count: u32,
-    /// Whether the mesh has vertex colours.
-    pub has_colors: bool,
-    /// What welding repaired.
-    pub repairs: Repairs,
-}
-
-impl StoreInfo {
-    /// The small fields of `w`.
-    pub fn of(w: &Welded) -> Self {
-        Self {
-            group_count: w.group_count,
-            group_ids: w.group_ids.clone(),
-            group_id_count: w.group_id_count,
-            surface_count: w.surface_count,
-            has_colors: w.has_colors,
-            repairs: w.repairs,
-        }
-    }
-}
-
 /// Where the store's triangles and positions came from: the producer's id of each, by
 /// store id. Kept when asked ([`StoreWriter::finish`]), for callers that map a result back
 /// to the producer's numbering.
@@ -164,7 +133,7 @@ pub struct WeldedStore {
     vertices: Column<[u32; 2]>,
     attributes: Column<StoredAttributes>,
     triangles: Column<StoredTri>,
-    info: StoreInfo,
+    info: WeldInfo,
     bounds: ([f32; 3], [f32; 3]),
     /// First-level tiles along each axis (a power of two).
     side: u32,
@@ -182,7 +151,7 @@ impl WeldedStore {
         block_triangles: usize,
         keep_origins: bool,
     ) -> std::io::Result<Self> {
-        let info = StoreInfo::of(&w);
+        let info = WeldInfo::of(&w);
         let Welded {
             positions,
             classes,
@@ -232,7 +201,7 @@ impl WeldedStore {
     }
 
     /// The small fields.
-    pub fn info(&self) -> &StoreInfo {
+    pub fn info(&self) -> &WeldInfo {
         &self.info
     }
 

@@ -6,9 +6,10 @@
 use caveclod_core::format::PositionClass;
 
 use super::column::{Column, ColumnWriter};
-use super::{Origins, StoreInfo, StoredAttributes, StoredTri, WeldedStore};
+use super::{Origins, StoredAttributes, StoredTri, WeldedStore};
 use crate::blocked::tiles::{side_for, Grid};
 use crate::weld::Attributes;
+use crate::weld::WeldInfo;
 
 const NONE: u32 = u32::MAX;
 
@@ -95,7 +96,7 @@ impl StoreWriter {
     /// the element.
     pub fn finish(
         self,
-        info: StoreInfo,
+        info: WeldInfo,
         block_triangles: usize,
         keep_origins: bool,
     ) -> std::io::Result<WeldedStore> {
@@ -153,7 +154,7 @@ fn tiles(
     triangles: &Column<StoredTri>,
     xyz: &[[f32; 3]],
     grid: &Grid,
-    info: &StoreInfo,
+    info: &WeldInfo,
 ) -> std::io::Result<(Vec<u32>, Vec<u32>)> {
     let mut tile = Vec::with_capacity(triangles.len());
     let mut count = vec![0u32; (grid.side * grid.side) as usize + 1];

@@ -41,22 +41,7 @@ impl<'a> PlyInput<'a> {
         let direct = file
             .try_clone()
             .map_err(|e| OocError::io(name, "cannot read", e))?;
-        let mut r = BufReader::with_capacity(1 << 20, file);
-        let header = Header::read(&mut r, name)?;
-        let layout = Layout::of(&header, name)?;
-        let mut reader = Reader {
-            name,
-            r,
-            items: ItemReader {
-                format: header.format,
-                bytes: Vec::new(),
-                line: String::new(),
-                list: Vec::new(),
-            },
-            record: Vec::new(),
-            header,
-            layout,
-        };
+        let mut reader = Reader::new(name, file)?;
         let vi = reader.layout.vi;
         reader.skip(0..vi)?;
         let vertices = reader.header.elements[vi].count;
@@ -153,7 +138,28 @@ struct Reader<'a> {
     layout: Layout,
 }
 
-impl Reader<'_> {
+impl<'a> Reader<'a> {
+    /// Reads the header of the PLY file `file` (named `name` in errors) and stands at its
+    /// first item.
+    fn new(name: &'a str, file: File) -> Result<Self, OocError> {
+        let mut r = BufReader::with_capacity(1 << 20, file);
+        let header = Header::read(&mut r, name)?;
+        let layout = Layout::of(&header, name)?;
+        Ok(Reader {
+            name,
+            r,
+            items: ItemReader {
+                format: header.format,
+                bytes: Vec::new(),
+                line: String::new(),
+                list: Vec::new(),
+            },
+            record: Vec::new(),
+            header,
+            layout,
+        })
+    }
+
     fn bad(&self, at: &str, message: String) -> OocError {
         bad(self.name, at, message)
     }
@@ -456,22 +462,7 @@ pub trait IndexedSink {
 /// corners skipped and counted). For a reader that keeps the attributes at full precision,
 /// where the soup quantises them. Returns the faces skipped.
 pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Result<u64, OocError> {
-    let mut r = BufReader::with_capacity(1 << 20, file);
-    let header = Header::read(&mut r, name)?;
-    let layout = Layout::of(&header, name)?;
-    let mut reader = Reader {
-        name,
-        r,
-        items: ItemReader {
-            format: header.format,
-            bytes: Vec::new(),
-            line: String::new(),
-            list: Vec::new(),
-        },
-        record: Vec::new(),
-        header,
-        layout,
-    };
+    let mut reader = Reader::new(name, file)?;
     let (vi, fi) = (reader.layout.vi, reader.layout.fi);
     let vcount = reader.header.elements[vi].count;
     sink.header(&IndexedHeader {

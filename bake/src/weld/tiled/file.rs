@@ -4,12 +4,13 @@
 
 use std::path::Path;
 
-use super::{weld_tiled_into, StreamTiles, TiledWeldError, WeldSink, WeldSummary};
+use super::{weld_tiled_into, StreamTiles, TiledWeldError, WeldSink};
 use crate::import::{self, ImportOptions};
 use crate::mesh::Surface;
 use crate::ooc::temp::TempSpace;
 use crate::ooc::OocError;
 use crate::pipeline::{weld_mesh, BakeError, Stage};
+use crate::weld::WeldInfo;
 use crate::weld::Welded;
 
 /// Triangles a tile holds at most: its weld (with the mesh it is built from) takes some
@@ -21,7 +22,7 @@ pub const TILE_TRIANGLES: usize = 1 << 17;
 #[derive(Debug)]
 pub enum WeldedMesh {
     /// Into the sink, piece by piece.
-    Streamed(WeldSummary),
+    Streamed(WeldInfo),
     /// Into memory (the file was imported in core); the sink got nothing.
     InCore(Welded),
 }

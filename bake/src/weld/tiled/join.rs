@@ -15,8 +15,9 @@ use super::super::groups::{colour_groups, Groups, VertexOf};
 use super::super::{Attributes, Repairs, VertexLists, WeldError, WeldedTri};
 use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
-use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink, WeldSummary};
+use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink};
 use crate::fxhash::{hash_of, map_with_capacity, FxHashMap};
+use crate::weld::WeldInfo;
 
 /// A triangle waiting for its group.
 #[repr(C)]
@@ -222,7 +223,7 @@ impl Joiner {
         mut self,
         mesh: &TiledMesh,
         sink: &mut dyn WeldSink,
-    ) -> Result<WeldSummary, TiledWeldError> {
+    ) -> Result<WeldInfo, TiledWeldError> {
         if self.triangles.len() == 0 {
             return Err(WeldError::Empty {
                 degenerate: self.repairs.degenerate_triangles,
@@ -302,7 +303,7 @@ impl Joiner {
             sink.push_triangles(&batch)
         })?;
         self.repairs.welded_positions = mesh.welded_positions;
-        Ok(WeldSummary {
+        Ok(WeldInfo {
             group_count: groups.count,
             group_ids: colour.iter().map(|&c| c as u16).collect(),
             group_id_count: colour_count,

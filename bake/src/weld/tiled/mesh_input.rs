@@ -3,7 +3,7 @@
 
 use std::io;
 
-use super::super::{repair, Repairs, WeldError, MAX_TRIANGLES, NONE};
+use super::super::{repair, Repairs, WeldError, NONE};
 use super::{TileTriangle, TiledMesh, Tiles, SHARED};
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 
@@ -17,16 +17,7 @@ impl MeshTiles {
     /// Welds the positions of `mesh` (step 1 of [`super::super::weld`]) and cuts its
     /// triangles into `side × side` tiles.
     pub fn new(mesh: &Mesh, side: u32) -> Result<Self, WeldError> {
-        mesh.validate()
-            .and_then(|()| mesh.check_magnitudes())
-            .map_err(WeldError::Invalid)?;
-        if mesh.surfaces.len() > u16::MAX as usize {
-            return Err(WeldError::TooManySurfaces(mesh.surfaces.len()));
-        }
-        let (triangles, points) = (mesh.triangles.len(), mesh.positions.len());
-        if triangles > MAX_TRIANGLES || points >= NONE as usize {
-            return Err(WeldError::TooLarge { triangles, points });
-        }
+        super::super::check_weldable(mesh)?;
         let mut repairs = Repairs::default();
         let (positions, remap) = repair::weld_positions(mesh, &mut repairs);
         let grid = TileGrid::new(&positions, side);

@@ -45,8 +45,6 @@ mod mesh_input;
 mod spool;
 mod store_sink;
 mod stream_input;
-#[cfg(test)]
-mod tests;
 mod tile;
 
 use std::io;
@@ -60,7 +58,7 @@ pub use stream_input::{StreamTiles, StreamedReport};
 use caveclod_core::format::PositionClass;
 use rayon::prelude::*;
 
-use super::{Attributes, Repairs, VertexLists, WeldError, Welded, WeldedTri, NONE};
+use super::{Attributes, Repairs, VertexLists, WeldError, WeldInfo, Welded, WeldedTri, NONE};
 use crate::fxhash::{map_with_capacity, FxHashMap};
 use join::Joiner;
 
@@ -157,23 +155,6 @@ pub trait WeldSink {
     fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()>;
 }
 
-/// What a weld tells besides its positions, attribute sets and triangles.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct WeldSummary {
-    /// Number of surface groups.
-    pub group_count: u32,
-    /// Surface-group id of each group (the colouring).
-    pub group_ids: Vec<u16>,
-    /// Number of surface-group ids.
-    pub group_id_count: u32,
-    /// Number of surfaces.
-    pub surface_count: u32,
-    /// Whether the mesh has colours.
-    pub has_colors: bool,
-    /// What was repaired.
-    pub repairs: Repairs,
-}
-
 /// A [`WeldSink`] into a [`Welded`] in memory.
 #[derive(Default)]
 pub struct WeldedBuilder {
@@ -208,7 +189,7 @@ impl WeldSink for WeldedBuilder {
 
 impl WeldedBuilder {
     /// The welded mesh, with `summary`.
-    pub fn finish(self, summary: WeldSummary) -> Welded {
+    pub fn finish(self, summary: WeldInfo) -> Welded {
         let mut w = self.w;
         w.vertices = self
             .lists
@@ -238,7 +219,7 @@ pub fn weld_tiled(tiles: &mut dyn Tiles) -> Result<Welded, TiledWeldError> {
 pub fn weld_tiled_into(
     tiles: &mut dyn Tiles,
     sink: &mut dyn WeldSink,
-) -> Result<WeldSummary, TiledWeldError> {
+) -> Result<WeldInfo, TiledWeldError> {
     let band = Band::collect(tiles)?;
     let mut joiner = Joiner::new(tiles.mesh())?;
     // As many tiles at once as there are threads, joined in tile order.

@@ -1,8 +1,12 @@
-use std::collections::HashMap;
+//! The tiled weld against the in-core weld on small built meshes: every case at several
+//! tilings, so borders cut through what each case repairs.
 
-use super::super::{weld, Welded};
-use super::{weld_tiled, MeshTiles};
-use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use caveclod_bake::weld::tiled::{weld_tiled, MeshTiles};
+use caveclod_bake::weld::weld;
+
+mod tiled_support;
+use tiled_support::assert_same;
 
 /// Builds test meshes: a height grid and extra pieces, one input vertex per corner use.
 #[derive(Default)]
@@ -73,82 +77,6 @@ impl Builder {
                 }
             }
         }
-    }
-}
-
-/// Checks that `b` is `a` up to numbering: triangles matched by their corners' coordinates
-/// (unique once duplicates are dropped), positions, groups mapped one to one, the same
-/// attribute sets per corner, classes, vertices, repairs and number of group ids.
-fn assert_same(a: &Welded, b: &Welded) {
-    assert_eq!(a.triangles.len(), b.triangles.len(), "triangles");
-    assert_eq!(a.positions.len(), b.positions.len(), "positions");
-    assert_eq!(a.attributes.len(), b.attributes.len(), "attribute sets");
-    assert_eq!(a.repairs, b.repairs, "repairs");
-    assert_eq!(a.group_count, b.group_count, "groups");
-    assert_eq!(a.group_id_count, b.group_id_count, "group ids");
-    assert_eq!(a.has_colors, b.has_colors);
-    assert_eq!(a.surface_count, b.surface_count);
-    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
-    let by_coords: HashMap<_, usize> = b
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| (coords(b, t.p), f))
-        .collect();
-    let mut pos = vec![u32::MAX; a.positions.len()];
-    let mut group = vec![u32::MAX; a.group_count as usize];
-    let map = |m: &mut Vec<u32>, x: u32, y: u32, what: &str| {
-        assert!(
-            m[x as usize] == u32::MAX || m[x as usize] == y,
-            "{what} {x} maps twice"
-        );
-        m[x as usize] = y;
-    };
-    for ta in &a.triangles {
-        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
-        assert_eq!(ta.surface, tb.surface);
-        map(&mut group, ta.group, tb.group, "group");
-        for k in 0..3 {
-            map(&mut pos, ta.p[k], tb.p[k], "position");
-            assert_eq!(
-                a.attributes[ta.a[k] as usize],
-                b.attributes[tb.a[k] as usize]
-            );
-        }
-    }
-    let mut images: Vec<u32> = pos.iter().copied().filter(|&x| x != u32::MAX).collect();
-    images.sort_unstable();
-    images.dedup();
-    assert_eq!(images.len(), pos.iter().filter(|&&x| x != u32::MAX).count());
-    for (x, &y) in pos.iter().enumerate() {
-        if y == u32::MAX {
-            continue;
-        }
-        assert_eq!(a.classes[x], b.classes[y as usize], "class of position {x}");
-        let va: Vec<_> = a.vertices[x]
-            .iter()
-            .map(|&(g, at)| (group[g as usize], a.attributes[at as usize].key()))
-            .collect();
-        let mut vb: Vec<_> = b.vertices[y as usize]
-            .iter()
-            .map(|&(g, at)| (g, b.attributes[at as usize].key()))
-            .collect();
-        let mut va = va;
-        va.sort_unstable();
-        vb.sort_unstable();
-        assert_eq!(va, vb, "vertices at position {x}");
-    }
-    assert_valid_colouring(b);
-}
-
-/// Groups with a vertex at one position have different ids.
-fn assert_valid_colouring(w: &Welded) {
-    for list in &w.vertices {
-        let mut ids: Vec<u16> = list.iter().map(|&(g, _)| w.group_ids[g as usize]).collect();
-        let n = ids.len();
-        ids.sort_unstable();
-        ids.dedup();
-        assert_eq!(ids.len(), n, "two groups at a position share an id");
     }
 }
 
