@@ -189,11 +189,11 @@ fn check_released(map: &memmap2::Mmap) -> Result<(), Failure> {
 }
 
 /// Runs `f`, which reads the mapped file `map`, while a second thread tells the system every
-/// 10 ms that the mapping's pages are not needed (`MADV_DONTNEED`). They stay in
-/// the page cache, where `f`'s next read of them finds them again, but no longer count in
-/// the process's resident memory, so reading a file of any length (validating it, reporting
-/// on it) takes the memory its reads touch within one period. The file must not change while
-/// mapped, as for any map of it.
+/// few milliseconds (`RELEASE_EVERY`) that the mapping's pages are not needed
+/// (`MADV_DONTNEED`). They stay in the page cache, where `f`'s next read of them finds them
+/// again, but no longer count in the process's resident memory, so reading a file of any
+/// length (validating it, reporting on it) takes the memory its reads touch within one
+/// period. The file must not change while mapped, as for any map of it.
 pub fn with_pages_released<R>(map: &memmap2::Mmap, f: impl FnOnce() -> R) -> R {
     use std::sync::atomic::{AtomicBool, Ordering};
     let done = AtomicBool::new(false);

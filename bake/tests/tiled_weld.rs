@@ -16,7 +16,7 @@ use caveclod_tests::generate::{write_terrain, TerrainGrid};
 use caveclod_tests::shared_data;
 
 mod tiled_support;
-use tiled_support::assert_same;
+use tiled_support::{assert_same, matched_triangles};
 
 /// Checks `w` keeps the weld's invariants: every directed edge once, one fan around every
 /// position, each corner's attribute set its group's one vertex at its position, the
@@ -104,15 +104,7 @@ fn assert_same_triangles(a: &Welded, b: &Welded) {
     assert_eq!(a.triangles.len(), b.triangles.len(), "triangles");
     assert_eq!(a.positions.len(), b.positions.len(), "positions");
     assert_eq!(a.repairs, b.repairs, "repairs");
-    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
-    let by_coords: HashMap<_, usize> = b
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| (coords(b, t.p), f))
-        .collect();
-    for ta in &a.triangles {
-        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
+    for (ta, tb) in matched_triangles(a, b) {
         assert_eq!(ta.surface, tb.surface);
         for k in 0..3 {
             let (x, y) = (

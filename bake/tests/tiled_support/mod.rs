@@ -3,7 +3,26 @@
 
 use std::collections::HashMap;
 
-use caveclod_bake::weld::Welded;
+use caveclod_bake::weld::{Welded, WeldedTri};
+
+/// Each triangle of `a` with the triangle of `b` at the same corner coordinates (unique once
+/// duplicates are dropped); panics if `b` has none there.
+pub fn matched_triangles<'w>(
+    a: &'w Welded,
+    b: &'w Welded,
+) -> impl Iterator<Item = (&'w WeldedTri, &'w WeldedTri)> {
+    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
+    let by_coords: HashMap<_, usize> = b
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| (coords(b, t.p), f))
+        .collect();
+    a.triangles.iter().map(move |ta| {
+        let at = by_coords.get(&coords(a, ta.p)).expect("triangle in both");
+        (ta, &b.triangles[*at])
+    })
+}
 
 /// Checks that `b` is `a` up to numbering: triangles matched by their corners' coordinates
 /// (unique once duplicates are dropped), positions and groups mapped one to one, the same
@@ -17,13 +36,6 @@ pub fn assert_same(a: &Welded, b: &Welded) {
     assert_eq!(a.group_id_count, b.group_id_count, "group ids");
     assert_eq!(a.has_colors, b.has_colors);
     assert_eq!(a.surface_count, b.surface_count);
-    let coords = |w: &Welded, p: [u32; 3]| p.map(|x| w.positions[x as usize].map(f32::to_bits));
-    let by_coords: HashMap<_, usize> = b
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| (coords(b, t.p), f))
-        .collect();
     let mut pos = vec![u32::MAX; a.positions.len()];
     let mut group = vec![u32::MAX; a.group_count as usize];
     let map = |m: &mut Vec<u32>, x: u32, y: u32, what: &str| {
@@ -33,8 +45,7 @@ pub fn assert_same(a: &Welded, b: &Welded) {
         );
         m[x as usize] = y;
     };
-    for ta in &a.triangles {
-        let tb = &b.triangles[*by_coords.get(&coords(a, ta.p)).expect("triangle in both")];
+    for (ta, tb) in matched_triangles(a, b) {
         assert_eq!(ta.surface, tb.surface);
         map(&mut group, ta.group, tb.group, "group");
         for k in 0..3 {
