@@ -28,17 +28,10 @@ impl Work<'_> {
     }
 
     /// Applies a checked collapse; returns the new node. The points of `u`'s triangles
-    /// (those dying included) wait for [`Work::settle`] to find their nearest triangle
-    /// around the new node.
+    /// (those dying included) stay in their lists for [`Work::settle`] to hand to their
+    /// nearest triangle around the new node.
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
-        for &f in self.faces_of.of(c.u) {
-            let mut x = std::mem::replace(&mut self.pts_head[f as usize], NONE);
-            while x != NONE {
-                self.moved.push((x, s));
-                x = self.pts_next[x as usize];
-            }
-        }
         self.push_node(c);
         self.merge_wedges(c);
         for f in [c.fl, c.fr] {
