@@ -130,7 +130,7 @@ impl Passes {
         let count = rank_all(work, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
         let share = if full { 1.0 } else { PASS_SHARE };
-        let limit = self.ranked.start(&self.slots, count, share);
+        let limit = self.ranked.start(&self.slots, count, share, threads);
         let mut applied = 0u64;
         self.later.clear();
         let max_tries = 2 * count as u64;
