@@ -33,6 +33,7 @@ pub(super) fn collapse_all(
         work.h.passes += 1;
         let pass = work.h.passes;
         let (applied, cut) = passes.run(work, pass, full, threads)?;
+        work.merge_wedges(threads);
         work.settle(threads);
         let done = work.h.collapses.len() as u64;
         progress(done, most);
