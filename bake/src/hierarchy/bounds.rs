@@ -4,7 +4,7 @@
 
 use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
 use super::work::{Tri, Work};
-use super::{NONE, PARALLEL_MIN};
+use super::NONE;
 use rayon::prelude::*;
 
 /// A triangle as the nearest-triangle search reads it: corners, edges from the first,
@@ -174,13 +174,14 @@ impl Work<'_> {
     /// does not change the result. The lists are then rebuilt in collapse order.
     pub(super) fn settle(&mut self, threads: usize) {
         let count = self.from_kept.len();
-        let per = count.div_ceil(threads.max(1)).max(SETTLE_MIN);
+        // Several parts a thread: the last passes' few collapses carry most points each.
+        let per = count.div_ceil(SETTLE_PARTS * threads.max(1)).max(1);
         let ranges: Vec<_> = (0..count)
             .step_by(per.max(1))
             .map(|lo| lo..(lo + per).min(count))
             .collect();
         let this = &*self;
-        let parts: Vec<Settled> = if ranges.len() <= 1 {
+        let parts: Vec<Settled> = if threads <= 1 || ranges.len() <= 1 {
             ranges.into_iter().map(|r| this.settle_part(r)).collect()
         } else {
             ranges
@@ -210,8 +211,8 @@ impl Work<'_> {
     }
 }
 
-/// Collapses below which [`Work::settle`] stays on one thread.
-const SETTLE_MIN: usize = PARALLEL_MIN / 16;
+/// Parts per thread that [`Work::settle`] splits a pass's collapses into.
+const SETTLE_PARTS: usize = 8;
 
 /// What [`Work::settle_part`] found.
 #[derive(Default)]
