@@ -4,7 +4,7 @@
 
 use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
 use super::work::{Tri, Work};
-use super::{NONE, PARALLEL_MIN};
+use super::NONE;
 use rayon::prelude::*;
 
 /// A triangle as the nearest-triangle search reads it: corners, edges from the first,
@@ -95,7 +95,7 @@ impl Work<'_> {
     pub(super) fn nearest(
         &self,
         star: &[u32],
-        points: &[(u32, u32)],
+        points: &[u32],
         probes: &mut Vec<Probe>,
         out: &mut Vec<(f64, u32)>,
     ) {
@@ -105,7 +105,7 @@ impl Work<'_> {
             star.iter()
                 .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
         );
-        for &(x, _) in points {
+        for &x in points {
             let x = self.point(x);
             let mut best = (f64::INFINITY, NONE);
             for (&f, probe) in star.iter().zip(probes.iter()) {
@@ -117,58 +117,108 @@ impl Work<'_> {
         }
     }
 
-    /// Gives each point a collapse of the pass moved to the nearest of the triangles that
-    /// replace the removed child's (its ring fanned from the kept child: the same stretch
-    /// of surface; a nearer triangle elsewhere would only lower the distance, so this is an
-    /// upper bound at half the work of searching the whole star), and raises the new
-    /// node's error to the largest such distance. The collapses of a pass have disjoint
-    /// stars, which no later collapse of the pass changes, so this runs after the pass, on
-    /// all threads.
-    pub(super) fn settle(&mut self, threads: usize) {
-        let moved = std::mem::take(&mut self.moved);
-        // Runs of points going to one node, split over the threads at run boundaries.
-        let per = moved.len().div_ceil(threads.max(1)).max(PARALLEL_MIN);
-        let mut parts = Vec::new();
-        let mut lo = 0;
-        while lo < moved.len() {
-            let mut hi = (lo + per).min(moved.len());
-            while hi < moved.len() && moved[hi].1 == moved[hi - 1].1 {
-                hi += 1;
-            }
-            parts.push(&moved[lo..hi]);
-            lo = hi;
-        }
-        let this = &*self;
+    /// The triangles the removed child of the pass's collapse `i` had: those it gave the
+    /// new node (listed after the kept child's), then the dying ones; and the triangles
+    /// their points go to, the given ones (the whole star when it gave none).
+    fn handed_over(&self, i: usize) -> (impl Iterator<Item = u32> + '_, &[u32]) {
+        let count = self.from_kept.len();
+        let c = &self.h.collapses[self.h.collapses.len() - count + i];
+        let s = (self.nodes.len() - count + i) as u32;
+        let star = self.faces_of.of(s);
+        let from_kept = self.from_kept[i] as usize;
+        let given = star.get(from_kept..).unwrap_or(&[]);
+        let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE);
+        let to = if given.is_empty() { star } else { given };
+        (given.iter().copied().chain(dying), to)
+    }
+
+    /// The points of the pass's collapses `range`, each moved to the nearest of the
+    /// triangles its collapse's removed child gave the new node (that child's ring fanned
+    /// from the kept child: the same stretch of surface; a nearer triangle elsewhere would
+    /// only lower the distance, so this is an upper bound at half the work of searching the
+    /// whole star): each point with its triangle, and per collapse its number of points and
+    /// its new node's error, raised to the largest distance.
+    fn settle_part(&self, range: std::ops::Range<usize>) -> Settled {
         let first_node = self.nodes.len() - self.from_kept.len();
-        let run = |part: &[(u32, u32)]| {
-            let (mut out, mut probes) = (Vec::with_capacity(part.len()), Vec::new());
-            for points in part.chunk_by(|a, b| a.1 == b.1) {
-                let s = points[0].1 as usize;
-                let star = this.faces_of.of(s as u32);
-                let from_kept = this.from_kept[s - first_node] as usize;
-                let moved_ones = if from_kept < star.len() {
-                    &star[from_kept..]
-                } else {
-                    star
-                };
-                this.nearest(moved_ones, points, &mut probes, &mut out);
+        let mut part = Settled::default();
+        let (mut points, mut found, mut probes) = (Vec::new(), Vec::new(), Vec::new());
+        for i in range {
+            let (from, to) = self.handed_over(i);
+            points.clear();
+            for f in from {
+                let mut x = self.pts_head[f as usize];
+                while x != NONE {
+                    points.push(x);
+                    x = self.pts_next[x as usize];
+                }
             }
-            out
-        };
-        let found: Vec<Vec<(f64, u32)>> = if parts.len() <= 1 {
-            parts.iter().map(|part| run(part)).collect()
+            found.clear();
+            self.nearest(to, &points, &mut probes, &mut found);
+            let mut error = self.nodes[first_node + i].error;
+            let before = part.points.len();
+            for (&x, &(d, f)) in points.iter().zip(&found) {
+                if f != NONE {
+                    part.points.push((x, f));
+                    error = error.max(d.sqrt() as f32);
+                }
+            }
+            part.nodes
+                .push(((part.points.len() - before) as u32, error));
+        }
+        part
+    }
+
+    /// Hands the points of the pass's collapses over ([`Work::settle_part`]), on all
+    /// threads: the collapses of a pass have disjoint stars, which no later collapse of the
+    /// pass changes, and each collapse's points are handed over on their own, so the split
+    /// does not change the result. The lists are then rebuilt in collapse order.
+    pub(super) fn settle(&mut self, threads: usize) {
+        let count = self.from_kept.len();
+        // Several parts a thread: the last passes' few collapses carry most points each.
+        let per = count.div_ceil(SETTLE_PARTS * threads.max(1)).max(1);
+        let ranges: Vec<_> = (0..count)
+            .step_by(per.max(1))
+            .map(|lo| lo..(lo + per).min(count))
+            .collect();
+        let this = &*self;
+        let parts: Vec<Settled> = if threads <= 1 || ranges.len() <= 1 {
+            ranges.into_iter().map(|r| this.settle_part(r)).collect()
         } else {
-            parts.par_iter().map(|part| run(part)).collect()
+            ranges
+                .into_par_iter()
+                .map(|r| this.settle_part(r))
+                .collect()
         };
-        for (&(x, s), &(d, f)) in moved.iter().zip(found.iter().flatten()) {
-            if f != NONE {
-                self.pts_next[x as usize] = std::mem::replace(&mut self.pts_head[f as usize], x);
-                let error = &mut self.nodes[s as usize].error;
-                *error = error.max(d.sqrt() as f32);
+        let first_node = self.nodes.len() - count;
+        let (mut i, mut from) = (0, Vec::new());
+        for part in parts {
+            let mut points = part.points.iter();
+            for &(n, error) in &part.nodes {
+                from.clear();
+                from.extend(self.handed_over(i).0);
+                for &f in &from {
+                    self.pts_head[f as usize] = NONE;
+                }
+                for &(x, f) in points.by_ref().take(n as usize) {
+                    self.pts_next[x as usize] =
+                        std::mem::replace(&mut self.pts_head[f as usize], x);
+                }
+                self.nodes[first_node + i].error = error;
+                i += 1;
             }
         }
-        self.moved = moved;
-        self.moved.clear();
         self.from_kept.clear();
     }
+}
+
+/// Parts per thread that [`Work::settle`] splits a pass's collapses into.
+const SETTLE_PARTS: usize = 8;
+
+/// What [`Work::settle_part`] found.
+#[derive(Default)]
+struct Settled {
+    /// The points handed over, each with its new triangle, collapse after collapse.
+    points: Vec<(u32, u32)>,
+    /// Per collapse: its number of points there, and its new node's error.
+    nodes: Vec<(u32, f32)>,
 }

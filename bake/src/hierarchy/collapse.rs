@@ -2,8 +2,9 @@
 //! triangles' neighbours, the star moved onto the new node, and the valences.
 
 use super::geometry::{corner_of, len, merge_cones, next, prev, sub};
-use super::work::{NodeOut, Tri, Work};
-use super::{Collapse, NONE};
+use super::setup::by_positions;
+use super::work::{NodeOut, Tri, Wedge, Work};
+use super::{Collapse, NONE, PARALLEL_MIN};
 
 impl Work<'_> {
     /// Applies a checked collapse of pass `pass` and stamps the neighbourhood it took (the
@@ -28,19 +29,12 @@ impl Work<'_> {
     }
 
     /// Applies a checked collapse; returns the new node. The points of `u`'s triangles
-    /// (those dying included) wait for [`Work::settle`] to find their nearest triangle
-    /// around the new node.
+    /// (those dying included) stay in their lists for [`Work::settle`] to hand to their
+    /// nearest triangle around the new node, and `u`'s wedges wait for
+    /// [`Work::merge_wedges`].
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
-        for &f in self.faces_of.of(c.u) {
-            let mut x = std::mem::replace(&mut self.pts_head[f as usize], NONE);
-            while x != NONE {
-                self.moved.push((x, s));
-                x = self.pts_next[x as usize];
-            }
-        }
         self.push_node(c);
-        self.merge_wedges(c);
         for f in [c.fl, c.fr] {
             if f != NONE {
                 self.remove_dying(c, f);
@@ -72,20 +66,45 @@ impl Work<'_> {
         });
     }
 
-    /// The removed position's wedges merge into the kept position's (those of its groups;
-    /// the surface-group rules made sure every group at `u` has a wedge at `t`).
-    fn merge_wedges(&mut self, c: Collapse) {
-        let (pt, pu) = (self.node_pos[c.t as usize], self.node_pos[c.u as usize]);
-        let (st, et) = (
-            self.wedge_start[pt as usize] as usize,
-            self.wedge_start[pt as usize + 1] as usize,
-        );
-        for i in self.wedge_start[pu as usize] as usize..self.wedge_start[pu as usize + 1] as usize
-        {
-            let g = self.wedges[i].group;
-            if let Some(j) = (st..et).find(|&j| self.wedges[j].group == g) {
-                let q = self.wedges[i].q;
-                self.wedges[j].q.add(&q);
+    /// Merges the wedges of the pass's collapses: the removed position's into the kept
+    /// position's (those of its groups; the surface-group rules made sure every group at
+    /// `u` has a wedge at `t`). Nothing in a pass reads them: its costs are those of ends
+    /// no collapse of the pass took. The positions are split into ranges, a rayon task
+    /// each merging the collapses within its range; those across two ranges follow on one
+    /// thread. Each kept position takes one collapse's wedges, so the sums do not depend
+    /// on the split.
+    pub(super) fn merge_wedges(&mut self, threads: usize) {
+        let count = self.from_kept.len();
+        let pairs: Vec<(usize, usize)> = self.h.collapses[self.h.collapses.len() - count..]
+            .iter()
+            .map(|c| {
+                let at = |v: u32| self.node_pos[v as usize] as usize;
+                (at(c.t), at(c.u))
+            })
+            .collect();
+        let np = self.positions();
+        let per = if threads <= 1 || count < PARALLEL_MIN {
+            np.max(1)
+        } else {
+            np.div_ceil(threads)
+        };
+        let ranges: Vec<(usize, usize)> = (0..np)
+            .step_by(per)
+            .map(|lo| (lo, (lo + per).min(np)))
+            .collect();
+        let wedge_start = &self.wedge_start;
+        by_positions(&ranges, &mut self.wedges, wedge_start, |lo, hi, wedges| {
+            let base = wedge_start[lo] as usize;
+            for &(pt, pu) in &pairs {
+                if (lo..hi).contains(&pt) && (lo..hi).contains(&pu) {
+                    merge_at(wedges, wedge_start, base, pt, pu);
+                }
+            }
+        });
+        let range_of = |p: usize| p / per;
+        for &(pt, pu) in &pairs {
+            if range_of(pt) != range_of(pu) {
+                merge_at(&mut self.wedges, wedge_start, 0, pt, pu);
             }
         }
     }
@@ -157,6 +176,19 @@ impl Work<'_> {
         for x in std::iter::once(s).chain(ring.iter().copied()) {
             self.find_ring(x, &mut around);
             debug_assert_eq!(self.valence[self.at_node(x)] as usize, around.len(), "{x}");
+        }
+    }
+}
+
+/// Adds the quadrics of the wedges at position `pu` to those of the same groups at `pt`,
+/// in `wedges`, which start with the wedges of the position whose first is `base`.
+fn merge_at(wedges: &mut [Wedge], wedge_start: &[u32], base: usize, pt: usize, pu: usize) {
+    let range = |p: usize| wedge_start[p] as usize - base..wedge_start[p + 1] as usize - base;
+    let at_t = range(pt);
+    for i in range(pu) {
+        let (g, q) = (wedges[i].group, wedges[i].q);
+        if let Some(j) = at_t.clone().find(|&j| wedges[j].group == g) {
+            wedges[j].q.add(&q);
         }
     }
 }

@@ -33,6 +33,7 @@ pub(super) fn collapse_all(
         work.h.passes += 1;
         let pass = work.h.passes;
         let (applied, cut) = passes.run(work, pass, full, threads)?;
+        work.merge_wedges(threads);
         work.settle(threads);
         let done = work.h.collapses.len() as u64;
         progress(done, most);
@@ -130,7 +131,7 @@ impl Passes {
         let count = rank_all(work, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
         let share = if full { 1.0 } else { PASS_SHARE };
-        let limit = self.ranked.start(&self.slots, count, share);
+        let limit = self.ranked.start(&self.slots, count, share, threads);
         let mut applied = 0u64;
         self.later.clear();
         let max_tries = 2 * count as u64;

@@ -176,6 +176,12 @@ pub(super) struct Ranked {
 /// Bits of [`order_key`] that pick a bucket: sign, exponent and 4 bits of mantissa.
 const BUCKET_BITS: u32 = 16;
 
+/// The bucket of a cost: the top [`BUCKET_BITS`] of its [`order_key`].
+#[inline]
+fn bucket_of(cost: f64) -> u64 {
+    order_key(cost) >> (64 - BUCKET_BITS)
+}
+
 /// Candidates below which a pass sorts them all at once.
 const BUCKET_MIN: usize = 4096;
 
@@ -212,8 +218,9 @@ impl Ranked {
     /// dearest cost in that share (for many candidates, rounded up to the end of its bucket),
     /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
     /// out, and the pass cuts what is dearer, the other directions it queues included: a
-    /// share of everything cuts nothing.
-    pub(super) fn start(&mut self, slots: &Slots, count: usize, share: f64) -> u64 {
+    /// share of everything cuts nothing. Many candidates are counted by bucket on up to
+    /// `threads` threads.
+    pub(super) fn start(&mut self, slots: &Slots, count: usize, share: f64, threads: usize) -> u64 {
         self.chunk.clear();
         self.pos = 0;
         let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
@@ -227,12 +234,7 @@ impl Ranked {
                 _ => u64::MAX,
             };
         }
-        let bucket = |c: f64| (order_key(c) >> (64 - BUCKET_BITS)) as usize;
-        self.bounds.clear();
-        self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        for (_, c) in costs(slots) {
-            self.bounds[bucket(c) + 1] += 1;
-        }
+        self.count_buckets(slots, threads);
         for i in 0..1 << BUCKET_BITS {
             self.bounds[i + 1] += self.bounds[i];
         }
@@ -248,6 +250,7 @@ impl Ranked {
         self.by_bucket.clear();
         self.by_bucket.resize(kept, 0);
         let mut fill = self.bounds.clone();
+        let bucket = |c: f64| bucket_of(c) as usize;
         for (i, c) in costs(slots) {
             let b = bucket(c);
             if b <= last {
@@ -257,6 +260,39 @@ impl Ranked {
         }
         self.bucket = 0;
         limit
+    }
+
+    /// Sets `bounds[b + 1]` to the number of ranked collapses of `slots` in bucket `b`
+    /// (`bounds[0]` to 0), counting ranges of rows on up to `threads` threads.
+    fn count_buckets(&mut self, slots: &Slots, threads: usize) {
+        let count = |rows: &[Row], counts: &mut [u32]| {
+            for row in rows {
+                for c in row.cost.into_iter().filter(|c| c.is_finite()) {
+                    counts[bucket_of(c) as usize + 1] += 1;
+                }
+            }
+        };
+        self.bounds.clear();
+        self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
+        if threads <= 1 || slots.rows.len() < PARALLEL_MIN {
+            count(&slots.rows, &mut self.bounds);
+            return;
+        }
+        let per = slots.rows.len().div_ceil(threads);
+        let parts: Vec<Vec<u32>> = slots
+            .rows
+            .par_chunks(per)
+            .map(|rows| {
+                let mut counts = vec![0u32; (1 << BUCKET_BITS) + 1];
+                count(rows, &mut counts);
+                counts
+            })
+            .collect();
+        for part in parts {
+            for (total, n) in self.bounds.iter_mut().zip(part) {
+                *total += n;
+            }
+        }
     }
 
     /// The next candidate whose ends were free (not `taken`) when its bucket was reached.

@@ -71,7 +71,6 @@ pub(super) fn work<'w>(
         start_valence: vec![0; np],
         pts_head: Vec::new(),
         pts_next: Vec::new(),
-        moved: Vec::new(),
         from_kept: Vec::new(),
     };
     work.place_points();

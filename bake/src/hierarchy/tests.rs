@@ -108,9 +108,9 @@ fn a_full_share_cuts_nothing() {
             slots.set(i, [0, 1, 2], [[1.0 + i as f64, f64::INFINITY], none, none]);
         }
         let mut ranked = Ranked::default();
-        assert_eq!(ranked.start(&slots, n, 1.0), u64::MAX, "{n} candidates");
+        assert_eq!(ranked.start(&slots, n, 1.0, 2), u64::MAX, "{n} candidates");
         // Half: the limit covers the cheapest half and leaves out the dearest.
-        let half = ranked.start(&slots, n, PASS_SHARE);
+        let half = ranked.start(&slots, n, PASS_SHARE, 2);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
         assert!(half < order_key(n as f64), "{n} candidates");
     }

@@ -91,9 +91,6 @@ pub(super) struct Work<'w> {
     pub(super) pts_head: Vec<u32>,
     /// ...and each position's next one in its triangle's list, or `NONE`.
     pub(super) pts_next: Vec<u32>,
-    /// Points (positions) the pass's collapses moved, waiting for [`Work::settle`], each
-    /// with the new node whose triangles it goes to (those of one node in a row).
-    pub(super) moved: Vec<(u32, u32)>,
     /// Per collapse of the pass, in order: how many of its new node's triangles came from
     /// the kept child (they are listed first; the removed child's follow).
     pub(super) from_kept: Vec<u32>,
@@ -212,7 +209,6 @@ impl Work<'_> {
             std::mem::take(&mut self.stamp),
             std::mem::take(&mut self.shrunk),
             std::mem::take(&mut self.start_valence),
-            std::mem::take(&mut self.moved),
             std::mem::take(&mut self.from_kept),
         ));
         let mut h = self.h;
