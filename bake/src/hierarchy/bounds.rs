@@ -25,7 +25,7 @@ pub(super) struct Probe {
 }
 
 impl Probe {
-    fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
+    pub(super) fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
         let [a, b, c] = tri.c.map(pos);
         let (ab, ac) = (sub(b, a), sub(c, a));
         let n = cross(ab, ac);
@@ -49,7 +49,7 @@ impl Probe {
     /// The distance to the plane is a lower bound; when `x` projects inside the triangle
     /// it is the distance, and only a projection outside takes the general case.
     #[inline]
-    fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
+    pub(super) fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
         let ax = sub(x, self.a);
         let h = dot(ax, self.n);
         if self.len2 > 0.0 {
@@ -167,8 +167,35 @@ impl Work<'_> {
                 *error = error.max(d.sqrt() as f32);
             }
         }
+        self.raise_to_surface(first_node, threads);
         self.moved = moved;
         self.moved.clear();
         self.from_kept.clear();
+    }
+
+    /// Raises the error of each node the pass made (from `first_node` on) to the distance
+    /// its collapse moved the surface ([`Work::surface_error`]), on all threads.
+    fn raise_to_surface(&mut self, first_node: usize, threads: usize) {
+        let this = &*self;
+        let nodes = first_node..self.nodes.len();
+        let raise = |probes: &mut Vec<Probe>, s: usize| {
+            let floor = f64::from(this.nodes[s].error);
+            let from_kept = this.from_kept[s - first_node] as usize;
+            this.surface_error(s as u32, from_kept, floor, probes) as f32
+        };
+        let errors: Vec<f32> = if threads <= 1 || nodes.len() < PARALLEL_MIN {
+            let mut probes = Vec::new();
+            nodes.clone().map(|s| raise(&mut probes, s)).collect()
+        } else {
+            nodes
+                .clone()
+                .into_par_iter()
+                .map_init(Vec::new, raise)
+                .collect()
+        };
+        for (s, e) in nodes.zip(errors) {
+            let error = &mut self.nodes[s].error;
+            *error = error.max(e);
+        }
     }
 }
