@@ -25,7 +25,7 @@ pub(super) struct Probe {
 }
 
 impl Probe {
-    fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
+    pub(super) fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
         let [a, b, c] = tri.c.map(pos);
         let (ab, ac) = (sub(b, a), sub(c, a));
         let n = cross(ab, ac);
@@ -49,7 +49,7 @@ impl Probe {
     /// The distance to the plane is a lower bound; when `x` projects inside the triangle
     /// it is the distance, and only a projection outside takes the general case.
     #[inline]
-    fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
+    pub(super) fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
         let ax = sub(x, self.a);
         let h = dot(ax, self.n);
         if self.len2 > 0.0 {
@@ -137,7 +137,8 @@ impl Work<'_> {
     /// from the kept child: the same stretch of surface; a nearer triangle elsewhere would
     /// only lower the distance, so this is an upper bound at half the work of searching the
     /// whole star): each point with its triangle, and per collapse its number of points and
-    /// its new node's error, raised to the largest distance.
+    /// its new node's error, raised to the largest distance and to how far the collapse
+    /// moved the surface ([`Work::surface_error`]).
     fn settle_part(&self, range: std::ops::Range<usize>) -> Settled {
         let first_node = self.nodes.len() - self.from_kept.len();
         let mut part = Settled::default();
@@ -162,6 +163,10 @@ impl Work<'_> {
                     error = error.max(d.sqrt() as f32);
                 }
             }
+            let s = (first_node + i) as u32;
+            let moved =
+                self.surface_error(s, self.from_kept[i] as usize, error.into(), &mut probes);
+            error = error.max(moved as f32);
             part.nodes
                 .push(((part.points.len() - before) as u32, error));
         }

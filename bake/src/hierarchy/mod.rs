@@ -50,8 +50,11 @@
 //!   triangles to the nearest of the triangles that replace them, and the node's error is
 //!   the largest of those distances and its children's errors. It measures what a cut
 //!   through the node loses, including borders that slide, where the planes' distances
-//!   alone miss it. The hand-over runs after each pass on all threads (the collapses of a
-//!   pass have disjoint stars).
+//!   alone miss it. The points see one direction only, so the error is also raised to how
+//!   far the collapse moved the surface (`surface`): the largest distance from the moved
+//!   triangles' centroids and edge midpoints to the surface just before it, which catches a
+//!   triangle laid across a gap or a fold that no input point lies near. Both run after
+//!   each pass on all threads (the collapses of a pass have disjoint stars).
 //!
 //! A pass is built for speed without changing its outcome: every edge is ranked by the cost
 //! of its cheaper allowed direction (a ranking stands while the edge's ends are the same
@@ -69,6 +72,7 @@ mod pass;
 mod rank;
 mod setup;
 mod stars;
+mod surface;
 #[cfg(test)]
 mod tests;
 mod work;

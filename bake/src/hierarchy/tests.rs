@@ -152,3 +152,61 @@ fn the_hierarchy_is_the_same_on_one_thread_and_on_several() {
         "the thread count changed the hierarchy"
     );
 }
+
+/// A collapse of two leaves moves the input's own triangles around its removed child: the
+/// new node's error covers how far their points (centroids and edge midpoints) then lie from
+/// the input surface, not only how far the input's points lie from them.
+#[test]
+fn a_first_collapse_bounds_how_far_it_moves_the_surface() {
+    let w = crate::weld::weld(&terrain(24)).expect("weld");
+    let h = build(&w, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
+    let at = |x: u32| w.positions[x as usize].map(f64::from);
+    let input: Vec<[u32; 3]> = w.triangles.iter().map(|t| t.p).collect();
+    let positions = w.positions.len();
+    let mut checked = 0;
+    for (i, c) in h.collapses.iter().enumerate() {
+        if c.t as usize >= positions || c.u as usize >= positions {
+            continue;
+        }
+        let node = (positions + i) as u32;
+        // Only collapses whose neighbourhood is still the input's: no corner of a triangle
+        // at `t` or `u` was collapsed before.
+        let untouched = input
+            .iter()
+            .filter(|t| t.contains(&c.t) || t.contains(&c.u))
+            .flatten()
+            .all(|&x| h.parent[x as usize] == NONE || h.parent[x as usize] >= node);
+        if !untouched {
+            continue;
+        }
+        let error = f64::from(h.error[node as usize]);
+        let moved = input
+            .iter()
+            .enumerate()
+            .filter(|&(f, t)| t.contains(&c.u) && f as u32 != c.fl && f as u32 != c.fr);
+        for (_, t) in moved {
+            let [a, b, d] = t.map(|x| at(if x == c.u { c.t } else { x }));
+            let mid = |x: V3, y: V3| {
+                [
+                    0.5 * (x[0] + y[0]),
+                    0.5 * (x[1] + y[1]),
+                    0.5 * (x[2] + y[2]),
+                ]
+            };
+            let centroid = [0, 1, 2].map(|k| (a[k] + b[k] + d[k]) / 3.0);
+            for x in [centroid, mid(a, b), mid(b, d), mid(d, a)] {
+                let near = input
+                    .iter()
+                    .map(|t| point_triangle_d2(x, at(t[0]), at(t[1]), at(t[2])))
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt();
+                assert!(
+                    near <= error * (1.0 + 1e-5) + 1e-9,
+                    "collapse {i}: {near} > {error}"
+                );
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked > 20, "{checked} collapses of two leaves");
+}

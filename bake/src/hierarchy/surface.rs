@@ -1,0 +1,96 @@
+//! The surface's side of the error bounds: how far a collapse moves the surface away from
+//! the surface it replaces.
+//!
+//! The input's points measure one direction only (every input point lies near the current
+//! surface). A collapse can also lay a triangle across a gap the input does not fill (across
+//! a crease, a fold or between two limbs) while every input point stays near some current
+//! triangle; the symmetric (Hausdorff) distance sees it, the points do not. So a new node's
+//! error is also raised to the largest distance from sample points of the triangles it moved
+//! (their centroids and edge midpoints) to the surface just before the collapse: the kept
+//! child's triangles, the removed child's as they were, and the two that died.
+
+use super::bounds::Probe;
+use super::geometry::{corner_of, next, prev, V3};
+use super::work::Work;
+use super::NONE;
+
+/// The sample points of a triangle with corners `c` that moved with node `s`: its centroid
+/// and the midpoints of its two edges at `s` (the third edge did not move: it is an edge of
+/// the triangle as it was).
+fn samples(c: [u32; 3], s: u32, pos: impl Fn(u32) -> V3) -> [V3; 3] {
+    let k = corner_of(c, s);
+    let [a, b, d] = [c[k], c[next(k)], c[prev(k)]].map(pos);
+    let mid = |x: V3, y: V3| {
+        [
+            0.5 * (x[0] + y[0]),
+            0.5 * (x[1] + y[1]),
+            0.5 * (x[2] + y[2]),
+        ]
+    };
+    let third = 1.0 / 3.0;
+    [
+        [
+            (a[0] + b[0] + d[0]) * third,
+            (a[1] + b[1] + d[1]) * third,
+            (a[2] + b[2] + d[2]) * third,
+        ],
+        mid(a, b),
+        mid(a, d),
+    ]
+}
+
+impl Work<'_> {
+    /// The largest distance from the samples of the triangles node `s` took from its removed
+    /// child to the surface before the collapse that made it, when above `floor` (which
+    /// settles most samples at their own triangle as it was); `from_kept` is how many of
+    /// `s`'s triangles came from the kept child ([`Work::move_star`] lists them first).
+    ///
+    /// The collapses of a pass have disjoint stars, so after the pass `s`'s triangles and
+    /// the two that died are still as the collapse left them, and the points of nodes never
+    /// change.
+    pub(super) fn surface_error(
+        &self,
+        s: u32,
+        from_kept: usize,
+        floor: f64,
+        probes: &mut Vec<Probe>,
+    ) -> f64 {
+        let c = self.h.collapses[s as usize - self.positions()];
+        let star = self.faces_of.of(s);
+        let (kept, moved) = star.split_at(from_kept.min(star.len()));
+        let before = |v: u32| self.pos(if v == s { c.u } else { v });
+        // The surface before: the moved triangles as they were (first, in the order of
+        // `moved`), then the kept child's and the two that died, which did not change.
+        probes.clear();
+        probes.extend(
+            moved
+                .iter()
+                .map(|&f| Probe::new(&self.tris[f as usize], before)),
+        );
+        probes.extend(
+            kept.iter()
+                .chain([c.fl, c.fr].iter().filter(|&&f| f != NONE))
+                .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
+        );
+        let mut worst = floor * floor;
+        for (i, &f) in moved.iter().enumerate() {
+            for x in samples(self.tris[f as usize].c, s, |v| self.pos(v)) {
+                // Its own triangle as it was first: most samples stay near it.
+                if probes[i].d2_below(x, worst).is_some() {
+                    continue;
+                }
+                let mut best = f64::INFINITY;
+                for probe in probes.iter() {
+                    if let Some(d) = probe.d2_below(x, best) {
+                        best = d;
+                        if best <= worst {
+                            break;
+                        }
+                    }
+                }
+                worst = worst.max(best);
+            }
+        }
+        worst.sqrt()
+    }
+}
