@@ -1,6 +1,8 @@
 //! Stanford PLY meshes: the header and binary element data read with `ply-rs-bw`, ASCII
 //! element data read line by line here (`ascii.rs`), so that an ASCII file's errors name the
-//! element, its index, line and property, and `nan` is reported as in a binary file.
+//! element, its index, line and property, and `nan` is reported as in a binary file. Binary
+//! data in the common layouts is read straight into the mesh instead (`binary.rs`), to the
+//! same mesh and the same errors.
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`, any scalar types.
 //! Element `vertex`: `x y z` (required), `nx ny nz`, colours `red green blue [alpha]` (or
