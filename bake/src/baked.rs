@@ -88,24 +88,50 @@ pub enum BakeWriteError {
 
 impl Baked {
     /// Assembles the arrays: nodes and polygons renumbered into their file order, then each
-    /// array built from the collapses in that order.
+    /// array built from the collapses in that order, the arrays on all cores (each is made
+    /// alone from the numbering, so the result does not depend on the threads).
     pub fn new(w: &Welded, h: &Collapses) -> Self {
         let ids = NodeIds::number(w.positions.len(), h);
         let polys = PolygonOrder::number(w.triangles.len(), h, &ids);
+        let (ids, polys) = (&ids, &polys);
+        let ((positions, nodes), (splits, bounds)) = rayon::join(
+            || rayon::join(|| arrays::positions(w), || ids.nodes(h)),
+            || {
+                rayon::join(
+                    || arrays::splits(h, ids, polys),
+                    || arrays::bounds(w, h, ids),
+                )
+            },
+        );
+        let ((polygons, (roots, base)), ((vertex_table_offsets, vertex_table), both)) = rayon::join(
+            || {
+                rayon::join(
+                    || polys.polygons(w, h, ids),
+                    || (ids.roots(h), polys.base_faces(h, ids)),
+                )
+            },
+            || {
+                rayon::join(
+                    || (arrays::vertex_table_offsets(w), arrays::vertex_table(w)),
+                    || rayon::join(|| arrays::vertices(w), || arrays::vertex_colours(w)),
+                )
+            },
+        );
+        let (vertices, vertex_colours) = both;
         Self {
-            positions: arrays::positions(w),
-            nodes: ids.nodes(h),
-            splits: arrays::splits(h, &ids, &polys),
-            bounds: arrays::bounds(w, h, &ids),
-            polygons: polys.polygons(w, h, &ids),
-            roots: ids.roots(h),
-            base: polys.base_faces(h, &ids),
-            vertex_table_offsets: arrays::vertex_table_offsets(w),
-            vertex_table: arrays::vertex_table(w),
-            vertices: arrays::vertices(w),
+            positions,
+            nodes,
+            splits,
+            bounds,
+            polygons,
+            roots,
+            base,
+            vertex_table_offsets,
+            vertex_table,
+            vertices,
             surface_count: w.surface_count,
             surface_group_count: w.group_id_count,
-            vertex_colours: arrays::vertex_colours(w),
+            vertex_colours,
             materials: Vec::new(),
             texture_dir: PathBuf::new(),
         }

@@ -61,11 +61,11 @@ fn source(mesh: &Mesh, kept: &[Kept], corner: u32) -> [u64; 2] {
 
 /// The distinct attribute sets and each kept triangle's per corner.
 ///
-/// Two tables of ids look the corners up, each hashing what its ids point at rather than
-/// storing a key: the first corner read from each source (8 bytes an entry, where a map
-/// from the sources would take 24), and the distinct sets (4 bytes an entry, where a map
-/// from their 36-byte keys would take 40). On a mesh with a set per position these tables
-/// are the weld's largest temporaries.
+/// The corners are looked up by the first corner read from each source ([`FirstCorners`]:
+/// 8 bytes a normal or position, where a map from the sources would take 24), the distinct
+/// sets in a table of ids that hashes what they point at (4 bytes an entry, where a map from
+/// their 36-byte keys would take 40). On a mesh with a set per position these are the weld's
+/// largest temporaries.
 pub(super) fn corner_attributes(
     mesh: &Mesh,
     kept: &[Kept],
@@ -75,8 +75,7 @@ pub(super) fn corner_attributes(
     let computed = area_normals(kept, positions);
     let min_cos = GEOMETRIC_NORMAL_DEGREES.to_radians().cos();
     let mut by_value: HashTable<u32> = HashTable::new();
-    // `(corner, attribute id)` of the first corner of each source.
-    let mut by_source: HashTable<(u32, u32)> = HashTable::with_capacity(positions.len());
+    let mut first = FirstCorners::new();
     let mut attributes: Vec<Attributes> = Vec::new();
     let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
     for (f, &(p, i)) in kept.iter().enumerate() {
@@ -91,32 +90,22 @@ pub(super) fn corner_attributes(
             if normal.is_none() {
                 repairs.computed_normals += 1;
             }
-            let src = source(mesh, kept, corner);
-            let entry = by_source.entry(
-                hash_of(&src),
-                |&(c, _)| source(mesh, kept, c) == src,
-                |&(c, _)| hash_of(&source(mesh, kept, c)),
-            );
-            a[k] = match entry {
-                Entry::Occupied(e) => e.get().1,
-                Entry::Vacant(v) => {
-                    let attrs = Attributes {
-                        normal: normal
-                            .copied()
-                            .unwrap_or_else(|| normalize(computed[p[k] as usize])),
-                        uv: mesh.uvs.get(t.uv[k] as usize).copied().unwrap_or([0.0; 2]),
-                        color: mesh
-                            .colors
-                            .get(t.color[k] as usize)
-                            .copied()
-                            .unwrap_or([1.0; 4]),
-                        normal_from_geometry: true,
-                    };
-                    let id = distinct_id(&mut by_value, &mut attributes, attrs);
-                    v.insert((corner, id));
-                    id
-                }
-            };
+            let src = (corner, source(mesh, kept, corner));
+            a[k] = first.id(mesh, kept, positions.len(), src, || {
+                let attrs = Attributes {
+                    normal: normal
+                        .copied()
+                        .unwrap_or_else(|| normalize(computed[p[k] as usize])),
+                    uv: mesh.uvs.get(t.uv[k] as usize).copied().unwrap_or([0.0; 2]),
+                    color: mesh
+                        .colors
+                        .get(t.color[k] as usize)
+                        .copied()
+                        .unwrap_or([1.0; 4]),
+                    normal_from_geometry: true,
+                };
+                distinct_id(&mut by_value, &mut attributes, attrs)
+            });
             let from_geometry = normal.is_none_or(|&n| {
                 let g = computed[p[k] as usize];
                 let n = n.map(f64::from);
@@ -127,6 +116,74 @@ pub(super) fn corner_attributes(
         tri_attrs.push(a);
     }
     (attributes, tri_attrs)
+}
+
+/// The first corner read from each source with its attribute id (`(corner, id)`): a source
+/// is found by its normal's index, or, for a normal computed here, by its position, in an
+/// array; the sources that share that index with an earlier one (another UV or colour) in a
+/// table that hashes what its corners' sources are rather than storing them.
+struct FirstCorners {
+    by_normal: Vec<(u32, u32)>,
+    by_position: Vec<(u32, u32)>,
+    more: HashTable<(u32, u32)>,
+}
+
+impl FirstCorners {
+    fn new() -> Self {
+        Self {
+            by_normal: Vec::new(),
+            by_position: Vec::new(),
+            more: HashTable::new(),
+        }
+    }
+
+    /// The array entry of source `src`, the array made on first use (`(NONE, NONE)`:
+    /// empty).
+    fn slot(&mut self, mesh: &Mesh, positions: usize, src: [u64; 2]) -> &mut (u32, u32) {
+        let (array, len) = if src[0] >> 32 == 0 {
+            (&mut self.by_normal, mesh.normals.len())
+        } else {
+            (&mut self.by_position, positions)
+        };
+        if array.is_empty() {
+            array.resize(len, (NONE, NONE));
+        }
+        &mut array[src[0] as u32 as usize]
+    }
+
+    /// The attribute id of source `src` (of `corner`), or the one `new` gives it when it is
+    /// the first corner read from it.
+    fn id(
+        &mut self,
+        mesh: &Mesh,
+        kept: &[Kept],
+        positions: usize,
+        (corner, src): (u32, [u64; 2]),
+        new: impl FnOnce() -> u32,
+    ) -> u32 {
+        let slot = self.slot(mesh, positions, src);
+        if slot.0 == NONE {
+            let id = new();
+            *slot = (corner, id);
+            return id;
+        }
+        if source(mesh, kept, slot.0) == src {
+            return slot.1;
+        }
+        let entry = self.more.entry(
+            hash_of(&src),
+            |&(c, _)| source(mesh, kept, c) == src,
+            |&(c, _)| hash_of(&source(mesh, kept, c)),
+        );
+        match entry {
+            Entry::Occupied(e) => e.get().1,
+            Entry::Vacant(v) => {
+                let id = new();
+                v.insert((corner, id));
+                id
+            }
+        }
+    }
 }
 
 /// The id of the set equal to `attrs` (by [`Attributes::key`]) in `attributes`, appended

@@ -266,12 +266,19 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     let (mut positions, remap) = repair::weld_positions(mesh, &mut repairs);
     let mut kept = repair::drop_degenerate_and_duplicates(mesh, &remap, &positions, &mut repairs)?;
     let welded_positions = positions.len() as u32;
-    let cut = repair::cut_non_manifold_edges(&mut kept, &mut positions, &mut repairs);
+    let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
+    let cut = repair::cut_non_manifold_edges(&faces_of, &mut kept, &mut positions, &mut repairs);
     let cut_positions = positions.len() as u32;
+    // The lists change only where a triangle was cut.
+    let faces_of = if cut.is_empty() {
+        faces_of
+    } else {
+        drop(faces_of);
+        FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len())
+    };
     // Now every directed edge has one triangle and every edge at most two: the triangle
     // across each edge, `NONE` on a border. Splitting vertices keeps these pairs (the two
     // triangles on an edge through a vertex are always in the same fan).
-    let faces_of = FacesOf::new(positions.len(), kept.iter().map(|k| k.0), kept.len());
     let opp = repair::opposites(&kept, &faces_of);
     repair::split_non_manifold_vertices(&faces_of, &opp, &mut kept, &mut positions, &mut repairs);
     drop(faces_of);

@@ -2,10 +2,10 @@
 //! cutting non-manifold edges and splitting non-manifold vertices.
 
 use super::attributes::{cross, sub};
-use super::{ek, Repairs, WeldError, NONE};
-use crate::fxhash::{hash_of, map_with_capacity, set_with_capacity, FxHashMap};
+use super::{Repairs, WeldError, NONE};
+use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
-use hashbrown::hash_table::{Entry, HashTable};
+use rayon::prelude::*;
 
 /// A kept triangle: its positions and the source triangle (for its attributes).
 pub(super) type Kept = ([u32; 3], u32);
@@ -75,89 +75,56 @@ pub(super) fn drop_degenerate_and_duplicates(
 /// triangle gets its own copies of the edge's two positions. Afterwards every directed edge
 /// has one triangle and every edge at most two. (A triangle's edge is cut when the same
 /// directed edge came before: a third triangle on an edge repeats one of the first two's
-/// directions.) Returns `(triangle, edges cut)` of each triangle given copies.
+/// directions.) `faces_of` lists the triangles around each position before the cut.
+/// Returns `(triangle, edges cut)` of each triangle given copies.
+///
+/// A triangle given copies has a copy at two corners at least, so each of its edges ends at
+/// a copy, which no other triangle has: an edge conflicts exactly when an earlier triangle
+/// that was not cut has it, which the lists around its first position tell.
 pub(super) fn cut_non_manifold_edges(
+    faces_of: &FacesOf,
     kept: &mut [Kept],
     positions: &mut Vec<[f32; 3]>,
     repairs: &mut Repairs,
 ) -> Vec<(u32, u8)> {
     let mut cut = Vec::new();
-    let mut directed = DirectedEdges::with_capacity(3 * kept.len());
+    let mut was_cut = vec![false; kept.len()];
     for f in 0..kept.len() {
         let p = kept[f].0;
-        let conflict: Vec<usize> = (0..3)
-            .filter(|&k| directed.contains(kept, p[k], p[(k + 1) % 3]))
-            .collect();
-        let mut q = p;
-        if !conflict.is_empty() {
-            repairs.non_manifold_edges += conflict.len() as u64;
-            cut.push((f as u32, conflict.len() as u8));
-            // Each of the triangle's positions on a cut edge gets one copy.
-            let mut fresh = [u32::MAX; 3];
-            for &k in &conflict {
-                for j in [k, (k + 1) % 3] {
-                    if fresh[j] == u32::MAX {
-                        positions.push(positions[p[j] as usize]);
-                        fresh[j] = positions.len() as u32 - 1;
-                    }
-                    q[j] = fresh[j];
-                }
-            }
-            kept[f].0 = q;
-        }
+        let mut conflict = [0usize; 3];
+        let mut conflicts = 0;
         for k in 0..3 {
-            directed.insert(kept, 3 * f as u32 + k as u32);
+            if faces_of.earlier_with_edge(p[k], p[(k + 1) % 3], f as u32, &was_cut) {
+                conflict[conflicts] = k;
+                conflicts += 1;
+            }
         }
+        if conflicts == 0 {
+            continue;
+        }
+        repairs.non_manifold_edges += conflicts as u64;
+        cut.push((f as u32, conflicts as u8));
+        was_cut[f] = true;
+        // Each of the triangle's positions on a cut edge gets one copy.
+        let mut q = p;
+        let mut fresh = [u32::MAX; 3];
+        for &k in &conflict[..conflicts] {
+            for j in [k, (k + 1) % 3] {
+                if fresh[j] == u32::MAX {
+                    positions.push(positions[p[j] as usize]);
+                    fresh[j] = positions.len() as u32 - 1;
+                }
+                q[j] = fresh[j];
+            }
+        }
+        kept[f].0 = q;
     }
     cut
 }
 
-/// The directed edges of the triangles met so far, as their corners' ids (`3 f + k`: the edge
-/// from corner `k` of kept triangle `f` to the next), hashed by their ends, which are read
-/// from the triangles: 4 bytes an entry, where a map keyed by the ends would take 16.
-struct DirectedEdges {
-    table: HashTable<u32>,
-}
-
-impl DirectedEdges {
-    fn with_capacity(n: usize) -> Self {
-        Self {
-            table: HashTable::with_capacity(n),
-        }
-    }
-
-    /// The ends of corner `c`'s edge.
-    fn ends(kept: &[Kept], c: u32) -> (u32, u32) {
-        let (p, k) = (kept[c as usize / 3].0, c as usize % 3);
-        (p[k], p[(k + 1) % 3])
-    }
-
-    fn contains(&self, kept: &[Kept], a: u32, b: u32) -> bool {
-        self.table
-            .find(hash_of(&ek(a, b)), |&c| Self::ends(kept, c) == (a, b))
-            .is_some()
-    }
-
-    /// Adds corner `c`'s edge, unless the same directed edge is there already.
-    fn insert(&mut self, kept: &[Kept], c: u32) {
-        let (a, b) = Self::ends(kept, c);
-        let hash = hash_of(&ek(a, b));
-        if let Entry::Vacant(v) = self.table.entry(
-            hash,
-            |&o| Self::ends(kept, o) == (a, b),
-            |&o| {
-                let (a, b) = Self::ends(kept, o);
-                hash_of(&ek(a, b))
-            },
-        ) {
-            v.insert(c);
-        }
-    }
-}
-
-/// The triangle across each edge of every kept triangle, `NONE` on a border.
+/// The triangle across each edge of every kept triangle, `NONE` on a border (on all cores).
 pub(super) fn opposites(kept: &[Kept], faces_of: &FacesOf) -> Vec<[u32; 3]> {
-    kept.iter()
+    kept.par_iter()
         .map(|&(p, _)| [0, 1, 2].map(|k| faces_of.with_edge(p[(k + 1) % 3], p[k])))
         .collect()
 }
@@ -172,6 +139,9 @@ pub(super) fn split_non_manifold_vertices(
 ) {
     let mut fans = Fans::default();
     for v in 0..faces_of.len() as u32 {
+        if one_fan(v, faces_of.get(v), kept, opp) {
+            continue;
+        }
         fans.find(v, faces_of.get(v), kept, opp);
         for fan in 1..fans.count() {
             repairs.non_manifold_vertices += 1;
@@ -184,6 +154,39 @@ pub(super) fn split_non_manifold_vertices(
             }
         }
     }
+}
+
+/// Whether the triangles `faces` around `v` form one fan, as [`Fans::find`] would find, told
+/// by walking around `v` across the edges through it: forward (across each triangle's edge
+/// leaving `v`) until the walk ends or comes back, then backward from the start. Every
+/// directed edge has one triangle and triangles are consistently oriented, so each triangle
+/// has at most one triangle across each of its two edges through `v` and the walk never
+/// turns back: it visits the fan of the first triangle once. `false` when in doubt.
+fn one_fan(v: u32, faces: &[u32], kept: &[Kept], opp: &[[u32; 3]]) -> bool {
+    let Some(&start) = faces.first() else {
+        return true;
+    };
+    let corner = |f: u32| kept[f as usize].0.iter().position(|&x| x == v).unwrap_or(0);
+    let mut visited = 1usize;
+    for backward in [false, true] {
+        let mut f = start;
+        loop {
+            let k = corner(f);
+            let o = opp[f as usize][if backward { (k + 2) % 3 } else { k }];
+            if o == NONE {
+                break;
+            }
+            if o == start {
+                return !backward && visited == faces.len();
+            }
+            visited += 1;
+            if visited > faces.len() {
+                return false;
+            }
+            f = o;
+        }
+    }
+    visited == faces.len()
 }
 
 /// The triangles around every position, in triangle order, in one array.
@@ -221,6 +224,18 @@ impl FacesOf {
             }
         }
         Self { start, faces, next }
+    }
+
+    /// Whether a triangle before `f` and not `cut` has the directed edge `a → b`.
+    pub(super) fn earlier_with_edge(&self, a: u32, b: u32, f: u32, cut: &[bool]) -> bool {
+        let range = self.start[a as usize] as usize..self.start[a as usize + 1] as usize;
+        let (faces, next) = (&self.faces[range.clone()], &self.next[range]);
+        // The list is in triangle order.
+        faces
+            .iter()
+            .zip(next)
+            .take_while(|&(&g, _)| g < f)
+            .any(|(&g, &n)| n == b && !cut[g as usize])
     }
 
     /// The triangle with the directed edge `a → b`, or `NONE`.

@@ -1,6 +1,8 @@
 //! Stanford PLY meshes: the header and binary element data read with `ply-rs-bw`, ASCII
 //! element data read line by line here (`ascii.rs`), so that an ASCII file's errors name the
-//! element, its index, line and property, and `nan` is reported as in a binary file.
+//! element, its index, line and property, and `nan` is reported as in a binary file. Binary
+//! data in the common layouts is read straight into the mesh instead (`binary.rs`), to the
+//! same mesh and the same errors.
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`, any scalar types.
 //! Element `vertex`: `x y z` (required), `nx ny nz`, colours `red green blue [alpha]` (or
@@ -25,6 +27,7 @@
 //! Faces with fewer than three vertices are skipped and counted.
 
 mod ascii;
+mod binary;
 pub(crate) mod properties;
 #[cfg(test)]
 mod tests;
@@ -106,8 +109,10 @@ fn read_element<E: PropertyAccess>(
         })
 }
 
-/// The passes: the header and what it promises checked, the elements read, then the surface,
-/// the vertices, the faces (fans) and the strips appended, and notes on what was dropped.
+/// The passes: the header and what it promises checked, the elements read (straight into
+/// the mesh where [`binary`] takes the layout, by the parser's reader otherwise), then the
+/// surface, the vertices, the faces (fans) and the strips appended, and notes on what was
+/// dropped.
 fn parse_ply(
     source: &Source,
     bytes: &[u8],
@@ -116,8 +121,42 @@ fn parse_ply(
     let (mut reader, header) = read_header(source, bytes)?;
     check_binary_size(source, bytes, &reader, &header)?;
     let present = Present::check(source, &header)?;
+    let start = reader.get_ref().position() as usize;
+    match binary::Payload::find(&header, &bytes[start..]) {
+        Some(payload) => read_direct(source, &payload, &header, present, report),
+        None => read_parsed(source, bytes, &mut reader, &header, present, report),
+    }
+}
+
+/// The mesh of a binary payload in a layout [`binary`] takes.
+fn read_direct(
+    source: &Source,
+    payload: &binary::Payload<'_>,
+    header: &Header,
+    present: Present,
+    report: &mut ImportReport,
+) -> Result<Mesh, ImportError> {
+    let mut mesh = Mesh::default();
+    let vertex_count = header.elements.get("vertex").map_or(0, |v| v.count);
+    let mut corners = Corners::new(source, vertex_count, present);
+    corners.surface = push_texture_surface(source, &mut mesh, header)?;
+    payload.read(&mut corners, &mut mesh, report)?;
+    note_dropped(source, 0, report);
+    Ok(mesh)
+}
+
+/// The mesh of any payload, its elements read by the parser (binary) or line by line
+/// (ASCII) first.
+fn read_parsed(
+    source: &Source,
+    bytes: &[u8],
+    reader: &mut ByteReader<'_>,
+    header: &Header,
+    present: Present,
+    report: &mut ImportReport,
+) -> Result<Mesh, ImportError> {
+    let start = reader.get_ref().position() as usize;
     let elements = if header.encoding == Encoding::Ascii {
-        let start = reader.get_ref().position() as usize;
         let first_line = 1 + bytes[..start].iter().filter(|&&b| b == b'\n').count();
         let text = std::str::from_utf8(&bytes[start..]).map_err(|e| {
             let line = first_line
@@ -130,23 +169,29 @@ fn parse_ply(
                 "not text (invalid UTF-8) in an ascii file; expected numbers",
             )
         })?;
-        ascii::read_elements(source, &mut ascii::Lines::new(text, first_line), &header)?
+        ascii::read_elements(source, &mut ascii::Lines::new(text, first_line), header)?
     } else {
-        read_elements(source, &mut reader, &header)?
+        read_elements(source, reader, header)?
     };
-
     let mut mesh = Mesh::default();
-    let surface = push_texture_surface(source, &mut mesh, &header)?;
-    push_vertices(source, &mut mesh, &elements.vertices, present)?;
-    let mut corners = Corners {
-        source,
-        vertex_count: elements.vertices.len(),
-        present,
-        surface,
-    };
+    let mut corners = Corners::new(source, elements.vertices.len(), present);
+    corners.surface = push_texture_surface(source, &mut mesh, header)?;
+    mesh.positions.reserve(elements.vertices.len());
+    for (i, v) in elements.vertices.iter().enumerate() {
+        corners.push_vertex(&mut mesh, i, v)?;
+    }
     drop(elements.vertices);
-    corners.push_faces(&mut mesh, &elements.faces, report)?;
+    mesh.triangles.reserve(elements.faces.len());
+    for (f, face) in elements.faces.iter().enumerate() {
+        corners.push_face(&mut mesh, f, &face.indices, &face.texcoord, report)?;
+    }
     let joints = corners.push_strips(&mut mesh, &elements.strips)?;
+    note_dropped(source, joints, report);
+    Ok(mesh)
+}
+
+/// Notes on the strips' joints and the faces dropped.
+fn note_dropped(source: &Source, joints: usize, report: &mut ImportReport) {
     if joints > 0 {
         report.notes.push(format!(
             "{}: {joints} degenerate triangles joining triangle strips dropped",
@@ -159,7 +204,6 @@ fn parse_ply(
             source.name, report.skipped_primitives
         ));
     }
-    Ok(mesh)
 }
 
 /// The header parsed (the reader left at the element data); every element with instances
@@ -332,15 +376,32 @@ fn push_texture_surface(
     )
 }
 
-/// Positions and the attributes present, checked finite; UV `v` flipped, colours to linear.
-fn push_vertices(
-    source: &Source,
-    mesh: &mut Mesh,
-    vertices: &[Vertex],
+/// Turns vertices into positions and attributes, faces and strips into triangles: vertex
+/// indices checked, per-vertex attributes sharing the position's index.
+struct Corners<'a> {
+    source: &'a Source,
+    vertex_count: usize,
     present: Present,
-) -> Result<(), ImportError> {
-    mesh.positions.reserve(vertices.len());
-    for (i, v) in vertices.iter().enumerate() {
+    surface: u16,
+    /// A face's corners, reused from face to face.
+    face: Vec<u32>,
+}
+
+impl<'a> Corners<'a> {
+    fn new(source: &'a Source, vertex_count: usize, present: Present) -> Self {
+        Corners {
+            source,
+            vertex_count,
+            present,
+            surface: 0,
+            face: Vec::new(),
+        }
+    }
+
+    /// Vertex `i`'s position and the attributes present, checked finite; UV `v` flipped,
+    /// colours to linear.
+    fn push_vertex(&self, mesh: &mut Mesh, i: usize, v: &Vertex) -> Result<(), ImportError> {
+        let (source, present) = (self.source, self.present);
         source.check_finite(&v.values, &VERTEX_NAMES, || format!("vertex {i}"))?;
         let x = &v.values;
         mesh.positions.push([x[X], x[X + 1], x[X + 2]]);
@@ -358,20 +419,9 @@ fn push_vertices(
                 x[A],
             ]);
         }
+        Ok(())
     }
-    Ok(())
-}
 
-/// Turns faces and strips into triangles: vertex indices checked, per-vertex attributes
-/// sharing the position's index.
-struct Corners<'a> {
-    source: &'a Source,
-    vertex_count: usize,
-    present: Present,
-    surface: u16,
-}
-
-impl Corners<'_> {
     fn vertex(&self, at: &dyn Fn() -> String, index: i64) -> Result<u32, ImportError> {
         if (0..self.vertex_count as i64).contains(&index) {
             Ok(index as u32)
@@ -403,53 +453,59 @@ impl Corners<'_> {
         }
     }
 
-    /// Faces as fans; faces under three vertices skipped and counted.
-    fn push_faces(
+    /// Face `f` (its vertex `indices`, and per-corner UVs `texcoord` or none) as a fan; a
+    /// face under three vertices skipped and counted.
+    fn push_face(
         &mut self,
         mesh: &mut Mesh,
-        faces: &[Face],
+        f: usize,
+        indices: &[i64],
+        texcoord: &[f32],
         report: &mut ImportReport,
     ) -> Result<(), ImportError> {
-        mesh.triangles.reserve(faces.len());
-        for (f, face) in faces.iter().enumerate() {
-            let at = || format!("face {f}");
-            let n = face.indices.len();
-            if n < 3 {
-                report.skipped_primitives += 1;
-                continue;
-            }
-            let corners = self.vertices(&at, &face.indices)?;
-            let corner_uvs = self.push_corner_uvs(mesh, f, face)?;
-            for k in 1..n - 1 {
-                let pick = [0, k, k + 1];
-                let uv = corner_uvs.as_ref().map(|ids| pick.map(|c| ids[c]));
-                mesh.triangles
-                    .push(self.triangle(pick.map(|c| corners[c]), uv));
-            }
+        let at = || format!("face {f}");
+        let n = indices.len();
+        if n < 3 {
+            report.skipped_primitives += 1;
+            return Ok(());
         }
+        let mut corners = std::mem::take(&mut self.face);
+        corners.clear();
+        for &i in indices {
+            corners.push(self.vertex(&at, i)?);
+        }
+        let corner_uvs = self.push_corner_uvs(mesh, f, n, texcoord)?;
+        for k in 1..n - 1 {
+            let pick = [0, k, k + 1];
+            let uv = corner_uvs.as_ref().map(|ids| pick.map(|c| ids[c]));
+            mesh.triangles
+                .push(self.triangle(pick.map(|c| corners[c]), uv));
+        }
+        self.face = corners;
         Ok(())
     }
 
-    /// A face's per-corner UVs (`texcoord`, two per corner) appended; their indices.
+    /// The per-corner UVs (`texcoord`, two for each of the face's `n` corners) of face `f`
+    /// appended; their indices.
     fn push_corner_uvs(
         &self,
         mesh: &mut Mesh,
         f: usize,
-        face: &Face,
+        n: usize,
+        texcoord: &[f32],
     ) -> Result<Option<Vec<u32>>, ImportError> {
         let source = self.source;
-        let n = face.indices.len();
-        if face.texcoord.is_empty() {
+        if texcoord.is_empty() {
             return Ok(None);
         }
-        if face.texcoord.len() != 2 * n {
+        if texcoord.len() != 2 * n {
             return Err(source.malformed(
                 format!("face {f}"),
-                format!("{} texcoord values for {n} vertices", face.texcoord.len()),
+                format!("{} texcoord values for {n} vertices", texcoord.len()),
             ));
         }
         let mut ids = Vec::with_capacity(n);
-        for (k, uv) in face.texcoord.chunks_exact(2).enumerate() {
+        for (k, uv) in texcoord.chunks_exact(2).enumerate() {
             source.check_finite(&[uv[0], uv[1]], &["texcoord u", "texcoord v"], || {
                 format!("face {f} corner {k}")
             })?;

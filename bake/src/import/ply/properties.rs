@@ -51,15 +51,28 @@ pub(super) fn vertex_slot(name: &str) -> Option<usize> {
 }
 
 impl Vertex {
-    /// Stores `value`; colours are normalised by `color_scale` (1/255 for bytes, ...).
+    /// A vertex with no value set yet (opaque).
+    pub(super) fn unset() -> Self {
+        let mut values = [0.0; SLOTS];
+        values[A] = 1.0;
+        Vertex { values }
+    }
+
+    /// Stores `value` in `slot`; colours are normalised by `color_scale` (1/255 for bytes,
+    /// ...).
+    pub(super) fn put(&mut self, slot: usize, value: f64, color_scale: f64) {
+        self.values[slot] = if slot >= R {
+            (value * color_scale) as f32
+        } else {
+            value as f32
+        };
+    }
+
+    /// Stores `value` in the slot `name` names, if any.
     fn set(&mut self, name: &str, value: f64, color_scale: f64) -> PropertyAccessResult {
         match vertex_slot(name) {
-            Some(slot) if slot >= R => {
-                self.values[slot] = (value * color_scale) as f32;
-                PropertyAccessResult::Set
-            }
             Some(slot) => {
-                self.values[slot] = value as f32;
+                self.put(slot, value, color_scale);
                 PropertyAccessResult::Set
             }
             None => PropertyAccessResult::Ignored,
@@ -67,13 +80,14 @@ impl Vertex {
     }
 }
 
-const BYTE_COLOR: f64 = 1.0 / 255.0;
+/// The scale of integer colours (bytes and other integer types but `ushort`).
+pub(super) const BYTE_COLOR: f64 = 1.0 / 255.0;
+/// The scale of `ushort` colours.
+pub(super) const USHORT_COLOR: f64 = 1.0 / 65535.0;
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
-        let mut values = [0.0; SLOTS];
-        values[A] = 1.0;
-        Vertex { values }
+        Vertex::unset()
     }
     fn set_char(&mut self, name: &str, value: i8) -> PropertyAccessResult {
         self.set(name, f64::from(value), BYTE_COLOR)
@@ -85,7 +99,7 @@ impl PropertyAccess for Vertex {
         self.set(name, f64::from(value), BYTE_COLOR)
     }
     fn set_ushort(&mut self, name: &str, value: u16) -> PropertyAccessResult {
-        self.set(name, f64::from(value), 1.0 / 65535.0)
+        self.set(name, f64::from(value), USHORT_COLOR)
     }
     fn set_int(&mut self, name: &str, value: i32) -> PropertyAccessResult {
         self.set(name, f64::from(value), BYTE_COLOR)

@@ -355,3 +355,60 @@ fn malformed_headers_are_errors() {
         "{e}"
     );
 }
+
+/// `bytes` (a binary file in a layout the direct reader takes) read by the direct reader and
+/// by the parser's, each as its mesh or its error's message.
+fn both_readers(bytes: &[u8]) -> [Result<Mesh, String>; 2] {
+    let source = src();
+    let (mut reader, header) = read_header(&source, bytes).unwrap();
+    let present = Present::check(&source, &header).unwrap();
+    let start = reader.get_ref().position() as usize;
+    let payload = binary::Payload::find(&header, &bytes[start..]).expect("a direct layout");
+    let mut report = ImportReport::default();
+    let direct = read_direct(&source, &payload, &header, present, &mut report);
+    let mut report = ImportReport::default();
+    let parsed = read_parsed(&source, bytes, &mut reader, &header, present, &mut report);
+    [direct, parsed].map(|r| r.map_err(|e| e.to_string()))
+}
+
+#[test]
+fn the_direct_reader_gives_the_parsers_mesh_and_errors() {
+    // Byte colours and a scalar after the faces' index list, in both byte orders.
+    for format in [Format::Le, Format::Be] {
+        let [direct, parsed] = both_readers(&sample(format));
+        assert_eq!(direct.unwrap(), parsed.unwrap());
+    }
+    // A non-finite value and an index out of range: the same error.
+    let [direct, parsed] = both_readers(&triangle_with_y(f32::NAN));
+    assert_eq!(direct.unwrap_err(), parsed.unwrap_err());
+    let mut bad_index = triangle_with_y(0.0);
+    let last = bad_index.len() - 4;
+    bad_index[last..].copy_from_slice(&9u32.to_le_bytes());
+    let [direct, parsed] = both_readers(&bad_index);
+    let error = direct.unwrap_err();
+    assert_eq!(
+        error,
+        "t.ply: face 0: vertex index 9 out of range (3 vertices)"
+    );
+    assert_eq!(error, parsed.unwrap_err());
+}
+
+#[test]
+fn other_layouts_and_cut_payloads_are_left_to_the_parser() {
+    let layout = |bytes: &[u8]| {
+        let (reader, header) = read_header(&src(), bytes).unwrap();
+        let start = reader.get_ref().position() as usize;
+        binary::Payload::find(&header, &bytes[start..]).is_some()
+    };
+    let full = triangle_with_y(0.0);
+    assert!(layout(&full));
+    // A cut list: the parser's reader names it.
+    assert!(!layout(&full[..full.len() - 1]));
+    let ascii = ascii_triangle("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    assert!(!layout(&ascii));
+    let texcoord = String::from_utf8_lossy(&full).replace(
+        "vertex_indices\n",
+        "vertex_indices\nproperty list uchar float texcoord\n",
+    );
+    assert!(!layout(texcoord.as_bytes()));
+}

@@ -1,0 +1,263 @@
+//! Binary element data read straight into the mesh: each value decoded once, where the
+//! header puts it, with no record per element nor list per face (the parser's way, which
+//! takes most of a large file's import).
+//!
+//! It takes the layouts real files use: a `vertex` and a `face` element, other elements read
+//! past, every list with a non-negative integer count; on faces, one integer
+//! `vertex_indices` list and no per-corner `texcoord`. Everything else (triangle strips,
+//! per-corner UVs, a payload shorter than its lists need) goes to the parser's reader: a
+//! walk over the payload first proves that every element ends within the file, so any
+//! error this reader reports is one the parser's path reports too (a value, an index), in
+//! the same order: the same mesh and the same errors either way.
+
+use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
+
+use super::properties::{is_index_list, vertex_slot, Vertex};
+use super::{scalar_size, Corners, ImportError, ImportReport};
+use crate::mesh::Mesh;
+
+/// Where each element's data starts, from a walk that checked every element ends within
+/// the payload.
+pub(super) struct Payload<'a> {
+    bytes: &'a [u8],
+    big: bool,
+    vertices: Option<(&'a ElementDef, usize)>,
+    faces: Option<(&'a ElementDef, usize)>,
+    /// Triangles the faces' fans make.
+    triangles: usize,
+}
+
+impl<'a> Payload<'a> {
+    /// The element data `bytes` (what follows the header) in a layout this reader takes, or
+    /// `None` (the parser's reader then reads it).
+    pub(super) fn find(header: &'a Header, bytes: &'a [u8]) -> Option<Self> {
+        let big = match header.encoding {
+            Encoding::Ascii => return None,
+            Encoding::BinaryBigEndian => true,
+            Encoding::BinaryLittleEndian => false,
+        };
+        let mut payload = Payload {
+            bytes,
+            big,
+            vertices: None,
+            faces: None,
+            triangles: 0,
+        };
+        let mut at = 0usize;
+        for def in header.elements.values() {
+            let start = at;
+            let index_list = def.properties.keys().position(|k| is_index_list(k));
+            let is_face = match def.name.as_str() {
+                "vertex" if stride(def).is_some() => {
+                    payload.vertices = Some((def, start));
+                    false
+                }
+                "vertex" => return None,
+                "face" if face_layout_taken(def) => {
+                    payload.faces = Some((def, start));
+                    true
+                }
+                "face" | "tristrips" => return None,
+                _ => false,
+            };
+            if let Some(stride) = stride(def) {
+                at = at.checked_add(def.count.checked_mul(stride)?)?;
+                if at > bytes.len() {
+                    return None;
+                }
+                continue;
+            }
+            for _ in 0..def.count {
+                let mut corners = 0usize;
+                at = payload.walk_instance(def, at, |p, _, _| {
+                    corners += usize::from(Some(p) == index_list);
+                })?;
+                if is_face {
+                    payload.triangles += corners.saturating_sub(2);
+                }
+            }
+        }
+        Some(payload)
+    }
+
+    /// Reads the vertices, then the faces, into `mesh` (as the parser's path pushes its
+    /// records); faces under three corners are skipped and counted.
+    pub(super) fn read(
+        &self,
+        corners: &mut Corners<'_>,
+        mesh: &mut Mesh,
+        report: &mut ImportReport,
+    ) -> Result<(), ImportError> {
+        if let Some((def, start)) = self.vertices {
+            self.read_vertices(corners, mesh, def, start)?;
+        }
+        if let Some((def, start)) = self.faces {
+            mesh.triangles.reserve(self.triangles);
+            let index_list = def.properties.keys().position(|k| is_index_list(k));
+            let mut indices: Vec<i64> = Vec::new();
+            let mut at = start;
+            for f in 0..def.count {
+                indices.clear();
+                at = self
+                    .walk_instance(def, at, |p, t, b| {
+                        if Some(p) == index_list {
+                            indices.push(integer(b, t, self.big).unwrap_or(0));
+                        }
+                    })
+                    // The walk in `find` covered every instance.
+                    .unwrap_or(self.bytes.len());
+                corners.push_face(mesh, f, &indices, &[], report)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The vertices, records of a fixed stride from `start`.
+    fn read_vertices(
+        &self,
+        corners: &Corners<'_>,
+        mesh: &mut Mesh,
+        def: &ElementDef,
+        start: usize,
+    ) -> Result<(), ImportError> {
+        let stride = stride(def).unwrap_or(0);
+        // `(offset in the record, type, slot)` of every property with a slot.
+        let mut fields = Vec::new();
+        let mut offset = 0usize;
+        for (name, property) in &def.properties {
+            if let PropertyType::Scalar(t) = &property.data_type {
+                if let Some(slot) = vertex_slot(name) {
+                    fields.push((offset, t.clone(), slot));
+                }
+                offset += scalar_size(t);
+            }
+        }
+        mesh.positions.reserve(def.count);
+        let records = self.bytes[start..start + def.count * stride].chunks_exact(stride.max(1));
+        for (i, record) in records.enumerate() {
+            let mut v = Vertex::unset();
+            for (offset, t, slot) in &fields {
+                v.put(
+                    *slot,
+                    number(&record[*offset..], t, self.big),
+                    colour_scale(t),
+                );
+            }
+            corners.push_vertex(mesh, i, &v)?;
+        }
+        Ok(())
+    }
+
+    /// Walks one instance of `def` from `at`, handing each scalar (a property's, or a list
+    /// item's; not list counts) to `value` with its property's index; the offset after it,
+    /// or `None` when the payload ends first or a list count is negative.
+    fn walk_instance(
+        &self,
+        def: &ElementDef,
+        mut at: usize,
+        mut value: impl FnMut(usize, &ScalarType, &[u8]),
+    ) -> Option<usize> {
+        for (p, property) in def.properties.values().enumerate() {
+            match &property.data_type {
+                PropertyType::Scalar(t) => {
+                    let end = at.checked_add(scalar_size(t))?;
+                    value(p, t, self.bytes.get(at..end)?);
+                    at = end;
+                }
+                PropertyType::List(count_type, t) => {
+                    let end = at.checked_add(scalar_size(count_type))?;
+                    let n = integer(self.bytes.get(at..end)?, count_type, self.big)?;
+                    at = end;
+                    let size = scalar_size(t);
+                    let items = usize::try_from(n).ok()?;
+                    let end = at.checked_add(items.checked_mul(size)?)?;
+                    let list = self.bytes.get(at..end)?;
+                    for item in list.chunks_exact(size) {
+                        value(p, t, item);
+                    }
+                    at = end;
+                }
+            }
+        }
+        Some(at)
+    }
+}
+
+/// The bytes of each instance of `def` when every property is a scalar.
+fn stride(def: &ElementDef) -> Option<usize> {
+    def.properties
+        .values()
+        .map(|p| match &p.data_type {
+            PropertyType::Scalar(t) => Some(scalar_size(t)),
+            PropertyType::List(..) => None,
+        })
+        .sum()
+}
+
+/// Whether this reader takes a `face` element's properties: exactly one index list, of an
+/// integer type, and no per-corner `texcoord`.
+fn face_layout_taken(def: &ElementDef) -> bool {
+    let mut index_lists = 0;
+    for (name, property) in &def.properties {
+        match &property.data_type {
+            PropertyType::List(_, t) if is_index_list(name) => {
+                if is_float(t) {
+                    return false;
+                }
+                index_lists += 1;
+            }
+            PropertyType::List(..) if name == "texcoord" => return false,
+            _ => {}
+        }
+    }
+    index_lists == 1
+}
+
+fn is_float(t: &ScalarType) -> bool {
+    matches!(t, ScalarType::Float | ScalarType::Double)
+}
+
+/// The first `N` bytes of `b` in little-endian order.
+#[inline]
+fn le<const N: usize>(b: &[u8], big: bool) -> [u8; N] {
+    let mut a = [0u8; N];
+    a.copy_from_slice(&b[..N]);
+    if big {
+        a.reverse();
+    }
+    a
+}
+
+/// An integer of type `t` from its bytes `b`; `None` for a floating type.
+#[inline]
+fn integer(b: &[u8], t: &ScalarType, big: bool) -> Option<i64> {
+    Some(match t {
+        ScalarType::Char => i8::from_le_bytes(le(b, big)).into(),
+        ScalarType::UChar => u8::from_le_bytes(le(b, big)).into(),
+        ScalarType::Short => i16::from_le_bytes(le(b, big)).into(),
+        ScalarType::UShort => u16::from_le_bytes(le(b, big)).into(),
+        ScalarType::Int => i32::from_le_bytes(le(b, big)).into(),
+        ScalarType::UInt => u32::from_le_bytes(le(b, big)).into(),
+        ScalarType::Float | ScalarType::Double => return None,
+    })
+}
+
+/// A value of type `t` from its bytes `b`, as the parser hands it to a vertex.
+#[inline]
+fn number(b: &[u8], t: &ScalarType, big: bool) -> f64 {
+    match t {
+        ScalarType::Float => f32::from_le_bytes(le(b, big)).into(),
+        ScalarType::Double => f64::from_le_bytes(le(b, big)),
+        _ => integer(b, t, big).map_or(0.0, |v| v as f64),
+    }
+}
+
+/// What a colour of type `t` is divided by its maximum with (the parser's setters'
+/// scales, [`Vertex`]'s `PropertyAccess`).
+fn colour_scale(t: &ScalarType) -> f64 {
+    match t {
+        ScalarType::UShort => super::properties::USHORT_COLOR,
+        ScalarType::Float | ScalarType::Double => 1.0,
+        _ => super::properties::BYTE_COLOR,
+    }
+}
