@@ -84,8 +84,7 @@ impl Work<'_> {
         {
             let g = self.wedges[i].group;
             if let Some(j) = (st..et).find(|&j| self.wedges[j].group == g) {
-                let q = self.wedges[i].q;
-                self.wedges[j].q.add(&q);
+                self.quadrics.merge(j, i);
             }
         }
     }

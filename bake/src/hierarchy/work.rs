@@ -7,16 +7,16 @@ use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::setup::scaled_attributes;
 use super::stars::Stars;
 use super::{AttributeWeights, Hierarchy, NONE};
-use crate::quadric::{Quadric, M};
+use crate::quadric::{Quadrics, M};
 use crate::weld::Welded;
 
-/// The quadric of one surface group at a position, with that group's attributes there
-/// (an index into the welded mesh's; [`Work::attrs_of`] scales them when a cost reads
-/// them, which keeps the wedge 64 bytes smaller than holding them scaled).
+/// One surface group at a position, with that group's attributes there (an index into the
+/// welded mesh's; [`Work::attrs_of`] scales them when a cost reads them, which keeps the
+/// wedge 64 bytes smaller than holding them scaled). Its quadric is the row of
+/// [`Work::quadrics`] with its index, over the attributes the mesh has.
 pub(super) struct Wedge {
     pub(super) group: u32,
     pub(super) attr: u32,
-    pub(super) q: Quadric,
 }
 
 /// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
@@ -70,6 +70,8 @@ pub(super) struct Work<'w> {
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
     pub(super) wedges: Vec<Wedge>,
     pub(super) wedge_start: Vec<u32>,
+    /// The quadric of every wedge, by its index.
+    pub(super) quadrics: Quadrics,
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
@@ -202,6 +204,7 @@ impl Work<'_> {
         drop((
             std::mem::take(&mut self.wedges),
             std::mem::take(&mut self.wedge_start),
+            std::mem::take(&mut self.quadrics),
             std::mem::take(&mut self.faces_of),
             std::mem::take(&mut self.pts_head),
             std::mem::take(&mut self.pts_next),
