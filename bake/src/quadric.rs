@@ -256,6 +256,18 @@ impl Quadrics {
         }
     }
 
+    /// Copies rows `from` to the rows from `to` on.
+    pub fn move_rows(&mut self, from: std::ops::Range<usize>, to: usize) {
+        let n = self.layout.stride();
+        self.data.copy_within(from.start * n..from.end * n, to * n);
+    }
+
+    /// Keeps the first `rows` rows and gives the rest of the memory back.
+    pub fn truncate(&mut self, rows: usize) {
+        self.data.truncate(rows * self.layout.stride());
+        self.data.shrink_to_fit();
+    }
+
     /// Row `i`'s `Q(p, s)` ([`Quadric::eval`]: the same number), never negative.
     #[inline]
     pub fn eval(&self, i: usize, p: [f64; 3], s: &[f64; M]) -> f64 {

@@ -34,6 +34,7 @@ pub(super) fn collapse_all(
         let pass = work.h.passes;
         let (applied, cut) = passes.run(work, pass, full, threads)?;
         work.settle(threads);
+        work.release_removed_wedges();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
         let broken = |stage, invariant| BuildError {

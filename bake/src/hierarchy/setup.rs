@@ -66,6 +66,7 @@ pub(super) fn work<'w>(
         wedges,
         wedge_start,
         quadrics,
+        wedges_released: 0,
         h: Hierarchy::default(),
         nodes: Vec::new(),
         stamp: vec![0; np],
