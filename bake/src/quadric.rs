@@ -9,6 +9,11 @@
 //! `Q(x) = xᵀAx + 2bᵀx + c` stored in `11 + 4M` numbers (not `(3 + M)²`), because the
 //! attribute block of `A` is a multiple of the identity and each attribute's coupling with
 //! the position is one vector.
+//!
+//! A mesh's quadrics are kept in a [`Quadrics`] table holding only the attributes its
+//! [`Layout`] names: those some vertex has non-zero. An attribute that is zero everywhere
+//! (no UVs, a normal given no weight) adds exact zeros to every sum and cost, so leaving it
+//! out changes no result and saves 32 bytes a quadric.
 
 /// Attributes per vertex: normal (3), UV (2), colour RGB (3).
 pub const M: usize = 8;
@@ -157,6 +162,190 @@ impl Quadric {
     }
 }
 
+/// Numbers of a [`Quadrics`] row besides its attributes': the position block of `A` (6),
+/// the attribute block (1), the position part of `b` (3) and the constant (1).
+const FIXED: usize = 11;
+
+/// Which of the [`M`] attributes a table of quadrics holds, in order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Layout {
+    /// The attributes held, `kept[..count]`.
+    kept: [u8; M],
+    count: u8,
+}
+
+impl Layout {
+    /// The attributes that are non-zero in some of `values`.
+    pub fn of(values: impl IntoIterator<Item = [f64; M]>) -> Self {
+        let mut any = [false; M];
+        for s in values {
+            for (a, x) in any.iter_mut().zip(s) {
+                *a |= x != 0.0;
+            }
+        }
+        let mut layout = Self {
+            kept: [0; M],
+            count: 0,
+        };
+        for (j, _) in any.iter().enumerate().filter(|(_, &a)| a) {
+            layout.kept[usize::from(layout.count)] = j as u8;
+            layout.count += 1;
+        }
+        layout
+    }
+
+    /// The attributes held, in order.
+    pub fn attributes(&self) -> &[u8] {
+        &self.kept[..usize::from(self.count)]
+    }
+
+    /// The `k`-th attribute held (below [`M`] without a bounds check in the cost's loop).
+    #[inline]
+    fn attribute(&self, k: usize) -> usize {
+        const { assert!(M.is_power_of_two()) };
+        usize::from(self.kept[k]) & (M - 1)
+    }
+
+    /// Numbers per quadric: `11 + 4m` for `m` attributes.
+    fn stride(&self) -> usize {
+        FIXED + 4 * usize::from(self.count)
+    }
+}
+
+/// Quadrics over the attributes of a [`Layout`], one row of `11 + 4m` numbers each: the
+/// position block of `A`, the attribute block, the position part of `b`, the constant,
+/// then per attribute its coupling with the position (3) and its part of `b`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Quadrics {
+    layout: Layout,
+    data: Vec<f64>,
+}
+
+/// Rows of a [`Quadrics`] to add to: a table's, or a part of them ([`QuadricsMut::split_at`]).
+#[derive(Debug)]
+pub struct QuadricsMut<'a> {
+    layout: Layout,
+    data: &'a mut [f64],
+}
+
+impl Quadrics {
+    /// `n` zero quadrics over the attributes of `layout`.
+    pub fn zeros(layout: Layout, n: usize) -> Self {
+        Self {
+            layout,
+            data: vec![0.0; n * layout.stride()],
+        }
+    }
+
+    /// All rows, to add to.
+    pub fn as_mut(&mut self) -> QuadricsMut<'_> {
+        QuadricsMut {
+            layout: self.layout,
+            data: &mut self.data,
+        }
+    }
+
+    /// Copies rows `from` to the rows from `to` on.
+    pub fn move_rows(&mut self, from: std::ops::Range<usize>, to: usize) {
+        let n = self.layout.stride();
+        self.data.copy_within(from.start * n..from.end * n, to * n);
+    }
+
+    /// Keeps the first `rows` rows and gives the rest of the memory back.
+    pub fn truncate(&mut self, rows: usize) {
+        self.data.truncate(rows * self.layout.stride());
+        self.data.shrink_to_fit();
+    }
+
+    /// Row `i`'s `Q(p, s)` ([`Quadric::eval`]: the same number), never negative.
+    #[inline]
+    pub fn eval(&self, i: usize, p: [f64; 3], s: &[f64; M]) -> f64 {
+        // One loop per attribute count, so that each is unrolled.
+        match self.layout.count {
+            0 => self.eval_with::<0>(i, p, s),
+            1 => self.eval_with::<1>(i, p, s),
+            2 => self.eval_with::<2>(i, p, s),
+            3 => self.eval_with::<3>(i, p, s),
+            4 => self.eval_with::<4>(i, p, s),
+            5 => self.eval_with::<5>(i, p, s),
+            6 => self.eval_with::<6>(i, p, s),
+            7 => self.eval_with::<7>(i, p, s),
+            _ => self.eval_with::<M>(i, p, s),
+        }
+    }
+
+    /// [`Self::eval`] of a layout of `K` attributes.
+    #[inline]
+    fn eval_with<const K: usize>(&self, i: usize, p: [f64; 3], s: &[f64; M]) -> f64 {
+        let n = FIXED + 4 * K;
+        let r = &self.data[i * n..][..n];
+        let pap = r[0] * p[0] * p[0]
+            + r[3] * p[1] * p[1]
+            + r[5] * p[2] * p[2]
+            + 2.0 * (r[1] * p[0] * p[1] + r[2] * p[0] * p[2] + r[4] * p[1] * p[2]);
+        let (ass, c) = (r[6], r[10]);
+        let mut v = pap + 2.0 * dot([r[7], r[8], r[9]], p) + c;
+        for k in 0..K {
+            let sj = s[self.layout.attribute(k)];
+            let g = [r[FIXED + 3 * k], r[FIXED + 3 * k + 1], r[FIXED + 3 * k + 2]];
+            let b = r[FIXED + 3 * K + k];
+            v += 2.0 * sj * dot(g, p) + ass * sj * sj + 2.0 * b * sj;
+        }
+        v.max(0.0)
+    }
+}
+
+impl QuadricsMut<'_> {
+    /// The same rows, for a shorter borrow.
+    pub fn reborrow(&mut self) -> QuadricsMut<'_> {
+        QuadricsMut {
+            layout: self.layout,
+            data: self.data,
+        }
+    }
+
+    /// Adds row `src` to row `dst`.
+    #[inline]
+    pub fn merge(&mut self, dst: usize, src: usize) {
+        let n = self.layout.stride();
+        let mut from = [0.0; FIXED + 4 * M];
+        from[..n].copy_from_slice(&self.data[src * n..][..n]);
+        for (t, f) in self.data[dst * n..][..n].iter_mut().zip(&from) {
+            *t += f;
+        }
+    }
+
+    /// The first `rows` rows and the others.
+    pub fn split_at(self, rows: usize) -> (Self, Self) {
+        let (a, b) = self.data.split_at_mut(rows * self.layout.stride());
+        let layout = self.layout;
+        (Self { layout, data: a }, Self { layout, data: b })
+    }
+
+    /// Adds `q` to row `i`: its attributes the layout holds (the others must be zero).
+    #[inline]
+    pub fn add(&mut self, i: usize, q: &Quadric) {
+        let n = self.layout.stride();
+        let (fixed, attrs) = self.data[i * n..][..n].split_at_mut(FIXED);
+        let from = [
+            q.app[0], q.app[1], q.app[2], q.app[3], q.app[4], q.app[5], q.ass, q.bp[0], q.bp[1],
+            q.bp[2], q.c,
+        ];
+        for (t, f) in fixed.iter_mut().zip(from) {
+            *t += f;
+        }
+        let kept = self.layout.attributes();
+        let (aps, bs) = attrs.split_at_mut(3 * kept.len());
+        for ((g, b), &j) in aps.chunks_exact_mut(3).zip(bs).zip(kept) {
+            let j = usize::from(j);
+            for (t, f) in g.iter_mut().zip(q.aps[j]) {
+                *t += f;
+            }
+            *b += q.bs[j];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,5 +386,39 @@ mod tests {
         s.add(&b);
         let (x, v) = ([0.2, 0.7, -0.4], attrs(0.9));
         assert!((s.eval(x, &v) - a.eval(x, &v) - b.eval(x, &v)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_table_holds_only_the_attributes_some_vertex_has() {
+        // UVs (3, 4) and the third colour channel (7), the others zero everywhere.
+        let at = |u: f64, v: f64, b: f64| {
+            let mut s = [0.0; M];
+            (s[3], s[4], s[7]) = (u, v, b);
+            s
+        };
+        let values = [at(0.0, 0.5, 0.25), at(1.0, 0.0, 0.0), at(0.5, 1.0, 1.0)];
+        let layout = Layout::of(values);
+        assert_eq!(layout.attributes(), [3, 4, 7]);
+        let p = [[0.1, 0.0, 0.3], [2.0, 0.4, 0.0], [0.0, 1.7, 0.2]];
+        let a = Quadric::triangle(p, values);
+        let b = Quadric::plane([0.0, 0.6, 0.8], -0.3, 2.5);
+        let mut table = Quadrics::zeros(layout, 3);
+        let mut rows = table.as_mut();
+        rows.add(0, &a);
+        rows.add(1, &b);
+        let (_, mut last) = rows.split_at(2);
+        last.add(0, &a);
+        table.as_mut().merge(0, 1);
+        let mut sum = a;
+        sum.add(&b);
+        for (x, s) in [
+            ([0.2, 0.7, -0.4], at(0.9, 0.1, 0.3)),
+            ([1.0, 1.0, 0.0], values[1]),
+        ] {
+            // The same number to the bit: what the table leaves out adds exact zeros.
+            assert_eq!(table.eval(0, x, &s).to_bits(), sum.eval(x, &s).to_bits());
+            assert_eq!(table.eval(1, x, &s).to_bits(), b.eval(x, &s).to_bits());
+            assert_eq!(table.eval(2, x, &s).to_bits(), a.eval(x, &s).to_bits());
+        }
     }
 }

@@ -5,6 +5,7 @@ use super::geometry::{corner_of, len, merge_cones, next, prev, sub};
 use super::setup::by_positions;
 use super::work::{NodeOut, Tri, Wedge, Work};
 use super::{Collapse, NONE, PARALLEL_MIN};
+use crate::quadric::QuadricsMut;
 
 impl Work<'_> {
     /// Applies a checked collapse of pass `pass` and stamps the neighbourhood it took (the
@@ -92,19 +93,25 @@ impl Work<'_> {
             .step_by(per)
             .map(|lo| (lo, (lo + per).min(np)))
             .collect();
-        let wedge_start = &self.wedge_start;
-        by_positions(&ranges, &mut self.wedges, wedge_start, |lo, hi, wedges| {
-            let base = wedge_start[lo] as usize;
-            for &(pt, pu) in &pairs {
-                if (lo..hi).contains(&pt) && (lo..hi).contains(&pu) {
-                    merge_at(wedges, wedge_start, base, pt, pu);
+        let (wedges, wedge_start) = (&self.wedges, &self.wedge_start);
+        by_positions(
+            &ranges,
+            wedge_start,
+            self.quadrics.as_mut(),
+            |lo, hi, mut rows| {
+                let base = wedge_start[lo] as usize;
+                for &(pt, pu) in &pairs {
+                    if (lo..hi).contains(&pt) && (lo..hi).contains(&pu) {
+                        merge_at(wedges, wedge_start, &mut rows, base, pt, pu);
+                    }
                 }
-            }
-        });
+            },
+        );
         let range_of = |p: usize| p / per;
+        let mut rows = self.quadrics.as_mut();
         for &(pt, pu) in &pairs {
             if range_of(pt) != range_of(pu) {
-                merge_at(&mut self.wedges, wedge_start, 0, pt, pu);
+                merge_at(wedges, wedge_start, &mut rows, 0, pt, pu);
             }
         }
     }
@@ -181,14 +188,22 @@ impl Work<'_> {
 }
 
 /// Adds the quadrics of the wedges at position `pu` to those of the same groups at `pt`,
-/// in `wedges`, which start with the wedges of the position whose first is `base`.
-fn merge_at(wedges: &mut [Wedge], wedge_start: &[u32], base: usize, pt: usize, pu: usize) {
-    let range = |p: usize| wedge_start[p] as usize - base..wedge_start[p + 1] as usize - base;
+/// in `rows`, the quadrics of the wedges from the first of the position whose first wedge
+/// is `base` on.
+fn merge_at(
+    wedges: &[Wedge],
+    wedge_start: &[u32],
+    rows: &mut QuadricsMut<'_>,
+    base: usize,
+    pt: usize,
+    pu: usize,
+) {
+    let range = |p: usize| wedge_start[p] as usize..wedge_start[p + 1] as usize;
     let at_t = range(pt);
     for i in range(pu) {
-        let (g, q) = (wedges[i].group, wedges[i].q);
+        let g = wedges[i].group;
         if let Some(j) = at_t.clone().find(|&j| wedges[j].group == g) {
-            wedges[j].q.add(&q);
+            rows.merge(j - base, i - base);
         }
     }
 }

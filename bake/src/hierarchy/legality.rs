@@ -25,10 +25,10 @@ impl Work<'_> {
             self.node_pos[u as usize] as usize,
         );
         let at = self.wedges_at(pt);
-        self.wedges_at(pu)
-            .iter()
-            .map(|wu| match at.iter().find(|wt| wt.group == wu.group) {
-                Some(wt) => wu.q.eval(self.at(pt), &self.attrs_of(wt)),
+        let (p, wedges) = (self.at(pt), &self.wedges);
+        (self.wedge_start[pu] as usize..self.wedge_start[pu + 1] as usize)
+            .map(|i| match at.iter().find(|wt| wt.group == wedges[i].group) {
+                Some(wt) => self.quadrics.eval(i, p, &self.attrs_of(wt)),
                 None => f64::INFINITY,
             })
             .sum()

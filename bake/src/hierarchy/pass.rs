@@ -35,6 +35,7 @@ pub(super) fn collapse_all(
         let (applied, cut) = passes.run(work, pass, full, threads)?;
         work.merge_wedges(threads);
         work.settle(threads);
+        work.release_removed_wedges();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
         let broken = |stage, invariant| BuildError {

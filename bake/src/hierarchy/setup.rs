@@ -5,7 +5,7 @@ use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
 use super::stars::Stars;
 use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
-use crate::quadric::{Quadric, M};
+use crate::quadric::{Layout, Quadric, Quadrics, QuadricsMut, M};
 use crate::weld::Welded;
 use rayon::prelude::*;
 
@@ -43,11 +43,12 @@ pub(super) fn work<'w>(
     let np = w.positions.len();
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
-    let (mut wedges, wedge_start) = s.wedges();
+    let (wedges, wedge_start) = s.wedges();
+    let mut quadrics = Quadrics::zeros(s.layout(), wedges.len());
     let faces_of = Stars::of_triangles(np, w.triangles.iter().map(|t| t.p));
-    s.add_triangle_quadrics(&mut wedges, &wedge_start);
+    s.add_triangle_quadrics(&wedges, &wedge_start, quadrics.as_mut());
     let tris = s.triangles(&faces_of);
-    s.add_boundary_planes(&tris, &mut wedges, &wedge_start);
+    s.add_boundary_planes(&tris, &wedges, &wedge_start, quadrics.as_mut());
     let info = position_info(w, frozen);
     let (diagonal, centre) = (s.diagonal, s.centre);
     drop(s);
@@ -64,6 +65,8 @@ pub(super) fn work<'w>(
         node_pos: (0..np as u32).collect(),
         wedges,
         wedge_start,
+        quadrics,
+        wedges_released: 0,
         h: Hierarchy::default(),
         nodes: Vec::new(),
         stamp: vec![0; np],
@@ -117,19 +120,24 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// One wedge per surface group at each position, with its attributes and an
-    /// empty quadric; and where each position's wedges start.
+    /// The attributes the quadrics hold: those some vertex has non-zero once scaled.
+    fn layout(&self) -> Layout {
+        let w = self.w;
+        Layout::of(
+            (0..w.attributes.len() as u32)
+                .map(|a| scaled_attributes(w, a, self.weights, self.diagonal)),
+        )
+    }
+
+    /// One wedge per surface group at each position, with its attributes; and where each
+    /// position's wedges start.
     fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
         let np = self.w.positions.len();
         let mut wedge_start = Vec::with_capacity(np + 1);
         let mut wedges = Vec::with_capacity(np);
         wedge_start.push(0u32);
         for vs in &self.w.vertices {
-            wedges.extend(vs.iter().map(|&(group, a)| Wedge {
-                group,
-                attr: a,
-                q: Quadric::default(),
-            }));
+            wedges.extend(vs.iter().map(|&(group, a)| Wedge { group, attr: a }));
             wedge_start.push(wedges.len() as u32);
         }
         (wedges, wedge_start)
@@ -137,7 +145,7 @@ impl<'a> Setup<'a> {
 
     /// Each triangle's quadric, added to the wedge of its group at its corners. The quadrics are computed in blocks on all threads
     /// and added in triangle order, so the sums do not depend on the threads.
-    fn add_triangle_quadrics(&self, wedges: &mut [Wedge], wedge_start: &[u32]) {
+    fn add_triangle_quadrics(&self, wedges: &[Wedge], wedge_start: &[u32], mut q: QuadricsMut<'_>) {
         let (w, p) = (self.w, &self.p);
         let nt = w.triangles.len();
         for first in (0..nt).step_by(QUADRIC_BLOCK) {
@@ -148,17 +156,22 @@ impl<'a> Setup<'a> {
                     t.a.map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
                 Quadric::triangle(t.p.map(|x| p[x as usize]), s)
             });
-            by_positions(&self.ranges, wedges, wedge_start, |lo, hi, wedges| {
-                for (i, q) in block.iter().enumerate() {
-                    let t = &w.triangles[first + i];
-                    for &x in &t.p {
-                        let x = x as usize;
-                        if (lo..hi).contains(&x) {
-                            add_to_wedge(wedges, wedge_start, lo, x, t.group, q);
+            by_positions(
+                &self.ranges,
+                wedge_start,
+                q.reborrow(),
+                |lo, hi, mut rows| {
+                    for (i, q) in block.iter().enumerate() {
+                        let t = &w.triangles[first + i];
+                        for &x in &t.p {
+                            let x = x as usize;
+                            if (lo..hi).contains(&x) {
+                                add_to_wedge(wedges, wedge_start, &mut rows, lo, x, t.group, q);
+                            }
                         }
                     }
-                }
-            });
+                },
+            );
         }
     }
 
@@ -190,7 +203,13 @@ impl<'a> Setup<'a> {
     /// Boundary planes: through each border or group-boundary edge, perpendicular to its
     /// triangle, weighted by the edge's squared length, added to the wedges of the
     /// triangle's group at the edge's ends.
-    fn add_boundary_planes(&self, tris: &[Tri], wedges: &mut [Wedge], wedge_start: &[u32]) {
+    fn add_boundary_planes(
+        &self,
+        tris: &[Tri],
+        wedges: &[Wedge],
+        wedge_start: &[u32],
+        q: QuadricsMut<'_>,
+    ) {
         let (w, p) = (self.w, &self.p);
         let mut planes = Vec::new();
         for (f, t) in w.triangles.iter().enumerate() {
@@ -207,12 +226,12 @@ impl<'a> Setup<'a> {
                 planes.push(([a, b], t.group, Quadric::plane(n, -dot(n, pa), weight)));
             }
         }
-        by_positions(&self.ranges, wedges, wedge_start, |lo, hi, wedges| {
+        by_positions(&self.ranges, wedge_start, q, |lo, hi, mut rows| {
             for (ends, group, q) in &planes {
                 for &x in ends {
                     let x = x as usize;
                     if (lo..hi).contains(&x) {
-                        add_to_wedge(wedges, wedge_start, lo, x, *group, q);
+                        add_to_wedge(wedges, wedge_start, &mut rows, lo, x, *group, q);
                     }
                 }
             }
@@ -345,44 +364,44 @@ pub(super) fn par_map<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T 
         .collect()
 }
 
-/// Runs `f(lo, hi, wedges)` for each range `lo..hi` of positions, as a rayon task each,
-/// with the wedges of those positions.
+/// Runs `f(lo, hi, rows)` for each range `lo..hi` of positions, as a rayon task each,
+/// with the quadrics of those positions' wedges (the first is row 0).
 pub(super) fn by_positions(
     ranges: &[(usize, usize)],
-    wedges: &mut [Wedge],
     wedge_start: &[u32],
-    f: impl Fn(usize, usize, &mut [Wedge]) + Sync,
+    rows: QuadricsMut<'_>,
+    f: impl Fn(usize, usize, QuadricsMut<'_>) + Sync,
 ) {
     if ranges.len() <= 1 {
-        f(0, wedge_start.len() - 1, wedges);
+        f(0, wedge_start.len() - 1, rows);
         return;
     }
     let mut parts = Vec::with_capacity(ranges.len());
-    let mut wedges = wedges;
+    let mut rows = rows;
     for &(lo, hi) in ranges {
         let count = (wedge_start[hi] - wedge_start[lo]) as usize;
-        let (these_wedges, other_wedges) = wedges.split_at_mut(count);
-        wedges = other_wedges;
-        parts.push((lo, hi, these_wedges));
+        let (these, others) = rows.split_at(count);
+        rows = others;
+        parts.push((lo, hi, these));
     }
     parts
         .into_par_iter()
-        .for_each(|(lo, hi, wedges)| f(lo, hi, wedges));
+        .for_each(|(lo, hi, rows)| f(lo, hi, rows));
 }
 
-/// Adds `q` to the wedge of `group` at position `x`, in the wedges of the positions from
-/// `lo` on.
+/// Adds `q` to the quadric of the wedge of `group` at position `x`, in `rows`, the
+/// quadrics of the wedges of the positions from `lo` on.
 pub(super) fn add_to_wedge(
-    wedges: &mut [Wedge],
+    wedges: &[Wedge],
     wedge_start: &[u32],
+    rows: &mut QuadricsMut<'_>,
     lo: usize,
     x: usize,
     group: u32,
     q: &Quadric,
 ) {
-    let base = wedge_start[lo] as usize;
-    let range = wedge_start[x] as usize - base..wedge_start[x + 1] as usize - base;
-    if let Some(wd) = wedges[range].iter_mut().find(|wd| wd.group == group) {
-        wd.q.add(q);
+    let range = wedge_start[x] as usize..wedge_start[x + 1] as usize;
+    if let Some(i) = range.clone().find(|&i| wedges[i].group == group) {
+        rows.add(i - wedge_start[lo] as usize, q);
     }
 }

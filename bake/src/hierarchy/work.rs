@@ -6,17 +6,18 @@ use caveclod_core::format::PositionClass;
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::setup::scaled_attributes;
 use super::stars::Stars;
-use super::{AttributeWeights, Hierarchy, NONE};
-use crate::quadric::{Quadric, M};
+use super::{AttributeWeights, Collapse, Hierarchy, NONE};
+use crate::quadric::{Quadrics, M};
 use crate::weld::Welded;
 
-/// The quadric of one surface group at a position, with that group's attributes there
-/// (an index into the welded mesh's; [`Work::attrs_of`] scales them when a cost reads
-/// them, which keeps the wedge 64 bytes smaller than holding them scaled).
+/// One surface group at a position, with that group's attributes there (an index into the
+/// welded mesh's; [`Work::attrs_of`] scales them when a cost reads them, which keeps the
+/// wedge 64 bytes smaller than holding them scaled). Its quadric is the row of
+/// [`Work::quadrics`] with its index, over the attributes the mesh has.
+#[derive(Clone, Copy)]
 pub(super) struct Wedge {
     pub(super) group: u32,
     pub(super) attr: u32,
-    pub(super) q: Quadric,
 }
 
 /// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
@@ -67,9 +68,14 @@ pub(super) struct Work<'w> {
     /// ([`Work::at_node`]).
     pub(super) valence: Vec<u32>,
     pub(super) node_pos: Vec<u32>,
-    /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]`.
+    /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]` (none once the
+    /// position is removed and [`Work::release_removed_wedges`] has run).
     pub(super) wedges: Vec<Wedge>,
     pub(super) wedge_start: Vec<u32>,
+    /// The quadric of every wedge, by its index.
+    pub(super) quadrics: Quadrics,
+    /// Collapses whose removed positions' wedges are released.
+    pub(super) wedges_released: usize,
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
@@ -185,6 +191,63 @@ impl Work<'_> {
     }
 }
 
+impl Work<'_> {
+    /// Releases the wedges and quadrics of the positions the collapses since the last
+    /// release removed, once they hold a [`RELEASE_PARTS`]th of the positions' count: the
+    /// others move down in place, a run of positions at a time, and the arrays' tails go
+    /// back to the system. A removed position's wedges are never read again, so the
+    /// quadrics, the largest table of the build, shrink with the mesh while the hierarchy
+    /// grows; a release goes through every position, so there are at most that many.
+    pub(super) fn release_removed_wedges(&mut self) {
+        let removed = &self.h.collapses[self.wedges_released..];
+        let gone_at = |c: &Collapse| self.node_pos[c.u as usize] as usize;
+        let count: usize = removed
+            .iter()
+            .map(|c| self.wedges_at(gone_at(c)).len())
+            .sum();
+        if count == 0 || RELEASE_PARTS * count < self.positions() {
+            return;
+        }
+        let mut gone = vec![false; self.positions()];
+        for c in removed {
+            gone[gone_at(c)] = true;
+        }
+        // The wedges of the kept positions since the last removed one, and where they go.
+        let (mut run, mut kept) = (0..0, 0);
+        for (x, gone) in gone.into_iter().enumerate() {
+            let hi = self.wedge_start[x + 1] as usize;
+            self.wedge_start[x] = (kept + run.len()) as u32;
+            if gone {
+                self.move_wedges(run.clone(), kept);
+                kept += run.len();
+                run = hi..hi;
+            } else {
+                run.end = hi;
+            }
+        }
+        self.move_wedges(run.clone(), kept);
+        kept += run.len();
+        let end = self.positions();
+        self.wedge_start[end] = kept as u32;
+        self.wedges.truncate(kept);
+        self.wedges.shrink_to_fit();
+        self.quadrics.truncate(kept);
+        self.wedges_released = self.h.collapses.len();
+    }
+
+    /// Moves the wedges `from` and their quadrics to those from `to` on.
+    fn move_wedges(&mut self, from: std::ops::Range<usize>, to: usize) {
+        if from.start != to {
+            self.wedges.copy_within(from.clone(), to);
+            self.quadrics.move_rows(from, to);
+        }
+    }
+}
+
+/// [`Work::release_removed_wedges`] releases the wedges of this share of the positions at
+/// a time.
+const RELEASE_PARTS: usize = 8;
+
 /// Position `q` relative to `centre`, in f64.
 #[inline]
 pub(super) fn centred(q: [f32; 3], centre: V3) -> V3 {
@@ -199,6 +262,7 @@ impl Work<'_> {
         drop((
             std::mem::take(&mut self.wedges),
             std::mem::take(&mut self.wedge_start),
+            std::mem::take(&mut self.quadrics),
             std::mem::take(&mut self.faces_of),
             std::mem::take(&mut self.pts_head),
             std::mem::take(&mut self.pts_next),
