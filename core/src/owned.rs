@@ -301,8 +301,12 @@ mod tests {
         let config = CameraConfig::full(&h).with_morphs(16);
         let mut owned = OwnedCamera::with_config(&h, &config).expect("camera");
         let [near, ..] = views(&h);
+        // A camera's first frame shows its cut at once; the splits of the next one morph.
+        let first = View::without_frustum(near.eye, 0.0);
         let (count, slots) = {
             let mut cam = owned.camera(&h);
+            let stats = cam.refine(&h, &first, &RefineParams::default()).unwrap();
+            assert_eq!(stats.splits, 0, "{stats:?}");
             let stats = cam.refine(&h, &near, &RefineParams::default()).unwrap();
             assert!(stats.morphing > 0, "{stats:?}");
             (cam.morph_count(), cam.morph_vertices().to_vec())

@@ -52,6 +52,12 @@ fn test_steps() -> Vec<(String, Step)> {
             "cargo test --workspace",
             &["test", "--workspace", "--no-fail-fast"],
         ),
+        // The owned forms of the core crate's optional `alloc` feature, which no workspace
+        // crate enables, so the workspace's tests do not build them.
+        step(
+            "cargo test -p caveclod-core --features alloc --lib",
+            &["test", "-p", "caveclod-core", "--features", "alloc", "--lib"],
+        ),
         // Thousands of imports of megabyte inputs need an optimised build (the sweep is
         // ignored in debug builds).
         step(
