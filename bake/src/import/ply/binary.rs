@@ -15,6 +15,7 @@ use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
 use super::properties::{is_index_list, vertex_slot, Vertex};
 use super::{scalar_size, Corners, ImportError, ImportReport};
 use crate::mesh::Mesh;
+use crate::ooc::stream::ply_format::Scalar;
 
 /// Where each element's data starts, from a walk that checked every element ends within
 /// the payload.
@@ -139,7 +140,7 @@ impl<'a> Payload<'a> {
             for (offset, t, slot) in &fields {
                 v.put(
                     *slot,
-                    number(&record[*offset..], t, self.big),
+                    scalar(t).decode(&record[*offset..], self.big),
                     colour_scale(t),
                 );
             }
@@ -217,39 +218,26 @@ fn is_float(t: &ScalarType) -> bool {
     matches!(t, ScalarType::Float | ScalarType::Double)
 }
 
-/// The first `N` bytes of `b` in little-endian order.
-#[inline]
-fn le<const N: usize>(b: &[u8], big: bool) -> [u8; N] {
-    let mut a = [0u8; N];
-    a.copy_from_slice(&b[..N]);
-    if big {
-        a.reverse();
+/// The streamed reader's decoder for a scalar of type `t`, whose values are those the
+/// parser reads.
+fn scalar(t: &ScalarType) -> Scalar {
+    match t {
+        ScalarType::Char => Scalar::I8,
+        ScalarType::UChar => Scalar::U8,
+        ScalarType::Short => Scalar::I16,
+        ScalarType::UShort => Scalar::U16,
+        ScalarType::Int => Scalar::I32,
+        ScalarType::UInt => Scalar::U32,
+        ScalarType::Float => Scalar::F32,
+        ScalarType::Double => Scalar::F64,
     }
-    a
 }
 
 /// An integer of type `t` from its bytes `b`; `None` for a floating type.
 #[inline]
 fn integer(b: &[u8], t: &ScalarType, big: bool) -> Option<i64> {
-    Some(match t {
-        ScalarType::Char => i8::from_le_bytes(le(b, big)).into(),
-        ScalarType::UChar => u8::from_le_bytes(le(b, big)).into(),
-        ScalarType::Short => i16::from_le_bytes(le(b, big)).into(),
-        ScalarType::UShort => u16::from_le_bytes(le(b, big)).into(),
-        ScalarType::Int => i32::from_le_bytes(le(b, big)).into(),
-        ScalarType::UInt => u32::from_le_bytes(le(b, big)).into(),
-        ScalarType::Float | ScalarType::Double => return None,
-    })
-}
-
-/// A value of type `t` from its bytes `b`, as the parser hands it to a vertex.
-#[inline]
-fn number(b: &[u8], t: &ScalarType, big: bool) -> f64 {
-    match t {
-        ScalarType::Float => f32::from_le_bytes(le(b, big)).into(),
-        ScalarType::Double => f64::from_le_bytes(le(b, big)),
-        _ => integer(b, t, big).map_or(0.0, |v| v as f64),
-    }
+    let s = scalar(t);
+    s.is_int().then(|| s.decode_int(b, big))
 }
 
 /// What a colour of type `t` is divided by its maximum with (the parser's setters'

@@ -32,7 +32,7 @@
 mod cache;
 mod obj;
 mod ply;
-mod ply_format;
+pub(crate) mod ply_format;
 
 use std::fs::File;
 use std::path::Path;

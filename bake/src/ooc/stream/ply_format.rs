@@ -7,8 +7,9 @@ use std::io::{self, BufRead, BufReader, Read};
 /// A vertex property read at a fixed offset: (offset, type, slot, colour scale).
 pub(super) type Field = (usize, Scalar, usize, f64);
 
+/// A PLY scalar type, which decodes its values from bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Scalar {
+pub(crate) enum Scalar {
     I8,
     U8,
     I16,
@@ -49,12 +50,12 @@ impl Scalar {
             _ => 255.0,
         }
     }
-    pub(super) fn is_int(self) -> bool {
+    pub(crate) fn is_int(self) -> bool {
         !matches!(self, Self::F32 | Self::F64)
     }
     /// An integer type's value (a float type's, truncated).
     #[inline]
-    pub(super) fn decode_int(self, b: &[u8], big: bool) -> i64 {
+    pub(crate) fn decode_int(self, b: &[u8], big: bool) -> i64 {
         macro_rules! get {
             ($t:ty, $n:expr) => {{
                 let mut a = [0u8; $n];
@@ -76,8 +77,9 @@ impl Scalar {
             Self::F32 | Self::F64 => self.decode(b, big) as i64,
         }
     }
+    /// The value, of any type, as an `f64`.
     #[inline]
-    pub(super) fn decode(self, b: &[u8], big: bool) -> f64 {
+    pub(crate) fn decode(self, b: &[u8], big: bool) -> f64 {
         macro_rules! get {
             ($t:ty, $n:expr) => {{
                 let mut a = [0u8; $n];
