@@ -102,12 +102,15 @@ impl Stars {
     }
 
     /// Moves every list down over the entries no list holds, in node order (the order
-    /// they lie in).
+    /// they lie in). Most nodes are no longer live and hold none, and a live one a few:
+    /// an entry at a time, which moves them down as a block copy would.
     fn compact(&mut self) {
         let mut to = 0usize;
         for v in 0..self.start.len() {
             let (s, n) = (self.start[v] as usize, self.len[v] as usize);
-            self.pool.copy_within(s..s + n, to);
+            for i in 0..n {
+                self.pool[to + i] = self.pool[s + i];
+            }
             self.start[v] = to as u32;
             to += n;
         }
