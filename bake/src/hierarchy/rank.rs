@@ -41,6 +41,15 @@ fn dir_of(dirs: u8, k: usize) -> u8 {
     (dirs >> (2 * k)) & 3
 }
 
+/// How many of a triangle's slots list a collapse (have a direction), from its direction
+/// bits.
+#[inline]
+fn listed(dirs: u8) -> usize {
+    // Bit 2k set when slot k has a direction.
+    let any = (dirs | dirs >> 1) & 0b01_0101;
+    usize::from(any & 1) + usize::from(any >> 2 & 1) + usize::from(any >> 4)
+}
+
 /// Sets slot `k` of a triangle's costs and direction bits from its two directions' costs.
 /// A slot keeps the cheaper allowed direction's cost only: the other is ranked again where
 /// a pass needs it ([`Work::other_cost`]), and comes out the same.
@@ -354,14 +363,14 @@ impl Work<'_> {
     /// and positions (a node's never change), the groups of the triangles on the edge, and
     /// which those are (they change only by a collapse that also changes an end).
     fn rank_triangle(&self, f: u32, changed: u8, cost: &mut [f64; 3], dirs: &mut u8) -> usize {
-        let mut count = 0;
-        for k in 0..3 {
-            if changed & (1 << k) != 0 {
-                set_slot(cost, dirs, k, self.rank(f, k));
+        if changed != 0 {
+            for k in 0..3 {
+                if changed & (1 << k) != 0 {
+                    set_slot(cost, dirs, k, self.rank(f, k));
+                }
             }
-            count += usize::from(dir_of(*dirs, k) != 0);
         }
-        count
+        listed(*dirs)
     }
 
     /// The costs of the edge in slot `k` of triangle `f` if the slot stands for its edge
