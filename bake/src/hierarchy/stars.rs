@@ -1,7 +1,9 @@
 //! The triangles around every node, every node's list in one pool: a start and a length
 //! per node (8 bytes) instead of a vector per node (a 24-byte header and a block of its
 //! own). A collapse's new node gets its children's lists, appended to the pool in turn;
-//! the pool is compacted when what no list holds outgrows a quarter of what lists hold.
+//! the pool is compacted when what no list holds outgrows a quarter of what lists hold and
+//! the number of nodes (a compaction goes through every node: so it costs a few steps per
+//! entry it frees).
 
 /// The triangles around every node: node `v`'s are `pool[start[v]..][..len[v]]`.
 #[derive(Default)]
@@ -96,7 +98,7 @@ impl Stars {
         self.start.push(at as u32);
         self.len.push((self.pool.len() - at) as u32);
         let held = self.pool.len() - self.waste;
-        if self.waste > (held / 4).max(self.start.len() / 4) {
+        if self.waste > (held / 4).max(self.start.len()) {
             self.compact();
         }
     }
