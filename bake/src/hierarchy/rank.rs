@@ -12,7 +12,8 @@ pub(super) type Candidate = (f64, u32, u32);
 /// The ranking of one edge slot (3 per triangle) in the current pass, as [`Slots`] holds it.
 #[derive(Clone, Copy)]
 pub(super) struct Slot {
-    /// The edge's ends, first and second corner of the slot, at the start of the pass.
+    /// The edge's ends, first and second corner of the slot: as the triangle has them now,
+    /// which are those of the start of the pass while either is free ([`Slots::get`]).
     pub(super) ends: [u32; 2],
     /// The cost of the cheaper allowed direction, infinite for none.
     pub(super) cost: f64,
