@@ -11,8 +11,9 @@ impl Work<'_> {
     /// Applies a checked collapse of pass `pass` and stamps the neighbourhood it took (the
     /// rings of `t` and `u` in `rings`, the ends and the new node), so that no later
     /// collapse of the pass overlaps it. The third corners of the edge remember their
-    /// number of neighbours at the start of the pass before they lose one.
-    pub(super) fn apply_in_pass(&mut self, c: Collapse, pass: u32, rings: &[Vec<u32>; 2]) {
+    /// number of neighbours at the start of the pass before they lose one. Returns the new
+    /// node.
+    pub(super) fn apply_in_pass(&mut self, c: Collapse, pass: u32, rings: &[Vec<u32>; 2]) -> u32 {
         let l = self.tris[c.fl as usize].c[prev(c.rot_l as usize)];
         let r = self.third(c.fr, c.t);
         for x in [l, r] {
@@ -27,6 +28,7 @@ impl Work<'_> {
             let pv = self.at_node(v);
             self.stamp[pv] = pass;
         }
+        s
     }
 
     /// Applies a checked collapse; returns the new node. The points of `u`'s triangles

@@ -132,7 +132,9 @@ impl Passes {
         let count = rank_all(work, &mut self.slots, threads);
         // The pass stops at the first collapse dearer than its cheapest share.
         let share = if full { 1.0 } else { PASS_SHARE };
-        let limit = self.ranked.start(&self.slots, count, share, threads);
+        let limit = self
+            .ranked
+            .start(&self.slots, &work.tris, count, share, threads);
         let mut applied = 0u64;
         self.later.clear();
         let max_tries = 2 * count as u64;
@@ -158,7 +160,8 @@ impl Passes {
             }
             match work.verdict(t, u, pass, &mut self.rings) {
                 Verdict::Legal(col) => {
-                    work.apply_in_pass(col, pass, &self.rings);
+                    let s = work.apply_in_pass(col, pass, &self.rings);
+                    self.slots.mark_changed(work, s);
                     applied += 1;
                 }
                 Verdict::Lapsed => {}
@@ -175,9 +178,9 @@ impl Passes {
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
     fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
-        let next_cand = self
-            .ranked
-            .peek(&self.slots, |v| work.stamp[work.at_node(v)] == pass);
+        let next_cand = self.ranked.peek(&self.slots, &work.tris, |v| {
+            work.stamp[work.at_node(v)] == pass
+        });
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,
@@ -202,7 +205,7 @@ impl Passes {
             let Some(Reverse((_, i))) = self.later.pop() else {
                 return Next::Done;
             };
-            let slot = self.slots.get(i);
+            let slot = self.slots.get(&work.tris, i);
             let [a, b] = slot.ends;
             let (t, u) = if slot.dir == 1 { (a, b) } else { (b, a) };
             Next::Try {

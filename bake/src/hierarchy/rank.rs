@@ -1,8 +1,8 @@
 //! Ranking a pass's collapses: each edge slot's cheaper allowed direction, and the ranked
 //! collapses handed out by cost through buckets sorted only when reached.
 
-use super::geometry::next;
-use super::work::Work;
+use super::geometry::{corner_of, next, prev};
+use super::work::{Tri, Work};
 use super::{NONE, PARALLEL_MIN};
 use rayon::prelude::*;
 
@@ -12,7 +12,8 @@ pub(super) type Candidate = (f64, u32, u32);
 /// The ranking of one edge slot (3 per triangle) in the current pass, as [`Slots`] holds it.
 #[derive(Clone, Copy)]
 pub(super) struct Slot {
-    /// The edge's ends, first and second corner of the slot, at the start of the pass.
+    /// The edge's ends, first and second corner of the slot: as the triangle has them now,
+    /// which are those of the start of the pass while either is free ([`Slots::get`]).
     pub(super) ends: [u32; 2],
     /// The cost of the cheaper allowed direction, infinite for none.
     pub(super) cost: f64,
@@ -35,52 +36,54 @@ pub(super) fn dir([cx, cy]: [f64; 2]) -> u8 {
     }
 }
 
-/// The rankings of one triangle's three edge slots: their cheaper allowed directions and
-/// those directions' costs, and the triangle's corners when they were ranked (a slot's
-/// ends are two of them). A slot keeps one cost, 40 bytes a triangle where both costs and
-/// each slot's ends would take 72: the other direction's cost is ranked again where a pass
-/// needs it ([`Work::other_cost`]), and comes out the same.
-#[derive(Clone, Copy)]
-struct Row {
-    cost: [f64; 3],
-    corners: [u32; 3],
-    /// Slot `k`'s direction in bits `2k..2k + 2`.
-    dirs: u8,
+/// Slot `k`'s direction ([`dir`]) out of a triangle's direction bits.
+#[inline]
+fn dir_of(dirs: u8, k: usize) -> u8 {
+    (dirs >> (2 * k)) & 3
 }
 
-impl Row {
-    const NONE: Self = Self {
-        cost: [f64::INFINITY; 3],
-        corners: [NONE; 3],
-        dirs: 0,
+/// How many of a triangle's slots list a collapse (have a direction), from its direction
+/// bits.
+#[inline]
+fn listed(dirs: u8) -> usize {
+    // Bit 2k set when slot k has a direction.
+    let any = (dirs | dirs >> 1) & 0b01_0101;
+    usize::from(any & 1) + usize::from(any >> 2 & 1) + usize::from(any >> 4)
+}
+
+/// Sets slot `k` of a triangle's costs and direction bits from its two directions' costs.
+/// A slot keeps the cheaper allowed direction's cost only: the other is ranked again where
+/// a pass needs it ([`Work::other_cost`]), and comes out the same.
+fn set_slot(cost: &mut [f64; 3], dirs: &mut u8, k: usize, costs: [f64; 2]) {
+    let d = dir(costs);
+    *dirs = (*dirs & !(3 << (2 * k))) | (d << (2 * k));
+    cost[k] = if d == 0 {
+        f64::INFINITY
+    } else {
+        costs[d as usize - 1]
     };
-
-    fn dir(&self, k: usize) -> u8 {
-        (self.dirs >> (2 * k)) & 3
-    }
-
-    /// Sets slot `k` from its costs.
-    fn set(&mut self, k: usize, costs: [f64; 2]) {
-        let d = dir(costs);
-        self.dirs = (self.dirs & !(3 << (2 * k))) | (d << (2 * k));
-        self.cost[k] = if d == 0 {
-            f64::INFINITY
-        } else {
-            costs[d as usize - 1]
-        };
-    }
 }
 
 /// The rankings of the three edge slots of every live triangle, by the triangle's place in
 /// the list of live triangles: slot `3 × i + k` is slot `k` of triangle `live[i]`. The
 /// list keeps the triangles' order, so the slots' numbers are in the order of
-/// `3 × triangle + k`, and the rows of the triangles a pass removed are dropped before the
-/// next pass ranks.
+/// `3 × triangle + k`, and the rankings of the triangles a pass removed are dropped before
+/// the next pass ranks.
+///
+/// A triangle's rankings take 25 bytes: the three costs and the directions. A slot's ends
+/// are read from the triangle's current corners, and the slots to rank again from what the
+/// collapses mark ([`Slots::mark_changed`]), rather than kept as the corners they were
+/// ranked with.
 pub(super) struct Slots {
     /// The live triangles, in order.
     live: Vec<u32>,
-    /// Their slots' rankings.
-    rows: Vec<Row>,
+    /// Their slots' costs: the cheaper allowed direction's, infinite for none.
+    costs: Vec<[f64; 3]>,
+    /// Their slots' directions, slot `k`'s in bits `2k..2k + 2`.
+    dirs: Vec<u8>,
+    /// By triangle: bit `k` set when a collapse changed an end of slot `k` since it was
+    /// last ranked (all set before the first ranking).
+    changed: Vec<u8>,
 }
 
 impl Slots {
@@ -88,27 +91,44 @@ impl Slots {
     pub(super) fn new(triangles: usize) -> Self {
         Self {
             live: (0..triangles as u32).collect(),
-            rows: vec![Row::NONE; triangles],
+            costs: vec![[f64::INFINITY; 3]; triangles],
+            dirs: vec![0; triangles],
+            changed: vec![0b111; triangles],
         }
     }
 
-    /// Drops the triangles no longer `alive` and their rows, keeping the order; gives the
-    /// memory back once a ninth of it is free (a large block's tail goes back to the system
-    /// without a copy), so that the rows shrink with the mesh pass by pass.
+    /// Drops the triangles no longer `alive` and their rankings, keeping the order; gives
+    /// the memory back once a ninth of it is free (a large block's tail goes back to the
+    /// system without a copy), so that the rankings shrink with the mesh pass by pass.
     pub(super) fn retain_alive(&mut self, alive: &[bool]) {
         let mut kept = 0;
         for i in 0..self.live.len() {
             if alive[self.live[i] as usize] {
                 self.live[kept] = self.live[i];
-                self.rows[kept] = self.rows[i];
+                self.costs[kept] = self.costs[i];
+                self.dirs[kept] = self.dirs[i];
                 kept += 1;
             }
         }
         self.live.truncate(kept);
-        self.rows.truncate(kept);
-        if kept + kept / 8 < self.rows.capacity() {
+        self.costs.truncate(kept);
+        self.dirs.truncate(kept);
+        if kept + kept / 8 < self.costs.capacity() {
             self.live.shrink_to_fit();
-            self.rows.shrink_to_fit();
+            self.costs.shrink_to_fit();
+            self.dirs.shrink_to_fit();
+        }
+    }
+
+    /// Marks the slots whose ends the collapse that made node `s` changed: those of the
+    /// triangles around `s` with `s` at one of their ends (every such corner was the
+    /// collapse's `t` or `u`).
+    pub(super) fn mark_changed(&mut self, work: &Work<'_>, s: u32) {
+        for &f in work.faces_of.of(s) {
+            let c = work.tris[f as usize].c;
+            let j = corner_of(c, s);
+            // Corner `j` is an end of slots `j` and `j − 1`.
+            self.changed[f as usize] |= (1 << j) | (1 << prev(j));
         }
     }
 
@@ -123,26 +143,30 @@ impl Slots {
         (self.live[i / 3], i % 3)
     }
 
-    /// Slot `i` (`3 × place + slot`).
+    /// Slot `i` (`3 × place + slot`), its ends read from the current corners `tris`.
+    ///
+    /// During a pass these are the ends it was ranked with unless both are stamped
+    /// (taken): a collapse changes only the triangles around its ends `t` and `u`, so a
+    /// changed triangle's corners, before and after, are `t`, `u`, the new node and
+    /// their rings, which it stamps; and no later collapse of the pass has a stamped end.
     #[inline]
-    pub(super) fn get(&self, i: usize) -> Slot {
-        let (row, k) = (&self.rows[i / 3], i % 3);
-        let c = row.corners;
+    pub(super) fn get(&self, tris: &[Tri], i: usize) -> Slot {
+        let (place, k) = (i / 3, i % 3);
+        let c = tris[self.live[place] as usize].c;
         Slot {
             ends: [c[k], c[next(k)]],
-            cost: row.cost[k],
-            dir: row.dir(k),
+            cost: self.costs[place][k],
+            dir: dir_of(self.dirs[place], k),
         }
     }
 
-    /// Sets the slots of triangle `f` from their corners and costs (for tests).
+    /// Sets the slots of the live triangle at place `i` from their costs (for tests).
     #[cfg(test)]
-    pub(super) fn set(&mut self, f: usize, corners: [u32; 3], costs: [[f64; 2]; 3]) {
-        let row = &mut self.rows[f];
-        row.corners = corners;
+    pub(super) fn set(&mut self, i: usize, costs: [[f64; 2]; 3]) {
         for (k, c) in costs.into_iter().enumerate() {
-            row.set(k, c);
+            set_slot(&mut self.costs[i], &mut self.dirs[i], k, c);
         }
+        self.changed[self.live[i] as usize] = 0;
     }
 }
 
@@ -185,48 +209,48 @@ fn bucket_of(cost: f64) -> u64 {
 /// Candidates below which a pass sorts them all at once.
 const BUCKET_MIN: usize = 4096;
 
-/// The ranked collapses of the live triangles in `slots`, in slot order, each with its
-/// slot number.
-pub(super) fn candidates(slots: &Slots) -> impl Iterator<Item = (u32, Candidate)> + '_ {
-    slots.rows.iter().enumerate().flat_map(|(i, row)| {
-        (0..3).filter_map(move |k| {
-            let (a, b) = (row.corners[k], row.corners[next(k)]);
-            let cost = row.cost[k];
-            let number = (3 * i + k) as u32;
-            match row.dir(k) {
-                1 => Some((number, (cost, b, a))),
-                2 => Some((number, (cost, a, b))),
-                _ => None,
-            }
-        })
-    })
+/// The ranked collapses of the live triangles in `slots`, in slot order, their ends read
+/// from the current corners `tris`.
+pub(super) fn candidates<'a>(
+    slots: &'a Slots,
+    tris: &'a [Tri],
+) -> impl Iterator<Item = Candidate> + 'a {
+    (0..3 * slots.live.len()).filter_map(move |i| candidate(&slots.get(tris, i)))
 }
 
 /// The costs of the ranked collapses of `slots` with their slot numbers, in slot order: a
-/// slot lists a collapse exactly when its cost is finite ([`Row::set`]).
+/// slot lists a collapse exactly when its cost is finite ([`set_slot`]).
 fn costs(slots: &Slots) -> impl Iterator<Item = (u32, f64)> + '_ {
-    slots.rows.iter().enumerate().flat_map(|(i, row)| {
+    slots.costs.iter().enumerate().flat_map(|(i, cost)| {
         (0..3)
-            .map(move |k| ((3 * i + k) as u32, row.cost[k]))
+            .map(move |k| ((3 * i + k) as u32, cost[k]))
             .filter(|(_, c)| c.is_finite())
     })
 }
 
 impl Ranked {
-    /// Takes a pass's `count` candidates (those of the live triangles in `slots`), of
+    /// Takes a pass's `count` candidates (those of the live triangles in `slots`, with
+    /// their current corners `tris`), of
     /// which the pass means to apply the cheapest `share`; returns the [`order_key`] of the
     /// dearest cost in that share (for many candidates, rounded up to the end of its bucket),
     /// or `u64::MAX` when the share is every candidate. Only candidates up to it are handed
     /// out, and the pass cuts what is dearer, the other directions it queues included: a
     /// share of everything cuts nothing. Many candidates are counted by bucket on up to
     /// `threads` threads.
-    pub(super) fn start(&mut self, slots: &Slots, count: usize, share: f64, threads: usize) -> u64 {
+    pub(super) fn start(
+        &mut self,
+        slots: &Slots,
+        tris: &[Tri],
+        count: usize,
+        share: f64,
+        threads: usize,
+    ) -> u64 {
         self.chunk.clear();
         self.pos = 0;
         let want = ((count as f64 * share).ceil() as usize).clamp(1, count.max(1));
         let everything = want >= count;
         if count < BUCKET_MIN {
-            self.chunk.extend(candidates(slots).map(|(_, c)| c));
+            self.chunk.extend(candidates(slots, tris));
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
             self.bucket = self.bounds.len().saturating_sub(1);
             return match self.chunk.get(want - 1) {
@@ -263,28 +287,28 @@ impl Ranked {
     }
 
     /// Sets `bounds[b + 1]` to the number of ranked collapses of `slots` in bucket `b`
-    /// (`bounds[0]` to 0), counting ranges of rows on up to `threads` threads.
+    /// (`bounds[0]` to 0), counting ranges of triangles on up to `threads` threads.
     fn count_buckets(&mut self, slots: &Slots, threads: usize) {
-        let count = |rows: &[Row], counts: &mut [u32]| {
-            for row in rows {
-                for c in row.cost.into_iter().filter(|c| c.is_finite()) {
+        let count = |costs: &[[f64; 3]], counts: &mut [u32]| {
+            for cost in costs {
+                for c in cost.iter().copied().filter(|c| c.is_finite()) {
                     counts[bucket_of(c) as usize + 1] += 1;
                 }
             }
         };
         self.bounds.clear();
         self.bounds.resize((1 << BUCKET_BITS) + 1, 0);
-        if threads <= 1 || slots.rows.len() < PARALLEL_MIN {
-            count(&slots.rows, &mut self.bounds);
+        if threads <= 1 || slots.costs.len() < PARALLEL_MIN {
+            count(&slots.costs, &mut self.bounds);
             return;
         }
-        let per = slots.rows.len().div_ceil(threads);
+        let per = slots.costs.len().div_ceil(threads);
         let parts: Vec<Vec<u32>> = slots
-            .rows
+            .costs
             .par_chunks(per)
-            .map(|rows| {
+            .map(|costs| {
                 let mut counts = vec![0u32; (1 << BUCKET_BITS) + 1];
-                count(rows, &mut counts);
+                count(costs, &mut counts);
                 counts
             })
             .collect();
@@ -296,7 +320,12 @@ impl Ranked {
     }
 
     /// The next candidate whose ends were free (not `taken`) when its bucket was reached.
-    pub(super) fn peek(&mut self, slots: &Slots, taken: impl Fn(u32) -> bool) -> Option<Candidate> {
+    pub(super) fn peek(
+        &mut self,
+        slots: &Slots,
+        tris: &[Tri],
+        taken: impl Fn(u32) -> bool,
+    ) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
                 return None;
@@ -314,7 +343,7 @@ impl Ranked {
             self.chunk.extend(
                 self.by_bucket[a..b]
                     .iter()
-                    .filter_map(|&i| candidate(&slots.get(i as usize)))
+                    .filter_map(|&i| candidate(&slots.get(tris, i as usize)))
                     .filter(|c| !taken(c.1) && !taken(c.2)),
             );
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -328,24 +357,21 @@ impl Ranked {
 }
 
 impl Work<'_> {
-    /// Ranks the slots of triangle `f` whose edges changed since `row.corners` (the
-    /// triangle's corners when they were last ranked), and brings the corners up to date;
-    /// returns how many of its slots list a collapse.
+    /// Ranks the slots of triangle `f` marked `changed` (bit `k` for slot `k`) in its
+    /// `cost` and `dirs`; returns how many of its slots list a collapse.
     ///
     /// A ranking stands while the edge's ends are the same nodes: it reads their quadrics
     /// and positions (a node's never change), the groups of the triangles on the edge, and
     /// which those are (they change only by a collapse that also changes an end).
-    fn rank_triangle(&self, f: u32, row: &mut Row) -> usize {
-        let c = self.tris[f as usize].c;
-        let mut count = 0;
-        for k in 0..3 {
-            if [row.corners[k], row.corners[next(k)]] != [c[k], c[next(k)]] {
-                row.set(k, self.rank(f, k));
+    fn rank_triangle(&self, f: u32, changed: u8, cost: &mut [f64; 3], dirs: &mut u8) -> usize {
+        if changed != 0 {
+            for k in 0..3 {
+                if changed & (1 << k) != 0 {
+                    set_slot(cost, dirs, k, self.rank(f, k));
+                }
             }
-            count += usize::from(row.dir(k) != 0);
         }
-        row.corners = c;
-        count
+        listed(*dirs)
     }
 
     /// The costs of the edge in slot `k` of triangle `f` if the slot stands for its edge
@@ -385,26 +411,38 @@ impl Work<'_> {
     }
 }
 
-/// Ranks every slot of the live triangles, split into rayon tasks by ranges of triangles
-/// (each slot's ranking depends on the mesh alone, so the split does not change it);
-/// returns how many slots list a collapse (have an allowed direction), which
-/// [`candidates`] hands out in slot order.
+/// Ranks the slots of the live triangles that collapses changed since they were last ranked
+/// ([`Slots::mark_changed`]; a ranking stands while the edge's ends are the same nodes),
+/// split into rayon tasks by ranges of triangles (each slot's ranking depends on the mesh
+/// alone, so the split does not change it); returns how many slots list a collapse (have
+/// an allowed direction), which [`candidates`] hands out in slot order.
 pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> usize {
-    let rank_part = |part: &[u32], rows: &mut [Row]| {
+    let Slots {
+        live,
+        costs,
+        dirs,
+        changed,
+    } = slots;
+    let marked = &*changed;
+    let rank_part = |part: &[u32], costs: &mut [[f64; 3]], dirs: &mut [u8]| {
         part.iter()
-            .zip(rows)
-            .map(|(&f, row)| work.rank_triangle(f, row))
+            .zip(costs)
+            .zip(dirs)
+            .map(|((&f, cost), dirs)| work.rank_triangle(f, marked[f as usize], cost, dirs))
             .sum::<usize>()
     };
-    let Slots { live, rows } = slots;
-    if threads <= 1 || live.len() < PARALLEL_MIN {
-        return rank_part(live, rows);
-    }
-    let per = live.len().div_ceil(threads);
-    live.par_chunks(per)
-        .zip(rows.par_chunks_mut(per))
-        .map(|(part, rows)| rank_part(part, rows))
-        .sum()
+    let count = if threads <= 1 || live.len() < PARALLEL_MIN {
+        rank_part(live, costs, dirs)
+    } else {
+        let per = live.len().div_ceil(threads);
+        live.par_chunks(per)
+            .zip(costs.par_chunks_mut(per))
+            .zip(dirs.par_chunks_mut(per))
+            .map(|((part, costs), dirs)| rank_part(part, costs, dirs))
+            .sum()
+    };
+    changed.fill(0);
+    count
 }
 
 /// The collapse a ranked slot lists: its cheaper allowed direction, if any.

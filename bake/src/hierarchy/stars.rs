@@ -1,7 +1,9 @@
 //! The triangles around every node, every node's list in one pool: a start and a length
 //! per node (8 bytes) instead of a vector per node (a 24-byte header and a block of its
 //! own). A collapse's new node gets its children's lists, appended to the pool in turn;
-//! the pool is compacted when what no list holds outgrows a quarter of what lists hold.
+//! the pool is compacted when what no list holds outgrows a quarter of what lists hold and
+//! the number of nodes (a compaction goes through every node: so it costs a few steps per
+//! entry it frees).
 
 /// The triangles around every node: node `v`'s are `pool[start[v]..][..len[v]]`.
 #[derive(Default)]
@@ -96,18 +98,21 @@ impl Stars {
         self.start.push(at as u32);
         self.len.push((self.pool.len() - at) as u32);
         let held = self.pool.len() - self.waste;
-        if self.waste > (held / 4).max(self.start.len() / 4) {
+        if self.waste > (held / 4).max(self.start.len()) {
             self.compact();
         }
     }
 
     /// Moves every list down over the entries no list holds, in node order (the order
-    /// they lie in).
+    /// they lie in). Most nodes are no longer live and hold none, and a live one a few:
+    /// an entry at a time, which moves them down as a block copy would.
     fn compact(&mut self) {
         let mut to = 0usize;
         for v in 0..self.start.len() {
             let (s, n) = (self.start[v] as usize, self.len[v] as usize);
-            self.pool.copy_within(s..s + n, to);
+            for i in 0..n {
+                self.pool[to + i] = self.pool[s + i];
+            }
             self.start[v] = to as u32;
             to += n;
         }

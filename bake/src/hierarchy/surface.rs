@@ -60,24 +60,29 @@ impl Work<'_> {
         let (kept, moved) = star.split_at(from_kept.min(star.len()));
         let before = |v: u32| self.pos(if v == s { c.u } else { v });
         // The surface before: the moved triangles as they were (first, in the order of
-        // `moved`), then the kept child's and the two that died, which did not change.
+        // `moved`), then, once a sample needs them, the kept child's and the two that
+        // died, which did not change.
         probes.clear();
         probes.extend(
             moved
                 .iter()
                 .map(|&f| Probe::new(&self.tris[f as usize], before)),
         );
-        probes.extend(
-            kept.iter()
-                .chain([c.fl, c.fr].iter().filter(|&&f| f != NONE))
-                .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
-        );
+        let mut all_probed = false;
         let mut worst = floor * floor;
         for (i, &f) in moved.iter().enumerate() {
             for x in samples(self.tris[f as usize].c, s, |v| self.pos(v)) {
                 // Its own triangle as it was first: most samples stay near it.
                 if probes[i].d2_below(x, worst).is_some() {
                     continue;
+                }
+                if !all_probed {
+                    probes.extend(
+                        kept.iter()
+                            .chain([c.fl, c.fr].iter().filter(|&&f| f != NONE))
+                            .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
+                    );
+                    all_probed = true;
                 }
                 let mut best = f64::INFINITY;
                 for probe in probes.iter() {

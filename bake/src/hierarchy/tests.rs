@@ -100,17 +100,29 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
 #[test]
 fn a_full_share_cuts_nothing() {
     use super::rank::{order_key, Ranked, Slots};
+    use super::work::Tri;
     for n in [100usize, 10_000] {
         // A triangle per candidate, its first slot allowed in one direction.
         let mut slots = Slots::new(n);
+        let tris = vec![
+            Tri {
+                c: [0, 1, 2],
+                o: [NONE; 3]
+            };
+            n
+        ];
         for i in 0..n {
             let none = [f64::INFINITY; 2];
-            slots.set(i, [0, 1, 2], [[1.0 + i as f64, f64::INFINITY], none, none]);
+            slots.set(i, [[1.0 + i as f64, f64::INFINITY], none, none]);
         }
         let mut ranked = Ranked::default();
-        assert_eq!(ranked.start(&slots, n, 1.0, 2), u64::MAX, "{n} candidates");
+        assert_eq!(
+            ranked.start(&slots, &tris, n, 1.0, 2),
+            u64::MAX,
+            "{n} candidates"
+        );
         // Half: the limit covers the cheapest half and leaves out the dearest.
-        let half = ranked.start(&slots, n, PASS_SHARE, 2);
+        let half = ranked.start(&slots, &tris, n, PASS_SHARE, 2);
         assert!(half >= order_key(n as f64 / 2.0), "{n} candidates");
         assert!(half < order_key(n as f64), "{n} candidates");
     }
