@@ -229,7 +229,7 @@ impl<'w> Checker<'w> {
             let tri = &w.triangles[t as usize];
             for k in 0..3 {
                 let v = h.vertices()[out[cursor[s] as usize + k] as usize];
-                let a = &w.attributes[tri.a[(k + rot as usize) % 3] as usize];
+                let a = &w.attributes[w.corner_attributes(tri)[(k + rot as usize) % 3] as usize];
                 assert_eq!(
                     v.position,
                     w.positions[tri.p[(k + rot as usize) % 3] as usize]

@@ -45,16 +45,8 @@ pub(super) fn extract(
         .zip(&stored)
         .map(|(&f, t)| {
             let p = [0, 1, 2].map(|k| at(f, k));
-            // A corner's attributes are its position's vertex of the triangle's group.
-            let a = [0, 1, 2].map(|k| {
-                let x = local(p[k]) as usize;
-                attr(crate::weld_store::corner_attributes(
-                    &lists, x as u32, t.group,
-                ))
-            });
             WeldedTri {
                 p: p.map(local),
-                a,
                 surface: t.surface,
                 group: t.group,
             }

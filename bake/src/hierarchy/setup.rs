@@ -152,8 +152,9 @@ impl<'a> Setup<'a> {
             let n = (nt - first).min(QUADRIC_BLOCK);
             let block = par_map(n, self.threads, |i| {
                 let t = &w.triangles[first + i];
-                let s =
-                    t.a.map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
+                let s = w
+                    .corner_attributes(t)
+                    .map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
                 Quadric::triangle(t.p.map(|x| p[x as usize]), s)
             });
             by_positions(

@@ -118,13 +118,13 @@ impl Attributes {
     }
 }
 
-/// One welded triangle.
+/// One welded triangle. Its corners' attributes are not stored: a surface group has one
+/// attribute set at each of its positions, so a corner's is its position's vertex of the
+/// triangle's group ([`Welded::corner_attributes`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WeldedTri {
     /// Position ids, counter-clockwise.
     pub p: [u32; 3],
-    /// Per-corner attribute ids into [`Welded::attributes`].
-    pub a: [u32; 3],
     /// Surface.
     pub surface: u16,
     /// Surface group (before colouring).
@@ -190,6 +190,14 @@ pub struct Welded {
     pub vertices: VertexLists,
     /// What was repaired.
     pub repairs: Repairs,
+}
+
+impl Welded {
+    /// The attribute ids (into [`Welded::attributes`]) of `t`'s corners: at each, the
+    /// vertex of `t`'s group at the corner's position.
+    pub fn corner_attributes(&self, t: &WeldedTri) -> [u32; 3] {
+        t.p.map(|x| self.vertices.attributes_of(x as usize, t.group))
+    }
 }
 
 /// Why welding failed.
@@ -285,6 +293,8 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     let (attributes, tri_attrs) =
         attributes::corner_attributes(mesh, &kept, &positions, &mut repairs);
     let groups = groups::grow_groups(mesh, &kept, &tri_attrs, &opp, positions.len());
+    // A corner's attributes are its position's vertex of its triangle's group from here on.
+    drop(tri_attrs);
     let classes = groups::classify(&kept, &opp, &groups.group, positions.len());
     // The steps below build the result: the repair tables go first, so they and the result
     // never take memory at once.
@@ -303,11 +313,9 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     };
     let triangles = kept
         .iter()
-        .zip(&tri_attrs)
         .enumerate()
-        .map(|(f, (&(p, i), &a))| WeldedTri {
+        .map(|(f, &(p, i))| WeldedTri {
             p,
-            a,
             surface: mesh.triangles[i as usize].surface,
             group: group[f],
         })

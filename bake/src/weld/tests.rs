@@ -163,6 +163,11 @@ fn a_uv_seam_makes_two_groups_and_classes_follow_boundaries() {
     assert_eq!(w.classes, vec![Rigid, Sharp, Rigid, Sharp]);
     assert_eq!(w.vertices[0].len(), 2);
     assert_eq!(w.vertices[1].len(), 1);
+    // Each corner's attributes are its position's vertex of its triangle's group.
+    for (t, &uv) in w.triangles.iter().zip(&m.uvs) {
+        let a = w.corner_attributes(t);
+        assert!(a.iter().all(|&a| w.attributes[a as usize].uv == uv));
+    }
     // The same UVs everywhere: one group, the diagonal no boundary.
     m.triangles[1].uv = [0, 0, 0];
     let w = weld(&m).expect("weld");

@@ -69,6 +69,17 @@ impl VertexLists {
         self.len() == 0
     }
 
+    /// The attribute id of `group`'s vertex at position `p` (of the position's first vertex
+    /// if the group has none there, which a triangle's corner never asks).
+    #[inline]
+    pub fn attributes_of(&self, p: usize, group: u32) -> u32 {
+        let vs = &self[p];
+        vs.iter()
+            .find(|&&(g, _)| g == group)
+            .or(vs.first())
+            .map_or(0, |&(_, a)| a)
+    }
+
     /// Each position's list, in position order.
     pub fn iter(&self) -> Lists<'_> {
         Lists {

@@ -329,7 +329,6 @@ impl WeldedStore {
             .iter()
             .map(|t| WeldedTri {
                 p: t.p,
-                a: t.p.map(|x| corner_attributes(&lists, x, t.group)),
                 surface: t.surface,
                 group: t.group,
             })
@@ -356,15 +355,6 @@ impl WeldedStore {
             repairs: self.info.repairs,
         })
     }
-}
-
-/// The attribute set of a corner at position `x` (of `lists`) of a triangle of `group`: the
-/// position's vertex of that group (its first if it has none, which a weld never leaves).
-pub fn corner_attributes(lists: &PositionLists, x: u32, group: u32) -> u32 {
-    let vs = lists.of(x as usize);
-    vs.iter()
-        .find(|&&[g, _]| g == group)
-        .map_or(vs.first().map_or(0, |v| v[1]), |v| v[1])
 }
 
 /// A stored class.

@@ -24,7 +24,6 @@ use crate::weld::WeldInfo;
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct SpooledTri {
     p: [u32; 3],
-    a: [u32; 3],
     node: u32,
     surface: u32,
 }
@@ -126,7 +125,6 @@ impl Joiner {
             *first = (*first).min(tri.index);
             self.triangles.push(SpooledTri {
                 p,
-                a,
                 node,
                 surface: u32::from(tri.surface),
             })?;
@@ -296,7 +294,6 @@ impl Joiner {
             batch.clear();
             batch.extend(chunk.iter().map(|t| WeldedTri {
                 p: t.p,
-                a: t.a,
                 surface: t.surface as u16,
                 group: group_of[t.node as usize],
             }));
