@@ -133,7 +133,7 @@ impl<'w> Checker<'w> {
             HashMap::with_capacity(w.triangles.len());
         for (i, t) in w.triangles.iter().enumerate() {
             let (k, r) = key(t.p.map(|p| w.positions[p as usize]));
-            let old = by_key.insert((t.surface, k), (i as u32, r));
+            let old = by_key.insert((w.surface_of(t), k), (i as u32, r));
             assert!(old.is_none(), "two welded triangles with the same corners");
         }
         let welded_of = h
@@ -201,7 +201,7 @@ impl<'w> Checker<'w> {
         let mut want: Vec<(u16, Key)> = w
             .triangles
             .iter()
-            .map(|t| (t.surface, key(t.p.map(|p| w.positions[p as usize])).0))
+            .map(|t| (w.surface_of(t), key(t.p.map(|p| w.positions[p as usize])).0))
             .collect();
         let mut got: Vec<(u16, Key)> = cam
             .active_polygons(h)

@@ -105,7 +105,7 @@ fn assert_same_triangles(a: &Welded, b: &Welded) {
     assert_eq!(a.positions.len(), b.positions.len(), "positions");
     assert_eq!(a.repairs, b.repairs, "repairs");
     for (ta, tb) in matched_triangles(a, b) {
-        assert_eq!(ta.surface, tb.surface);
+        assert_eq!(a.surface_of(ta), b.surface_of(tb));
         let (aa, ab) = (a.corner_attributes(ta), b.corner_attributes(tb));
         for k in 0..3 {
             let (x, y) = (&a.attributes[aa[k] as usize], &b.attributes[ab[k] as usize]);
@@ -277,8 +277,9 @@ fn refused_edges(w: &Welded) -> usize {
             if let Some(&(o, j)) = by_edge.get(&(b, a)) {
                 let u = &w.triangles[o];
                 let (ua, ta) = (w.corner_attributes(u), w.corner_attributes(t));
-                let matching =
-                    u.surface == t.surface && ua[(j + 1) % 3] == ta[k] && ua[j] == ta[(k + 1) % 3];
+                let matching = w.surface_of(u) == w.surface_of(t)
+                    && ua[(j + 1) % 3] == ta[k]
+                    && ua[j] == ta[(k + 1) % 3];
                 if f < o && matching && u.group != t.group {
                     n += 1;
                 }

@@ -202,6 +202,12 @@ fn a_closed_mesh_is_free_and_groups_that_share_no_position_share_an_id() {
     assert_eq!(w.group_count, 2);
     assert_eq!(w.group_id_count, 1);
     assert_eq!(w.surface_count, 2);
+    let surfaces: Vec<u16> = w.triangles.iter().map(|t| w.surface_of(t)).collect();
+    assert_eq!(
+        surfaces,
+        [0, 0, 0, 0, 1, 1, 1, 1],
+        "each triangle its group's surface"
+    );
     assert_eq!(w.repairs.computed_normals, 24);
     assert_manifold(&w);
 }

@@ -46,7 +46,7 @@ pub fn assert_same(a: &Welded, b: &Welded) {
         m[x as usize] = y;
     };
     for (ta, tb) in matched_triangles(a, b) {
-        assert_eq!(ta.surface, tb.surface);
+        assert_eq!(a.surface_of(ta), b.surface_of(tb));
         map(&mut group, ta.group, tb.group, "group");
         let (aa, ab) = (a.corner_attributes(ta), b.corner_attributes(tb));
         for k in 0..3 {

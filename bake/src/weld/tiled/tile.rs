@@ -194,7 +194,7 @@ pub(super) fn weld_tile(
                 let ot = &w.triangles[o as usize];
                 let oa = w.corner_attributes(ot);
                 let corner = |x: u32| ot.p.iter().position(|&y| y == x).map(|j| oa[j]);
-                let matching = ot.surface == t.surface
+                let matching = w.surface_of(ot) == w.surface_of(t)
                     && corner(a) == Some(ta[k])
                     && corner(b) == Some(ta[(k + 1) % 3]);
                 if matching {
@@ -218,7 +218,7 @@ pub(super) fn weld_tile(
             index: src.index,
             p: t.p,
             a: ta,
-            surface: t.surface,
+            surface: w.surface_of(t),
             group: t.group,
         });
     }
