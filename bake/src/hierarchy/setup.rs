@@ -44,9 +44,10 @@ pub(super) fn work<'w>(
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
     let (wedges, wedge_start) = s.wedges();
-    let mut quadrics = Quadrics::zeros(s.layout(), wedges.len());
+    let layout = s.layout();
+    let mut quadrics = Quadrics::zeros(layout, wedges.len());
     let faces_of = Stars::of_triangles(np, w.triangles.iter().map(|t| t.p));
-    s.add_triangle_quadrics(&wedges, &wedge_start, quadrics.as_mut());
+    s.add_triangle_quadrics(layout, &wedges, &wedge_start, quadrics.as_mut());
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &wedges, &wedge_start, quadrics.as_mut());
     let info = position_info(w, frozen);
@@ -120,7 +121,7 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// The attributes the quadrics hold: those some vertex has non-zero once scaled.
+    /// The attributes the quadrics hold: those that vary over the vertices once scaled.
     fn layout(&self) -> Layout {
         let w = self.w;
         Layout::of(
@@ -143,9 +144,16 @@ impl<'a> Setup<'a> {
         (wedges, wedge_start)
     }
 
-    /// Each triangle's quadric, added to the wedge of its group at its corners. The quadrics are computed in blocks on all threads
-    /// and added in triangle order, so the sums do not depend on the threads.
-    fn add_triangle_quadrics(&self, wedges: &[Wedge], wedge_start: &[u32], mut q: QuadricsMut<'_>) {
+    /// Each triangle's quadric over the attributes of `layout`, added to the wedge of its
+    /// group at its corners. The quadrics are computed in blocks on all threads and added in
+    /// triangle order, so the sums do not depend on the threads.
+    fn add_triangle_quadrics(
+        &self,
+        layout: Layout,
+        wedges: &[Wedge],
+        wedge_start: &[u32],
+        mut q: QuadricsMut<'_>,
+    ) {
         let (w, p) = (self.w, &self.p);
         let nt = w.triangles.len();
         for first in (0..nt).step_by(QUADRIC_BLOCK) {
@@ -154,7 +162,7 @@ impl<'a> Setup<'a> {
                 let t = &w.triangles[first + i];
                 let s = w
                     .corner_attributes(t)
-                    .map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
+                    .map(|a| layout.only(scaled_attributes(w, a, self.weights, self.diagonal)));
                 Quadric::triangle(t.p.map(|x| p[x as usize]), s)
             });
             by_positions(
