@@ -1,6 +1,8 @@
 //! Setting up the work: the centred points, the wedges and their quadrics (triangles' and
 //! boundary planes'), the triangles with their neighbours, and the leaves' bounds.
 
+use std::borrow::Cow;
+
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
 use super::stars::Stars;
 use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
@@ -43,7 +45,8 @@ pub(super) fn work<'w>(
     let np = w.positions.len();
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
-    let (wedges, wedge_start) = s.wedges();
+    let wedges = s.wedges();
+    let wedge_start = Cow::Borrowed(w.vertices.starts());
     let layout = s.layout();
     let mut quadrics = Quadrics::zeros(layout, wedges.len());
     let faces_of = Stars::of_triangles(np, w.triangles.iter().map(|t| t.p));
@@ -130,18 +133,14 @@ impl<'a> Setup<'a> {
         )
     }
 
-    /// One wedge per surface group at each position, with its attributes; and where each
-    /// position's wedges start.
-    fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
-        let np = self.w.positions.len();
-        let mut wedge_start = Vec::with_capacity(np + 1);
-        let mut wedges = Vec::with_capacity(np);
-        wedge_start.push(0u32);
-        for vs in &self.w.vertices {
-            wedges.extend(vs.iter().map(|&(group, a)| Wedge { group, attr: a }));
-            wedge_start.push(wedges.len() as u32);
-        }
-        (wedges, wedge_start)
+    /// One wedge per surface group at each position, with its attributes: the position's
+    /// vertices, in order (so each position's wedges start where its vertex list does).
+    fn wedges(&self) -> Vec<Wedge> {
+        let vertices = &self.w.vertices;
+        let mut wedges = Vec::with_capacity(vertices.starts().last().map_or(0, |&n| n as usize));
+        let all = vertices.iter().flatten();
+        wedges.extend(all.map(|&(group, attr)| Wedge { group, attr }));
+        wedges
     }
 
     /// Each triangle's quadric over the attributes of `layout`, added to the wedge of its

@@ -59,6 +59,12 @@ impl VertexLists {
         Self { start, entries }
     }
 
+    /// Where each position's list starts in the lists of all positions, and the end:
+    /// `starts()[p]..starts()[p + 1]` is position `p`'s range.
+    pub fn starts(&self) -> &[u32] {
+        &self.start
+    }
+
     /// Number of positions.
     pub fn len(&self) -> usize {
         self.start.len() - 1
