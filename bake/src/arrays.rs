@@ -220,7 +220,7 @@ impl PolygonOrder {
     pub(crate) fn polygon(&self, w: &Welded, f: u32, rot: u8, of: impl Fn(u32) -> u32) -> Polygon {
         let t = &w.triangles[f as usize];
         let group = SurfaceGroupId(w.group_ids[t.group as usize]);
-        self.polygon_of(f, t.p, SurfaceId(t.surface), group, rot, of)
+        self.polygon_of(f, t.p, SurfaceId(w.surface_of(t)), group, rot, of)
     }
 
     /// The polygon of welded triangle `f` with positions `p`, `surface` and `group`, its

@@ -11,9 +11,14 @@
 //! the position is one vector.
 //!
 //! A mesh's quadrics are kept in a [`Quadrics`] table holding only the attributes its
-//! [`Layout`] names: those some vertex has non-zero. An attribute that is zero everywhere
-//! (no UVs, a normal given no weight) adds exact zeros to every sum and cost, so leaving it
-//! out changes no result and saves 32 bytes a quadric.
+//! [`Layout`] names: those that vary over the mesh. An attribute with one value at every
+//! vertex (white where the mesh has no colours, zero where it has no UVs, a normal given no
+//! weight) has that value wherever a cost is evaluated, and its interpolant over every
+//! triangle is that value, so its term of every cost is zero: the triangles' quadrics are
+//! made with it zero ([`Layout::only`]) and the table leaves it out, which saves 32 bytes a
+//! quadric. The costs are then, to the bit, those of the mesh with that attribute zero;
+//! where the value is not zero, the full quadric's terms for it would cancel only up to
+//! their rounding.
 
 /// Attributes per vertex: normal (3), UV (2), colour RGB (3).
 pub const M: usize = 8;
@@ -175,12 +180,14 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// The attributes that are non-zero in some of `values`.
+    /// The attributes that differ between some of `values`.
     pub fn of(values: impl IntoIterator<Item = [f64; M]>) -> Self {
+        let mut values = values.into_iter();
+        let first = values.next().unwrap_or([0.0; M]);
         let mut any = [false; M];
         for s in values {
-            for (a, x) in any.iter_mut().zip(s) {
-                *a |= x != 0.0;
+            for ((a, x), f) in any.iter_mut().zip(s).zip(first) {
+                *a |= x != f;
             }
         }
         let mut layout = Self {
@@ -192,6 +199,15 @@ impl Layout {
             layout.count += 1;
         }
         layout
+    }
+
+    /// `s` with the attributes the layout leaves out zero.
+    pub fn only(&self, s: [f64; M]) -> [f64; M] {
+        let mut out = [0.0; M];
+        for &j in self.attributes() {
+            out[usize::from(j)] = s[usize::from(j)];
+        }
+        out
     }
 
     /// The attributes held, in order.
@@ -322,7 +338,8 @@ impl QuadricsMut<'_> {
         (Self { layout, data: a }, Self { layout, data: b })
     }
 
-    /// Adds `q` to row `i`: its attributes the layout holds (the others must be zero).
+    /// Adds `q` to row `i`: its attributes the layout holds (the others must be zero:
+    /// [`Layout::only`]).
     #[inline]
     pub fn add(&mut self, i: usize, q: &Quadric) {
         let n = self.layout.stride();
@@ -389,7 +406,7 @@ mod tests {
     }
 
     #[test]
-    fn a_table_holds_only_the_attributes_some_vertex_has() {
+    fn a_table_holds_only_the_attributes_that_vary() {
         // UVs (3, 4) and the third colour channel (7), the others zero everywhere.
         let at = |u: f64, v: f64, b: f64| {
             let mut s = [0.0; M];
@@ -419,6 +436,40 @@ mod tests {
             assert_eq!(table.eval(0, x, &s).to_bits(), sum.eval(x, &s).to_bits());
             assert_eq!(table.eval(1, x, &s).to_bits(), b.eval(x, &s).to_bits());
             assert_eq!(table.eval(2, x, &s).to_bits(), a.eval(x, &s).to_bits());
+        }
+    }
+
+    #[test]
+    fn an_attribute_with_one_value_everywhere_is_left_out_and_costs_nothing() {
+        // UV u (3) varies; the colour's red (5) is 0.7 at every vertex.
+        let at = |u: f64| {
+            let mut s = [0.0; M];
+            (s[3], s[5]) = (u, 0.7);
+            s
+        };
+        let values = [at(0.0), at(1.0), at(0.5)];
+        let layout = Layout::of(values);
+        assert_eq!(layout.attributes(), [3]);
+        let p = [[0.1, 0.0, 0.3], [2.0, 0.4, 0.0], [0.0, 1.7, 0.2]];
+        let mut table = Quadrics::zeros(layout, 1);
+        table
+            .as_mut()
+            .add(0, &Quadric::triangle(p, values.map(|s| layout.only(s))));
+        let (full, plain) = (
+            Quadric::triangle(p, values),
+            Quadric::triangle(
+                p,
+                values.map(|s| [s[0], s[1], s[2], s[3], 0.0, 0.0, 0.0, 0.0]),
+            ),
+        );
+        for (x, u) in [([0.2, 0.7, -0.4], 0.9), ([1.0, 1.0, 0.0], 0.25)] {
+            // The cost of the mesh with red zero, to the bit; the full quadric's red terms
+            // are zero but for their rounding.
+            let cost = table.eval(0, x, &at(u));
+            let mut zero_red = at(u);
+            zero_red[5] = 0.0;
+            assert_eq!(cost.to_bits(), plain.eval(x, &zero_red).to_bits());
+            assert!((cost - full.eval(x, &at(u))).abs() <= 1e-12 * (1.0 + cost));
         }
     }
 }

@@ -133,7 +133,7 @@ impl<'w> Checker<'w> {
             HashMap::with_capacity(w.triangles.len());
         for (i, t) in w.triangles.iter().enumerate() {
             let (k, r) = key(t.p.map(|p| w.positions[p as usize]));
-            let old = by_key.insert((t.surface, k), (i as u32, r));
+            let old = by_key.insert((w.surface_of(t), k), (i as u32, r));
             assert!(old.is_none(), "two welded triangles with the same corners");
         }
         let welded_of = h
@@ -201,7 +201,7 @@ impl<'w> Checker<'w> {
         let mut want: Vec<(u16, Key)> = w
             .triangles
             .iter()
-            .map(|t| (t.surface, key(t.p.map(|p| w.positions[p as usize])).0))
+            .map(|t| (w.surface_of(t), key(t.p.map(|p| w.positions[p as usize])).0))
             .collect();
         let mut got: Vec<(u16, Key)> = cam
             .active_polygons(h)
@@ -229,7 +229,7 @@ impl<'w> Checker<'w> {
             let tri = &w.triangles[t as usize];
             for k in 0..3 {
                 let v = h.vertices()[out[cursor[s] as usize + k] as usize];
-                let a = &w.attributes[tri.a[(k + rot as usize) % 3] as usize];
+                let a = &w.attributes[w.corner_attributes(tri)[(k + rot as usize) % 3] as usize];
                 assert_eq!(
                     v.position,
                     w.positions[tri.p[(k + rot as usize) % 3] as usize]

@@ -74,7 +74,7 @@ fn assert_invariants(w: &Welded) {
                 "position {x} has two fans"
             );
             fan_of[x] = r;
-            entries[x].push((t.group, t.a[k]));
+            entries[x].push((t.group, w.corner_attributes(t)[k]));
         }
     }
     for (x, mut e) in entries.into_iter().enumerate() {
@@ -105,12 +105,10 @@ fn assert_same_triangles(a: &Welded, b: &Welded) {
     assert_eq!(a.positions.len(), b.positions.len(), "positions");
     assert_eq!(a.repairs, b.repairs, "repairs");
     for (ta, tb) in matched_triangles(a, b) {
-        assert_eq!(ta.surface, tb.surface);
+        assert_eq!(a.surface_of(ta), b.surface_of(tb));
+        let (aa, ab) = (a.corner_attributes(ta), b.corner_attributes(tb));
         for k in 0..3 {
-            let (x, y) = (
-                &a.attributes[ta.a[k] as usize],
-                &b.attributes[tb.a[k] as usize],
-            );
+            let (x, y) = (&a.attributes[aa[k] as usize], &b.attributes[ab[k] as usize]);
             assert_eq!((x.normal, x.uv, x.color), (y.normal, y.uv, y.color));
         }
     }
@@ -278,9 +276,10 @@ fn refused_edges(w: &Welded) -> usize {
             let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
             if let Some(&(o, j)) = by_edge.get(&(b, a)) {
                 let u = &w.triangles[o];
-                let matching = u.surface == t.surface
-                    && u.a[(j + 1) % 3] == t.a[k]
-                    && u.a[j] == t.a[(k + 1) % 3];
+                let (ua, ta) = (w.corner_attributes(u), w.corner_attributes(t));
+                let matching = w.surface_of(u) == w.surface_of(t)
+                    && ua[(j + 1) % 3] == ta[k]
+                    && ua[j] == ta[(k + 1) % 3];
                 if f < o && matching && u.group != t.group {
                     n += 1;
                 }

@@ -26,11 +26,12 @@ fn a_stored_mesh_reads_back_as_the_same_mesh_renumbered() {
     for (f, t) in back.triangles.iter().enumerate() {
         let o = &w.triangles[origins.triangles[f] as usize];
         assert_eq!(t.p.map(|x| origins.positions[x as usize]), o.p);
-        assert_eq!((t.surface, t.group), (o.surface, o.group));
+        assert_eq!((back.surface_of(t), t.group), (w.surface_of(o), o.group));
+        let (at, ao) = (back.corner_attributes(t), w.corner_attributes(o));
         for k in 0..3 {
             assert_eq!(
-                back.attributes[t.a[k] as usize],
-                w.attributes[o.a[k] as usize]
+                back.attributes[at[k] as usize],
+                w.attributes[ao[k] as usize]
             );
         }
     }

@@ -45,22 +45,14 @@ pub(super) fn extract(
         .zip(&stored)
         .map(|(&f, t)| {
             let p = [0, 1, 2].map(|k| at(f, k));
-            // A corner's attributes are its position's vertex of the triangle's group.
-            let a = [0, 1, 2].map(|k| {
-                let x = local(p[k]) as usize;
-                attr(crate::weld_store::corner_attributes(
-                    &lists, x as u32, t.group,
-                ))
-            });
             WeldedTri {
                 p: p.map(local),
-                a,
-                surface: t.surface,
                 group: t.group,
             }
         })
         .collect();
     let info = store.info();
+    let group_surfaces = crate::weld_store::group_surfaces(&stored, info.group_count);
     let vertices: VertexLists = (0..lists.len())
         .map(|x| lists.of(x).iter().map(|&[g, a]| (g, attr(a))))
         .collect();
@@ -71,6 +63,7 @@ pub(super) fn extract(
         triangles,
         group_count: info.group_count,
         group_ids: info.group_ids.clone(),
+        group_surfaces,
         group_id_count: info.group_id_count,
         surface_count: info.surface_count,
         has_colors: info.has_colors,

@@ -26,7 +26,7 @@ impl Work<'_> {
         );
         let at = self.wedges_at(pt);
         let (p, wedges) = (self.at(pt), &self.wedges);
-        (self.wedge_start[pu] as usize..self.wedge_start[pu + 1] as usize)
+        self.wedge_range(pu)
             .map(|i| match at.iter().find(|wt| wt.group == wedges[i].group) {
                 Some(wt) => self.quadrics.eval(i, p, &self.attrs_of(wt)),
                 None => f64::INFINITY,

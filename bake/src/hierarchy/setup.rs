@@ -1,6 +1,8 @@
 //! Setting up the work: the centred points, the wedges and their quadrics (triangles' and
 //! boundary planes'), the triangles with their neighbours, and the leaves' bounds.
 
+use std::borrow::Cow;
+
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
 use super::stars::Stars;
 use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
@@ -43,10 +45,12 @@ pub(super) fn work<'w>(
     let np = w.positions.len();
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
-    let (wedges, wedge_start) = s.wedges();
-    let mut quadrics = Quadrics::zeros(s.layout(), wedges.len());
+    let wedges = s.wedges();
+    let wedge_start = Cow::Borrowed(w.vertices.starts());
+    let layout = s.layout();
+    let mut quadrics = Quadrics::zeros(layout, wedges.len());
     let faces_of = Stars::of_triangles(np, w.triangles.iter().map(|t| t.p));
-    s.add_triangle_quadrics(&wedges, &wedge_start, quadrics.as_mut());
+    s.add_triangle_quadrics(layout, &wedges, &wedge_start, quadrics.as_mut());
     let tris = s.triangles(&faces_of);
     s.add_boundary_planes(&tris, &wedges, &wedge_start, quadrics.as_mut());
     let info = position_info(w, frozen);
@@ -120,7 +124,7 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// The attributes the quadrics hold: those some vertex has non-zero once scaled.
+    /// The attributes the quadrics hold: those that vary over the vertices once scaled.
     fn layout(&self) -> Layout {
         let w = self.w;
         Layout::of(
@@ -129,31 +133,35 @@ impl<'a> Setup<'a> {
         )
     }
 
-    /// One wedge per surface group at each position, with its attributes; and where each
-    /// position's wedges start.
-    fn wedges(&self) -> (Vec<Wedge>, Vec<u32>) {
-        let np = self.w.positions.len();
-        let mut wedge_start = Vec::with_capacity(np + 1);
-        let mut wedges = Vec::with_capacity(np);
-        wedge_start.push(0u32);
-        for vs in &self.w.vertices {
-            wedges.extend(vs.iter().map(|&(group, a)| Wedge { group, attr: a }));
-            wedge_start.push(wedges.len() as u32);
-        }
-        (wedges, wedge_start)
+    /// One wedge per surface group at each position, with its attributes: the position's
+    /// vertices, in order (so each position's wedges start where its vertex list does).
+    fn wedges(&self) -> Vec<Wedge> {
+        let vertices = &self.w.vertices;
+        let mut wedges = Vec::with_capacity(vertices.starts().last().map_or(0, |&n| n as usize));
+        let all = vertices.iter().flatten();
+        wedges.extend(all.map(|&(group, attr)| Wedge { group, attr }));
+        wedges
     }
 
-    /// Each triangle's quadric, added to the wedge of its group at its corners. The quadrics are computed in blocks on all threads
-    /// and added in triangle order, so the sums do not depend on the threads.
-    fn add_triangle_quadrics(&self, wedges: &[Wedge], wedge_start: &[u32], mut q: QuadricsMut<'_>) {
+    /// Each triangle's quadric over the attributes of `layout`, added to the wedge of its
+    /// group at its corners. The quadrics are computed in blocks on all threads and added in
+    /// triangle order, so the sums do not depend on the threads.
+    fn add_triangle_quadrics(
+        &self,
+        layout: Layout,
+        wedges: &[Wedge],
+        wedge_start: &[u32],
+        mut q: QuadricsMut<'_>,
+    ) {
         let (w, p) = (self.w, &self.p);
         let nt = w.triangles.len();
         for first in (0..nt).step_by(QUADRIC_BLOCK) {
             let n = (nt - first).min(QUADRIC_BLOCK);
             let block = par_map(n, self.threads, |i| {
                 let t = &w.triangles[first + i];
-                let s =
-                    t.a.map(|a| scaled_attributes(w, a, self.weights, self.diagonal));
+                let s = w
+                    .corner_attributes(t)
+                    .map(|a| layout.only(scaled_attributes(w, a, self.weights, self.diagonal)));
                 Quadric::triangle(t.p.map(|x| p[x as usize]), s)
             });
             by_positions(

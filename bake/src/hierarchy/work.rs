@@ -1,6 +1,8 @@
 //! The mesh being simplified: triangles with their neighbours, the triangles around every
 //! node, the wedges' quadrics, and the bounds recorded per node.
 
+use std::borrow::Cow;
+
 use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
@@ -69,9 +71,11 @@ pub(super) struct Work<'w> {
     pub(super) valence: Vec<u32>,
     pub(super) node_pos: Vec<u32>,
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]` (none once the
-    /// position is removed and [`Work::release_removed_wedges`] has run).
+    /// position is removed and [`Work::release_removed_wedges`] has run). A position's
+    /// wedges are its vertices, in the same order, so until the first release the starts
+    /// are the welded mesh's vertex lists' own, borrowed rather than copied.
     pub(super) wedges: Vec<Wedge>,
-    pub(super) wedge_start: Vec<u32>,
+    pub(super) wedge_start: Cow<'w, [u32]>,
     /// The quadric of every wedge, by its index.
     pub(super) quadrics: Quadrics,
     /// Collapses whose removed positions' wedges are released.
@@ -111,7 +115,14 @@ impl Work<'_> {
 
     #[inline]
     pub(super) fn wedges_at(&self, pos: usize) -> &[Wedge] {
-        &self.wedges[self.wedge_start[pos] as usize..self.wedge_start[pos + 1] as usize]
+        &self.wedges[self.wedge_range(pos)]
+    }
+
+    /// The indices of position `pos`'s wedges (and quadrics).
+    #[inline]
+    pub(super) fn wedge_range(&self, pos: usize) -> std::ops::Range<usize> {
+        let start = &*self.wedge_start;
+        start[pos] as usize..start[pos + 1] as usize
     }
 
     /// The triangle with the directed edge `a → b` and the corner of `a` in it.
@@ -213,10 +224,11 @@ impl Work<'_> {
             gone[gone_at(c)] = true;
         }
         // The wedges of the kept positions since the last removed one, and where they go.
+        let mut start = std::mem::take(&mut self.wedge_start).into_owned();
         let (mut run, mut kept) = (0..0, 0);
         for (x, gone) in gone.into_iter().enumerate() {
-            let hi = self.wedge_start[x + 1] as usize;
-            self.wedge_start[x] = (kept + run.len()) as u32;
+            let hi = start[x + 1] as usize;
+            start[x] = (kept + run.len()) as u32;
             if gone {
                 self.move_wedges(run.clone(), kept);
                 kept += run.len();
@@ -228,7 +240,8 @@ impl Work<'_> {
         self.move_wedges(run.clone(), kept);
         kept += run.len();
         let end = self.positions();
-        self.wedge_start[end] = kept as u32;
+        start[end] = kept as u32;
+        self.wedge_start = Cow::Owned(start);
         self.wedges.truncate(kept);
         self.wedges.shrink_to_fit();
         self.quadrics.truncate(kept);

@@ -118,15 +118,14 @@ impl Attributes {
     }
 }
 
-/// One welded triangle.
+/// One welded triangle: 16 bytes. Its corners' attributes and its surface are its
+/// group's: a surface group lies on one surface and has one attribute set at each of its
+/// positions, so a corner's attributes are its position's vertex of the group
+/// ([`Welded::corner_attributes`]) and the surface the group's ([`Welded::surface_of`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WeldedTri {
     /// Position ids, counter-clockwise.
     pub p: [u32; 3],
-    /// Per-corner attribute ids into [`Welded::attributes`].
-    pub a: [u32; 3],
-    /// Surface.
-    pub surface: u16,
     /// Surface group (before colouring).
     pub group: u32,
 }
@@ -179,6 +178,8 @@ pub struct Welded {
     pub group_count: u32,
     /// Surface-group id of each group (the colouring).
     pub group_ids: Vec<u16>,
+    /// Surface of each group.
+    pub group_surfaces: Vec<u16>,
     /// Number of surface-group ids.
     pub group_id_count: u32,
     /// Number of surfaces.
@@ -190,6 +191,20 @@ pub struct Welded {
     pub vertices: VertexLists,
     /// What was repaired.
     pub repairs: Repairs,
+}
+
+impl Welded {
+    /// The attribute ids (into [`Welded::attributes`]) of `t`'s corners: at each, the
+    /// vertex of `t`'s group at the corner's position.
+    pub fn corner_attributes(&self, t: &WeldedTri) -> [u32; 3] {
+        t.p.map(|x| self.vertices.attributes_of(x as usize, t.group))
+    }
+
+    /// The surface of `t` (its group's).
+    #[inline]
+    pub fn surface_of(&self, t: &WeldedTri) -> u16 {
+        self.group_surfaces[t.group as usize]
+    }
 }
 
 /// Why welding failed.
@@ -285,6 +300,8 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     let (attributes, tri_attrs) =
         attributes::corner_attributes(mesh, &kept, &positions, &mut repairs);
     let groups = groups::grow_groups(mesh, &kept, &tri_attrs, &opp, positions.len());
+    // A corner's attributes are its position's vertex of its triangle's group from here on.
+    drop(tri_attrs);
     let classes = groups::classify(&kept, &opp, &groups.group, positions.len());
     // The steps below build the result: the repair tables go first, so they and the result
     // never take memory at once.
@@ -303,15 +320,13 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
     };
     let triangles = kept
         .iter()
-        .zip(&tri_attrs)
         .enumerate()
-        .map(|(f, (&(p, i), &a))| WeldedTri {
-            p,
-            a,
-            surface: mesh.triangles[i as usize].surface,
-            group: group[f],
-        })
+        .map(|(f, &(p, _))| WeldedTri { p, group: group[f] })
         .collect();
+    let mut group_surfaces = vec![0u16; count as usize];
+    for (&g, &(_, i)) in group.iter().zip(&kept) {
+        group_surfaces[g as usize] = mesh.triangles[i as usize].surface;
+    }
     let welded = Welded {
         positions,
         classes,
@@ -319,6 +334,7 @@ pub(crate) fn weld_traced(mesh: &Mesh) -> Result<(Welded, Trace), WeldError> {
         triangles,
         group_count: count,
         group_ids: colour.iter().map(|&c| c as u16).collect(),
+        group_surfaces,
         group_id_count: colour_count,
         surface_count: mesh.surfaces.len().max(1) as u32,
         has_colors: mesh.triangles.iter().any(|t| {

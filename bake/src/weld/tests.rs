@@ -163,6 +163,11 @@ fn a_uv_seam_makes_two_groups_and_classes_follow_boundaries() {
     assert_eq!(w.classes, vec![Rigid, Sharp, Rigid, Sharp]);
     assert_eq!(w.vertices[0].len(), 2);
     assert_eq!(w.vertices[1].len(), 1);
+    // Each corner's attributes are its position's vertex of its triangle's group.
+    for (t, &uv) in w.triangles.iter().zip(&m.uvs) {
+        let a = w.corner_attributes(t);
+        assert!(a.iter().all(|&a| w.attributes[a as usize].uv == uv));
+    }
     // The same UVs everywhere: one group, the diagonal no boundary.
     m.triangles[1].uv = [0, 0, 0];
     let w = weld(&m).expect("weld");
@@ -197,6 +202,12 @@ fn a_closed_mesh_is_free_and_groups_that_share_no_position_share_an_id() {
     assert_eq!(w.group_count, 2);
     assert_eq!(w.group_id_count, 1);
     assert_eq!(w.surface_count, 2);
+    let surfaces: Vec<u16> = w.triangles.iter().map(|t| w.surface_of(t)).collect();
+    assert_eq!(
+        surfaces,
+        [0, 0, 0, 0, 1, 1, 1, 1],
+        "each triangle its group's surface"
+    );
     assert_eq!(w.repairs.computed_normals, 24);
     assert_manifold(&w);
 }

@@ -59,6 +59,12 @@ impl VertexLists {
         Self { start, entries }
     }
 
+    /// Where each position's list starts in the lists of all positions, and the end:
+    /// `starts()[p]..starts()[p + 1]` is position `p`'s range.
+    pub fn starts(&self) -> &[u32] {
+        &self.start
+    }
+
     /// Number of positions.
     pub fn len(&self) -> usize {
         self.start.len() - 1
@@ -67,6 +73,17 @@ impl VertexLists {
     /// Whether there is no position.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// The attribute id of `group`'s vertex at position `p` (of the position's first vertex
+    /// if the group has none there, which a triangle's corner never asks).
+    #[inline]
+    pub fn attributes_of(&self, p: usize, group: u32) -> u32 {
+        let vs = &self[p];
+        vs.iter()
+            .find(|&&(g, _)| g == group)
+            .or(vs.first())
+            .map_or(0, |&(_, a)| a)
     }
 
     /// Each position's list, in position order.

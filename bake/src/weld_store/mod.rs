@@ -42,12 +42,13 @@ pub struct StoredTri {
     pub reserved: u16,
 }
 
-impl From<&WeldedTri> for StoredTri {
-    fn from(t: &WeldedTri) -> Self {
+impl StoredTri {
+    /// Welded triangle `t` of surface `surface`.
+    pub fn of(t: &WeldedTri, surface: u16) -> Self {
         Self {
             p: t.p,
             group: t.group,
-            surface: t.surface,
+            surface,
             reserved: 0,
         }
     }
@@ -158,6 +159,7 @@ impl WeldedStore {
             attributes,
             triangles,
             vertices,
+            group_surfaces,
             ..
         } = w;
         let mut out = StoreWriter::new()?;
@@ -173,7 +175,11 @@ impl WeldedStore {
         let mut stored = Vec::with_capacity(1 << 16);
         for chunk in triangles.chunks(1 << 16) {
             stored.clear();
-            stored.extend(chunk.iter().map(StoredTri::from));
+            stored.extend(
+                chunk
+                    .iter()
+                    .map(|t| StoredTri::of(t, group_surfaces[t.group as usize])),
+            );
             out.push_triangles(&stored)?;
         }
         drop(triangles);
@@ -323,17 +329,16 @@ impl WeldedStore {
     pub fn into_welded(self) -> std::io::Result<Welded> {
         let np = self.positions() as u32;
         let lists = self.read_vertex_lists(0..np)?;
-        let triangles = self
-            .triangles
-            .read_all()?
+        let stored = self.triangles.read_all()?;
+        let group_surfaces = group_surfaces(&stored, self.info.group_count);
+        let triangles = stored
             .iter()
             .map(|t| WeldedTri {
                 p: t.p,
-                a: t.p.map(|x| corner_attributes(&lists, x, t.group)),
-                surface: t.surface,
                 group: t.group,
             })
             .collect();
+        drop(stored);
         let vertices: VertexLists = (0..lists.len())
             .map(|x| lists.of(x).iter().map(|&[g, a]| (g, a)))
             .collect();
@@ -349,6 +354,7 @@ impl WeldedStore {
             triangles,
             group_count: self.info.group_count,
             group_ids: self.info.group_ids,
+            group_surfaces,
             group_id_count: self.info.group_id_count,
             surface_count: self.info.surface_count,
             has_colors: self.info.has_colors,
@@ -358,13 +364,16 @@ impl WeldedStore {
     }
 }
 
-/// The attribute set of a corner at position `x` (of `lists`) of a triangle of `group`: the
-/// position's vertex of that group (its first if it has none, which a weld never leaves).
-pub fn corner_attributes(lists: &PositionLists, x: u32, group: u32) -> u32 {
-    let vs = lists.of(x as usize);
-    vs.iter()
-        .find(|&&[g, _]| g == group)
-        .map_or(vs.first().map_or(0, |v| v[1]), |v| v[1])
+/// The surface of each of `groups` groups, from the triangles `stored` (a group lies on one
+/// surface; a group without a triangle there gets surface 0).
+pub(crate) fn group_surfaces(stored: &[StoredTri], groups: u32) -> Vec<u16> {
+    let mut surfaces = vec![0u16; groups as usize];
+    for t in stored {
+        if let Some(s) = surfaces.get_mut(t.group as usize) {
+            *s = t.surface;
+        }
+    }
+    surfaces
 }
 
 /// A stored class.

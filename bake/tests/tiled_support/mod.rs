@@ -46,14 +46,12 @@ pub fn assert_same(a: &Welded, b: &Welded) {
         m[x as usize] = y;
     };
     for (ta, tb) in matched_triangles(a, b) {
-        assert_eq!(ta.surface, tb.surface);
+        assert_eq!(a.surface_of(ta), b.surface_of(tb));
         map(&mut group, ta.group, tb.group, "group");
+        let (aa, ab) = (a.corner_attributes(ta), b.corner_attributes(tb));
         for k in 0..3 {
             map(&mut pos, ta.p[k], tb.p[k], "position");
-            assert_eq!(
-                a.attributes[ta.a[k] as usize],
-                b.attributes[tb.a[k] as usize]
-            );
+            assert_eq!(a.attributes[aa[k] as usize], b.attributes[ab[k] as usize]);
         }
     }
     let mut images: Vec<u32> = pos.iter().copied().filter(|&x| x != u32::MAX).collect();

@@ -12,19 +12,19 @@ use caveclod_core::format::PositionClass;
 use hashbrown::hash_table::{Entry, HashTable};
 
 use super::super::groups::{colour_groups, Groups, VertexOf};
-use super::super::{Attributes, Repairs, VertexLists, WeldError, WeldedTri};
+use super::super::{Attributes, Repairs, VertexLists, WeldError};
 use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
 use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink};
 use crate::fxhash::{hash_of, map_with_capacity, FxHashMap};
 use crate::weld::WeldInfo;
+use crate::weld_store::StoredTri;
 
 /// A triangle waiting for its group.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 struct SpooledTri {
     p: [u32; 3],
-    a: [u32; 3],
     node: u32,
     surface: u32,
 }
@@ -126,7 +126,6 @@ impl Joiner {
             *first = (*first).min(tri.index);
             self.triangles.push(SpooledTri {
                 p,
-                a,
                 node,
                 surface: u32::from(tri.surface),
             })?;
@@ -291,14 +290,14 @@ impl Joiner {
             sink.push_position(xyz, self.classes[x], &list)?;
         }
         drop(vertices);
-        let mut batch: Vec<WeldedTri> = Vec::with_capacity(PUSH);
+        let mut batch: Vec<StoredTri> = Vec::with_capacity(PUSH);
         self.triangles.for_each_chunk(|chunk| {
             batch.clear();
-            batch.extend(chunk.iter().map(|t| WeldedTri {
+            batch.extend(chunk.iter().map(|t| StoredTri {
                 p: t.p,
-                a: t.a,
-                surface: t.surface as u16,
                 group: group_of[t.node as usize],
+                surface: t.surface as u16,
+                reserved: 0,
             }));
             sink.push_triangles(&batch)
         })?;

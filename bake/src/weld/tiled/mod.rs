@@ -60,6 +60,7 @@ use rayon::prelude::*;
 
 use super::{Attributes, Repairs, VertexLists, WeldError, WeldInfo, Welded, WeldedTri, NONE};
 use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::weld_store::StoredTri;
 use join::Joiner;
 
 /// One input triangle: its welded positions and its corners' attributes as imported.
@@ -151,8 +152,8 @@ pub trait WeldSink {
     ) -> io::Result<()>;
     /// The next attribute sets (ids in push order).
     fn push_attributes(&mut self, attributes: &[Attributes]) -> io::Result<()>;
-    /// Triangles, in any order.
-    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()>;
+    /// Triangles, in any order, each with its group and surface.
+    fn push_triangles(&mut self, triangles: &[StoredTri]) -> io::Result<()>;
 }
 
 /// A [`WeldSink`] into a [`Welded`] in memory.
@@ -181,8 +182,19 @@ impl WeldSink for WeldedBuilder {
         Ok(())
     }
 
-    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()> {
-        self.w.triangles.extend_from_slice(triangles);
+    fn push_triangles(&mut self, triangles: &[StoredTri]) -> io::Result<()> {
+        let w = &mut self.w;
+        for t in triangles {
+            let g = t.group as usize;
+            if g >= w.group_surfaces.len() {
+                w.group_surfaces.resize(g + 1, 0);
+            }
+            w.group_surfaces[g] = t.surface;
+            w.triangles.push(WeldedTri {
+                p: t.p,
+                group: t.group,
+            });
+        }
         Ok(())
     }
 }
@@ -198,6 +210,7 @@ impl WeldedBuilder {
             .collect::<VertexLists>();
         w.group_count = summary.group_count;
         w.group_ids = summary.group_ids;
+        w.group_surfaces.resize(summary.group_count as usize, 0);
         w.group_id_count = summary.group_id_count;
         w.surface_count = summary.surface_count;
         w.has_colors = summary.has_colors;

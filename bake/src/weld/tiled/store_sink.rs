@@ -5,7 +5,7 @@ use std::io;
 use caveclod_core::format::PositionClass;
 
 use super::WeldSink;
-use crate::weld::{Attributes, WeldedTri};
+use crate::weld::Attributes;
 use crate::weld_store::{StoreWriter, StoredTri};
 
 impl WeldSink for StoreWriter {
@@ -22,8 +22,7 @@ impl WeldSink for StoreWriter {
         StoreWriter::push_attributes(self, attributes)
     }
 
-    fn push_triangles(&mut self, triangles: &[WeldedTri]) -> io::Result<()> {
-        let stored: Vec<StoredTri> = triangles.iter().map(StoredTri::from).collect();
-        StoreWriter::push_triangles(self, &stored)
+    fn push_triangles(&mut self, triangles: &[StoredTri]) -> io::Result<()> {
+        StoreWriter::push_triangles(self, triangles)
     }
 }

@@ -163,6 +163,7 @@ pub(super) fn weld_tile(
             continue;
         }
         let src = source[f];
+        let ta = w.corner_attributes(t);
         // The welded triangle keeps the source's corner order.
         for k in 0..3 {
             let given = src.has_normal(k);
@@ -174,7 +175,7 @@ pub(super) fn weld_tile(
                 let n = src.normal[k].map(f64::from);
                 dot(n, g) >= min_cos * (dot(n, n) * dot(g, g)).sqrt()
             };
-            attributes[t.a[k] as usize].normal_from_geometry &= from_geometry;
+            attributes[ta[k] as usize].normal_from_geometry &= from_geometry;
         }
         if src.p.iter().any(|&x| mesh.owner[x as usize] == SHARED) {
             band_groups.push((src.index, t.group));
@@ -191,10 +192,11 @@ pub(super) fn weld_tile(
                 Across::Group(w.triangles[o as usize].group)
             } else {
                 let ot = &w.triangles[o as usize];
-                let corner = |x: u32| ot.p.iter().position(|&y| y == x).map(|j| ot.a[j]);
-                let matching = ot.surface == t.surface
-                    && corner(a) == Some(t.a[k])
-                    && corner(b) == Some(t.a[(k + 1) % 3]);
+                let oa = w.corner_attributes(ot);
+                let corner = |x: u32| ot.p.iter().position(|&y| y == x).map(|j| oa[j]);
+                let matching = w.surface_of(ot) == w.surface_of(t)
+                    && corner(a) == Some(ta[k])
+                    && corner(b) == Some(ta[(k + 1) % 3]);
                 if matching {
                     joins.push((t.group, source[o as usize].index));
                 }
@@ -215,8 +217,8 @@ pub(super) fn weld_tile(
         triangles.push(OwnTriangle {
             index: src.index,
             p: t.p,
-            a: t.a,
-            surface: t.surface,
+            a: ta,
+            surface: w.surface_of(t),
             group: t.group,
         });
     }
