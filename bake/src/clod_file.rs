@@ -81,24 +81,28 @@ fn stream_error(e: StreamError<std::io::Error>) -> BakeWriteError {
     }
 }
 
+/// What a read-back check hands the validated hierarchy of the written file to, before the
+/// rename: a caller's report on the file is then made from the very bytes that were
+/// validated, without validating them again.
+pub type Inspect<'i> = &'i mut dyn FnMut(&Hierarchy<'_>);
+
 /// Whether the written file is read back and validated before it replaces the target.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Check {
+pub enum Check<'i> {
     /// The sections were validated before writing ([`caveclod_core::format::validate_parts`]).
     Validated,
     /// Validate the written file ([`Hierarchy::from_bytes`]: checksum, section table, every
-    /// record) before the rename.
-    ReadBack,
+    /// record) before the rename, then hand its hierarchy to the [`Inspect`].
+    ReadBack(Inspect<'i>),
 }
 
 /// Writes the file planned by `specs` at `path`: `fill` gives every section's bytes in
 /// order ([`Sections::put`]); then the header goes at the start, the file is synced,
-/// validated if `check` asks, and renamed over `path`. Returns the file's length. On any
+/// validated and inspected if `check` asks, and renamed over `path`. Returns the file's length. On any
 /// failure the temporary file is removed and `path` is untouched.
 pub fn write_sections(
     path: &Path,
     specs: &[SectionSpec],
-    check: Check,
+    check: Check<'_>,
     fill: impl FnOnce(&mut Sections<'_>) -> Result<(), BakeWriteError>,
 ) -> Result<u64, BakeWriteError> {
     let plan = FilePlan::new(specs).map_err(BakeWriteError::Invalid)?;
@@ -126,8 +130,8 @@ pub fn write_sections(
         file.write_all(bytemuck::bytes_of(&header))
             .map_err(Failure::Io)?;
         file.sync_all().map_err(Failure::Io)?;
-        if check == Check::ReadBack {
-            validate_written(&mut file)?;
+        if let Check::ReadBack(inspect) = check {
+            validate_written(&mut file, inspect)?;
         }
         std::fs::rename(&tmp, path).map_err(Failure::Io)?;
         Ok(plan.file_len())
@@ -164,28 +168,28 @@ pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
 /// ([`with_pages_released`]).
 const RELEASE_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
 
-/// Validates the written file as a reader would: mapped (page aligned) when the system
-/// allows, otherwise read into an aligned buffer.
-fn validate_written(file: &mut File) -> Result<(), Failure> {
+/// Validates the written file as a reader would, and hands its hierarchy to `inspect`:
+/// mapped (page aligned) when the system allows, otherwise read into an aligned buffer.
+fn validate_written(file: &mut File, inspect: Inspect<'_>) -> Result<(), Failure> {
     // SAFETY: the map is read-only and shared; the file is this process's own temporary
     // file, which nothing else writes while it is mapped.
     match unsafe { memmap2::Mmap::map(&*file) } {
-        Ok(map) => check_released(&map),
+        Ok(map) => check_released(&map, inspect),
         Err(_) => {
             let len = file.metadata().map_err(Failure::Io)?.len() as usize;
             let mut words = vec![0u64; len.div_ceil(8)];
             let bytes = &mut bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..len];
             file.seek(SeekFrom::Start(0)).map_err(Failure::Io)?;
             file.read_exact(bytes).map_err(Failure::Io)?;
-            check(bytes)
+            check(bytes, inspect)
         }
     }
 }
 
-/// [`check`] of a mapped file whose pages leave the process as the check goes
-/// ([`with_pages_released`]).
-fn check_released(map: &memmap2::Mmap) -> Result<(), Failure> {
-    with_pages_released(map, || check(map))
+/// [`check`] of a mapped file whose pages leave the process as the check and the inspection
+/// go ([`with_pages_released`]).
+fn check_released(map: &memmap2::Mmap, inspect: Inspect<'_>) -> Result<(), Failure> {
+    with_pages_released(map, || check(map, inspect))
 }
 
 /// Runs `f`, which reads the mapped file `map`, while a second thread tells the system every
@@ -215,8 +219,10 @@ pub fn with_pages_released<R>(map: &memmap2::Mmap, f: impl FnOnce() -> R) -> R {
     })
 }
 
-fn check(bytes: &[u8]) -> Result<(), Failure> {
-    Hierarchy::from_bytes(bytes)
-        .map(|_| ())
-        .map_err(|e| Failure::Bake(BakeWriteError::Invalid(WriteError::Invalid(e))))
+/// Validates `bytes` as a reader does, then hands the hierarchy to `inspect`.
+fn check(bytes: &[u8], inspect: Inspect<'_>) -> Result<(), Failure> {
+    let h = Hierarchy::from_bytes(bytes)
+        .map_err(|e| Failure::Bake(BakeWriteError::Invalid(WriteError::Invalid(e))))?;
+    inspect(&h);
+    Ok(())
 }

@@ -19,7 +19,7 @@ use caveclod_core::format::ExtraSection;
 
 use crate::arrays::{self, NodeIds, PolygonOrder};
 use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check};
+use crate::clod_file::{write_sections, Check, Inspect};
 use crate::hierarchy::Hierarchy as Collapses;
 use crate::materials::{has_materials, MaterialSections, TexturePaths};
 use crate::mesh::Surface;
@@ -29,7 +29,8 @@ use crate::weld::Welded;
 /// materials (texture paths relative to `texture_dir`, stored relative to `path`'s
 /// directory) and `extra` sections, at `path`, one array at a time. The mesh and the
 /// collapses are dropped once the last array is written, before the written temporary file
-/// is validated and renamed over `path`. Returns the file's length.
+/// is validated, its hierarchy handed to `inspect`, and renamed over `path`. Returns the
+/// file's length.
 pub fn write(
     w: Welded,
     h: Collapses,
@@ -37,6 +38,7 @@ pub fn write(
     texture_dir: &Path,
     path: &Path,
     extra: &[ExtraSection<'_>],
+    inspect: Inspect<'_>,
 ) -> Result<u64, BakeWriteError> {
     let appearance = Appearance::new(&w, surfaces, texture_dir, path)?;
     let sections = appearance.then(extra);
@@ -45,7 +47,7 @@ pub fn write(
     let polys = PolygonOrder::number(w.triangles.len(), &h, &ids);
     let meta = arrays::meta(&w, &h, &ids, &polys);
     let specs = section_specs(&meta, &sections);
-    write_sections(path, &specs, Check::ReadBack, move |out| {
+    write_sections(path, &specs, Check::ReadBack(inspect), move |out| {
         out.put(std::slice::from_ref(&meta))?;
         out.put_iter(arrays::position_records(&w))?;
         out.put_iter(ids.node_records(&h))?;
