@@ -67,6 +67,35 @@ impl Sections<'_> {
         }
         self.put(&chunk)
     }
+
+    /// The records `record(0)`, ..., `record(n - 1)` of the current section, made on all
+    /// cores [`CHUNK_RECORDS`] at a time while the chunk before is written: each record
+    /// depends on its index alone, so the bytes are those of a loop on one thread. Two
+    /// chunks are in memory at once, never the section.
+    pub fn put_indexed<T: Pod + Send + Sync>(
+        &mut self,
+        n: usize,
+        record: impl Fn(usize) -> T + Sync + Send,
+    ) -> Result<(), BakeWriteError> {
+        let make = |chunk: &mut Vec<T>, range: Range<usize>| {
+            chunk.clear();
+            chunk.par_extend(range.into_par_iter().map(&record));
+        };
+        let mut ready = Vec::with_capacity(CHUNK_RECORDS.min(n));
+        let mut next = Vec::with_capacity(CHUNK_RECORDS.min(n));
+        make(&mut ready, 0..CHUNK_RECORDS.min(n));
+        let mut at = ready.len();
+        loop {
+            let end = (at + CHUNK_RECORDS).min(n);
+            let (written, ()) = rayon::join(|| self.put(&ready), || make(&mut next, at..end));
+            written?;
+            if at == end {
+                return Ok(());
+            }
+            std::mem::swap(&mut ready, &mut next);
+            at = end;
+        }
+    }
 }
 
 /// What a failed step of the section writer becomes; the caller adds the path to an I/O error.

@@ -1,10 +1,13 @@
 //! Writing a `.clod` file straight from the welded mesh and its collapses, one array at a
 //! time and each array in chunks: its records are made in file order (as
-//! [`Baked::new`](crate::baked::Baked::new) collects them) and written a chunk at a time
-//! ([`Sections::put_iter`](crate::clod_file::Sections::put_iter)), so the write step holds
-//! the inputs, the numbering tables (`u32` per node, split and triangle) and one chunk,
-//! never an array whole (as a [`Baked`](crate::baked::Baked) does) nor the file's bytes. Only
-//! the roots and the base mesh, both as small as the coarsest mesh, are made whole.
+//! [`Baked::new`](crate::baked::Baked::new) collects them), each from its index on all
+//! cores while the chunk before is written
+//! ([`Sections::put_indexed`](crate::clod_file::Sections::put_indexed)), so the write step
+//! holds the inputs, the numbering tables (`u32` per node, split and triangle, and per
+//! polygon while the polygons are written) and two chunks, never an array whole (as a
+//! [`Baked`](crate::baked::Baked) does) nor the file's bytes. Only the roots and the base
+//! mesh, both as small as the coarsest mesh, are made whole; the vertex table, whose
+//! records follow from sorting each position's vertices, is made in order on one thread.
 //!
 //! The arrays are never all in memory at once, so they cannot be validated before writing as
 //! [`Baked::write`](crate::baked::Baked::write) validates its own; the written temporary file
@@ -17,7 +20,7 @@ use std::path::Path;
 
 use caveclod_core::format::ExtraSection;
 
-use crate::arrays::{self, NodeIds, PolygonOrder};
+use crate::arrays::{self, NodeIds, PolygonOrder, Polygons};
 use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
 use crate::clod_file::{write_sections, Check, Inspect};
 use crate::hierarchy::Hierarchy as Collapses;
@@ -49,11 +52,14 @@ pub fn write(
     let specs = section_specs(&meta, &sections);
     write_sections(path, &specs, Check::ReadBack(inspect), move |out| {
         out.put(std::slice::from_ref(&meta))?;
-        out.put_iter(arrays::position_records(&w))?;
-        out.put_iter(ids.node_records(&h))?;
-        out.put_iter(arrays::split_records(&h, &ids, &polys))?;
-        out.put_iter(arrays::bound_records(&w, &h, &ids))?;
-        out.put_iter(polys.polygon_records(&w, &h, &ids))?;
+        out.put_indexed(w.positions.len(), |p| arrays::position(&w, p))?;
+        out.put_indexed(ids.total(), |id| ids.node(&h, id))?;
+        let splits = h.collapses.len();
+        out.put_indexed(splits, |s| arrays::split(&h, &ids, &polys, s))?;
+        out.put_indexed(splits, |s| arrays::bound(&w, &h, &ids, s))?;
+        let polygons = Polygons::new(&polys, &w, &h, &ids);
+        out.put_indexed(polys.count, |id| polygons.polygon(id))?;
+        drop(polygons);
         out.put(&ids.roots(&h))?;
         out.put(&polys.base_faces(&h, &ids))?;
         drop((h, ids, polys));
