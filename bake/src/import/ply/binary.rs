@@ -11,6 +11,7 @@
 //! the same order: the same mesh and the same errors either way.
 
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
+use rayon::prelude::*;
 
 use super::properties::{is_index_list, vertex_slot, Vertex};
 use super::{scalar_size, Corners, ImportError, ImportReport};
@@ -26,6 +27,9 @@ pub(super) struct Payload<'a> {
     faces: Option<(&'a ElementDef, usize)>,
     /// Triangles the faces' fans make.
     triangles: usize,
+    /// The count and index types of the faces' index list, when it is their only property
+    /// and every face has three corners: faces of one stride.
+    triangle_list: Option<(&'a ScalarType, &'a ScalarType)>,
 }
 
 impl<'a> Payload<'a> {
@@ -43,6 +47,7 @@ impl<'a> Payload<'a> {
             vertices: None,
             faces: None,
             triangles: 0,
+            triangle_list: None,
         };
         let mut at = 0usize;
         for def in header.elements.values() {
@@ -68,6 +73,7 @@ impl<'a> Payload<'a> {
                 }
                 continue;
             }
+            let mut all_triangles = true;
             for _ in 0..def.count {
                 let mut corners = 0usize;
                 at = payload.walk_instance(def, at, |p, _, _| {
@@ -75,7 +81,11 @@ impl<'a> Payload<'a> {
                 })?;
                 if is_face {
                     payload.triangles += corners.saturating_sub(2);
+                    all_triangles &= corners == 3;
                 }
+            }
+            if is_face && all_triangles {
+                payload.triangle_list = only_list(def);
             }
         }
         Some(payload)
@@ -94,6 +104,9 @@ impl<'a> Payload<'a> {
         }
         if let Some((def, start)) = self.faces {
             mesh.triangles.reserve(self.triangles);
+            if let Some(list) = self.triangle_list {
+                return self.read_triangles(corners, mesh, report, list, (def.count, start));
+            }
             let index_list = def.properties.keys().position(|k| is_index_list(k));
             let mut indices: Vec<i64> = Vec::new();
             let mut at = start;
@@ -133,19 +146,53 @@ impl<'a> Payload<'a> {
                 offset += scalar_size(t);
             }
         }
-        mesh.positions.reserve(def.count);
-        let records = self.bytes[start..start + def.count * stride].chunks_exact(stride.max(1));
-        for (i, record) in records.enumerate() {
+        let fields: Vec<(usize, Scalar, usize, f64)> = fields
+            .into_iter()
+            .map(|(offset, t, slot)| (offset, scalar(&t), slot, colour_scale(&t)))
+            .collect();
+        let records = &self.bytes[start..start + def.count * stride];
+        let vertex = |i: usize| {
+            let record = &records[i * stride..(i + 1) * stride];
             let mut v = Vertex::unset();
-            for (offset, t, slot) in &fields {
-                v.put(
-                    *slot,
-                    scalar(t).decode(&record[*offset..], self.big),
-                    colour_scale(t),
-                );
+            for &(offset, s, slot, scale) in &fields {
+                v.put(slot, s.decode(&record[offset..], self.big), scale);
             }
-            corners.push_vertex(mesh, i, &v)?;
+            v
+        };
+        corners.push_vertices(mesh, def.count, vertex)
+    }
+
+    /// Faces whose only property is the index list, each of three corners (what
+    /// [`find`](Self::find) saw): records of one stride from `start`, read on all cores. On
+    /// an index out of range, the error of the first face with one, as reading the faces in
+    /// order gives.
+    fn read_triangles(
+        &self,
+        corners: &mut Corners<'_>,
+        mesh: &mut Mesh,
+        report: &mut ImportReport,
+        (count, index): (&ScalarType, &ScalarType),
+        (faces, start): (usize, usize),
+    ) -> Result<(), ImportError> {
+        let (count_size, index_size) = (scalar_size(count), scalar_size(index));
+        let stride = count_size + 3 * index_size;
+        let index = scalar(index);
+        let corners_of = |f: usize| {
+            let at = start + f * stride + count_size;
+            [0, 1, 2].map(|k| index.decode_int(&self.bytes[at + k * index_size..], self.big))
+        };
+        let bad = (0..faces)
+            .into_par_iter()
+            .position_first(|f| !corners_of(f).iter().all(|&i| corners.in_range(i)));
+        if let Some(f) = bad {
+            return corners.push_face(mesh, f, &corners_of(f), &[], report);
         }
+        let corners = &*corners;
+        mesh.triangles.par_extend(
+            (0..faces)
+                .into_par_iter()
+                .map(|f| corners.triangle(corners_of(f).map(|i| i as u32), None)),
+        );
         Ok(())
     }
 
@@ -193,6 +240,15 @@ fn stride(def: &ElementDef) -> Option<usize> {
             PropertyType::List(..) => None,
         })
         .sum()
+}
+
+/// The count and item types of `def`'s list when it is `def`'s only property.
+fn only_list(def: &ElementDef) -> Option<(&ScalarType, &ScalarType)> {
+    let mut properties = def.properties.values();
+    match (properties.next().map(|p| &p.data_type), properties.next()) {
+        (Some(PropertyType::List(count, item)), None) => Some((count, item)),
+        _ => None,
+    }
 }
 
 /// Whether this reader takes a `face` element's properties: exactly one index list, of an

@@ -34,6 +34,8 @@ mod tests;
 
 use std::io::{Cursor, ErrorKind};
 
+use rayon::prelude::*;
+
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
 use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
@@ -176,10 +178,8 @@ fn read_parsed(
     let mut mesh = Mesh::default();
     let mut corners = Corners::new(source, elements.vertices.len(), present);
     corners.surface = push_texture_surface(source, &mut mesh, header)?;
-    mesh.positions.reserve(elements.vertices.len());
-    for (i, v) in elements.vertices.iter().enumerate() {
-        corners.push_vertex(&mut mesh, i, v)?;
-    }
+    let vertices = &elements.vertices;
+    corners.push_vertices(&mut mesh, vertices.len(), |i| vertices[i])?;
     drop(elements.vertices);
     mesh.triangles.reserve(elements.faces.len());
     for (f, face) in elements.faces.iter().enumerate() {
@@ -385,6 +385,20 @@ struct Corners<'a> {
     surface: u16,
     /// A face's corners, reused from face to face.
     face: Vec<u32>,
+    /// The linear value of each 8-bit colour channel ([`Self::linear`]).
+    byte_linear: [f32; 256],
+}
+
+/// Vertices a piece of [`Corners::push_vertices`] converts on one thread.
+const VERTEX_PIECE: usize = 1 << 13;
+
+/// The attributes of a piece of vertices, as they are appended to the mesh.
+#[derive(Default)]
+struct VertexPiece {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    colors: Vec<[f32; 4]>,
 }
 
 impl<'a> Corners<'a> {
@@ -395,35 +409,92 @@ impl<'a> Corners<'a> {
             present,
             surface: 0,
             face: Vec::new(),
+            byte_linear: std::array::from_fn(|k| srgb_to_linear(byte_colour(k))),
         }
     }
 
-    /// Vertex `i`'s position and the attributes present, checked finite; UV `v` flipped,
-    /// colours to linear.
-    fn push_vertex(&self, mesh: &mut Mesh, i: usize, v: &Vertex) -> Result<(), ImportError> {
-        let (source, present) = (self.source, self.present);
-        source.check_finite(&v.values, &VERTEX_NAMES, || format!("vertex {i}"))?;
-        let x = &v.values;
-        mesh.positions.push([x[X], x[X + 1], x[X + 2]]);
-        if present.normals {
-            mesh.normals.push([x[NX], x[NX + 1], x[NX + 2]]);
-        }
-        if present.uvs {
-            mesh.uvs.push([x[U], 1.0 - x[U + 1]]);
-        }
-        if present.colors {
-            mesh.colors.push([
-                srgb_to_linear(x[R]),
-                srgb_to_linear(x[R + 1]),
-                srgb_to_linear(x[R + 2]),
-                x[A],
-            ]);
+    /// Vertices `0..n` (`vertex(i)` is vertex `i` as read) converted on all cores, a piece
+    /// at a time, and appended in order; on a vertex that is not finite, the error of the
+    /// first such vertex, as converting them in order would give.
+    fn push_vertices(
+        &self,
+        mesh: &mut Mesh,
+        n: usize,
+        vertex: impl Fn(usize) -> Vertex + Sync,
+    ) -> Result<(), ImportError> {
+        let pieces: Vec<Result<VertexPiece, usize>> = (0..n.div_ceil(VERTEX_PIECE))
+            .into_par_iter()
+            .map(|p| self.vertex_piece(p * VERTEX_PIECE..n.min((p + 1) * VERTEX_PIECE), &vertex))
+            .collect();
+        for piece in pieces {
+            match piece {
+                Ok(piece) => {
+                    mesh.positions.extend(piece.positions);
+                    mesh.normals.extend(piece.normals);
+                    mesh.uvs.extend(piece.uvs);
+                    mesh.colors.extend(piece.colors);
+                }
+                Err(i) => {
+                    let names = &VERTEX_NAMES;
+                    let at = || format!("vertex {i}");
+                    return self.source.check_finite(&vertex(i).values, names, at);
+                }
+            }
         }
         Ok(())
     }
 
+    /// The vertices `range` converted: position and the attributes present, UV `v`
+    /// flipped, colours to linear; or the first that is not finite.
+    fn vertex_piece(
+        &self,
+        range: std::ops::Range<usize>,
+        vertex: &(impl Fn(usize) -> Vertex + Sync),
+    ) -> Result<VertexPiece, usize> {
+        let present = self.present;
+        let mut piece = VertexPiece::default();
+        piece.positions.reserve(range.len());
+        for i in range {
+            let v = vertex(i);
+            let x = &v.values;
+            if !x.iter().all(|c| c.is_finite()) {
+                return Err(i);
+            }
+            piece.positions.push([x[X], x[X + 1], x[X + 2]]);
+            if present.normals {
+                piece.normals.push([x[NX], x[NX + 1], x[NX + 2]]);
+            }
+            if present.uvs {
+                piece.uvs.push([x[U], 1.0 - x[U + 1]]);
+            }
+            if present.colors {
+                let linear = |c: f32| self.linear(c);
+                piece
+                    .colors
+                    .push([linear(x[R]), linear(x[R + 1]), linear(x[R + 2]), x[A]]);
+            }
+        }
+        Ok(piece)
+    }
+
+    /// The sRGB colour channel `c` (in 0..=1) to linear: from the table when `c` is an
+    /// 8-bit value as [`Vertex`] stores it (the same number the conversion gives).
+    fn linear(&self, c: f32) -> f32 {
+        let k = (c * 255.0).round();
+        if (0.0..=255.0).contains(&k) && byte_colour(k as usize).to_bits() == c.to_bits() {
+            self.byte_linear[k as usize]
+        } else {
+            srgb_to_linear(c)
+        }
+    }
+
+    /// Whether `index` names a vertex.
+    fn in_range(&self, index: i64) -> bool {
+        (0..self.vertex_count as i64).contains(&index)
+    }
+
     fn vertex(&self, at: &dyn Fn() -> String, index: i64) -> Result<u32, ImportError> {
-        if (0..self.vertex_count as i64).contains(&index) {
+        if self.in_range(index) {
             Ok(index as u32)
         } else {
             Err(self.source.out_of_range(
@@ -536,4 +607,9 @@ impl<'a> Corners<'a> {
         }
         Ok(joints)
     }
+}
+
+/// The value [`Vertex`] stores for the 8-bit colour channel `k`.
+fn byte_colour(k: usize) -> f32 {
+    (k as f64 * properties::BYTE_COLOR) as f32
 }
