@@ -1,8 +1,8 @@
 //! The `.clod` arrays computed from a welded mesh and its collapses, one array at a time:
 //! the numbering of nodes and polygons into file order (the small tables every array needs,
-//! `u32` per node, split or triangle), then each array's records from the numbering, each
-//! record from its index alone (the vertex table's in order), so an array is made on all
-//! cores and comes out the same whatever the threads. [`crate::baked::Baked::new`] collects
+//! `u32` per node, split or triangle, and the vertex table's order), then each array's
+//! records from the numbering, each record from its index alone, so an array is made on
+//! all cores and comes out the same whatever the threads. [`crate::baked::Baked::new`] collects
 //! each into a `Vec`; [`crate::streamed`] writes the records in bounded chunks as they are
 //! made, so no array is ever whole in memory.
 //!
@@ -401,50 +401,64 @@ fn collect_indexed<T: Send>(n: usize, record: impl Fn(usize) -> T + Sync + Send)
 }
 
 /// The vertex table in file order: per position, its vertices sorted by surface-group id,
-/// each as (position, group id, attribute index).
-struct EachVertex<'a> {
-    w: &'a Welded,
-    /// The next position to sort.
-    next: usize,
-    /// The current position and its sorted keys, and the next key of them.
-    position: usize,
-    keys: Vec<(u16, u32)>,
-    k: usize,
-}
+/// each as (position, group id, attribute index); made on all cores, so that the vertex
+/// table, the vertices and their colours are made by index like the other arrays.
+pub(crate) struct VertexOrder(Vec<(u32, u16, u32)>);
 
-impl<'a> EachVertex<'a> {
-    fn new(w: &'a Welded) -> Self {
-        Self {
-            w,
-            next: 0,
-            position: 0,
-            keys: Vec::new(),
-            k: 0,
+impl VertexOrder {
+    pub(crate) fn new(w: &Welded) -> Self {
+        let ids = &w.group_ids;
+        let mut order: Vec<(u32, u16, u32)> = (0..w.vertices.len())
+            .into_par_iter()
+            .flat_map_iter(|p| {
+                let vs = &w.vertices[p];
+                vs.iter().map(move |&(g, a)| (p as u32, ids[g as usize], a))
+            })
+            .collect();
+        order
+            .par_chunk_by_mut(|x, y| x.0 == y.0)
+            .for_each(|position| position.sort_unstable());
+        Self(order)
+    }
+
+    /// Vertices (and vertex-table entries).
+    pub(crate) fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Vertex-table entry `i`: its group and the vertex it keys, which the vertex buffer
+    /// holds at the same place.
+    pub(crate) fn key(&self, i: usize) -> VertexKey {
+        VertexKey {
+            group: SurfaceGroupId(self.0[i].1),
+            reserved: 0,
+            vertex: i as u32,
         }
     }
-}
 
-impl Iterator for EachVertex<'_> {
-    type Item = (usize, u16, u32);
-
-    fn next(&mut self) -> Option<Self::Item> {
-        while self.k == self.keys.len() {
-            if self.next == self.w.vertices.len() {
-                return None;
-            }
-            let vs = &self.w.vertices[self.next];
-            self.position = self.next;
-            self.next += 1;
-            self.keys.clear();
-            let ids = &self.w.group_ids;
-            self.keys
-                .extend(vs.iter().map(|&(g, a)| (ids[g as usize], a)));
-            self.keys.sort_unstable();
-            self.k = 0;
+    /// Vertex `i` of the vertex buffer.
+    pub(crate) fn vertex(&self, w: &Welded, i: usize) -> Vertex {
+        let (p, _, a) = self.0[i];
+        let attrs = &w.attributes[a as usize];
+        Vertex {
+            position: w.positions[p as usize],
+            normal: attrs.normal,
+            uv: attrs.uv,
         }
-        let (group, a) = self.keys[self.k];
-        self.k += 1;
-        Some((self.position, group, a))
+    }
+
+    /// Vertex `i`'s colour.
+    fn colour(&self, w: &Welded, i: usize) -> [u8; 4] {
+        encode_colour(w.attributes[self.0[i].2 as usize].color)
+    }
+
+    /// The vertices' colours in vertex-table order, made on all cores; empty when the mesh
+    /// has none.
+    pub(crate) fn colours(&self, w: &Welded) -> Vec<[u8; 4]> {
+        if !w.has_colors {
+            return Vec::new();
+        }
+        collect_indexed(self.len(), |i| self.colour(w, i))
     }
 }
 
@@ -469,36 +483,15 @@ pub(crate) fn vertex_table_offsets(w: &Welded) -> Vec<u32> {
 
 /// The vertex table: per position, its vertices sorted by surface-group id, each a key into
 /// the vertex buffer, which holds them in the same order.
-pub(crate) fn vertex_table_records(w: &Welded) -> impl Iterator<Item = VertexKey> + '_ {
-    EachVertex::new(w)
-        .enumerate()
-        .map(|(i, (_, group, _))| VertexKey {
-            group: SurfaceGroupId(group),
-            reserved: 0,
-            vertex: i as u32,
-        })
-}
-
-/// [`vertex_table_records`] collected.
 pub(crate) fn vertex_table(w: &Welded) -> Vec<VertexKey> {
-    vertex_table_records(w).collect()
+    let order = VertexOrder::new(w);
+    collect_indexed(order.len(), |i| order.key(i))
 }
 
 /// The vertex buffer, in vertex-table order.
-pub(crate) fn vertex_records(w: &Welded) -> impl Iterator<Item = Vertex> + '_ {
-    EachVertex::new(w).map(|(p, _, a)| {
-        let attrs = &w.attributes[a as usize];
-        Vertex {
-            position: w.positions[p],
-            normal: attrs.normal,
-            uv: attrs.uv,
-        }
-    })
-}
-
-/// [`vertex_records`] collected.
 pub(crate) fn vertices(w: &Welded) -> Vec<Vertex> {
-    vertex_records(w).collect()
+    let order = VertexOrder::new(w);
+    collect_indexed(order.len(), |i| order.vertex(w, i))
 }
 
 /// The vertices' colours in vertex-table order; empty when the mesh has none.
@@ -506,9 +499,7 @@ pub(crate) fn vertex_colours(w: &Welded) -> Vec<[u8; 4]> {
     if !w.has_colors {
         return Vec::new();
     }
-    EachVertex::new(w)
-        .map(|(_, _, a)| encode_colour(w.attributes[a as usize].color))
-        .collect()
+    VertexOrder::new(w).colours(w)
 }
 
 /// Welded position `p` with its class.

@@ -3,11 +3,11 @@
 //! [`Baked::new`](crate::baked::Baked::new) collects them), each from its index on all
 //! cores while the chunk before is written
 //! ([`Sections::put_indexed`](crate::clod_file::Sections::put_indexed)), so the write step
-//! holds the inputs, the numbering tables (`u32` per node, split and triangle, and per
-//! polygon while the polygons are written) and two chunks, never an array whole (as a
-//! [`Baked`](crate::baked::Baked) does) nor the file's bytes. Only the roots and the base
-//! mesh, both as small as the coarsest mesh, are made whole; the vertex table, whose
-//! records follow from sorting each position's vertices, is made in order on one thread.
+//! holds the inputs, the numbering tables (`u32` per node, split and triangle, per polygon
+//! while the polygons are written, and the vertex table's order, 12 bytes per vertex) and
+//! two chunks, never an array whole (as a [`Baked`](crate::baked::Baked) does) nor the
+//! file's bytes. Only the roots and the base mesh, both as small as the coarsest mesh, are
+//! made whole.
 //!
 //! The arrays are never all in memory at once, so they cannot be validated before writing as
 //! [`Baked::write`](crate::baked::Baked::write) validates its own; the written temporary file
@@ -20,7 +20,7 @@ use std::path::Path;
 
 use caveclod_core::format::ExtraSection;
 
-use crate::arrays::{self, NodeIds, PolygonOrder, Polygons};
+use crate::arrays::{self, NodeIds, PolygonOrder, Polygons, VertexOrder};
 use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
 use crate::clod_file::{write_sections, Check, Inspect};
 use crate::hierarchy::Hierarchy as Collapses;
@@ -43,7 +43,9 @@ pub fn write(
     extra: &[ExtraSection<'_>],
     inspect: Inspect<'_>,
 ) -> Result<u64, BakeWriteError> {
-    let appearance = Appearance::new(&w, surfaces, texture_dir, path)?;
+    let vertex_order = VertexOrder::new(&w);
+    let colours = vertex_order.colours(&w);
+    let appearance = Appearance::with_colours(colours, surfaces, texture_dir, path)?;
     let sections = appearance.then(extra);
 
     let ids = NodeIds::number(w.positions.len(), &h);
@@ -64,9 +66,9 @@ pub fn write(
         out.put(&polys.base_faces(&h, &ids))?;
         drop((h, ids, polys));
         out.put_iter(arrays::vertex_table_offset_records(&w))?;
-        out.put_iter(arrays::vertex_table_records(&w))?;
-        out.put_iter(arrays::vertex_records(&w))?;
-        drop(w);
+        out.put_indexed(vertex_order.len(), |i| vertex_order.key(i))?;
+        out.put_indexed(vertex_order.len(), |i| vertex_order.vertex(&w, i))?;
+        drop((w, vertex_order));
         for e in &sections {
             out.put(e.bytes)?;
         }
@@ -85,16 +87,6 @@ pub(crate) struct Appearance {
 }
 
 impl Appearance {
-    /// The appearance of `w` with `surfaces`, for a file written at `path`.
-    pub(crate) fn new(
-        w: &Welded,
-        surfaces: &[Surface],
-        texture_dir: &Path,
-        path: &Path,
-    ) -> Result<Self, BakeWriteError> {
-        Self::with_colours(arrays::vertex_colours(w), surfaces, texture_dir, path)
-    }
-
     /// The appearance of a mesh whose vertex colours in vertex-table order are `colours`
     /// (empty: none), with `surfaces`, for a file written at `path`.
     pub(crate) fn with_colours(
