@@ -73,22 +73,61 @@ impl<'a> Payload<'a> {
                 }
                 continue;
             }
-            let mut all_triangles = true;
-            for _ in 0..def.count {
-                let mut corners = 0usize;
-                at = payload.walk_instance(def, at, |p, _, _| {
-                    corners += usize::from(Some(p) == index_list);
-                })?;
-                if is_face {
-                    payload.triangles += corners.saturating_sub(2);
-                    all_triangles &= corners == 3;
+            let (mut triangles, mut all_triangles) = (0usize, true);
+            let mut instance = |corners: usize| {
+                triangles += corners.saturating_sub(2);
+                all_triangles &= corners == 3;
+            };
+            at = match only_list(def) {
+                Some(list) => {
+                    let counted = index_list == Some(0);
+                    payload
+                        .walk_lists(def.count, list, at, |n| instance(n * usize::from(counted)))?
                 }
-            }
-            if is_face && all_triangles {
-                payload.triangle_list = only_list(def);
+                None => {
+                    for _ in 0..def.count {
+                        let mut corners = 0usize;
+                        at = payload.walk_instance(def, at, |p, _, _| {
+                            corners += usize::from(Some(p) == index_list);
+                        })?;
+                        instance(corners);
+                    }
+                    at
+                }
+            };
+            if is_face {
+                payload.triangles += triangles;
+                if all_triangles {
+                    payload.triangle_list = only_list(def);
+                }
             }
         }
         Some(payload)
+    }
+
+    /// [`walk_instance`](Self::walk_instance) of `count` instances of an element whose only
+    /// property is a list of `(count type, item type)`, from `at`, handing each list's length
+    /// to `length`; the offset after them, or `None` when the payload ends first or a count
+    /// is negative.
+    fn walk_lists(
+        &self,
+        count: usize,
+        (count_type, item): (&ScalarType, &ScalarType),
+        mut at: usize,
+        mut length: impl FnMut(usize),
+    ) -> Option<usize> {
+        let (count_size, item_size) = (scalar_size(count_type), scalar_size(item));
+        for _ in 0..count {
+            let end = at.checked_add(count_size)?;
+            let n = integer(self.bytes.get(at..end)?, count_type, self.big)?;
+            let items = usize::try_from(n).ok()?;
+            at = end.checked_add(items.checked_mul(item_size)?)?;
+            if at > self.bytes.len() {
+                return None;
+            }
+            length(items);
+        }
+        Some(at)
     }
 
     /// Reads the vertices, then the faces, into `mesh` (as the parser's path pushes its
