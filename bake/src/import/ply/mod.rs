@@ -2,7 +2,8 @@
 //! element data read line by line here (`ascii.rs`), so that an ASCII file's errors name the
 //! element, its index, line and property, and `nan` is reported as in a binary file. Binary
 //! data in the common layouts is read straight into the mesh instead (`binary.rs`), to the
-//! same mesh and the same errors.
+//! same mesh and the same errors. Vertices become the mesh's positions and attributes on all
+//! cores, a piece at a time (`vertices.rs`).
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`, any scalar types.
 //! Element `vertex`: `x y z` (required), `nx ny nz`, colours `red green blue [alpha]` (or
@@ -31,15 +32,14 @@ mod binary;
 pub(crate) mod properties;
 #[cfg(test)]
 mod tests;
+mod vertices;
 
 use std::io::{Cursor, ErrorKind};
-
-use rayon::prelude::*;
 
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
 use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
-use properties::{A, NX, R, U, VERTEX_NAMES, X};
+use vertices::byte_colour;
 
 use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
@@ -389,18 +389,6 @@ struct Corners<'a> {
     byte_linear: [f32; 256],
 }
 
-/// Vertices a piece of [`Corners::push_vertices`] converts on one thread.
-const VERTEX_PIECE: usize = 1 << 13;
-
-/// The attributes of a piece of vertices, as they are appended to the mesh.
-#[derive(Default)]
-struct VertexPiece {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    uvs: Vec<[f32; 2]>,
-    colors: Vec<[f32; 4]>,
-}
-
 impl<'a> Corners<'a> {
     fn new(source: &'a Source, vertex_count: usize, present: Present) -> Self {
         Corners {
@@ -410,81 +398,6 @@ impl<'a> Corners<'a> {
             surface: 0,
             face: Vec::new(),
             byte_linear: std::array::from_fn(|k| srgb_to_linear(byte_colour(k))),
-        }
-    }
-
-    /// Vertices `0..n` (`vertex(i)` is vertex `i` as read) converted on all cores, a piece
-    /// at a time, and appended in order; on a vertex that is not finite, the error of the
-    /// first such vertex, as converting them in order would give.
-    fn push_vertices(
-        &self,
-        mesh: &mut Mesh,
-        n: usize,
-        vertex: impl Fn(usize) -> Vertex + Sync,
-    ) -> Result<(), ImportError> {
-        let pieces: Vec<Result<VertexPiece, usize>> = (0..n.div_ceil(VERTEX_PIECE))
-            .into_par_iter()
-            .map(|p| self.vertex_piece(p * VERTEX_PIECE..n.min((p + 1) * VERTEX_PIECE), &vertex))
-            .collect();
-        for piece in pieces {
-            match piece {
-                Ok(piece) => {
-                    mesh.positions.extend(piece.positions);
-                    mesh.normals.extend(piece.normals);
-                    mesh.uvs.extend(piece.uvs);
-                    mesh.colors.extend(piece.colors);
-                }
-                Err(i) => {
-                    let names = &VERTEX_NAMES;
-                    let at = || format!("vertex {i}");
-                    return self.source.check_finite(&vertex(i).values, names, at);
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// The vertices `range` converted: position and the attributes present, UV `v`
-    /// flipped, colours to linear; or the first that is not finite.
-    fn vertex_piece(
-        &self,
-        range: std::ops::Range<usize>,
-        vertex: &(impl Fn(usize) -> Vertex + Sync),
-    ) -> Result<VertexPiece, usize> {
-        let present = self.present;
-        let mut piece = VertexPiece::default();
-        piece.positions.reserve(range.len());
-        for i in range {
-            let v = vertex(i);
-            let x = &v.values;
-            if !x.iter().all(|c| c.is_finite()) {
-                return Err(i);
-            }
-            piece.positions.push([x[X], x[X + 1], x[X + 2]]);
-            if present.normals {
-                piece.normals.push([x[NX], x[NX + 1], x[NX + 2]]);
-            }
-            if present.uvs {
-                piece.uvs.push([x[U], 1.0 - x[U + 1]]);
-            }
-            if present.colors {
-                let linear = |c: f32| self.linear(c);
-                piece
-                    .colors
-                    .push([linear(x[R]), linear(x[R + 1]), linear(x[R + 2]), x[A]]);
-            }
-        }
-        Ok(piece)
-    }
-
-    /// The sRGB colour channel `c` (in 0..=1) to linear: from the table when `c` is an
-    /// 8-bit value as [`Vertex`] stores it (the same number the conversion gives).
-    fn linear(&self, c: f32) -> f32 {
-        let k = (c * 255.0).round();
-        if (0.0..=255.0).contains(&k) && byte_colour(k as usize).to_bits() == c.to_bits() {
-            self.byte_linear[k as usize]
-        } else {
-            srgb_to_linear(c)
         }
     }
 
@@ -607,9 +520,4 @@ impl<'a> Corners<'a> {
         }
         Ok(joints)
     }
-}
-
-/// The value [`Vertex`] stores for the 8-bit colour channel `k`.
-fn byte_colour(k: usize) -> f32 {
-    (k as f64 * properties::BYTE_COLOR) as f32
 }
