@@ -167,9 +167,9 @@ impl Baked {
         }
     }
 
-    /// The validated hierarchy over these arrays.
+    /// The validated hierarchy over these arrays (each pass on all cores).
     pub fn hierarchy(&self) -> Result<Hierarchy<'_>, caveclod_core::FormatError> {
-        Hierarchy::from_parts(self.parts())
+        Hierarchy::from_parts_in(self.parts(), &crate::clod_file::OnRayon)
     }
 
     /// The `.clod` bytes with the materials and vertex colours, when there are any, and

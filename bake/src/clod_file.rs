@@ -9,11 +9,15 @@
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use bytemuck::Pod;
-use caveclod_core::format::{FilePlan, SectionSpec, SectionWriter, Sink, StreamError, WriteError};
+use caveclod_core::format::{
+    FilePlan, Pieces, SectionSpec, SectionWriter, Sink, StreamError, WriteError,
+};
 use caveclod_core::Hierarchy;
+use rayon::prelude::*;
 
 use crate::baked::BakeWriteError;
 
@@ -63,6 +67,35 @@ impl Sections<'_> {
         }
         self.put(&chunk)
     }
+
+    /// The records `record(0)`, ..., `record(n - 1)` of the current section, made on all
+    /// cores [`CHUNK_RECORDS`] at a time while the chunk before is written: each record
+    /// depends on its index alone, so the bytes are those of a loop on one thread. Two
+    /// chunks are in memory at once, never the section.
+    pub fn put_indexed<T: Pod + Send + Sync>(
+        &mut self,
+        n: usize,
+        record: impl Fn(usize) -> T + Sync + Send,
+    ) -> Result<(), BakeWriteError> {
+        let make = |chunk: &mut Vec<T>, range: Range<usize>| {
+            chunk.clear();
+            chunk.par_extend(range.into_par_iter().map(&record));
+        };
+        let mut ready = Vec::with_capacity(CHUNK_RECORDS.min(n));
+        let mut next = Vec::with_capacity(CHUNK_RECORDS.min(n));
+        make(&mut ready, 0..CHUNK_RECORDS.min(n));
+        let mut at = ready.len();
+        loop {
+            let end = (at + CHUNK_RECORDS).min(n);
+            let (written, ()) = rayon::join(|| self.put(&ready), || make(&mut next, at..end));
+            written?;
+            if at == end {
+                return Ok(());
+            }
+            std::mem::swap(&mut ready, &mut next);
+            at = end;
+        }
+    }
 }
 
 /// What a failed step of the section writer becomes; the caller adds the path to an I/O error.
@@ -81,24 +114,28 @@ fn stream_error(e: StreamError<std::io::Error>) -> BakeWriteError {
     }
 }
 
+/// What a read-back check hands the validated hierarchy of the written file to, before the
+/// rename: a caller's report on the file is then made from the very bytes that were
+/// validated, without validating them again.
+pub type Inspect<'i> = &'i mut dyn FnMut(&Hierarchy<'_>);
+
 /// Whether the written file is read back and validated before it replaces the target.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Check {
+pub enum Check<'i> {
     /// The sections were validated before writing ([`caveclod_core::format::validate_parts`]).
     Validated,
     /// Validate the written file ([`Hierarchy::from_bytes`]: checksum, section table, every
-    /// record) before the rename.
-    ReadBack,
+    /// record) before the rename, then hand its hierarchy to the [`Inspect`].
+    ReadBack(Inspect<'i>),
 }
 
 /// Writes the file planned by `specs` at `path`: `fill` gives every section's bytes in
 /// order ([`Sections::put`]); then the header goes at the start, the file is synced,
-/// validated if `check` asks, and renamed over `path`. Returns the file's length. On any
+/// validated and inspected if `check` asks, and renamed over `path`. Returns the file's length. On any
 /// failure the temporary file is removed and `path` is untouched.
 pub fn write_sections(
     path: &Path,
     specs: &[SectionSpec],
-    check: Check,
+    check: Check<'_>,
     fill: impl FnOnce(&mut Sections<'_>) -> Result<(), BakeWriteError>,
 ) -> Result<u64, BakeWriteError> {
     let plan = FilePlan::new(specs).map_err(BakeWriteError::Invalid)?;
@@ -126,8 +163,8 @@ pub fn write_sections(
         file.write_all(bytemuck::bytes_of(&header))
             .map_err(Failure::Io)?;
         file.sync_all().map_err(Failure::Io)?;
-        if check == Check::ReadBack {
-            validate_written(&mut file)?;
+        if let Check::ReadBack(inspect) = check {
+            validate_written(&mut file, inspect)?;
         }
         std::fs::rename(&tmp, path).map_err(Failure::Io)?;
         Ok(plan.file_len())
@@ -164,28 +201,28 @@ pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
 /// ([`with_pages_released`]).
 const RELEASE_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
 
-/// Validates the written file as a reader would: mapped (page aligned) when the system
-/// allows, otherwise read into an aligned buffer.
-fn validate_written(file: &mut File) -> Result<(), Failure> {
+/// Validates the written file as a reader would, and hands its hierarchy to `inspect`:
+/// mapped (page aligned) when the system allows, otherwise read into an aligned buffer.
+fn validate_written(file: &mut File, inspect: Inspect<'_>) -> Result<(), Failure> {
     // SAFETY: the map is read-only and shared; the file is this process's own temporary
     // file, which nothing else writes while it is mapped.
     match unsafe { memmap2::Mmap::map(&*file) } {
-        Ok(map) => check_released(&map),
+        Ok(map) => check_released(&map, inspect),
         Err(_) => {
             let len = file.metadata().map_err(Failure::Io)?.len() as usize;
             let mut words = vec![0u64; len.div_ceil(8)];
             let bytes = &mut bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..len];
             file.seek(SeekFrom::Start(0)).map_err(Failure::Io)?;
             file.read_exact(bytes).map_err(Failure::Io)?;
-            check(bytes)
+            check(bytes, inspect)
         }
     }
 }
 
-/// [`check`] of a mapped file whose pages leave the process as the check goes
-/// ([`with_pages_released`]).
-fn check_released(map: &memmap2::Mmap) -> Result<(), Failure> {
-    with_pages_released(map, || check(map))
+/// [`check`] of a mapped file whose pages leave the process as the check and the inspection
+/// go ([`with_pages_released`]).
+fn check_released(map: &memmap2::Mmap, inspect: Inspect<'_>) -> Result<(), Failure> {
+    with_pages_released(map, || check(map, inspect))
 }
 
 /// Runs `f`, which reads the mapped file `map`, while a second thread tells the system every
@@ -215,8 +252,43 @@ pub fn with_pages_released<R>(map: &memmap2::Mmap, f: impl FnOnce() -> R) -> R {
     })
 }
 
-fn check(bytes: &[u8]) -> Result<(), Failure> {
-    Hierarchy::from_bytes(bytes)
-        .map(|_| ())
-        .map_err(|e| Failure::Bake(BakeWriteError::Invalid(WriteError::Invalid(e))))
+/// Validates `bytes` as a reader does (each pass on all cores, [`OnRayon`]), then hands the
+/// hierarchy to `inspect`.
+fn check(bytes: &[u8], inspect: Inspect<'_>) -> Result<(), Failure> {
+    let h = Hierarchy::from_bytes_in(bytes, &OnRayon)
+        .map_err(|e| Failure::Bake(BakeWriteError::Invalid(WriteError::Invalid(e))))?;
+    inspect(&h);
+    Ok(())
+}
+
+/// Records a validation piece holds at least: fewer cost more to hand to a thread than they
+/// take to check.
+const PIECE_RECORDS: usize = 1 << 14;
+
+/// The validation passes of a hierarchy ([`Hierarchy::from_bytes_in`],
+/// [`Hierarchy::from_parts_in`]) in pieces on rayon's threads (the pool the caller runs in),
+/// a few per thread so that uneven pieces even out. The answer is the one a single piece
+/// gives, whatever the threads.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OnRayon;
+
+impl Pieces for OnRayon {
+    fn fold<T: Send>(
+        &self,
+        n: usize,
+        map: &(dyn Fn(Range<usize>) -> T + Sync),
+        join: &dyn Fn(T, T) -> T,
+    ) -> T {
+        let count = (n / PIECE_RECORDS).clamp(1, 4 * rayon::current_num_threads());
+        if count == 1 {
+            return map(0..n);
+        }
+        let answers: Vec<T> = (0..count)
+            .into_par_iter()
+            .map(|i| map(i * n / count..(i + 1) * n / count))
+            .collect();
+        let mut answers = answers.into_iter();
+        let first = answers.next().unwrap_or_else(|| map(0..0));
+        answers.fold(first, join)
+    }
 }

@@ -5,6 +5,8 @@
 //! point every stream of a corner at the same source vertex (glTF indices differ between
 //! streams by a per-stream offset when some primitives lack an attribute).
 
+use rayon::prelude::*;
+
 /// "No attribute" in a corner's attribute index.
 pub const NO_ATTRIBUTE: u32 = u32::MAX;
 
@@ -135,10 +137,13 @@ impl Mesh {
 
     /// Checks the invariants every importer guarantees: every index in range (or
     /// [`NO_ATTRIBUTE`] where allowed), every surface id below `surfaces.len()`, every number
-    /// finite. Returns a description of the first violation.
+    /// finite. Returns a description of the first violation. Runs on all cores.
     pub fn validate(&self) -> Result<(), String> {
         fn finite<const N: usize>(name: &str, values: &[[f32; N]]) -> Result<(), String> {
-            match values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+            match values
+                .par_iter()
+                .position_first(|v| v.iter().any(|c| !c.is_finite()))
+            {
                 None => Ok(()),
                 Some(i) => Err(format!("{name}[{i}] is not finite: {:?}", values[i])),
             }
@@ -147,39 +152,48 @@ impl Mesh {
         finite("normals", &self.normals)?;
         finite("uvs", &self.uvs)?;
         finite("colors", &self.colors)?;
+        let first = (0..self.triangles.len())
+            .into_par_iter()
+            .position_first(|t| self.triangle_problem(t).is_some());
+        first
+            .and_then(|t| self.triangle_problem(t))
+            .map_or(Ok(()), Err)
+    }
+
+    /// What is wrong with triangle `t`'s indices, if anything ([`validate`](Self::validate)).
+    fn triangle_problem(&self, t: usize) -> Option<String> {
         let streams: [(&str, usize); 3] = [
             ("normal", self.normals.len()),
             ("uv", self.uvs.len()),
             ("color", self.colors.len()),
         ];
-        for (t, tri) in self.triangles.iter().enumerate() {
-            if let Some(&p) = tri
-                .position
+        let tri = &self.triangles[t];
+        if let Some(&p) = tri
+            .position
+            .iter()
+            .find(|&&p| p as usize >= self.positions.len())
+        {
+            return Some(format!(
+                "triangle {t}: position {p} out of range ({} positions)",
+                self.positions.len()
+            ));
+        }
+        for ((name, len), indices) in streams.iter().zip([tri.normal, tri.uv, tri.color]) {
+            if let Some(&i) = indices
                 .iter()
-                .find(|&&p| p as usize >= self.positions.len())
+                .find(|&&i| i != NO_ATTRIBUTE && i as usize >= *len)
             {
-                return Err(format!(
-                    "triangle {t}: position {p} out of range ({} positions)",
-                    self.positions.len()
-                ));
-            }
-            for ((name, len), indices) in streams.iter().zip([tri.normal, tri.uv, tri.color]) {
-                if let Some(&i) = indices
-                    .iter()
-                    .find(|&&i| i != NO_ATTRIBUTE && i as usize >= *len)
-                {
-                    return Err(format!("triangle {t}: {name} {i} out of range ({len})"));
-                }
-            }
-            if usize::from(tri.surface) >= self.surfaces.len() {
-                return Err(format!(
-                    "triangle {t}: surface {} out of range ({} surfaces)",
-                    tri.surface,
-                    self.surfaces.len()
-                ));
+                return Some(format!("triangle {t}: {name} {i} out of range ({len})"));
             }
         }
-        Ok(())
+        if usize::from(tri.surface) >= self.surfaces.len() {
+            return Some(format!(
+                "triangle {t}: surface {} out of range ({} surfaces)",
+                tri.surface,
+                self.surfaces.len()
+            ));
+        }
+        None
     }
 
     /// Triangles per surface, indexed like [`Mesh::surfaces`].

@@ -99,6 +99,17 @@ impl Built {
     /// once, the mesh and the collapses are dropped once written, and the written file is
     /// validated before it replaces `path`. Returns the file's length.
     pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
+        self.write_inspected(path, extra, &mut |_| {})
+    }
+
+    /// [`write`](Self::write), handing the written file's validated hierarchy to `inspect`
+    /// before the rename (for a report on the file without validating it again).
+    pub fn write_inspected(
+        self,
+        path: &Path,
+        extra: &[ExtraSection<'_>],
+        inspect: crate::clod_file::Inspect<'_>,
+    ) -> Result<u64, BakeWriteError> {
         crate::streamed::write(
             self.welded,
             self.collapses,
@@ -106,6 +117,7 @@ impl Built {
             &self.texture_dir,
             path,
             extra,
+            inspect,
         )
     }
 

@@ -6,7 +6,7 @@
 //! [`CameraState`](crate::CameraState).
 
 use crate::format::materials::Materials;
-use crate::format::{self, FormatError, HierarchyParts, Tag};
+use crate::format::{self, FormatError, HierarchyParts, OnePiece, Pieces, Tag};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
@@ -30,8 +30,15 @@ impl<'a> Hierarchy<'a> {
     /// pass reads straddles two cache lines (`HierarchyBuf`, with the `alloc` feature, keeps its bytes
     /// so aligned). The optional materials and vertex colours are validated too.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        Self::from_bytes_in(bytes, &OnePiece)
+    }
+
+    /// [`from_bytes`](Self::from_bytes) with each validation pass run in the `pieces` of its
+    /// records (on a caller's threads): the same checks and the same first error, whatever
+    /// the pieces.
+    pub fn from_bytes_in(bytes: &'a [u8], pieces: &impl Pieces) -> Result<Self, FormatError> {
         let parsed = format::validate::parse(bytes)?;
-        let meta = format::validate::validate(&parsed.parts, Some(&parsed.meta))?;
+        let meta = format::validate::validate(&parsed.parts, Some(&parsed.meta), pieces)?;
         let appearance = format::validate::appearance(
             &parsed.appearance,
             parsed.parts.surface_count as usize,
@@ -76,7 +83,17 @@ impl<'a> Hierarchy<'a> {
     /// [`from_bytes`](Self::from_bytes) validates a file. Such a hierarchy has no materials
     /// and no vertex colours.
     pub fn from_parts(parts: HierarchyParts<'a>) -> Result<Self, FormatError> {
-        let meta = format::validate::validate(&parts, None)?;
+        Self::from_parts_in(parts, &OnePiece)
+    }
+
+    /// [`from_parts`](Self::from_parts) with each validation pass run in the `pieces` of its
+    /// records (on a caller's threads): the same checks and the same first error, whatever
+    /// the pieces.
+    pub fn from_parts_in(
+        parts: HierarchyParts<'a>,
+        pieces: &impl Pieces,
+    ) -> Result<Self, FormatError> {
+        let meta = format::validate::validate(&parts, None, pieces)?;
         // An in-memory hierarchy is identified by its counts: mix them into a checksum so a
         // camera made for one hierarchy is refused by another.
         let checksum = crate::checksum::checksum64(bytemuck::bytes_of(&meta));

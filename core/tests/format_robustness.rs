@@ -9,7 +9,7 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use caveclod_core::format::{tags, FileHeader, Node, Position, SectionEntry, Split, Tag};
+use caveclod_core::format::{tags, FileHeader, Node, Pieces, Position, SectionEntry, Split, Tag};
 use caveclod_core::{FormatError, Hierarchy, PolyKey};
 use common::{exercise, fix_checksum, golden, header, set_header, Aligned, Rng};
 
@@ -189,6 +189,72 @@ fn seeded_byte_flips_never_panic() {
         .map(|(_, n)| n)
         .sum();
     assert!(reached_validator > 0, "{tally:?}");
+}
+
+/// Validation passes in pieces of `len` records, each piece's check run last to first (as
+/// threads may finish in any order), the answers joined first to last.
+struct Backwards {
+    len: usize,
+}
+
+impl Pieces for Backwards {
+    fn fold<T: Send>(
+        &self,
+        n: usize,
+        map: &(dyn Fn(std::ops::Range<usize>) -> T + Sync),
+        join: &dyn Fn(T, T) -> T,
+    ) -> T {
+        let starts: Vec<usize> = (0..n.max(1)).step_by(self.len).collect();
+        let mut answers: Vec<T> = starts
+            .iter()
+            .rev()
+            .map(|&s| map(s..(s + self.len).min(n)))
+            .collect();
+        answers.reverse();
+        let mut answers = answers.into_iter();
+        let first = answers.next().expect("at least one piece");
+        answers.fold(first, join)
+    }
+}
+
+/// A damaged file gets the same answer, the first error in record order, whatever the
+/// pieces its validation passes run in.
+#[test]
+fn validation_in_pieces_gives_the_answer_of_one_piece() {
+    let file = golden();
+    let len = file.bytes().len();
+    let mut rng = Rng::new(0x5eed_c1a0_d000_0002);
+    let mut invalid = 0;
+    for round in 0..flip_count() / 5 {
+        let mut damaged = file.clone();
+        let bytes = damaged.bytes_mut();
+        for _ in 0..1 + round % 3 {
+            let at = HEADER_LEN + rng.below(len - HEADER_LEN);
+            bytes[at] ^= 1 + rng.below(255) as u8;
+        }
+        fix_checksum(bytes);
+        let whole = Hierarchy::from_bytes(damaged.bytes());
+        invalid += usize::from(matches!(whole, Err(FormatError::Invalid { .. })));
+        for piece in [1, 3, 64] {
+            let pieces = Backwards { len: piece };
+            let parts = Hierarchy::from_bytes_in(damaged.bytes(), &pieces);
+            assert_eq!(
+                parts.as_ref().err(),
+                whole.as_ref().err(),
+                "round {round}, pieces of {piece}"
+            );
+            if let (Ok(a), Ok(b)) = (&parts, &whole) {
+                assert_eq!(bytemuck::bytes_of(a.meta()), bytemuck::bytes_of(b.meta()));
+            }
+        }
+    }
+    assert!(invalid > 0, "the flips reached the record checks");
+    let h = Hierarchy::from_parts_in(
+        *Hierarchy::from_bytes(file.bytes()).expect("valid").parts(),
+        &Backwards { len: 5 },
+    )
+    .expect("valid in pieces");
+    assert!(!h.splits().is_empty());
 }
 
 // ---------------------------------------------------------------------------------------

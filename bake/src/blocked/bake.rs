@@ -10,6 +10,7 @@ use caveclod_core::format::ExtraSection;
 
 use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
 use crate::baked::{BakeWriteError, Baked};
+use crate::clod_file::Inspect;
 use crate::hierarchy::AttributeWeights;
 use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};
@@ -40,6 +41,17 @@ impl SpilledBuild {
     /// spilled collapses, splits in reverse creation order (`blocked::write`); the written
     /// file is validated before it replaces `path`. Returns the file's length.
     pub fn write(self, path: &Path, extra: &[ExtraSection<'_>]) -> Result<u64, BakeWriteError> {
+        self.write_inspected(path, extra, &mut |_| {})
+    }
+
+    /// [`write`](Self::write), handing the written file's validated hierarchy to `inspect`
+    /// before the rename (for a report on the file without validating it again).
+    pub fn write_inspected(
+        self,
+        path: &Path,
+        extra: &[ExtraSection<'_>],
+        inspect: Inspect<'_>,
+    ) -> Result<u64, BakeWriteError> {
         super::write::write(
             self.store,
             self.spilled,
@@ -47,6 +59,7 @@ impl SpilledBuild {
             &self.texture_dir,
             path,
             extra,
+            inspect,
         )
     }
 

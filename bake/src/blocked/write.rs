@@ -20,7 +20,7 @@ use super::spill::{Record, Spilled};
 use super::store_arrays::{self, Gathered};
 use crate::arrays::{self, Counts, MeshCounts, PolygonOrder};
 use crate::baked::{section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check, Sections, CHUNK_RECORDS as CHUNK};
+use crate::clod_file::{write_sections, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK};
 use crate::mesh::Surface;
 use crate::streamed::Appearance;
 use crate::weld_store::{StoredTri, WeldedStore};
@@ -53,8 +53,9 @@ impl ReverseIds {
 
 /// Writes the `.clod` file of the welded store `store` and the spilled hierarchy `h` at
 /// `path`, as [`crate::streamed::write`] writes an in-memory one, with splits in reverse
-/// creation order; the welded data is read from the store a chunk at a time. Returns the
-/// file's length.
+/// creation order; the welded data is read from the store a chunk at a time. The written
+/// file's validated hierarchy is handed to `inspect` before the rename. Returns the file's
+/// length.
 pub fn write(
     store: WeldedStore,
     h: Spilled,
@@ -62,6 +63,7 @@ pub fn write(
     texture_dir: &Path,
     path: &Path,
     extra: &[ExtraSection<'_>],
+    inspect: Inspect<'_>,
 ) -> Result<u64, BakeWriteError> {
     let colours = store_arrays::colours(&store)?;
     let appearance = Appearance::with_colours(colours, surfaces, texture_dir, path)?;
@@ -94,7 +96,7 @@ pub fn write(
     };
     let meta = arrays::meta_from(&mesh, &counts, &polys);
     let specs = section_specs(&meta, &sections);
-    write_sections(path, &specs, Check::ReadBack, move |out| {
+    write_sections(path, &specs, Check::ReadBack(inspect), move |out| {
         out.put(std::slice::from_ref(&meta))?;
         store_arrays::put_positions(out, &store)?;
         put_records(out, &h, |r| node(ids, r.record.position, r.parent))?;

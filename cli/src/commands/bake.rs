@@ -3,6 +3,7 @@
 
 use caveclod_bake::baked::{BakeWriteError, Baked};
 use caveclod_bake::blocked::{build_file_spilled, BlockedOptions, LevelStats, SpilledBuild};
+use caveclod_bake::clod_file::Inspect;
 use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
@@ -48,15 +49,17 @@ impl Build {
         }
     }
 
-    /// Writes the file one array at a time, from the collapses in memory or on disk.
+    /// Writes the file one array at a time, from the collapses in memory or on disk, and
+    /// hands the written file's validated hierarchy to `inspect` before the rename.
     fn write(
         self,
         path: &std::path::Path,
         extra: &[ExtraSection<'_>],
+        inspect: Inspect<'_>,
     ) -> Result<u64, BakeWriteError> {
         match self {
-            Build::InMemory(b) => b.write(path, extra),
-            Build::Spilled(b) => b.write(path, extra),
+            Build::InMemory(b) => b.write_inspected(path, extra, inspect),
+            Build::Spilled(b) => b.write_inspected(path, extra, inspect),
         }
     }
 
@@ -113,37 +116,38 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
     };
     bar.finish();
     let Made { built, extras } = made?;
-    let info = if a.gmesh {
-        write_with_gmesh(a, built, &extras, &bar)?
+    let r = if a.gmesh {
+        let info = write_with_gmesh(a, built, &extras, &bar)?;
+        report_released(&a.output, |h| {
+            Ok(bake_report(h, &info, &extras, a.memory_budget))
+        })?
     } else {
         // The arrays are assembled as they are written.
         show_stage(&bar, Stage::Assemble);
         write_streamed(a, built, &extras)?
     };
-    report_released(&a.output, |h| {
-        let r = bake_report(h, &info, &extras, a.memory_budget);
-        if a.json {
-            println!("{}", Value::Object(r));
-        } else {
-            println!(
-                "baked {} -> {}\n{}",
-                a.input.display(),
-                a.output.display(),
-                report::human(&r)
-            );
-        }
-        Ok(())
-    })
+    if a.json {
+        println!("{}", Value::Object(r));
+    } else {
+        println!(
+            "baked {} -> {}\n{}",
+            a.input.display(),
+            a.output.display(),
+            report::human(&r)
+        );
+    }
+    Ok(())
 }
 
-/// [`super::with_hierarchy`] for the report on a file just written, as large as the bake made it:
-/// a mapped file's pages are handed back as the validation and the report read them
+/// [`super::with_hierarchy`] for the report on a file that `--gmesh` wrote from arrays
+/// validated in memory (the streamed writes report from their own read-back instead), as
+/// large as the bake made it: a mapped file's pages are handed back as the validation and the report read them
 /// ([`caveclod_bake::clod_file::with_pages_released`]), so the report does not hold the
 /// whole file resident.
-fn report_released(
+fn report_released<R>(
     path: &Path,
-    f: impl FnOnce(&Hierarchy<'_>) -> Result<(), String>,
-) -> Result<(), String> {
+    f: impl FnOnce(&Hierarchy<'_>) -> Result<R, String>,
+) -> Result<R, String> {
     let file = ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let report = || {
         let h = file
@@ -284,16 +288,24 @@ fn gmesh_levels(baked: &Baked, min_polygons: Option<u32>) -> Result<GMeshData, S
 }
 
 /// Writes the file from the welded mesh and the collapses one array at a time
-/// ([`Built::write`], [`SpilledBuild::write`]), with the bake's report and the
-/// multiresolution octree (if any) as extra sections; the mesh and the collapses are dropped
-/// once written. Returns the report.
-fn write_streamed(a: &BakeArgs, built: Build, extras: &Extras) -> Result<BakeInfo, String> {
+/// ([`Built::write_inspected`], [`SpilledBuild::write_inspected`]), with the bake's report and
+/// the multiresolution octree (if any) as extra sections; the mesh and the collapses are
+/// dropped once written. Returns the file's report, made from the hierarchy the writer's
+/// read-back validated, so the file is validated once and the report describes those bytes.
+fn write_streamed(
+    a: &BakeArgs,
+    built: Build,
+    extras: &Extras,
+) -> Result<Map<String, Value>, String> {
     let mut info = built.info().clone();
     info.bake_seconds = built.seconds();
+    let mut report = None;
     write_with(extras, &info, None, |sections| {
-        built.write(&a.output, sections)
+        built.write(&a.output, sections, &mut |h| {
+            report = Some(bake_report(h, &info, extras, a.memory_budget));
+        })
     })?;
-    Ok(info)
+    report.ok_or_else(|| format!("{}: written but not inspected", a.output.display()))
 }
 
 /// Assembles the arrays, builds the g-mesh levels over them and writes the file with the

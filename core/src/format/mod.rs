@@ -49,6 +49,7 @@ pub use records::{
     octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
     PositionClass, Split, SplitBounds, Vertex, VertexKey,
 };
+pub use validate::{OnePiece, Pieces};
 pub use writer::{
     serialized_len, validate_parts, write_into, ExtraSection, HierarchyParts, KNOWN_SECTIONS,
 };

@@ -153,7 +153,7 @@ pub fn validate_parts(
     parts: &HierarchyParts<'_>,
     extra: &[ExtraSection<'_>],
 ) -> Result<Meta, WriteError> {
-    let meta = validate::validate(parts, None)?;
+    let meta = validate::validate(parts, None, &validate::OnePiece)?;
     for e in extra {
         let reserved = KNOWN_SECTIONS.contains(&e.tag);
         if reserved || e.record_size == 0 || e.bytes.len() % e.record_size as usize != 0 {

@@ -11,6 +11,7 @@
 //! the same order: the same mesh and the same errors either way.
 
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
+use rayon::prelude::*;
 
 use super::properties::{is_index_list, vertex_slot, Vertex};
 use super::{scalar_size, Corners, ImportError, ImportReport};
@@ -26,6 +27,9 @@ pub(super) struct Payload<'a> {
     faces: Option<(&'a ElementDef, usize)>,
     /// Triangles the faces' fans make.
     triangles: usize,
+    /// The count and index types of the faces' index list, when it is their only property
+    /// and every face has three corners: faces of one stride.
+    triangle_list: Option<(&'a ScalarType, &'a ScalarType)>,
 }
 
 impl<'a> Payload<'a> {
@@ -43,6 +47,7 @@ impl<'a> Payload<'a> {
             vertices: None,
             faces: None,
             triangles: 0,
+            triangle_list: None,
         };
         let mut at = 0usize;
         for def in header.elements.values() {
@@ -68,17 +73,61 @@ impl<'a> Payload<'a> {
                 }
                 continue;
             }
-            for _ in 0..def.count {
-                let mut corners = 0usize;
-                at = payload.walk_instance(def, at, |p, _, _| {
-                    corners += usize::from(Some(p) == index_list);
-                })?;
-                if is_face {
-                    payload.triangles += corners.saturating_sub(2);
+            let (mut triangles, mut all_triangles) = (0usize, true);
+            let mut instance = |corners: usize| {
+                triangles += corners.saturating_sub(2);
+                all_triangles &= corners == 3;
+            };
+            at = match only_list(def) {
+                Some(list) => {
+                    let counted = index_list == Some(0);
+                    payload
+                        .walk_lists(def.count, list, at, |n| instance(n * usize::from(counted)))?
+                }
+                None => {
+                    for _ in 0..def.count {
+                        let mut corners = 0usize;
+                        at = payload.walk_instance(def, at, |p, _, _| {
+                            corners += usize::from(Some(p) == index_list);
+                        })?;
+                        instance(corners);
+                    }
+                    at
+                }
+            };
+            if is_face {
+                payload.triangles += triangles;
+                if all_triangles {
+                    payload.triangle_list = only_list(def);
                 }
             }
         }
         Some(payload)
+    }
+
+    /// [`walk_instance`](Self::walk_instance) of `count` instances of an element whose only
+    /// property is a list of `(count type, item type)`, from `at`, handing each list's length
+    /// to `length`; the offset after them, or `None` when the payload ends first or a count
+    /// is negative.
+    fn walk_lists(
+        &self,
+        count: usize,
+        (count_type, item): (&ScalarType, &ScalarType),
+        mut at: usize,
+        mut length: impl FnMut(usize),
+    ) -> Option<usize> {
+        let (count_size, item_size) = (scalar_size(count_type), scalar_size(item));
+        for _ in 0..count {
+            let end = at.checked_add(count_size)?;
+            let n = integer(self.bytes.get(at..end)?, count_type, self.big)?;
+            let items = usize::try_from(n).ok()?;
+            at = end.checked_add(items.checked_mul(item_size)?)?;
+            if at > self.bytes.len() {
+                return None;
+            }
+            length(items);
+        }
+        Some(at)
     }
 
     /// Reads the vertices, then the faces, into `mesh` (as the parser's path pushes its
@@ -94,6 +143,9 @@ impl<'a> Payload<'a> {
         }
         if let Some((def, start)) = self.faces {
             mesh.triangles.reserve(self.triangles);
+            if let Some(list) = self.triangle_list {
+                return self.read_triangles(corners, mesh, report, list, (def.count, start));
+            }
             let index_list = def.properties.keys().position(|k| is_index_list(k));
             let mut indices: Vec<i64> = Vec::new();
             let mut at = start;
@@ -133,19 +185,53 @@ impl<'a> Payload<'a> {
                 offset += scalar_size(t);
             }
         }
-        mesh.positions.reserve(def.count);
-        let records = self.bytes[start..start + def.count * stride].chunks_exact(stride.max(1));
-        for (i, record) in records.enumerate() {
+        let fields: Vec<(usize, Scalar, usize, f64)> = fields
+            .into_iter()
+            .map(|(offset, t, slot)| (offset, scalar(&t), slot, colour_scale(&t)))
+            .collect();
+        let records = &self.bytes[start..start + def.count * stride];
+        let vertex = |i: usize| {
+            let record = &records[i * stride..(i + 1) * stride];
             let mut v = Vertex::unset();
-            for (offset, t, slot) in &fields {
-                v.put(
-                    *slot,
-                    scalar(t).decode(&record[*offset..], self.big),
-                    colour_scale(t),
-                );
+            for &(offset, s, slot, scale) in &fields {
+                v.put(slot, s.decode(&record[offset..], self.big), scale);
             }
-            corners.push_vertex(mesh, i, &v)?;
+            v
+        };
+        corners.push_vertices(mesh, def.count, vertex)
+    }
+
+    /// Faces whose only property is the index list, each of three corners (what
+    /// [`find`](Self::find) saw): records of one stride from `start`, read on all cores. On
+    /// an index out of range, the error of the first face with one, as reading the faces in
+    /// order gives.
+    fn read_triangles(
+        &self,
+        corners: &mut Corners<'_>,
+        mesh: &mut Mesh,
+        report: &mut ImportReport,
+        (count, index): (&ScalarType, &ScalarType),
+        (faces, start): (usize, usize),
+    ) -> Result<(), ImportError> {
+        let (count_size, index_size) = (scalar_size(count), scalar_size(index));
+        let stride = count_size + 3 * index_size;
+        let index = scalar(index);
+        let corners_of = |f: usize| {
+            let at = start + f * stride + count_size;
+            [0, 1, 2].map(|k| index.decode_int(&self.bytes[at + k * index_size..], self.big))
+        };
+        let bad = (0..faces)
+            .into_par_iter()
+            .position_first(|f| !corners_of(f).iter().all(|&i| corners.in_range(i)));
+        if let Some(f) = bad {
+            return corners.push_face(mesh, f, &corners_of(f), &[], report);
         }
+        let corners = &*corners;
+        mesh.triangles.par_extend(
+            (0..faces)
+                .into_par_iter()
+                .map(|f| corners.triangle(corners_of(f).map(|i| i as u32), None)),
+        );
         Ok(())
     }
 
@@ -193,6 +279,15 @@ fn stride(def: &ElementDef) -> Option<usize> {
             PropertyType::List(..) => None,
         })
         .sum()
+}
+
+/// The count and item types of `def`'s list when it is `def`'s only property.
+fn only_list(def: &ElementDef) -> Option<(&ScalarType, &ScalarType)> {
+    let mut properties = def.properties.values();
+    match (properties.next().map(|p| &p.data_type), properties.next()) {
+        (Some(PropertyType::List(count, item)), None) => Some((count, item)),
+        _ => None,
+    }
 }
 
 /// Whether this reader takes a `face` element's properties: exactly one index list, of an

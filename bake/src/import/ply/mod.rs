@@ -2,7 +2,8 @@
 //! element data read line by line here (`ascii.rs`), so that an ASCII file's errors name the
 //! element, its index, line and property, and `nan` is reported as in a binary file. Binary
 //! data in the common layouts is read straight into the mesh instead (`binary.rs`), to the
-//! same mesh and the same errors.
+//! same mesh and the same errors. Vertices become the mesh's positions and attributes on all
+//! cores, a piece at a time (`vertices.rs`).
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`, any scalar types.
 //! Element `vertex`: `x y z` (required), `nx ny nz`, colours `red green blue [alpha]` (or
@@ -31,13 +32,14 @@ mod binary;
 pub(crate) mod properties;
 #[cfg(test)]
 mod tests;
+mod vertices;
 
 use std::io::{Cursor, ErrorKind};
 
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
 use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
-use properties::{A, NX, R, U, VERTEX_NAMES, X};
+use vertices::byte_colour;
 
 use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
@@ -176,10 +178,8 @@ fn read_parsed(
     let mut mesh = Mesh::default();
     let mut corners = Corners::new(source, elements.vertices.len(), present);
     corners.surface = push_texture_surface(source, &mut mesh, header)?;
-    mesh.positions.reserve(elements.vertices.len());
-    for (i, v) in elements.vertices.iter().enumerate() {
-        corners.push_vertex(&mut mesh, i, v)?;
-    }
+    let vertices = &elements.vertices;
+    corners.push_vertices(&mut mesh, vertices.len(), |i| vertices[i])?;
     drop(elements.vertices);
     mesh.triangles.reserve(elements.faces.len());
     for (f, face) in elements.faces.iter().enumerate() {
@@ -385,6 +385,8 @@ struct Corners<'a> {
     surface: u16,
     /// A face's corners, reused from face to face.
     face: Vec<u32>,
+    /// The linear value of each 8-bit colour channel ([`Self::linear`]).
+    byte_linear: [f32; 256],
 }
 
 impl<'a> Corners<'a> {
@@ -395,35 +397,17 @@ impl<'a> Corners<'a> {
             present,
             surface: 0,
             face: Vec::new(),
+            byte_linear: std::array::from_fn(|k| srgb_to_linear(byte_colour(k))),
         }
     }
 
-    /// Vertex `i`'s position and the attributes present, checked finite; UV `v` flipped,
-    /// colours to linear.
-    fn push_vertex(&self, mesh: &mut Mesh, i: usize, v: &Vertex) -> Result<(), ImportError> {
-        let (source, present) = (self.source, self.present);
-        source.check_finite(&v.values, &VERTEX_NAMES, || format!("vertex {i}"))?;
-        let x = &v.values;
-        mesh.positions.push([x[X], x[X + 1], x[X + 2]]);
-        if present.normals {
-            mesh.normals.push([x[NX], x[NX + 1], x[NX + 2]]);
-        }
-        if present.uvs {
-            mesh.uvs.push([x[U], 1.0 - x[U + 1]]);
-        }
-        if present.colors {
-            mesh.colors.push([
-                srgb_to_linear(x[R]),
-                srgb_to_linear(x[R + 1]),
-                srgb_to_linear(x[R + 2]),
-                x[A],
-            ]);
-        }
-        Ok(())
+    /// Whether `index` names a vertex.
+    fn in_range(&self, index: i64) -> bool {
+        (0..self.vertex_count as i64).contains(&index)
     }
 
     fn vertex(&self, at: &dyn Fn() -> String, index: i64) -> Result<u32, ImportError> {
-        if (0..self.vertex_count as i64).contains(&index) {
+        if self.in_range(index) {
             Ok(index as u32)
         } else {
             Err(self.source.out_of_range(

@@ -28,6 +28,7 @@ pub(crate) const VERTEX_NAMES: [&str; SLOTS] = [
 ];
 
 /// One vertex as the parser fills it.
+#[derive(Clone, Copy)]
 pub(super) struct Vertex {
     pub(super) values: [f32; SLOTS],
 }

@@ -412,3 +412,85 @@ fn other_layouts_and_cut_payloads_are_left_to_the_parser() {
     );
     assert!(!layout(texcoord.as_bytes()));
 }
+
+/// A binary grid of `side` x `side` vertices with byte colours (every channel value) and
+/// ushort alpha, and two triangles per cell, each face's index list its only property: the
+/// layout whose vertices and triangles the direct reader converts in pieces on all cores.
+fn grid(side: u32) -> Vec<u8> {
+    let mut out = format!(
+        "ply\nformat binary_big_endian 1.0\nelement vertex {}\nproperty float x\n\
+         property float y\nproperty float z\nproperty uchar red\nproperty uchar green\n\
+         property uchar blue\nproperty ushort alpha\nelement face {}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        side * side,
+        2 * (side - 1) * (side - 1)
+    )
+    .into_bytes();
+    for v in 0..side * side {
+        for c in [v % side, v / side, v % 7] {
+            out.extend_from_slice(&(c as f32).to_be_bytes());
+        }
+        out.extend_from_slice(&[v as u8, (v / 3) as u8, 255 - v as u8]);
+        out.extend_from_slice(&((v * 13) as u16).to_be_bytes());
+    }
+    for y in 0..side - 1 {
+        for x in 0..side - 1 {
+            let v = (y * side + x) as i32;
+            let s = side as i32;
+            for t in [[v, v + 1, v + s], [v + 1, v + s + 1, v + s]] {
+                out.push(3);
+                for i in t {
+                    out.extend_from_slice(&i.to_be_bytes());
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn pieces_on_all_cores_give_the_parsers_mesh_and_first_errors() {
+    let side = 150u32;
+    let bytes = grid(side);
+    let [direct, parsed] = both_readers(&bytes);
+    let mesh = direct.unwrap();
+    assert_eq!(mesh.positions.len(), (side * side) as usize);
+    assert_eq!(mesh.triangles.len(), (2 * (side - 1) * (side - 1)) as usize);
+    assert_eq!(mesh, parsed.unwrap());
+    // The colours of the table are those of the conversion, channel for channel.
+    for (v, c) in mesh.colors.iter().enumerate() {
+        let byte = byte_colour(v % 256);
+        assert_eq!(c[0].to_bits(), srgb_to_linear(byte).to_bits(), "vertex {v}");
+    }
+    let header_len = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    let vertex_len = 3 * 4 + 3 + 2;
+    let face_len = 1 + 3 * 4;
+    let faces_at = header_len + (side * side) as usize * vertex_len;
+    // Two bad vertices in different pieces: the first is named, by both readers.
+    let mut bad = bytes.clone();
+    for v in [15_000usize, 9_000] {
+        let at = header_len + v * vertex_len + 4;
+        bad[at..at + 4].copy_from_slice(&f32::INFINITY.to_be_bytes());
+    }
+    let [direct, parsed] = both_readers(&bad);
+    let error = direct.unwrap_err();
+    assert!(error.contains("vertex 9000"), "{error}");
+    assert_eq!(error, parsed.unwrap_err());
+    // Two faces with an index out of range: the first is named.
+    let mut bad = bytes.clone();
+    for (f, index) in [(40_000usize, -3i32), (12_000, 999_999)] {
+        let at = faces_at + f * face_len + 1 + 4;
+        bad[at..at + 4].copy_from_slice(&index.to_be_bytes());
+    }
+    let [direct, parsed] = both_readers(&bad);
+    let error = direct.unwrap_err();
+    assert_eq!(
+        error,
+        "t.ply: face 12000: vertex index 999999 out of range (22500 vertices)"
+    );
+    assert_eq!(error, parsed.unwrap_err());
+}

@@ -18,6 +18,11 @@
 //!
 //! The optional appearance sections (materials and vertex colours, [`materials`]) are
 //! checked after these, against the surface and vertex counts: [`appearance`].
+//!
+//! Within a pass each record is checked on its own, reading only what earlier passes (and
+//! its own earlier checks) bounded, so a pass may run over pieces of its records at once:
+//! [`Pieces`] says how, and the first error in record order is the one reported whatever the
+//! pieces, so the answer is the one a single piece gives.
 
 mod materials;
 mod nodes;
@@ -30,8 +35,48 @@ pub(crate) use materials::{appearance, Appearance};
 pub(crate) use table::parse_checked;
 pub(crate) use table::{appearance_extras, parse, section_table_checked};
 
+use core::ops::Range;
+
 use crate::format::{tags, FormatError, HierarchyParts, Meta, Tag, VertexKey};
 use crate::ids::PositionId;
+
+/// How the validation runs each pass over its records: split into consecutive ranges that
+/// may be checked at once, on other threads (the core has none of its own; a caller with a
+/// thread pool implements this over it). Validation is the same whatever the split.
+pub trait Pieces: Sync {
+    /// `map` of consecutive ranges that cover `0..n` in order (at least one range, which may
+    /// be empty), folded from the first to the last by `join`.
+    fn fold<T: Send>(
+        &self,
+        n: usize,
+        map: &(dyn Fn(Range<usize>) -> T + Sync),
+        join: &dyn Fn(T, T) -> T,
+    ) -> T;
+}
+
+/// Every pass in one piece, on the caller's thread.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OnePiece;
+
+impl Pieces for OnePiece {
+    fn fold<T: Send>(
+        &self,
+        n: usize,
+        map: &(dyn Fn(Range<usize>) -> T + Sync),
+        _join: &dyn Fn(T, T) -> T,
+    ) -> T {
+        map(0..n)
+    }
+}
+
+/// `pass` over the records `0..n`, in pieces; the first error in record order.
+fn in_pieces(
+    pieces: &impl Pieces,
+    n: usize,
+    pass: &(dyn Fn(Range<usize>) -> Result<(), FormatError> + Sync),
+) -> Result<(), FormatError> {
+    pieces.fold(n, pass, &|a, b| a.and(b))
+}
 
 fn invalid(
     tag: Tag,
@@ -83,16 +128,17 @@ fn count(tag: Tag, expected: usize, found: usize) -> Result<(), FormatError> {
 pub(crate) fn validate(
     parts: &HierarchyParts<'_>,
     file_meta: Option<&Meta>,
+    pieces: &impl Pieces,
 ) -> Result<Meta, FormatError> {
     counts(parts)?;
-    let [bounds_min, bounds_max] = vertices::positions(parts)?;
-    vertices::vertex_table(parts)?;
-    nodes::nodes(parts)?;
-    nodes::splits(parts)?;
-    nodes::bounds(parts)?;
-    polygons::polygons(parts)?;
+    let [bounds_min, bounds_max] = vertices::positions(parts, pieces)?;
+    vertices::vertex_table(parts, pieces)?;
+    nodes::nodes(parts, pieces)?;
+    nodes::splits(parts, pieces)?;
+    nodes::bounds(parts, pieces)?;
+    polygons::polygons(parts, pieces)?;
     polygons::roots(parts)?;
-    polygons::base_mesh(parts)?;
+    polygons::base_mesh(parts, pieces)?;
     let meta = Meta {
         node_count: parts.nodes.len() as u32,
         split_count: parts.splits.len() as u32,
@@ -104,7 +150,7 @@ pub(crate) fn validate(
         vertex_key_count: parts.vertex_table.len() as u32,
         surface_count: parts.surface_count,
         surface_group_count: parts.surface_group_count,
-        max_depth: polygons::max_depth(parts),
+        max_depth: polygons::max_depth(parts, pieces),
         flags: 0,
         bounds_min,
         bounds_max,

@@ -1,14 +1,23 @@
 //! Nodes, splits and the splits' refinement bounds.
 
-use super::{count, invalid, keys};
+use core::ops::Range;
+
+use super::{count, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, FormatError, HierarchyParts, PositionClass, Split};
 use crate::ids::{NodeId, PolyId};
 
 /// Each node: its position in range, its parent a splittable node before it whose split
 /// names it as a child.
-pub(super) fn nodes(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
+pub(super) fn nodes(parts: &HierarchyParts<'_>, pieces: &impl Pieces) -> Result<(), FormatError> {
+    in_pieces(pieces, parts.nodes.len(), &|r| nodes_in(parts, r))
+}
+
+/// [`nodes`] of the records in `range`.
+fn nodes_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
     let (ne, ns) = (parts.positions.len(), parts.splits.len());
-    for (i, node) in parts.nodes.iter().enumerate() {
+    let start = range.start;
+    for (i, node) in parts.nodes[range].iter().enumerate() {
+        let i = start + i;
         if node.position.index() >= ne {
             return Err(invalid(
                 tags::NODES,
@@ -45,8 +54,15 @@ pub(super) fn nodes(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
 
 /// Each split, one record after the other: children, where the floating child may go, the
 /// polygons it creates and the neighbours it names.
-pub(super) fn splits(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
-    for (i, s) in parts.splits.iter().enumerate() {
+pub(super) fn splits(parts: &HierarchyParts<'_>, pieces: &impl Pieces) -> Result<(), FormatError> {
+    in_pieces(pieces, parts.splits.len(), &|r| splits_in(parts, r))
+}
+
+/// [`splits`] of the records in `range`.
+fn splits_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    let start = range.start;
+    for (i, s) in parts.splits[range].iter().enumerate() {
+        let i = start + i;
         children(parts, i, s)?;
         floats_onto_its_groups(parts, i, s)?;
         created_polygons(parts, i, s)?;
@@ -241,9 +257,16 @@ fn neighbours(parts: &HierarchyParts<'_>, i: usize, s: &Split) -> Result<(), For
 }
 
 /// One bounds record per split, at its node's position, with finite non-negative figures.
-pub(super) fn bounds(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
+pub(super) fn bounds(parts: &HierarchyParts<'_>, pieces: &impl Pieces) -> Result<(), FormatError> {
     count(tags::BOUNDS, parts.splits.len(), parts.bounds.len())?;
-    for (i, b) in parts.bounds.iter().enumerate() {
+    in_pieces(pieces, parts.bounds.len(), &|r| bounds_in(parts, r))
+}
+
+/// [`bounds`] of the records in `range`.
+fn bounds_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    let start = range.start;
+    for (i, b) in parts.bounds[range].iter().enumerate() {
+        let i = start + i;
         let t = tags::BOUNDS;
         let pos = parts.nodes[i].position;
         if b.point.map(f32::to_bits) != parts.positions[pos.index()].xyz.map(f32::to_bits) {

@@ -1,12 +1,24 @@
 //! Polygons, roots, the base mesh and the depth of the hierarchy.
 
-use super::{count, invalid, keys};
+use core::ops::Range;
+
+use super::{count, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, BaseFace, Creator, FormatError, HierarchyParts, Node, Polygon};
 use crate::ids::{NodeId, PolyId};
 
 /// Each polygon: its corners and surface, then its creator.
-pub(super) fn polygons(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
-    for (i, poly) in parts.polygons.iter().enumerate() {
+pub(super) fn polygons(
+    parts: &HierarchyParts<'_>,
+    pieces: &impl Pieces,
+) -> Result<(), FormatError> {
+    in_pieces(pieces, parts.polygons.len(), &|r| polygons_in(parts, r))
+}
+
+/// [`polygons`] of the records in `range`.
+fn polygons_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    let start = range.start;
+    for (i, poly) in parts.polygons[range].iter().enumerate() {
+        let i = start + i;
         corners(parts, i, poly)?;
         creator(parts, i, poly)?;
     }
@@ -145,8 +157,18 @@ pub(super) fn roots(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
 
 /// Each base face: its corners the roots above its polygon's corners, no corner twice, and
 /// its neighbours other base faces that share the edge and link back.
-pub(super) fn base_mesh(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
-    for (i, b) in parts.base.iter().enumerate() {
+pub(super) fn base_mesh(
+    parts: &HierarchyParts<'_>,
+    pieces: &impl Pieces,
+) -> Result<(), FormatError> {
+    in_pieces(pieces, parts.base.len(), &|r| base_mesh_in(parts, r))
+}
+
+/// [`base_mesh`] of the records in `range`.
+fn base_mesh_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    let start = range.start;
+    for (i, b) in parts.base[range].iter().enumerate() {
+        let i = start + i;
         for k in 0..3 {
             base_corner(parts, i, b, k)?;
         }
@@ -218,9 +240,20 @@ fn base_corner(
 }
 
 /// The longest walk up from a leaf to its root.
-pub(super) fn max_depth(parts: &HierarchyParts<'_>) -> u32 {
+pub(super) fn max_depth(parts: &HierarchyParts<'_>, pieces: &impl Pieces) -> u32 {
+    let ns = parts.splits.len();
+    let leaves = parts.nodes.len() - ns;
+    pieces.fold(
+        leaves,
+        &|r| max_depth_in(parts, ns + r.start..ns + r.end),
+        &|a, b| a.max(b),
+    )
+}
+
+/// The longest walk up from the leaves `leaves`.
+fn max_depth_in(parts: &HierarchyParts<'_>, leaves: Range<usize>) -> u32 {
     let mut max_depth = 0u32;
-    for leaf in parts.splits.len()..parts.nodes.len() {
+    for leaf in leaves {
         let mut d = 0;
         let mut v = NodeId(leaf as u32);
         while let Some(p) = parts.nodes[v.index()].parent.get() {

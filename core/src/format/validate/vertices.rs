@@ -1,15 +1,40 @@
 //! Positions, the vertex table and the vertices.
 
-use super::{count, finite, invalid, keys};
+use core::ops::Range;
+
+use super::{count, finite, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, FormatError, HierarchyParts, PositionClass};
 use crate::ids::PositionId;
 
+/// Bounds of positions: the least and the greatest coordinates.
+type Bounds = [[f32; 3]; 2];
+
 /// Every position finite and of a known class; returns the bounds of the positions (zero
 /// for none).
-pub(super) fn positions(parts: &HierarchyParts<'_>) -> Result<[[f32; 3]; 2], FormatError> {
+pub(super) fn positions(
+    parts: &HierarchyParts<'_>,
+    pieces: &impl Pieces,
+) -> Result<Bounds, FormatError> {
+    if parts.positions.is_empty() {
+        return Ok([[0.0; 3]; 2]);
+    }
+    let join = |a: Result<Bounds, FormatError>, b: Result<Bounds, FormatError>| {
+        let ([amin, amax], [bmin, bmax]) = (a?, b?);
+        Ok([
+            [0, 1, 2].map(|k| amin[k].min(bmin[k])),
+            [0, 1, 2].map(|k| amax[k].max(bmax[k])),
+        ])
+    };
+    pieces.fold(parts.positions.len(), &|r| positions_in(parts, r), &join)
+}
+
+/// [`positions`] of the positions in `range`: their bounds (infinite, inside out, for none).
+fn positions_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<Bounds, FormatError> {
     let mut bounds_min = [f32::INFINITY; 3];
     let mut bounds_max = [f32::NEG_INFINITY; 3];
-    for (i, p) in parts.positions.iter().enumerate() {
+    let start = range.start;
+    for (i, p) in parts.positions[range].iter().enumerate() {
+        let i = start + i;
         if let Some(x) = p.xyz.iter().find(|x| !x.is_finite()) {
             return Err(invalid(
                 tags::POSITIONS,
@@ -33,16 +58,32 @@ pub(super) fn positions(parts: &HierarchyParts<'_>) -> Result<[[f32; 3]; 2], For
             bounds_max[k] = bounds_max[k].max(p.xyz[k]);
         }
     }
-    if parts.positions.is_empty() {
-        return Ok([[0.0; 3]; 2]);
-    }
     Ok([bounds_min, bounds_max])
 }
 
 /// The vertex table: offsets, finite vertices, then each position's entries.
-pub(super) fn vertex_table(parts: &HierarchyParts<'_>) -> Result<(), FormatError> {
+pub(super) fn vertex_table(
+    parts: &HierarchyParts<'_>,
+    pieces: &impl Pieces,
+) -> Result<(), FormatError> {
     offsets(parts)?;
-    for (i, v) in parts.vertices.iter().enumerate() {
+    in_pieces(pieces, parts.vertices.len(), &|r| vertices_in(parts, r))?;
+    in_pieces(pieces, parts.positions.len(), &|r| entries_in(parts, r))
+}
+
+/// The entries of the positions in `range`.
+fn entries_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    for pi in range {
+        position_entries(parts, pi)?;
+    }
+    Ok(())
+}
+
+/// The vertices in `range` finite.
+fn vertices_in(parts: &HierarchyParts<'_>, range: Range<usize>) -> Result<(), FormatError> {
+    let start = range.start;
+    for (i, v) in parts.vertices[range].iter().enumerate() {
+        let i = start + i;
         if !finite(&v.position) || !finite(&v.normal) || !finite(&v.uv) {
             return Err(invalid(
                 tags::VERTICES,
@@ -52,9 +93,6 @@ pub(super) fn vertex_table(parts: &HierarchyParts<'_>) -> Result<(), FormatError
                 0,
             ));
         }
-    }
-    for pi in 0..parts.positions.len() {
-        position_entries(parts, pi)?;
     }
     Ok(())
 }

@@ -1,9 +1,10 @@
 //! The `.clod` arrays computed from a welded mesh and its collapses, one array at a time:
 //! the numbering of nodes and polygons into file order (the small tables every array needs,
-//! `u32` per node, split or triangle), then each array from the numbering as an iterator of
-//! its records in file order. [`crate::baked::Baked::new`] collects each into a `Vec`;
-//! [`crate::streamed`] writes the records in bounded chunks as they are made, so no array is
-//! ever whole in memory.
+//! `u32` per node, split or triangle, and the vertex table's order), then each array's
+//! records from the numbering, each record from its index alone, so an array is made on
+//! all cores and comes out the same whatever the threads. [`crate::baked::Baked::new`] collects
+//! each into a `Vec`; [`crate::streamed`] writes the records in bounded chunks as they are
+//! made, so no array is ever whole in memory.
 //!
 //! Node ids: splittable nodes first, in depth-first preorder (stationary child first, roots
 //! in position order), so a subtree is one id range and a stationary child sits next to its
@@ -11,14 +12,20 @@
 //! position order. Polygons: the base mesh first, then each split's `f_l` and `f_r` in split
 //! order.
 
-use caveclod_core::format::{
-    BaseFace, Creator, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
-};
+use caveclod_core::format::{BaseFace, Creator, Meta, Node, Polygon, Position, Split, SplitBounds};
 use caveclod_core::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
+use rayon::prelude::*;
+
 use crate::hierarchy::{Collapse, Hierarchy as Collapses};
-use crate::materials::encode_colour;
 use crate::weld::Welded;
+
+mod vertices;
+
+pub(crate) use vertices::{
+    vertex_colours, vertex_count, vertex_table, vertex_table_offset_records, vertex_table_offsets,
+    vertices, VertexOrder,
+};
 
 const NONE: u32 = u32::MAX;
 
@@ -78,27 +85,26 @@ impl NodeIds {
         self.by_new.iter().map(|&c| c as usize)
     }
 
-    /// Every node with its parent and position, in new-id order: the splits' nodes, then
-    /// the leaves.
-    pub(crate) fn node_records<'a>(&'a self, h: &'a Collapses) -> impl Iterator<Item = Node> + 'a {
-        let np = self.np as u32;
-        let splits = self.by_new.iter().map(move |&c| np + c);
-        splits.chain(0..np).map(move |old| {
-            let p = h.parent[old as usize];
-            Node {
-                parent: if p == NONE {
-                    NodeId::NONE
-                } else {
-                    NodeId(self.of(p))
-                },
-                position: PositionId(h.node_position[old as usize]),
-            }
-        })
+    /// Node `id` (new ids: the splits' nodes, then the leaves) with its parent and position.
+    pub(crate) fn node(&self, h: &Collapses, id: usize) -> Node {
+        let old = match self.by_new.get(id) {
+            Some(&c) => self.np + c as usize,
+            None => id - self.by_new.len(),
+        };
+        let p = h.parent[old];
+        Node {
+            parent: if p == NONE {
+                NodeId::NONE
+            } else {
+                NodeId(self.of(p))
+            },
+            position: PositionId(h.node_position[old]),
+        }
     }
 
-    /// [`node_records`](Self::node_records) collected.
+    /// Every [`node`](Self::node) in new-id order, made on all cores.
     pub(crate) fn nodes(&self, h: &Collapses) -> Vec<Node> {
-        self.node_records(h).collect()
+        collect_indexed(self.total(), |id| self.node(h, id))
     }
 
     /// Nodes without a parent.
@@ -181,20 +187,6 @@ impl PolygonOrder {
         &self.base
     }
 
-    /// Triangle and stored rotation of each polygon, in new-id order.
-    fn order<'a>(
-        &'a self,
-        h: &'a Collapses,
-        ids: &'a NodeIds,
-    ) -> impl Iterator<Item = (u32, u8)> + 'a {
-        let created = ids.collapses_in_order().flat_map(move |c| {
-            let col = h.collapses[c];
-            let right = (col.fr != NONE).then_some((col.fr, col.rot_r));
-            std::iter::once((col.fl, col.rot_l)).chain(right)
-        });
-        self.base.iter().map(|&f| (f, 0)).chain(created)
-    }
-
     /// The new id of welded triangle `f` (`NONE`: none).
     pub(crate) fn pid(&self, f: u32) -> PolyId {
         if f == NONE {
@@ -204,15 +196,33 @@ impl PolygonOrder {
         }
     }
 
-    /// The polygons in file order, corners rotated as stored.
-    pub(crate) fn polygon_records<'a>(
-        &'a self,
-        w: &'a Welded,
-        h: &'a Collapses,
-        ids: &'a NodeIds,
-    ) -> impl Iterator<Item = Polygon> + 'a {
-        self.order(h, ids)
-            .map(move |(f, rot)| self.polygon(w, f, rot, |p| ids.of(p)))
+    /// The welded triangle of each polygon, in new-id order (the inverse of the numbering),
+    /// so that any polygon's record can be made on its own ([`Polygons`]).
+    pub(crate) fn triangles_in_order(&self) -> Vec<u32> {
+        let mut by_polygon = vec![NONE; self.count];
+        for (f, &p) in self.poly_new.iter().enumerate() {
+            if p != NONE {
+                by_polygon[p as usize] = f as u32;
+            }
+        }
+        by_polygon
+    }
+
+    /// The rotation welded triangle `f` is stored with: none for a base polygon, its
+    /// creator's collapse's `rot_l` or `rot_r` for the others.
+    fn rotation(&self, h: &Collapses, ids: &NodeIds, f: u32) -> u8 {
+        let creator = self.creator[f as usize];
+        match creator.node() {
+            None => 0,
+            Some(s) => {
+                let col = &h.collapses[ids.by_new[s.index()] as usize];
+                if creator.is_right() {
+                    col.rot_r
+                } else {
+                    col.rot_l
+                }
+            }
+        }
     }
 
     /// The polygon of welded triangle `f`, its corners rotated by `rot` and named by the
@@ -263,9 +273,10 @@ impl PolygonOrder {
         }
     }
 
-    /// [`polygon_records`](Self::polygon_records) collected.
+    /// The polygons in file order, corners rotated as stored, made on all cores.
     pub(crate) fn polygons(&self, w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<Polygon> {
-        self.polygon_records(w, h, ids).collect()
+        let order = Polygons::new(self, w, h, ids);
+        collect_indexed(self.count, |id| order.polygon(id))
     }
 
     /// The base mesh with its adjacency, from the final corners.
@@ -303,37 +314,60 @@ impl PolygonOrder {
     }
 }
 
-/// The split record of every collapse, in split order. Splits name their neighbours by key
-/// (`PolyKey`): base polygons by id, the others by creator and side.
-pub(crate) fn split_records<'a>(
-    h: &'a Collapses,
-    ids: &'a NodeIds,
-    polys: &'a PolygonOrder,
-) -> impl Iterator<Item = Split> + 'a {
-    ids.collapses_in_order()
-        .map(move |c| polys.split(&h.collapses[c], |x| ids.of(x)))
-}
-
-/// [`split_records`] collected.
-pub(crate) fn splits(h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Vec<Split> {
-    split_records(h, ids, polys).collect()
-}
-
-/// The refinement bounds of every collapse, in split order.
-pub(crate) fn bound_records<'a>(
+/// The polygons' records by id: the welded triangle of each ([`PolygonOrder::triangles_in_order`])
+/// and what names their corners.
+pub(crate) struct Polygons<'a> {
+    order: &'a PolygonOrder,
+    by_polygon: Vec<u32>,
     w: &'a Welded,
     h: &'a Collapses,
     ids: &'a NodeIds,
-) -> impl Iterator<Item = SplitBounds> + 'a {
-    ids.collapses_in_order().map(move |c| {
-        let old = ids.np + c;
-        split_bounds(
-            w.positions[h.node_position[old] as usize],
-            h.radius[old],
-            h.cone[old],
-            h.error[old],
-        )
-    })
+}
+
+impl<'a> Polygons<'a> {
+    pub(crate) fn new(
+        order: &'a PolygonOrder,
+        w: &'a Welded,
+        h: &'a Collapses,
+        ids: &'a NodeIds,
+    ) -> Self {
+        Self {
+            order,
+            by_polygon: order.triangles_in_order(),
+            w,
+            h,
+            ids,
+        }
+    }
+
+    /// Polygon `id`, corners rotated as stored.
+    pub(crate) fn polygon(&self, id: usize) -> Polygon {
+        let f = self.by_polygon[id];
+        let rot = self.order.rotation(self.h, self.ids, f);
+        self.order.polygon(self.w, f, rot, |p| self.ids.of(p))
+    }
+}
+
+/// The split record of split `s` (in split order). Splits name their neighbours by key
+/// (`PolyKey`): base polygons by id, the others by creator and side.
+pub(crate) fn split(h: &Collapses, ids: &NodeIds, polys: &PolygonOrder, s: usize) -> Split {
+    polys.split(&h.collapses[ids.by_new[s] as usize], |x| ids.of(x))
+}
+
+/// Every [`split`] in split order, made on all cores.
+pub(crate) fn splits(h: &Collapses, ids: &NodeIds, polys: &PolygonOrder) -> Vec<Split> {
+    collect_indexed(ids.by_new.len(), |s| split(h, ids, polys, s))
+}
+
+/// The refinement bounds of split `s` (in split order).
+pub(crate) fn bound(w: &Welded, h: &Collapses, ids: &NodeIds, s: usize) -> SplitBounds {
+    let old = ids.np + ids.by_new[s] as usize;
+    split_bounds(
+        w.positions[h.node_position[old] as usize],
+        h.radius[old],
+        h.cone[old],
+        h.error[old],
+    )
 }
 
 /// The refinement bounds of a split whose node stands at `position` with sphere `radius`,
@@ -359,136 +393,31 @@ pub(crate) fn split_bounds(
     )
 }
 
-/// [`bound_records`] collected.
+/// Every [`bound`] in split order, made on all cores.
 pub(crate) fn bounds(w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<SplitBounds> {
-    bound_records(w, h, ids).collect()
+    collect_indexed(ids.by_new.len(), |s| bound(w, h, ids, s))
 }
 
-/// The vertex table in file order: per position, its vertices sorted by surface-group id,
-/// each as (position, group id, attribute index).
-struct EachVertex<'a> {
-    w: &'a Welded,
-    /// The next position to sort.
-    next: usize,
-    /// The current position and its sorted keys, and the next key of them.
-    position: usize,
-    keys: Vec<(u16, u32)>,
-    k: usize,
+/// `record(0..n)` in order, made on all cores: each record depends on its index alone, so
+/// the array is the same whatever the threads.
+pub(crate) fn collect_indexed<T: Send>(
+    n: usize,
+    record: impl Fn(usize) -> T + Sync + Send,
+) -> Vec<T> {
+    (0..n).into_par_iter().map(record).collect()
 }
 
-impl<'a> EachVertex<'a> {
-    fn new(w: &'a Welded) -> Self {
-        Self {
-            w,
-            next: 0,
-            position: 0,
-            keys: Vec::new(),
-            k: 0,
-        }
+/// Welded position `p` with its class.
+pub(crate) fn position(w: &Welded, p: usize) -> Position {
+    Position {
+        xyz: w.positions[p],
+        class: w.classes[p] as u32,
     }
 }
 
-impl Iterator for EachVertex<'_> {
-    type Item = (usize, u16, u32);
-
-    fn next(&mut self) -> Option<Self::Item> {
-        while self.k == self.keys.len() {
-            if self.next == self.w.vertices.len() {
-                return None;
-            }
-            let vs = &self.w.vertices[self.next];
-            self.position = self.next;
-            self.next += 1;
-            self.keys.clear();
-            let ids = &self.w.group_ids;
-            self.keys
-                .extend(vs.iter().map(|&(g, a)| (ids[g as usize], a)));
-            self.keys.sort_unstable();
-            self.k = 0;
-        }
-        let (group, a) = self.keys[self.k];
-        self.k += 1;
-        Some((self.position, group, a))
-    }
-}
-
-/// Vertices (and vertex-table entries) of the welded mesh.
-pub(crate) fn vertex_count(w: &Welded) -> usize {
-    w.vertices.iter().map(<[_]>::len).sum()
-}
-
-/// Where each position's vertex-table entries start, and the end.
-pub(crate) fn vertex_table_offset_records(w: &Welded) -> impl Iterator<Item = u32> + '_ {
-    let ends = w.vertices.iter().scan(0u32, |at, vs| {
-        *at += vs.len() as u32;
-        Some(*at)
-    });
-    std::iter::once(0).chain(ends)
-}
-
-/// [`vertex_table_offset_records`] collected.
-pub(crate) fn vertex_table_offsets(w: &Welded) -> Vec<u32> {
-    vertex_table_offset_records(w).collect()
-}
-
-/// The vertex table: per position, its vertices sorted by surface-group id, each a key into
-/// the vertex buffer, which holds them in the same order.
-pub(crate) fn vertex_table_records(w: &Welded) -> impl Iterator<Item = VertexKey> + '_ {
-    EachVertex::new(w)
-        .enumerate()
-        .map(|(i, (_, group, _))| VertexKey {
-            group: SurfaceGroupId(group),
-            reserved: 0,
-            vertex: i as u32,
-        })
-}
-
-/// [`vertex_table_records`] collected.
-pub(crate) fn vertex_table(w: &Welded) -> Vec<VertexKey> {
-    vertex_table_records(w).collect()
-}
-
-/// The vertex buffer, in vertex-table order.
-pub(crate) fn vertex_records(w: &Welded) -> impl Iterator<Item = Vertex> + '_ {
-    EachVertex::new(w).map(|(p, _, a)| {
-        let attrs = &w.attributes[a as usize];
-        Vertex {
-            position: w.positions[p],
-            normal: attrs.normal,
-            uv: attrs.uv,
-        }
-    })
-}
-
-/// [`vertex_records`] collected.
-pub(crate) fn vertices(w: &Welded) -> Vec<Vertex> {
-    vertex_records(w).collect()
-}
-
-/// The vertices' colours in vertex-table order; empty when the mesh has none.
-pub(crate) fn vertex_colours(w: &Welded) -> Vec<[u8; 4]> {
-    if !w.has_colors {
-        return Vec::new();
-    }
-    EachVertex::new(w)
-        .map(|(_, _, a)| encode_colour(w.attributes[a as usize].color))
-        .collect()
-}
-
-/// Welded positions with their classes.
-pub(crate) fn position_records(w: &Welded) -> impl Iterator<Item = Position> + '_ {
-    w.positions
-        .iter()
-        .zip(&w.classes)
-        .map(|(&xyz, &c)| Position {
-            xyz,
-            class: c as u32,
-        })
-}
-
-/// [`position_records`] collected.
+/// Every [`position`], made on all cores.
 pub(crate) fn positions(w: &Welded) -> Vec<Position> {
-    position_records(w).collect()
+    collect_indexed(w.positions.len(), |p| position(w, p))
 }
 
 /// The `META` record of the arrays, from the welded mesh and the collapses (what validating
