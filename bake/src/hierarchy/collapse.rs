@@ -203,8 +203,8 @@ fn merge_at(
     let range = |p: usize| wedge_start[p] as usize..wedge_start[p + 1] as usize;
     let at_t = range(pt);
     for i in range(pu) {
-        let g = wedges[i].group;
-        if let Some(j) = at_t.clone().find(|&j| wedges[j].group == g) {
+        let (group, _) = wedges[i];
+        if let Some(j) = at_t.clone().find(|&j| wedges[j].0 == group) {
             rows.merge(j - base, i - base);
         }
     }

@@ -27,7 +27,7 @@ impl Work<'_> {
         let at = self.wedges_at(pt);
         let (p, wedges) = (self.at(pt), &self.wedges);
         self.wedge_range(pu)
-            .map(|i| match at.iter().find(|wt| wt.group == wedges[i].group) {
+            .map(|i| match at.iter().find(|wt| wt.0 == wedges[i].0) {
                 Some(wt) => self.quadrics.eval(i, p, &self.attrs_of(wt)),
                 None => f64::INFINITY,
             })

@@ -34,8 +34,10 @@ pub(super) fn collapse_all(
         let pass = work.h.passes;
         let (applied, cut) = passes.run(work, pass, full, threads)?;
         work.merge_wedges(threads);
-        work.settle(threads);
+        // The removed wedges go before the bounds are settled, which read none of them, so
+        // that the settling's lists do not add to them.
         work.release_removed_wedges();
+        work.settle(threads);
         let done = work.h.collapses.len() as u64;
         progress(done, most);
         let broken = |stage, invariant| BuildError {

@@ -70,13 +70,15 @@ fn set_slot(cost: &mut [f64; 3], dirs: &mut u8, k: usize, costs: [f64; 2]) {
 /// `3 × triangle + k`, and the rankings of the triangles a pass removed are dropped before
 /// the next pass ranks.
 ///
-/// A triangle's rankings take 25 bytes: the three costs and the directions. A slot's ends
+/// A triangle's rankings take 25 bytes: the three costs and the directions; the list of
+/// live triangles is made when a pass first removes some (until then it is every triangle,
+/// and the first pass, when the build's memory peaks, holds none). A slot's ends
 /// are read from the triangle's current corners, and the slots to rank again from what the
 /// collapses mark ([`Slots::mark_changed`]), rather than kept as the corners they were
 /// ranked with.
 pub(super) struct Slots {
-    /// The live triangles, in order.
-    live: Vec<u32>,
+    /// The live triangles, in order; `None` while they are all the mesh's.
+    live: Option<Vec<u32>>,
     /// Their slots' costs: the cheaper allowed direction's, infinite for none.
     costs: Vec<[f64; 3]>,
     /// Their slots' directions, slot `k`'s in bits `2k..2k + 2`.
@@ -90,7 +92,7 @@ impl Slots {
     /// Slots of `triangles` triangles, all live, none ranked.
     pub(super) fn new(triangles: usize) -> Self {
         Self {
-            live: (0..triangles as u32).collect(),
+            live: None,
             costs: vec![[f64::INFINITY; 3]; triangles],
             dirs: vec![0; triangles],
             changed: vec![0b111; triangles],
@@ -101,22 +103,43 @@ impl Slots {
     /// the memory back once a ninth of it is free (a large block's tail goes back to the
     /// system without a copy), so that the rankings shrink with the mesh pass by pass.
     pub(super) fn retain_alive(&mut self, alive: &[bool]) {
+        let places = self.costs.len();
         let mut kept = 0;
-        for i in 0..self.live.len() {
-            if alive[self.live[i] as usize] {
-                self.live[kept] = self.live[i];
+        for i in 0..places {
+            if alive[self.triangle(i) as usize] {
                 self.costs[kept] = self.costs[i];
                 self.dirs[kept] = self.dirs[i];
                 kept += 1;
             }
         }
-        self.live.truncate(kept);
+        let mut live = match self.live.take() {
+            Some(mut live) => {
+                live.retain(|&f| alive[f as usize]);
+                live
+            }
+            None if kept == places => return,
+            None => {
+                let mut live = Vec::with_capacity(kept);
+                live.extend((0..places as u32).filter(|&f| alive[f as usize]));
+                live
+            }
+        };
         self.costs.truncate(kept);
         self.dirs.truncate(kept);
         if kept + kept / 8 < self.costs.capacity() {
-            self.live.shrink_to_fit();
+            live.shrink_to_fit();
             self.costs.shrink_to_fit();
             self.dirs.shrink_to_fit();
+        }
+        self.live = Some(live);
+    }
+
+    /// The triangle at place `i` of the live list.
+    #[inline]
+    fn triangle(&self, i: usize) -> u32 {
+        match &self.live {
+            Some(live) => live[i],
+            None => i as u32,
         }
     }
 
@@ -134,13 +157,19 @@ impl Slots {
 
     /// The number of slot `k` of the live triangle `f`.
     pub(super) fn number(&self, f: u32, k: usize) -> usize {
-        let (Ok(i) | Err(i)) = self.live.binary_search(&f);
+        let i = match &self.live {
+            Some(live) => {
+                let (Ok(i) | Err(i)) = live.binary_search(&f);
+                i
+            }
+            None => f as usize,
+        };
         3 * i + k
     }
 
     /// The triangle and slot of slot number `i`.
     pub(super) fn slot(&self, i: usize) -> (u32, usize) {
-        (self.live[i / 3], i % 3)
+        (self.triangle(i / 3), i % 3)
     }
 
     /// Slot `i` (`3 × place + slot`), its ends read from the current corners `tris`.
@@ -152,7 +181,7 @@ impl Slots {
     #[inline]
     pub(super) fn get(&self, tris: &[Tri], i: usize) -> Slot {
         let (place, k) = (i / 3, i % 3);
-        let c = tris[self.live[place] as usize].c;
+        let c = tris[self.triangle(place) as usize].c;
         Slot {
             ends: [c[k], c[next(k)]],
             cost: self.costs[place][k],
@@ -166,7 +195,8 @@ impl Slots {
         for (k, c) in costs.into_iter().enumerate() {
             set_slot(&mut self.costs[i], &mut self.dirs[i], k, c);
         }
-        self.changed[self.live[i] as usize] = 0;
+        let f = self.triangle(i);
+        self.changed[f as usize] = 0;
     }
 }
 
@@ -215,7 +245,7 @@ pub(super) fn candidates<'a>(
     slots: &'a Slots,
     tris: &'a [Tri],
 ) -> impl Iterator<Item = Candidate> + 'a {
-    (0..3 * slots.live.len()).filter_map(move |i| candidate(&slots.get(tris, i)))
+    (0..3 * slots.costs.len()).filter_map(move |i| candidate(&slots.get(tris, i)))
 }
 
 /// The costs of the ranked collapses of `slots` with their slot numbers, in slot order: a
@@ -423,22 +453,28 @@ pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> us
         dirs,
         changed,
     } = slots;
-    let marked = &*changed;
-    let rank_part = |part: &[u32], costs: &mut [[f64; 3]], dirs: &mut [u8]| {
-        part.iter()
-            .zip(costs)
+    let (live, marked) = (&*live, &*changed);
+    // Ranks the places from `first` on.
+    let rank_part = |first: usize, costs: &mut [[f64; 3]], dirs: &mut [u8]| {
+        costs
+            .iter_mut()
             .zip(dirs)
-            .map(|((&f, cost), dirs)| work.rank_triangle(f, marked[f as usize], cost, dirs))
+            .enumerate()
+            .map(|(j, (cost, dirs))| {
+                let f = live.as_ref().map_or((first + j) as u32, |l| l[first + j]);
+                work.rank_triangle(f, marked[f as usize], cost, dirs)
+            })
             .sum::<usize>()
     };
-    let count = if threads <= 1 || live.len() < PARALLEL_MIN {
-        rank_part(live, costs, dirs)
+    let count = if threads <= 1 || costs.len() < PARALLEL_MIN {
+        rank_part(0, costs, dirs)
     } else {
-        let per = live.len().div_ceil(threads);
-        live.par_chunks(per)
-            .zip(costs.par_chunks_mut(per))
+        let per = costs.len().div_ceil(threads);
+        costs
+            .par_chunks_mut(per)
             .zip(dirs.par_chunks_mut(per))
-            .map(|((part, costs), dirs)| rank_part(part, costs, dirs))
+            .enumerate()
+            .map(|(i, (costs, dirs))| rank_part(i * per, costs, dirs))
             .sum()
     };
     changed.fill(0);

@@ -45,7 +45,7 @@ pub(super) fn work<'w>(
     let np = w.positions.len();
     let nt = w.triangles.len();
     let s = Setup::new(w, weights, threads);
-    let wedges = s.wedges();
+    let wedges = Cow::Borrowed(w.vertices.entries());
     let wedge_start = Cow::Borrowed(w.vertices.starts());
     let layout = s.layout();
     let mut quadrics = Quadrics::zeros(layout, wedges.len());
@@ -131,16 +131,6 @@ impl<'a> Setup<'a> {
             (0..w.attributes.len() as u32)
                 .map(|a| scaled_attributes(w, a, self.weights, self.diagonal)),
         )
-    }
-
-    /// One wedge per surface group at each position, with its attributes: the position's
-    /// vertices, in order (so each position's wedges start where its vertex list does).
-    fn wedges(&self) -> Vec<Wedge> {
-        let vertices = &self.w.vertices;
-        let mut wedges = Vec::with_capacity(vertices.starts().last().map_or(0, |&n| n as usize));
-        let all = vertices.iter().flatten();
-        wedges.extend(all.map(|&(group, attr)| Wedge { group, attr }));
-        wedges
     }
 
     /// Each triangle's quadric over the attributes of `layout`, added to the wedge of its
@@ -409,7 +399,7 @@ pub(super) fn add_to_wedge(
     q: &Quadric,
 ) {
     let range = wedge_start[x] as usize..wedge_start[x + 1] as usize;
-    if let Some(i) = range.clone().find(|&i| wedges[i].group == group) {
+    if let Some(i) = range.clone().find(|&i| wedges[i].0 == group) {
         rows.add(i - wedge_start[lo] as usize, q);
     }
 }

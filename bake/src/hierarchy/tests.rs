@@ -222,3 +222,64 @@ fn a_first_collapse_bounds_how_far_it_moves_the_surface() {
     }
     assert!(checked > 20, "{checked} collapses of two leaves");
 }
+
+/// A release's runs: the wedges of the kept positions between removed ones move down in
+/// order, and a removed position's range becomes empty at the next kept one's start.
+#[test]
+fn kept_runs_move_the_kept_positions_wedges_down() {
+    use super::work::kept_runs;
+    // Wedges per position: 1, 2, 1, 0, 1, 1, 2 (starts 0, 1, 3, 4, 4, 5, 6, 8).
+    let starts = [0u32, 1, 3, 4, 4, 5, 6, 8];
+    let gone = [false, true, false, false, true, true, false];
+    let (runs, start) = kept_runs(&gone, &starts);
+    assert_eq!(runs, vec![(0..1, 0), (3..4, 1), (6..8, 2)]);
+    assert_eq!(start, vec![0, 1, 1, 2, 2, 2, 2, 4]);
+    // Moving the runs keeps each kept position's wedges, in order.
+    let mut wedges: Vec<u32> = (0..8).collect();
+    for (from, to) in runs {
+        wedges.copy_within(from, to);
+    }
+    wedges.truncate(4);
+    assert_eq!(wedges, [0, 3, 6, 7]);
+    // Nothing gone: one run that stays; everything gone: none.
+    assert_eq!(kept_runs(&[false; 7], &starts).0, vec![(0..8, 0)]);
+    let (none, start) = kept_runs(&[true; 7], &starts);
+    assert!(none.is_empty() && start.iter().all(|&s| s == 0));
+}
+
+/// The live list, made when a pass first removes triangles, gives the slots the same
+/// triangles, numbers and rankings as the list of every triangle did.
+#[test]
+fn the_live_list_made_on_the_first_removal_keeps_the_slots() {
+    use super::rank::Slots;
+    let n = 10usize;
+    let mut slots = Slots::new(n);
+    for i in 0..n {
+        let none = [f64::INFINITY; 2];
+        slots.set(i, [[i as f64, f64::INFINITY], none, none]);
+    }
+    assert_eq!((slots.slot(3 * 7 + 2), slots.number(7, 2)), ((7, 2), 23));
+    // Nothing removed: the slots stay as they are.
+    slots.retain_alive(&[true; 10]);
+    assert_eq!((slots.slot(3 * 7 + 2), slots.number(7, 2)), ((7, 2), 23));
+    let alive: Vec<bool> = (0..n).map(|f| f % 3 != 0).collect();
+    slots.retain_alive(&alive);
+    // Triangles 1, 2, 4, 5, 7, 8 are left, with their rankings.
+    let tris = vec![
+        super::work::Tri {
+            c: [0, 1, 2],
+            o: [NONE; 3]
+        };
+        n
+    ];
+    for (place, f) in [1u32, 2, 4, 5, 7, 8].into_iter().enumerate() {
+        assert_eq!(slots.slot(3 * place), (f, 0));
+        assert_eq!(slots.number(f, 1), 3 * place + 1);
+        assert_eq!(slots.get(&tris, 3 * place).cost, f as f64);
+    }
+    // A second removal works on the list.
+    let alive: Vec<bool> = (0..n).map(|f| f % 3 != 0 && f != 5).collect();
+    slots.retain_alive(&alive);
+    assert_eq!(slots.slot(3 * 3), (7, 0));
+    assert_eq!(slots.get(&tris, 3 * 3).cost, 7.0);
+}

@@ -12,15 +12,13 @@ use super::{AttributeWeights, Collapse, Hierarchy, NONE};
 use crate::quadric::{Quadrics, M};
 use crate::weld::Welded;
 
-/// One surface group at a position, with that group's attributes there (an index into the
-/// welded mesh's; [`Work::attrs_of`] scales them when a cost reads them, which keeps the
-/// wedge 64 bytes smaller than holding them scaled). Its quadric is the row of
-/// [`Work::quadrics`] with its index, over the attributes the mesh has.
-#[derive(Clone, Copy)]
-pub(super) struct Wedge {
-    pub(super) group: u32,
-    pub(super) attr: u32,
-}
+/// One surface group at a position, with that group's attributes there: `(group,
+/// attribute id)`, a vertex of the welded mesh's lists ([`crate::weld::VertexLists`]), the
+/// attributes an index into the welded mesh's ([`Work::attrs_of`] scales them when a cost
+/// reads them, which keeps the wedge 64 bytes smaller than holding them scaled). Its
+/// quadric is the row of [`Work::quadrics`] with its index, over the attributes the mesh
+/// has.
+pub(super) type Wedge = (u32, u32);
 
 /// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
 /// check reads it, from the corners, and its surface group read from the welded mesh,
@@ -73,8 +71,9 @@ pub(super) struct Work<'w> {
     /// Wedges of position `x`: `wedges[wedge_start[x]..wedge_start[x + 1]]` (none once the
     /// position is removed and [`Work::release_removed_wedges`] has run). A position's
     /// wedges are its vertices, in the same order, so until the first release the starts
-    /// are the welded mesh's vertex lists' own, borrowed rather than copied.
-    pub(super) wedges: Vec<Wedge>,
+    /// are the welded mesh's vertex lists' own, borrowed rather than copied, and so are the
+    /// wedges (the first pass, when the build's memory peaks, holds no copy of either).
+    pub(super) wedges: Cow<'w, [Wedge]>,
     pub(super) wedge_start: Cow<'w, [u32]>,
     /// The quadric of every wedge, by its index.
     pub(super) quadrics: Quadrics,
@@ -109,8 +108,8 @@ pub(super) struct Work<'w> {
 impl Work<'_> {
     /// The scaled attributes of a wedge.
     #[inline]
-    pub(super) fn attrs_of(&self, wedge: &Wedge) -> [f64; M] {
-        scaled_attributes(self.w, wedge.attr, &self.weights, self.diagonal)
+    pub(super) fn attrs_of(&self, &(_, attr): &Wedge) -> [f64; M] {
+        scaled_attributes(self.w, attr, &self.weights, self.diagonal)
     }
 
     #[inline]
@@ -208,7 +207,9 @@ impl Work<'_> {
     /// others move down in place, a run of positions at a time, and the arrays' tails go
     /// back to the system. A removed position's wedges are never read again, so the
     /// quadrics, the largest table of the build, shrink with the mesh while the hierarchy
-    /// grows; a release goes through every position, so there are at most that many.
+    /// grows; a release goes through every position, so there are at most that many. The
+    /// quadrics go first, so that the first release, which copies the wedges and their
+    /// starts out of the welded mesh's lists, does so with the quadrics' memory given back.
     pub(super) fn release_removed_wedges(&mut self) {
         let removed = &self.h.collapses[self.wedges_released..];
         let gone_at = |c: &Collapse| self.node_pos[c.u as usize] as usize;
@@ -223,38 +224,64 @@ impl Work<'_> {
         for c in removed {
             gone[gone_at(c)] = true;
         }
-        // The wedges of the kept positions since the last removed one, and where they go.
-        let mut start = std::mem::take(&mut self.wedge_start).into_owned();
-        let (mut run, mut kept) = (0..0, 0);
-        for (x, gone) in gone.into_iter().enumerate() {
-            let hi = start[x + 1] as usize;
-            start[x] = (kept + run.len()) as u32;
-            if gone {
-                self.move_wedges(run.clone(), kept);
-                kept += run.len();
-                run = hi..hi;
-            } else {
-                run.end = hi;
-            }
+        let (runs, start) = kept_runs(&gone, &self.wedge_start);
+        let kept = start[self.positions()] as usize;
+        for (from, to) in runs.iter().filter(|(from, to)| from.start != *to) {
+            self.quadrics.move_rows(from.clone(), *to);
         }
-        self.move_wedges(run.clone(), kept);
-        kept += run.len();
-        let end = self.positions();
-        start[end] = kept as u32;
-        self.wedge_start = Cow::Owned(start);
-        self.wedges.truncate(kept);
-        self.wedges.shrink_to_fit();
         self.quadrics.truncate(kept);
+        self.wedges = match std::mem::take(&mut self.wedges) {
+            Cow::Borrowed(all) => {
+                let mut wedges = Vec::with_capacity(kept);
+                for (from, _) in &runs {
+                    wedges.extend_from_slice(&all[from.clone()]);
+                }
+                Cow::Owned(wedges)
+            }
+            Cow::Owned(mut wedges) => {
+                for (from, to) in runs.iter().filter(|(from, to)| from.start != *to) {
+                    wedges.copy_within(from.clone(), *to);
+                }
+                wedges.truncate(kept);
+                wedges.shrink_to_fit();
+                Cow::Owned(wedges)
+            }
+        };
+        self.wedge_start = Cow::Owned(start);
         self.wedges_released = self.h.collapses.len();
     }
+}
 
-    /// Moves the wedges `from` and their quadrics to those from `to` on.
-    fn move_wedges(&mut self, from: std::ops::Range<usize>, to: usize) {
-        if from.start != to {
-            self.wedges.copy_within(from.clone(), to);
-            self.quadrics.move_rows(from, to);
+/// The runs of wedges of the positions not `gone` between two that are, where each run
+/// moves to (in order, each after the one before), and the positions' wedges' starts
+/// after the move (a gone position's is the next kept one's, so its range is empty).
+pub(super) fn kept_runs(
+    gone: &[bool],
+    starts: &[u32],
+) -> (Vec<(std::ops::Range<usize>, usize)>, Vec<u32>) {
+    let mut runs = Vec::new();
+    let mut start = Vec::with_capacity(starts.len());
+    let (mut run, mut kept) = (0..0, 0);
+    for (x, &gone) in gone.iter().enumerate() {
+        let hi = starts[x + 1] as usize;
+        start.push((kept + run.len()) as u32);
+        if gone {
+            let run = std::mem::replace(&mut run, hi..hi);
+            let len = run.len();
+            if len > 0 {
+                runs.push((run, kept));
+            }
+            kept += len;
+        } else {
+            run.end = hi;
         }
     }
+    let len = run.len();
+    if len > 0 {
+        runs.push((run, kept));
+    }
+    start.push((kept + len) as u32);
+    (runs, start)
 }
 
 /// [`Work::release_removed_wedges`] releases the wedges of this share of the positions at

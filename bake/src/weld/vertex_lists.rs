@@ -65,6 +65,12 @@ impl VertexLists {
         &self.start
     }
 
+    /// Every position's list, one after another in position order: position `p`'s is
+    /// `entries()[starts()[p]..starts()[p + 1]]`.
+    pub fn entries(&self) -> &[(u32, u32)] {
+        &self.entries
+    }
+
     /// Number of positions.
     pub fn len(&self) -> usize {
         self.start.len() - 1
