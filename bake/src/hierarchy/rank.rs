@@ -104,17 +104,22 @@ impl Slots {
     /// system without a copy), so that the rankings shrink with the mesh pass by pass.
     pub(super) fn retain_alive(&mut self, alive: &[bool]) {
         let places = self.costs.len();
+        let mut live = self.live.take();
         let mut kept = 0;
         for i in 0..places {
-            if alive[self.triangle(i) as usize] {
+            let f = triangle_at(live.as_deref(), i);
+            if alive[f as usize] {
+                if let Some(live) = &mut live {
+                    live[kept] = f;
+                }
                 self.costs[kept] = self.costs[i];
                 self.dirs[kept] = self.dirs[i];
                 kept += 1;
             }
         }
-        let mut live = match self.live.take() {
+        let mut live = match live {
             Some(mut live) => {
-                live.retain(|&f| alive[f as usize]);
+                live.truncate(kept);
                 live
             }
             None if kept == places => return,
@@ -137,10 +142,7 @@ impl Slots {
     /// The triangle at place `i` of the live list.
     #[inline]
     fn triangle(&self, i: usize) -> u32 {
-        match &self.live {
-            Some(live) => live[i],
-            None => i as u32,
-        }
+        triangle_at(self.live.as_deref(), i)
     }
 
     /// Marks the slots whose ends the collapse that made node `s` changed: those of the
@@ -198,6 +200,12 @@ impl Slots {
         let f = self.triangle(i);
         self.changed[f as usize] = 0;
     }
+}
+
+/// The triangle at place `i` of the live triangles `live` (`None`: every triangle).
+#[inline]
+fn triangle_at(live: Option<&[u32]>, i: usize) -> u32 {
+    live.map_or(i as u32, |live| live[i])
 }
 
 /// The bits of `x` as an unsigned number ordered as [`f64::total_cmp`] orders floats.
@@ -453,7 +461,7 @@ pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> us
         dirs,
         changed,
     } = slots;
-    let (live, marked) = (&*live, &*changed);
+    let (live, marked) = (live.as_deref(), &*changed);
     // Ranks the places from `first` on.
     let rank_part = |first: usize, costs: &mut [[f64; 3]], dirs: &mut [u8]| {
         costs
@@ -461,7 +469,7 @@ pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> us
             .zip(dirs)
             .enumerate()
             .map(|(j, (cost, dirs))| {
-                let f = live.as_ref().map_or((first + j) as u32, |l| l[first + j]);
+                let f = triangle_at(live, first + j);
                 work.rank_triangle(f, marked[f as usize], cost, dirs)
             })
             .sum::<usize>()
