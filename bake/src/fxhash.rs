@@ -25,11 +25,6 @@ pub fn map_with_capacity<K, V>(n: usize) -> FxHashMap<K, V> {
     HashMap::with_capacity_and_hasher(n, BuildHasherDefault::default())
 }
 
-/// A set with room for `n` entries.
-pub fn set_with_capacity<K>(n: usize) -> FxHashSet<K> {
-    HashSet::with_capacity_and_hasher(n, BuildHasherDefault::default())
-}
-
 const K: u64 = 0xf135_7aea_2e62_a9c5;
 
 /// Word-at-a-time multiply hash.

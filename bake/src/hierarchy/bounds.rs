@@ -91,12 +91,13 @@ impl Work<'_> {
     }
 
     /// The nearest triangle of `star` to each of `points` and the squared distance, into
-    /// `out`; `probes` is scratch space.
+    /// `out`; `probes` and `coords` are scratch space.
     pub(super) fn nearest(
         &self,
         star: &[u32],
         points: &[u32],
         probes: &mut Vec<Probe>,
+        coords: &mut Vec<V3>,
         out: &mut Vec<(f64, u32)>,
     ) {
         // What the distances read of the triangles, gathered once for all the points.
@@ -105,8 +106,10 @@ impl Work<'_> {
             star.iter()
                 .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
         );
-        for &x in points {
-            let x = self.point(x);
+        // The points' coordinates in a loop of their own, whose loads overlap.
+        coords.clear();
+        coords.extend(points.iter().map(|&x| self.point(x)));
+        for &x in coords.iter() {
             let mut best = (f64::INFINITY, NONE);
             for (&f, probe) in star.iter().zip(probes.iter()) {
                 if let Some(d) = probe.d2_below(x, best.0) {
@@ -132,6 +135,21 @@ impl Work<'_> {
         (given.iter().copied().chain(dying), to)
     }
 
+    /// The points of the lists that start at `heads` (the lists' heads, changed), into
+    /// `points`: the lists are walked side by side, so that their cache misses overlap, and
+    /// their points are interleaved (which no result depends on).
+    fn walk_lists(&self, heads: &mut Vec<u32>, points: &mut Vec<u32>) {
+        points.clear();
+        heads.retain(|&x| x != NONE);
+        while !heads.is_empty() {
+            for x in heads.iter_mut() {
+                points.push(*x);
+                *x = self.pts_next[*x as usize];
+            }
+            heads.retain(|&x| x != NONE);
+        }
+    }
+
     /// The points of the pass's collapses `range`, each moved to the nearest of the
     /// triangles its collapse's removed child gave the new node (that child's ring fanned
     /// from the kept child: the same stretch of surface; a nearer triangle elsewhere would
@@ -143,18 +161,14 @@ impl Work<'_> {
         let first_node = self.nodes.len() - self.from_kept.len();
         let mut part = Settled::default();
         let (mut points, mut found, mut probes) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut walks, mut coords) = (Vec::new(), Vec::new());
         for i in range {
             let (from, to) = self.handed_over(i);
-            points.clear();
-            for f in from {
-                let mut x = self.pts_head[f as usize];
-                while x != NONE {
-                    points.push(x);
-                    x = self.pts_next[x as usize];
-                }
-            }
+            walks.clear();
+            walks.extend(from.map(|f| self.pts_head[f as usize]));
+            self.walk_lists(&mut walks, &mut points);
             found.clear();
-            self.nearest(to, &points, &mut probes, &mut found);
+            self.nearest(to, &points, &mut probes, &mut coords, &mut found);
             let mut error = self.nodes[first_node + i].error;
             let before = part.points.len();
             for (&x, &(d, f)) in points.iter().zip(&found) {

@@ -8,25 +8,25 @@ use super::{Collapse, NONE, PARALLEL_MIN};
 use crate::quadric::QuadricsMut;
 
 impl Work<'_> {
-    /// Applies a checked collapse of pass `pass` and stamps the neighbourhood it took (the
+    /// Applies a checked collapse of the pass and stamps the neighbourhood it took (the
     /// rings of `t` and `u` in `rings`, the ends and the new node), so that no later
     /// collapse of the pass overlaps it. The third corners of the edge remember their
     /// number of neighbours at the start of the pass before they lose one. Returns the new
     /// node.
-    pub(super) fn apply_in_pass(&mut self, c: Collapse, pass: u32, rings: &[Vec<u32>; 2]) -> u32 {
+    pub(super) fn apply_in_pass(&mut self, c: Collapse, rings: &[Vec<u32>; 2]) -> u32 {
         let l = self.tris[c.fl as usize].c[prev(c.rot_l as usize)];
         let r = self.third(c.fr, c.t);
         for x in [l, r] {
-            if x != NONE && self.shrunk[self.at_node(x)] != pass {
+            if x != NONE && !self.shrunk.get(self.at_node(x)) {
                 let px = self.at_node(x);
-                self.shrunk[px] = pass;
+                self.shrunk.set(px);
                 self.start_valence[px] = self.valence[px];
             }
         }
         let s = self.apply(c);
         for &v in rings.iter().flatten().chain(&[c.t, c.u, s]) {
             let pv = self.at_node(v);
-            self.stamp[pv] = pass;
+            self.stamp.set(pv);
         }
         s
     }

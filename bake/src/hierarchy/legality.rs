@@ -54,11 +54,11 @@ impl Work<'_> {
         shared == 1 + usize::from(r != NONE)
     }
 
-    /// Number of neighbours of `x` at the start of pass `pass`.
+    /// Number of neighbours of `x` at the start of the pass.
     #[inline]
-    pub(super) fn valence_at_start(&self, x: u32, pass: u32) -> usize {
+    pub(super) fn valence_at_start(&self, x: u32) -> usize {
         let px = self.at_node(x);
-        if self.shrunk[px] == pass {
+        if self.shrunk.get(px) {
             self.start_valence[px] as usize
         } else {
             self.valence[px] as usize
@@ -147,11 +147,11 @@ impl Work<'_> {
     }
 
     /// The checks of the collapse of `u` into `t` (which the surface-group rules allow, at
-    /// a finite cost) as they stood at the start of pass `pass`, and as they stand now;
+    /// a finite cost) as they stood at the start of the pass, and as they stand now;
     /// the rings of `t` and `u` go to `rings`. Neither end was touched since (callers skip
     /// stamped ends), so their stars, rings and borders are as they were; only a third
     /// corner of the edge may have lost a neighbour since.
-    pub(super) fn verdict(&self, t: u32, u: u32, pass: u32, rings: &mut [Vec<u32>; 2]) -> Verdict {
+    pub(super) fn verdict(&self, t: u32, u: u32, rings: &mut [Vec<u32>; 2]) -> Verdict {
         let Some((fl, jl)) = self.dir_face(t, u) else {
             return Verdict::Illegal;
         };
@@ -161,7 +161,7 @@ impl Work<'_> {
         let opposite = [l, r];
         if !opposite
             .iter()
-            .all(|&x| x == NONE || self.valence_at_start(x, pass) > 3)
+            .all(|&x| x == NONE || self.valence_at_start(x) > 3)
         {
             return Verdict::Illegal;
         }

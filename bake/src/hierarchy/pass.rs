@@ -127,6 +127,8 @@ impl Passes {
         full: bool,
         threads: usize,
     ) -> Result<(u64, bool), BuildError> {
+        work.stamp.clear();
+        work.shrunk.clear();
         // Drop the triangles the last pass removed (keeping the order).
         self.slots.retain_alive(&work.alive);
         // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
@@ -142,7 +144,7 @@ impl Passes {
         let max_tries = 2 * count as u64;
         let mut tries = 0u64;
         loop {
-            let (t, u, from_later) = match self.next(work, pass, limit) {
+            let (t, u, from_later) = match self.next(work, limit) {
                 Next::Done => return Ok((applied, false)),
                 Next::Cut => return Ok((applied, true)),
                 Next::Try { t, u, from_later } => (t, u, from_later),
@@ -157,12 +159,12 @@ impl Passes {
                     invariant: "a pass tried more collapses than it ranked and queued",
                 });
             }
-            if stamped(work, pass, t, u) {
+            if stamped(work, t, u) {
                 continue;
             }
-            match work.verdict(t, u, pass, &mut self.rings) {
+            match work.verdict(t, u, &mut self.rings) {
                 Verdict::Legal(col) => {
-                    let s = work.apply_in_pass(col, pass, &self.rings);
+                    let s = work.apply_in_pass(col, &self.rings);
                     self.slots.mark_changed(work, s);
                     applied += 1;
                 }
@@ -179,10 +181,10 @@ impl Passes {
     /// The next collapse to try: the cheaper of the next ranked one and the next queued
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
-    fn next(&mut self, work: &Work<'_>, pass: u32, limit: u64) -> Next {
-        let next_cand = self.ranked.peek(&self.slots, &work.tris, |v| {
-            work.stamp[work.at_node(v)] == pass
-        });
+    fn next(&mut self, work: &Work<'_>, limit: u64) -> Next {
+        let next_cand = self
+            .ranked
+            .peek(&self.slots, &work.tris, |v| work.stamp.get(work.at_node(v)));
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,
@@ -190,9 +192,7 @@ impl Passes {
             (Some((c, t, u)), Some(&Reverse((key, i)))) => {
                 let own = order_key(c);
                 key < own
-                    || (key == own
-                        && !stamped(work, pass, t, u)
-                        && i < slot_of(work, &self.slots, t, u))
+                    || (key == own && !stamped(work, t, u) && i < slot_of(work, &self.slots, t, u))
             }
         };
         let key = if later_first {
@@ -239,9 +239,9 @@ impl Passes {
     }
 }
 
-/// Whether an earlier collapse of pass `pass` took a neighbourhood `t` or `u` is in.
-fn stamped(work: &Work<'_>, pass: u32, t: u32, u: u32) -> bool {
-    work.stamp[work.at_node(t)] == pass || work.stamp[work.at_node(u)] == pass
+/// Whether an earlier collapse of the pass took a neighbourhood `t` or `u` is in.
+fn stamped(work: &Work<'_>, t: u32, u: u32) -> bool {
+    work.stamp.get(work.at_node(t)) || work.stamp.get(work.at_node(u))
 }
 
 /// The number of the slot standing for the edge of free ends `t`, `u`.

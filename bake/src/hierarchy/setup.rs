@@ -5,7 +5,7 @@ use std::borrow::Cow;
 
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
 use super::stars::Stars;
-use super::work::{centred, NodeOut, PosInfo, Tri, Wedge, Work};
+use super::work::{centred, Marks, NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
 use crate::quadric::{Layout, Quadric, Quadrics, QuadricsMut, M};
 use crate::weld::Welded;
@@ -73,8 +73,8 @@ pub(super) fn work<'w>(
         wedges_released: 0,
         h: Hierarchy::default(),
         nodes: Vec::new(),
-        stamp: vec![0; np],
-        shrunk: vec![0; np],
+        stamp: Marks::new(np),
+        shrunk: Marks::new(np),
         start_valence: vec![0; np],
         pts_head: Vec::new(),
         pts_next: Vec::new(),

@@ -82,15 +82,15 @@ pub(super) struct Work<'w> {
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
-    /// Pass in which a node's neighbourhood was last taken by a collapse, by its position.
-    /// The live node at a position is the last made there (the kept child's parent is at
-    /// its position): a collapse stamps both children and the new node, so a position
-    /// stamped in a pass is one whose node, live at the start of the pass or made in it, was
-    /// stamped.
-    pub(super) stamp: Vec<u32>,
-    /// Pass in which a node last lost a neighbour, by its position: a node losing one is
+    /// Whether a collapse of this pass took a node's neighbourhood (stamped it), by its
+    /// position. The live node at a position is the last made there (the kept child's
+    /// parent is at its position): a collapse stamps both children and the new node, so a
+    /// position stamped in a pass is one whose node, live at the start of the pass or made
+    /// in it, was stamped.
+    pub(super) stamp: Marks,
+    /// Whether a node lost a neighbour in this pass, by its position: a node losing one is
     /// stamped by that collapse, so no new node of the same pass is made at its position.
-    pub(super) shrunk: Vec<u32>,
+    pub(super) shrunk: Marks,
     /// A node's number of neighbours at the start of the pass it last lost one in, by its
     /// position.
     pub(super) start_valence: Vec<u32>,
@@ -327,5 +327,34 @@ impl Work<'_> {
         drop(self.tris);
         h.alive = self.alive;
         h
+    }
+}
+
+/// A flag per position that a pass sets and the next pass clears: a bit each, so that the
+/// flags of a whole mesh stay in cache while a pass tests them at random.
+#[derive(Debug, Default)]
+pub(super) struct Marks(Vec<u64>);
+
+impl Marks {
+    /// Flags for `n` positions, none set.
+    pub(super) fn new(n: usize) -> Self {
+        Self(vec![0; n.div_ceil(64)])
+    }
+
+    /// Clears every flag.
+    pub(super) fn clear(&mut self) {
+        self.0.fill(0);
+    }
+
+    /// Whether position `p`'s flag is set.
+    #[inline]
+    pub(super) fn get(&self, p: usize) -> bool {
+        self.0[p / 64] >> (p % 64) & 1 != 0
+    }
+
+    /// Sets position `p`'s flag.
+    #[inline]
+    pub(super) fn set(&mut self, p: usize) {
+        self.0[p / 64] |= 1 << (p % 64);
     }
 }

@@ -3,7 +3,7 @@
 
 use super::attributes::{cross, sub};
 use super::{Repairs, WeldError, NONE};
-use crate::fxhash::{map_with_capacity, set_with_capacity, FxHashMap};
+use crate::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
@@ -31,7 +31,8 @@ pub(super) fn weld_positions(mesh: &Mesh, repairs: &mut Repairs) -> (Vec<[f32; 3
 }
 
 /// Step 2: drops degenerate triangles (a repeated or missing position, or zero area) and
-/// duplicates (the same three positions, either orientation); an error when none is left.
+/// duplicates (the same three positions, either orientation, as an earlier triangle); an
+/// error when none is left.
 pub(super) fn drop_degenerate_and_duplicates(
     mesh: &Mesh,
     remap: &[u32],
@@ -39,7 +40,6 @@ pub(super) fn drop_degenerate_and_duplicates(
     repairs: &mut Repairs,
 ) -> Result<Vec<Kept>, WeldError> {
     let mut kept: Vec<Kept> = Vec::with_capacity(mesh.triangles.len());
-    let mut seen = set_with_capacity::<[u32; 3]>(mesh.triangles.len());
     for (i, t) in mesh.triangles.iter().enumerate() {
         let p = t
             .position
@@ -54,14 +54,12 @@ pub(super) fn drop_degenerate_and_duplicates(
             repairs.degenerate_triangles += 1;
             continue;
         }
-        let mut key = p;
-        key.sort_unstable();
-        if !seen.insert(key) {
-            repairs.duplicate_triangles += 1;
-            continue;
-        }
         kept.push((p, i as u32));
     }
+    let duplicate = duplicates(&kept, positions.len());
+    let mut flags = duplicate.iter();
+    kept.retain(|_| flags.next() == Some(&false));
+    repairs.duplicate_triangles += duplicate.iter().filter(|&&d| d).count() as u64;
     if kept.is_empty() {
         return Err(WeldError::Empty {
             degenerate: repairs.degenerate_triangles,
@@ -69,6 +67,44 @@ pub(super) fn drop_degenerate_and_duplicates(
         });
     }
     Ok(kept)
+}
+
+/// Whether each of `tris` (of distinct corners below `positions`) has the same three
+/// positions as an earlier one. Triangles with the same positions share their lowest one,
+/// so each is compared with the earlier triangles listed at its lowest position (a handful),
+/// in lists built by a counting sort: no table of every triangle's key.
+fn duplicates(tris: &[Kept], positions: usize) -> Vec<bool> {
+    let sorted = |p: [u32; 3]| {
+        let mut key = p;
+        key.sort_unstable();
+        key
+    };
+    let mut start = vec![0u32; positions + 1];
+    for &(p, _) in tris {
+        start[sorted(p)[0] as usize + 1] += 1;
+    }
+    for i in 0..positions {
+        start[i + 1] += start[i];
+    }
+    let mut at_lowest = vec![0u32; tris.len()];
+    let mut fill = start;
+    for (f, &(p, _)) in tris.iter().enumerate() {
+        let i = &mut fill[sorted(p)[0] as usize];
+        at_lowest[*i as usize] = f as u32;
+        *i += 1;
+    }
+    // `fill[x]` is now where the list of position `x + 1` starts.
+    let mut duplicate = vec![false; tris.len()];
+    let mut lo = 0;
+    for &hi in &fill {
+        let list = &at_lowest[lo..hi as usize];
+        for (j, &f) in list.iter().enumerate() {
+            let key = sorted(tris[f as usize].0);
+            duplicate[f as usize] = list[..j].iter().any(|&g| sorted(tris[g as usize].0) == key);
+        }
+        lo = hi as usize;
+    }
+    duplicate
 }
 
 /// Step 3: cuts the edges used by more than two triangles or twice in one direction: the later

@@ -95,6 +95,33 @@ fn welds_points_and_drops_degenerate_and_duplicate_triangles() {
 }
 
 #[test]
+fn a_duplicate_is_found_whichever_corner_it_starts_at() {
+    let points = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+        [0.5, -1.0, 0.25],
+    ];
+    let w = weld(&mesh(
+        &points,
+        &[
+            [0, 1, 2],
+            [0, 2, 3],
+            [2, 1, 0], // [0, 1, 2] turned over
+            [3, 0, 2], // [0, 2, 3] rotated
+            [1, 4, 2],
+            [2, 1, 4], // [1, 4, 2] rotated
+            [4, 1, 2], // [1, 4, 2] turned over
+        ],
+    ))
+    .expect("weld");
+    let kept: Vec<[u32; 3]> = w.triangles.iter().map(|t| t.p).collect();
+    assert_eq!(kept, vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
+    assert_eq!(w.repairs.duplicate_triangles, 4);
+}
+
+#[test]
 fn nothing_left_is_an_error() {
     let e = weld(&mesh(&[[0.0; 3], [1.0, 0.0, 0.0]], &[[0, 1, 1]])).expect_err("empty");
     assert_eq!(
