@@ -1,9 +1,14 @@
 //! The error bounds: every input position belongs to a current triangle near it; a
 //! collapse hands the positions of the removed node's triangles to the nearest of the
 //! triangles that replace them, and raises the new node's error to the largest distance.
+//!
+//! The settling reads a pass's collapses from a [`Handover`] (what it needs of them, taken
+//! once they are applied) and the points' lists, never the mesh being simplified, so it runs
+//! while the pass goes on with its next collapses ([`super::pass`]).
 
 use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
-use super::work::{Tri, Work};
+use super::handover::Handover;
+use super::work::{centred, NodeOut, Work};
 use super::NONE;
 use rayon::prelude::*;
 
@@ -25,8 +30,8 @@ pub(super) struct Probe {
 }
 
 impl Probe {
-    pub(super) fn new(tri: &Tri, pos: impl Fn(u32) -> V3) -> Self {
-        let [a, b, c] = tri.c.map(pos);
+    pub(super) fn new(corners: [u32; 3], pos: impl Fn(u32) -> V3) -> Self {
+        let [a, b, c] = corners.map(pos);
         let (ab, ac) = (sub(b, a), sub(c, a));
         let n = cross(ab, ac);
         let l = len(n);
@@ -70,172 +75,210 @@ impl Probe {
     }
 }
 
-impl Work<'_> {
-    /// The points of the error bounds, the input's positions, each given to a triangle it
-    /// is a corner of (its first).
-    pub(super) fn place_points(&mut self) {
-        self.pts_head = vec![NONE; self.tris.len()];
-        self.pts_next = vec![NONE; self.positions()];
-        for x in 0..self.positions() {
-            if let Some(&f) = self.faces_of.of(x as u32).first() {
-                self.pts_next[x] = std::mem::replace(&mut self.pts_head[f as usize], x as u32);
-            }
+/// Where the settling reads positions: the welded mesh's, relative to the centre the work
+/// takes them from ([`Work::at`]).
+#[derive(Clone, Copy)]
+pub(super) struct Frame<'a> {
+    positions: &'a [[f32; 3]],
+    centre: V3,
+}
+
+impl<'a> Frame<'a> {
+    /// The frame of `work`'s positions, borrowing its welded mesh rather than the work.
+    pub(super) fn of(work: &Work<'a>) -> Self {
+        Self {
+            positions: &work.w.positions,
+            centre: work.centre,
         }
+    }
+
+    /// The point of position `x`, as [`Work::at`] gives it.
+    #[inline]
+    pub(super) fn at(&self, x: u32) -> V3 {
+        centred(self.positions[x as usize], self.centre)
     }
 
     /// The point of the error bounds standing for position `x`: in single precision
     /// (ample for an error bound), relative to the centre.
     #[inline]
     fn point(&self, x: u32) -> V3 {
-        self.at(x as usize).map(|c| c as f32 as f64)
+        self.at(x).map(|c| c as f32 as f64)
     }
+}
 
-    /// The nearest triangle of `star` to each of `points` and the squared distance, into
-    /// `out`; `probes` and `coords` are scratch space.
-    pub(super) fn nearest(
-        &self,
-        star: &[u32],
-        points: &[u32],
-        probes: &mut Vec<Probe>,
-        coords: &mut Vec<V3>,
-        out: &mut Vec<(f64, u32)>,
-    ) {
-        // What the distances read of the triangles, gathered once for all the points.
-        probes.clear();
-        probes.extend(
-            star.iter()
-                .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
-        );
-        // The points' coordinates in a loop of their own, whose loads overlap.
-        coords.clear();
-        coords.extend(points.iter().map(|&x| self.point(x)));
-        for &x in coords.iter() {
-            let mut best = (f64::INFINITY, NONE);
-            for (&f, probe) in star.iter().zip(probes.iter()) {
-                if let Some(d) = probe.d2_below(x, best.0) {
-                    best = (d, f);
-                }
+/// The points of the error bounds, the input's positions, as a list per triangle.
+#[derive(Default)]
+pub(super) struct Points {
+    /// Each triangle's first position, or `NONE`...
+    head: Vec<u32>,
+    /// ...and each position's next one in its triangle's list, or `NONE`.
+    next: Vec<u32>,
+}
+
+impl Points {
+    /// Each position given to a triangle it is a corner of (its first).
+    pub(super) fn place(work: &Work<'_>) -> Self {
+        let mut p = Self {
+            head: vec![NONE; work.tris.len()],
+            next: vec![NONE; work.positions()],
+        };
+        for x in 0..work.positions() {
+            if let Some(&f) = work.faces_of.of(x as u32).first() {
+                p.next[x] = std::mem::replace(&mut p.head[f as usize], x as u32);
             }
-            out.push(best);
         }
-    }
-
-    /// The triangles the removed child of the pass's collapse `i` had: those it gave the
-    /// new node (listed after the kept child's), then the dying ones; and the triangles
-    /// their points go to, the given ones (the whole star when it gave none).
-    fn handed_over(&self, i: usize) -> (impl Iterator<Item = u32> + '_, &[u32]) {
-        let count = self.from_kept.len();
-        let c = &self.h.collapses[self.h.collapses.len() - count + i];
-        let s = (self.nodes.len() - count + i) as u32;
-        let star = self.faces_of.of(s);
-        let from_kept = self.from_kept[i] as usize;
-        let given = star.get(from_kept..).unwrap_or(&[]);
-        let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE);
-        let to = if given.is_empty() { star } else { given };
-        (given.iter().copied().chain(dying), to)
+        p
     }
 
     /// The points of the lists that start at `heads` (the lists' heads, changed), into
     /// `points`: the lists are walked side by side, so that their cache misses overlap, and
     /// their points are interleaved (which no result depends on).
-    fn walk_lists(&self, heads: &mut Vec<u32>, points: &mut Vec<u32>) {
+    fn walk(&self, heads: &mut Vec<u32>, points: &mut Vec<u32>) {
         points.clear();
         heads.retain(|&x| x != NONE);
         while !heads.is_empty() {
             for x in heads.iter_mut() {
                 points.push(*x);
-                *x = self.pts_next[*x as usize];
+                *x = self.next[*x as usize];
             }
             heads.retain(|&x| x != NONE);
         }
     }
 
-    /// The points of the pass's collapses `range`, each moved to the nearest of the
-    /// triangles its collapse's removed child gave the new node (that child's ring fanned
-    /// from the kept child: the same stretch of surface; a nearer triangle elsewhere would
-    /// only lower the distance, so this is an upper bound at half the work of searching the
-    /// whole star): each point with its triangle, and per collapse its number of points and
-    /// its new node's error, raised to the largest distance and to how far the collapse
-    /// moved the surface ([`Work::surface_error`]).
-    fn settle_part(&self, range: std::ops::Range<usize>) -> Settled {
-        let first_node = self.nodes.len() - self.from_kept.len();
+    /// Moves the points of `handover`'s collapses to the triangles `parts` found for them
+    /// ([`Handover::settle`]) and records the new nodes' errors, collapse after collapse.
+    pub(super) fn hand_over(
+        &mut self,
+        handover: &Handover,
+        parts: Vec<Settled>,
+        nodes: &mut [NodeOut],
+    ) {
+        let mut entries = handover.entries().iter();
+        for part in parts {
+            let mut points = part.points.iter();
+            for (&(n, error), e) in part.nodes.iter().zip(entries.by_ref()) {
+                for (f, _) in handover.given(e).iter().chain(handover.dying(e)) {
+                    self.head[*f as usize] = NONE;
+                }
+                for &(x, f) in points.by_ref().take(n as usize) {
+                    self.next[x as usize] = std::mem::replace(&mut self.head[f as usize], x);
+                }
+                nodes[e.node as usize].error = error;
+            }
+        }
+    }
+}
+
+/// The nearest triangle of `star` (each with its corners' positions) to each of `points`
+/// and the squared distance, into `out`; `probes` and `coords` are scratch space.
+fn nearest(
+    frame: Frame<'_>,
+    star: &[(u32, [u32; 3])],
+    points: &[u32],
+    (probes, coords): (&mut Vec<Probe>, &mut Vec<V3>),
+    out: &mut Vec<(f64, u32)>,
+) {
+    // What the distances read of the triangles, gathered once for all the points.
+    probes.clear();
+    probes.extend(star.iter().map(|&(_, c)| Probe::new(c, |x| frame.at(x))));
+    // The points' coordinates in a loop of their own, whose loads overlap.
+    coords.clear();
+    coords.extend(points.iter().map(|&x| frame.point(x)));
+    for &x in coords.iter() {
+        let mut best = (f64::INFINITY, NONE);
+        for (&(f, _), probe) in star.iter().zip(probes.iter()) {
+            if let Some(d) = probe.d2_below(x, best.0) {
+                best = (d, f);
+            }
+        }
+        out.push(best);
+    }
+}
+
+impl Handover {
+    /// Finds where the points of the handover's collapses go ([`Handover::settle_part`]),
+    /// on up to `threads` threads: the collapses of a pass have disjoint stars, which no
+    /// later collapse of the pass changes, and each collapse's points are handed over on
+    /// their own, so the split does not change the result. [`Points::hand_over`] then moves
+    /// them.
+    pub(super) fn settle(&self, frame: Frame<'_>, points: &Points, threads: usize) -> Vec<Settled> {
+        let count = self.entries().len();
+        // Several parts a thread: the last passes' few collapses carry most points each.
+        let per = count.div_ceil(SETTLE_PARTS * threads.max(1)).max(1);
+        let ranges: Vec<_> = (0..count)
+            .step_by(per)
+            .map(|lo| lo..(lo + per).min(count))
+            .collect();
+        if threads <= 1 || ranges.len() <= 1 {
+            ranges
+                .into_iter()
+                .map(|r| self.settle_part(frame, points, r))
+                .collect()
+        } else {
+            ranges
+                .into_par_iter()
+                .map(|r| self.settle_part(frame, points, r))
+                .collect()
+        }
+    }
+
+    /// The points of the collapses `range`, each moved to the nearest of the triangles its
+    /// collapse's removed child gave the new node (that child's ring fanned from the kept
+    /// child: the same stretch of surface; a nearer triangle elsewhere would only lower the
+    /// distance, so this is an upper bound at half the work of searching the whole star),
+    /// or of the whole star when it gave none: each point with its triangle, and per
+    /// collapse its number of points and its new node's error, raised to the largest
+    /// distance and to how far the collapse moved the surface
+    /// ([`Handover::surface_error`]).
+    fn settle_part(
+        &self,
+        frame: Frame<'_>,
+        points: &Points,
+        range: std::ops::Range<usize>,
+    ) -> Settled {
         let mut part = Settled::default();
-        let (mut points, mut found, mut probes) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut list, mut found, mut probes) = (Vec::new(), Vec::new(), Vec::new());
         let (mut walks, mut coords) = (Vec::new(), Vec::new());
-        for i in range {
-            let (from, to) = self.handed_over(i);
+        for e in &self.entries()[range] {
+            let given = self.given(e);
             walks.clear();
-            walks.extend(from.map(|f| self.pts_head[f as usize]));
-            self.walk_lists(&mut walks, &mut points);
+            walks.extend(
+                given
+                    .iter()
+                    .chain(self.dying(e))
+                    .map(|&(f, _)| points.head[f as usize]),
+            );
+            points.walk(&mut walks, &mut list);
+            let to = if given.is_empty() {
+                self.star(e)
+            } else {
+                given
+            };
             found.clear();
-            self.nearest(to, &points, &mut probes, &mut coords, &mut found);
-            let mut error = self.nodes[first_node + i].error;
+            nearest(frame, to, &list, (&mut probes, &mut coords), &mut found);
+            let mut error = e.error;
             let before = part.points.len();
-            for (&x, &(d, f)) in points.iter().zip(&found) {
+            for (&x, &(d, f)) in list.iter().zip(&found) {
                 if f != NONE {
                     part.points.push((x, f));
                     error = error.max(d.sqrt() as f32);
                 }
             }
-            let s = (first_node + i) as u32;
-            let moved =
-                self.surface_error(s, self.from_kept[i] as usize, error.into(), &mut probes);
+            let moved = self.surface_error(frame, e, error.into(), &mut probes);
             error = error.max(moved as f32);
             part.nodes
                 .push(((part.points.len() - before) as u32, error));
         }
         part
     }
-
-    /// Hands the points of the pass's collapses over ([`Work::settle_part`]), on all
-    /// threads: the collapses of a pass have disjoint stars, which no later collapse of the
-    /// pass changes, and each collapse's points are handed over on their own, so the split
-    /// does not change the result. The lists are then rebuilt in collapse order.
-    pub(super) fn settle(&mut self, threads: usize) {
-        let count = self.from_kept.len();
-        // Several parts a thread: the last passes' few collapses carry most points each.
-        let per = count.div_ceil(SETTLE_PARTS * threads.max(1)).max(1);
-        let ranges: Vec<_> = (0..count)
-            .step_by(per.max(1))
-            .map(|lo| lo..(lo + per).min(count))
-            .collect();
-        let this = &*self;
-        let parts: Vec<Settled> = if threads <= 1 || ranges.len() <= 1 {
-            ranges.into_iter().map(|r| this.settle_part(r)).collect()
-        } else {
-            ranges
-                .into_par_iter()
-                .map(|r| this.settle_part(r))
-                .collect()
-        };
-        let first_node = self.nodes.len() - count;
-        let (mut i, mut from) = (0, Vec::new());
-        for part in parts {
-            let mut points = part.points.iter();
-            for &(n, error) in &part.nodes {
-                from.clear();
-                from.extend(self.handed_over(i).0);
-                for &f in &from {
-                    self.pts_head[f as usize] = NONE;
-                }
-                for &(x, f) in points.by_ref().take(n as usize) {
-                    self.pts_next[x as usize] =
-                        std::mem::replace(&mut self.pts_head[f as usize], x);
-                }
-                self.nodes[first_node + i].error = error;
-                i += 1;
-            }
-        }
-        self.from_kept.clear();
-    }
 }
 
-/// Parts per thread that [`Work::settle`] splits a pass's collapses into.
+/// Parts per thread that [`Handover::settle`] splits its collapses into.
 const SETTLE_PARTS: usize = 8;
 
-/// What [`Work::settle_part`] found.
+/// What [`Handover::settle_part`] found.
 #[derive(Default)]
-struct Settled {
+pub(super) struct Settled {
     /// The points handed over, each with its new triangle, collapse after collapse.
     points: Vec<(u32, u32)>,
     /// Per collapse: its number of points there, and its new node's error.

@@ -32,8 +32,8 @@ impl Work<'_> {
     }
 
     /// Applies a checked collapse; returns the new node. The points of `u`'s triangles
-    /// (those dying included) stay in their lists for [`Work::settle`] to hand to their
-    /// nearest triangle around the new node, and `u`'s wedges wait for
+    /// (those dying included) stay in their lists for the settling ([`super::bounds`]) to
+    /// hand to their nearest triangle around the new node, and `u`'s wedges wait for
     /// [`Work::merge_wedges`].
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
@@ -141,7 +141,7 @@ impl Work<'_> {
     }
 
     /// The triangles left around `t` and `u` become the new node `s`'s (the kept child's
-    /// first, which [`Work::settle`] relies on).
+    /// first, which the settling ([`Work::handover`]) relies on).
     fn move_star(&mut self, c: Collapse, s: u32) {
         let (t, u) = (c.t, c.u);
         self.from_kept.push(self.faces_of.of(t).len() as u32);

@@ -53,8 +53,11 @@
 //!   alone miss it. The points see one direction only, so the error is also raised to how
 //!   far the collapse moved the surface (`surface`): the largest distance from the moved
 //!   triangles' centroids and edge midpoints to the surface just before it, which catches a
-//!   triangle laid across a gap or a fold that no input point lies near. Both run after
-//!   each pass on all threads (the collapses of a pass have disjoint stars).
+//!   triangle laid across a gap or a fold that no input point lies near. Both run on the
+//!   other threads while the pass applies its next collapses: the collapses of a pass have
+//!   disjoint stars, which no later collapse of the pass changes, so what they read is
+//!   taken from each run of applied collapses (`handover`) and the settling never reads
+//!   the mesh the pass is changing.
 //!
 //! A pass is built for speed without changing its outcome: every edge is ranked by the cost
 //! of its cheaper allowed direction (a ranking stands while the edge's ends are the same
@@ -67,6 +70,7 @@ mod bounds;
 mod collapse;
 mod geometry;
 pub(crate) use geometry::merge_cones;
+mod handover;
 mod legality;
 mod pass;
 mod rank;
@@ -226,6 +230,6 @@ pub fn build_frozen(
 ) -> Result<Hierarchy, BuildError> {
     let threads = rayon::current_num_threads().min(MAX_THREADS);
     let mut work = setup::work(w, weights, frozen, threads);
-    pass::collapse_all(&mut work, threads, stop_at, progress)?;
+    pass::collapse_all(&mut work, (threads, pass::SEGMENT), stop_at, progress)?;
     Ok(work.into_hierarchy())
 }

@@ -4,11 +4,16 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+use super::bounds::{Frame, Points};
 use super::geometry::corner_of;
 use super::legality::Verdict;
 use super::rank::{order_key, rank_all, Ranked, Slots};
 use super::work::Work;
 use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
+
+/// Collapses a pass applies between handing the ones before over to the settling of the
+/// error bounds, which runs beside the next ones.
+pub(super) const SEGMENT: u64 = 4096;
 
 /// Runs passes until one finds nothing to apply, reporting progress after each.
 ///
@@ -17,13 +22,17 @@ use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
 /// that one applying nothing ends it too. Every other pass removes a node, so there are at
 /// most `2 × positions` passes. A pass that breaks either invariant (a full pass cut
 /// short, more passes than that) is a [`BuildError`] naming it, never a loop.
+///
+/// A pass hands its collapses over to the settling every `segment` collapses ([`SEGMENT`]
+/// but in tests).
 pub(super) fn collapse_all(
     work: &mut Work<'_>,
-    threads: usize,
+    (threads, segment): (usize, u64),
     stop_at: usize,
     progress: Progress<'_>,
 ) -> Result<(), BuildError> {
-    let mut passes = Passes::new(work.tris.len());
+    let mut passes = Passes::new(work.tris.len(), segment);
+    let mut points = Points::place(work);
     let most = work.positions().saturating_sub(1) as u64;
     let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
@@ -32,12 +41,17 @@ pub(super) fn collapse_all(
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        let (applied, cut) = passes.run(work, pass, full, threads)?;
-        work.merge_wedges(threads);
-        // The removed wedges go before the bounds are settled, which read none of them, so
-        // that the settling's lists do not add to them.
+        let (applied, cut, rest) = passes.run(work, &mut points, pass, full, threads)?;
+        // The pass's last collapses are settled beside the merging of the wedges.
+        let rest = work.handover(rest);
+        let frame = Frame::of(work);
+        let ((), settled) = rayon::join(
+            || work.merge_wedges(threads),
+            || rest.settle(frame, &points, threads),
+        );
         work.release_removed_wedges();
-        work.settle(threads);
+        points.hand_over(&rest, settled, &mut work.nodes);
+        work.from_kept.clear();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
         let broken = |stage, invariant| BuildError {
@@ -86,6 +100,19 @@ struct Passes {
     later: BinaryHeap<Reverse<(u64, usize)>>,
     /// The rings of the ends of the collapse being checked.
     rings: [Vec<u32>; 2],
+    /// Collapses between handovers to the settling.
+    segment: u64,
+}
+
+/// Where a pass stands in its collapses.
+struct Tries {
+    /// The cost key of the dearest collapse of its share.
+    limit: u64,
+    /// Collapses applied.
+    applied: u64,
+    /// Collapses tried, and at most.
+    tried: u64,
+    most: u64,
 }
 
 /// The next collapse a pass tries, or why it stops.
@@ -99,8 +126,9 @@ enum Next {
 }
 
 impl Passes {
-    fn new(triangles: usize) -> Self {
+    fn new(triangles: usize, segment: u64) -> Self {
         Self {
+            segment,
             slots: Slots::new(triangles),
             ranked: Ranked::default(),
             later: BinaryHeap::new(),
@@ -108,7 +136,8 @@ impl Passes {
         }
     }
 
-    /// One pass; returns how many collapses it applied and whether it stopped at its share.
+    /// One pass; returns how many collapses it applied, whether it stopped at its share,
+    /// and the range of its collapses whose points are still to settle.
     ///
     /// The pass applies, in cost order, each edge's cheapest legal direction unless an
     /// earlier collapse of the pass took a neighbourhood its ends are in (stamped), or it
@@ -117,16 +146,17 @@ impl Passes {
     /// direction queues at its own cost (in the same order as if it had been ranked with
     /// the others).
     ///
-    /// Each ranked collapse is tried at most once and queues at most one other direction,
-    /// so a pass tries at most twice as many collapses as it ranked; trying more is a
-    /// [`BuildError`].
+    /// Every `segment` collapses ([`SEGMENT`]), those before are handed over ([`Work::handover`]) and
+    /// their points settled beside the next ones, on the other threads: the settling reads
+    /// nothing the pass changes, and moves the points after (in order, as if at the end).
     fn run(
         &mut self,
         work: &mut Work<'_>,
+        points: &mut Points,
         pass: u32,
         full: bool,
         threads: usize,
-    ) -> Result<(u64, bool), BuildError> {
+    ) -> Result<(u64, bool, std::ops::Range<usize>), BuildError> {
         work.stamp.clear();
         work.shrunk.clear();
         // Drop the triangles the last pass removed (keeping the order).
@@ -139,18 +169,53 @@ impl Passes {
         let limit = self
             .ranked
             .start(&self.slots, &work.tris, count, share, threads);
-        let mut applied = 0u64;
         self.later.clear();
-        let max_tries = 2 * count as u64;
-        let mut tries = 0u64;
+        let mut tries = Tries {
+            limit,
+            applied: 0,
+            tried: 0,
+            most: 2 * count as u64,
+        };
+        let mut handed = work.h.collapses.len();
+        let mut pending = crate::hierarchy::handover::Handover::default();
         loop {
-            let (t, u, from_later) = match self.next(work, limit) {
-                Next::Done => return Ok((applied, false)),
-                Next::Cut => return Ok((applied, true)),
+            let frame = Frame::of(work);
+            let until = tries.applied + self.segment;
+            let (end, settled) = rayon::join(
+                || self.apply_until(work, pass, &mut tries, until),
+                || pending.settle(frame, points, threads),
+            );
+            points.hand_over(&pending, settled, &mut work.nodes);
+            let Some(cut) = end? else {
+                pending = work.handover(handed..work.h.collapses.len());
+                handed = work.h.collapses.len();
+                continue;
+            };
+            return Ok((tries.applied, cut, handed..work.h.collapses.len()));
+        }
+    }
+
+    /// Applies the pass's collapses until `until` are applied (`None`) or the pass ends
+    /// (whether it stopped at its share).
+    ///
+    /// Each ranked collapse is tried at most once and queues at most one other direction,
+    /// so a pass tries at most twice as many collapses as it ranked; trying more is a
+    /// [`BuildError`].
+    fn apply_until(
+        &mut self,
+        work: &mut Work<'_>,
+        pass: u32,
+        tries: &mut Tries,
+        until: u64,
+    ) -> Result<Option<bool>, BuildError> {
+        while tries.applied < until {
+            let (t, u, from_later) = match self.next(work, tries.limit) {
+                Next::Done => return Ok(Some(false)),
+                Next::Cut => return Ok(Some(true)),
                 Next::Try { t, u, from_later } => (t, u, from_later),
             };
-            tries += 1;
-            if tries > max_tries {
+            tries.tried += 1;
+            if tries.tried > tries.most {
                 return Err(BuildError {
                     stage: BuildStage::Pass,
                     pass,
@@ -166,7 +231,7 @@ impl Passes {
                 Verdict::Legal(col) => {
                     let s = work.apply_in_pass(col, &self.rings);
                     self.slots.mark_changed(work, s);
-                    applied += 1;
+                    tries.applied += 1;
                 }
                 Verdict::Lapsed => {}
                 Verdict::Illegal => {
@@ -176,6 +241,7 @@ impl Passes {
                 }
             }
         }
+        Ok(None)
     }
 
     /// The next collapse to try: the cheaper of the next ranked one and the next queued

@@ -76,11 +76,8 @@ pub(super) fn work<'w>(
         stamp: Marks::new(np),
         shrunk: Marks::new(np),
         start_valence: vec![0; np],
-        pts_head: Vec::new(),
-        pts_next: Vec::new(),
         from_kept: Vec::new(),
     };
-    work.place_points();
     work.add_leaves(threads);
     work.reserve_nodes();
     work

@@ -9,14 +9,13 @@
 //! (their centroids and edge midpoints) to the surface just before the collapse: the kept
 //! child's triangles, the removed child's as they were, and the two that died.
 
-use super::bounds::Probe;
+use super::bounds::{Frame, Probe};
 use super::geometry::{corner_of, next, prev, V3};
-use super::work::Work;
-use super::NONE;
+use super::handover::{Entry, Handover};
 
-/// The sample points of a triangle with corners `c` that moved with node `s`: its centroid
-/// and the midpoints of its two edges at `s` (the third edge did not move: it is an edge of
-/// the triangle as it was).
+/// The sample points of a triangle with corners `c` that moved with the node at `s`: its
+/// centroid and the midpoints of its two edges at `s` (the third edge did not move: it is
+/// an edge of the triangle as it was).
 fn samples(c: [u32; 3], s: u32, pos: impl Fn(u32) -> V3) -> [V3; 3] {
     let k = corner_of(c, s);
     let [a, b, d] = [c[k], c[next(k)], c[prev(k)]].map(pos);
@@ -39,39 +38,33 @@ fn samples(c: [u32; 3], s: u32, pos: impl Fn(u32) -> V3) -> [V3; 3] {
     ]
 }
 
-impl Work<'_> {
-    /// The largest distance from the samples of the triangles node `s` took from its removed
-    /// child to the surface before the collapse that made it, when above `floor` (which
-    /// settles most samples at their own triangle as it was); `from_kept` is how many of
-    /// `s`'s triangles came from the kept child ([`Work::move_star`] lists them first).
+impl Handover {
+    /// The largest distance from the samples of the triangles the new node of `e` took from
+    /// its removed child to the surface before the collapse that made it, when above
+    /// `floor` (which settles most samples at their own triangle as it was).
     ///
-    /// The collapses of a pass have disjoint stars, so after the pass `s`'s triangles and
-    /// the two that died are still as the collapse left them, and the points of nodes never
+    /// The collapses of a pass have disjoint stars, so the new node's triangles and the two
+    /// that died are as the collapse left them ([`Handover`]), and the points of nodes never
     /// change.
     pub(super) fn surface_error(
         &self,
-        s: u32,
-        from_kept: usize,
+        frame: Frame<'_>,
+        e: &Entry,
         floor: f64,
         probes: &mut Vec<Probe>,
     ) -> f64 {
-        let c = self.h.collapses[s as usize - self.positions()];
-        let star = self.faces_of.of(s);
-        let (kept, moved) = star.split_at(from_kept.min(star.len()));
-        let before = |v: u32| self.pos(if v == s { c.u } else { v });
+        let (kept, moved) = (self.kept(e), self.given(e));
+        // The moved triangles had the removed child where the new node is.
+        let before = |x: u32| frame.at(if x == e.at { e.was } else { x });
         // The surface before: the moved triangles as they were (first, in the order of
         // `moved`), then, once a sample needs them, the kept child's and the two that
         // died, which did not change.
         probes.clear();
-        probes.extend(
-            moved
-                .iter()
-                .map(|&f| Probe::new(&self.tris[f as usize], before)),
-        );
+        probes.extend(moved.iter().map(|&(_, c)| Probe::new(c, before)));
         let mut all_probed = false;
         let mut worst = floor * floor;
-        for (i, &f) in moved.iter().enumerate() {
-            for x in samples(self.tris[f as usize].c, s, |v| self.pos(v)) {
+        for (i, &(_, c)) in moved.iter().enumerate() {
+            for x in samples(c, e.at, |x| frame.at(x)) {
                 // Its own triangle as it was first: most samples stay near it.
                 if probes[i].d2_below(x, worst).is_some() {
                     continue;
@@ -79,8 +72,8 @@ impl Work<'_> {
                 if !all_probed {
                     probes.extend(
                         kept.iter()
-                            .chain([c.fl, c.fr].iter().filter(|&&f| f != NONE))
-                            .map(|&f| Probe::new(&self.tris[f as usize], |v| self.pos(v))),
+                            .chain(self.dying(e))
+                            .map(|&(_, c)| Probe::new(c, |x| frame.at(x))),
                     );
                     all_probed = true;
                 }

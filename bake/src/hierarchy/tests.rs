@@ -144,25 +144,67 @@ fn the_hierarchy_is_the_same_on_one_thread_and_on_several() {
     let w = crate::weld::weld(&terrain(80)).expect("weld");
     assert!(w.triangles.len() > 2 * PARALLEL_MIN);
     let (one, three) = (build_on(1, &w), build_on(3, &w));
-    let key = |h: &Hierarchy| {
-        (
-            h.collapses
-                .iter()
-                .map(|c| (c.t, c.u, c.fl, c.fr, c.neighbours))
-                .collect::<Vec<_>>(),
-            h.parent.clone(),
-            h.error.iter().map(|e| e.to_bits()).collect::<Vec<_>>(),
-            h.radius.iter().map(|r| r.to_bits()).collect::<Vec<_>>(),
-            h.corners.clone(),
-            h.alive.clone(),
-            h.passes,
-        )
-    };
     assert!(one.collapses.len() > 1000);
     assert!(
-        key(&one) == key(&three),
+        hierarchy_key(&one) == hierarchy_key(&three),
         "the thread count changed the hierarchy"
     );
+}
+
+/// What two builds of the same mesh must agree on, to the bit.
+#[allow(clippy::type_complexity)]
+fn hierarchy_key(
+    h: &Hierarchy,
+) -> (
+    Vec<(u32, u32, u32, u32, [u32; 4])>,
+    Vec<u32>,
+    Vec<u32>,
+    Vec<u32>,
+    Vec<[u32; 3]>,
+    Vec<bool>,
+    u32,
+) {
+    (
+        h.collapses
+            .iter()
+            .map(|c| (c.t, c.u, c.fl, c.fr, c.neighbours))
+            .collect(),
+        h.parent.clone(),
+        h.error.iter().map(|e| e.to_bits()).collect(),
+        h.radius.iter().map(|r| r.to_bits()).collect(),
+        h.corners.clone(),
+        h.alive.clone(),
+        h.passes,
+    )
+}
+
+/// The hierarchy of `w` with the points settled every `segment` collapses of a pass, on
+/// `threads` threads.
+fn build_segmented(threads: usize, segment: u64, w: &crate::weld::Welded) -> Hierarchy {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool")
+        .install(|| {
+            let mut work = super::setup::work(w, &AttributeWeights::default(), &[], threads);
+            super::pass::collapse_all(&mut work, (threads, segment), 0, &mut |_, _| {})
+                .expect("build");
+            work.into_hierarchy()
+        })
+}
+
+#[test]
+fn settling_beside_the_pass_gives_what_settling_after_it_gives() {
+    let w = crate::weld::weld(&terrain(80)).expect("weld");
+    let after = build_segmented(1, u64::MAX, &w);
+    assert!(after.collapses.len() > 1000);
+    for (threads, segment) in [(1, 7), (2, 7), (3, 64), (2, super::pass::SEGMENT)] {
+        let beside = build_segmented(threads, segment, &w);
+        assert!(
+            hierarchy_key(&beside) == hierarchy_key(&after),
+            "settled every {segment} collapses on {threads} threads"
+        );
+    }
 }
 
 /// A collapse of two leaves moves the input's own triangles around its removed child: the

@@ -94,12 +94,6 @@ pub(super) struct Work<'w> {
     /// A node's number of neighbours at the start of the pass it last lost one in, by its
     /// position.
     pub(super) start_valence: Vec<u32>,
-    /// The input's positions each triangle stands for (nearest to it when it last
-    /// changed), which the error bounds measure, as a list per triangle: its first
-    /// position, or `NONE`...
-    pub(super) pts_head: Vec<u32>,
-    /// ...and each position's next one in its triangle's list, or `NONE`.
-    pub(super) pts_next: Vec<u32>,
     /// Per collapse of the pass, in order: how many of its new node's triangles came from
     /// the kept child (they are listed first; the removed child's follow).
     pub(super) from_kept: Vec<u32>,
@@ -304,8 +298,6 @@ impl Work<'_> {
             std::mem::take(&mut self.wedge_start),
             std::mem::take(&mut self.quadrics),
             std::mem::take(&mut self.faces_of),
-            std::mem::take(&mut self.pts_head),
-            std::mem::take(&mut self.pts_next),
             std::mem::take(&mut self.info),
             std::mem::take(&mut self.valence),
         ));
