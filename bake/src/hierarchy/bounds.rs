@@ -8,7 +8,7 @@
 
 use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
 use super::handover::Handover;
-use super::work::{centred, NodeOut, Work};
+use super::work::{centred, Work};
 use super::NONE;
 use rayon::prelude::*;
 
@@ -145,13 +145,28 @@ impl Points {
         }
     }
 
+    /// Settles the points of `handover`'s collapses: finds the triangles they go to
+    /// ([`Handover::settle`], on up to `threads` threads), then moves them, collapse after
+    /// collapse, and gives each new node's error to `errors` (`(node, error)`, for
+    /// [`Work::record_errors`]).
+    pub(super) fn settle(
+        &mut self,
+        handover: &Handover,
+        frame: Frame<'_>,
+        threads: usize,
+        errors: &mut Vec<(u32, f32)>,
+    ) {
+        let parts = handover.settle(frame, self, threads);
+        self.hand_over(handover, parts, errors);
+    }
+
     /// Moves the points of `handover`'s collapses to the triangles `parts` found for them
-    /// ([`Handover::settle`]) and records the new nodes' errors, collapse after collapse.
-    pub(super) fn hand_over(
+    /// and gives the new nodes' errors to `errors`, collapse after collapse.
+    fn hand_over(
         &mut self,
         handover: &Handover,
         parts: Vec<Settled>,
-        nodes: &mut [NodeOut],
+        errors: &mut Vec<(u32, f32)>,
     ) {
         let mut entries = handover.entries().iter();
         for part in parts {
@@ -163,8 +178,17 @@ impl Points {
                 for &(x, f) in points.by_ref().take(n as usize) {
                     self.next[x as usize] = std::mem::replace(&mut self.head[f as usize], x);
                 }
-                nodes[e.node as usize].error = error;
+                errors.push((e.node, error));
             }
+        }
+    }
+}
+
+impl Work<'_> {
+    /// Records the new nodes' errors the settling gave (`(node, error)`), emptying `errors`.
+    pub(super) fn record_errors(&mut self, errors: &mut Vec<(u32, f32)>) {
+        for (node, error) in errors.drain(..) {
+            self.nodes[node as usize].error = error;
         }
     }
 }
@@ -199,7 +223,7 @@ impl Handover {
     /// Finds where the points of the handover's collapses go ([`Handover::settle_part`]),
     /// on up to `threads` threads: the collapses of a pass have disjoint stars, which no
     /// later collapse of the pass changes, and each collapse's points are handed over on
-    /// their own, so the split does not change the result. [`Points::hand_over`] then moves
+    /// their own, so the split does not change the result. [`Points::settle`] then moves
     /// them.
     pub(super) fn settle(&self, frame: Frame<'_>, points: &Points, threads: usize) -> Vec<Settled> {
         let count = self.entries().len();

@@ -33,6 +33,8 @@ pub(super) fn collapse_all(
 ) -> Result<(), BuildError> {
     let mut passes = Passes::new(work.tris.len(), segment);
     let mut points = Points::place(work);
+    // The new nodes' errors the settling gives.
+    let mut errors = Vec::new();
     let most = work.positions().saturating_sub(1) as u64;
     let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
@@ -45,12 +47,12 @@ pub(super) fn collapse_all(
         // The pass's last collapses are settled beside the merging of the wedges.
         let rest = work.handover(rest);
         let frame = Frame::of(work);
-        let ((), settled) = rayon::join(
+        rayon::join(
             || work.merge_wedges(threads),
-            || rest.settle(frame, &points, threads),
+            || points.settle(&rest, frame, threads, &mut errors),
         );
         work.release_removed_wedges();
-        points.hand_over(&rest, settled, &mut work.nodes);
+        work.record_errors(&mut errors);
         work.from_kept.clear();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
@@ -178,14 +180,15 @@ impl Passes {
         };
         let mut handed = work.h.collapses.len();
         let mut pending = crate::hierarchy::handover::Handover::default();
+        let mut errors = Vec::new();
         loop {
             let frame = Frame::of(work);
             let until = tries.applied + self.segment;
-            let (end, settled) = rayon::join(
+            let (end, ()) = rayon::join(
                 || self.apply_until(work, pass, &mut tries, until),
-                || pending.settle(frame, points, threads),
+                || points.settle(&pending, frame, threads, &mut errors),
             );
-            points.hand_over(&pending, settled, &mut work.nodes);
+            work.record_errors(&mut errors);
             let Some(cut) = end? else {
                 pending = work.handover(handed..work.h.collapses.len());
                 handed = work.h.collapses.len();
