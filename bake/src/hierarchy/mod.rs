@@ -73,6 +73,7 @@ pub(crate) use geometry::merge_cones;
 mod handover;
 mod legality;
 mod pass;
+mod prefetch;
 mod rank;
 mod setup;
 mod stars;

@@ -7,6 +7,7 @@ use std::collections::BinaryHeap;
 use super::bounds::{Frame, Points};
 use super::geometry::corner_of;
 use super::legality::Verdict;
+use super::prefetch::prefetch;
 use super::rank::{order_key, rank_all, Ranked, Slots};
 use super::work::Work;
 use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
@@ -217,6 +218,12 @@ impl Passes {
                 Next::Cut => return Ok(Some(true)),
                 Next::Try { t, u, from_later } => (t, u, from_later),
             };
+            // What the next candidates' checks read, a step further for each.
+            for (k, step) in [(0, 2), (1, 1), (2, 0)] {
+                for v in self.ranked.upcoming(k).into_iter().flatten() {
+                    work.prefetch_around(v, step);
+                }
+            }
             tries.tried += 1;
             if tries.tried > tries.most {
                 return Err(BuildError {
@@ -251,9 +258,12 @@ impl Passes {
     /// other direction (on equal costs, the one of the earlier slot), unless it is dearer
     /// than `limit`.
     fn next(&mut self, work: &Work<'_>, limit: u64) -> Next {
-        let next_cand = self
-            .ranked
-            .peek(&self.slots, &work.tris, |v| work.stamp.get(work.at_node(v)));
+        let next_cand = self.ranked.peek(
+            &self.slots,
+            &work.tris,
+            |v| work.stamp.get(work.at_node(v)),
+            |v| prefetch(&work.node_pos[v as usize]),
+        );
         let later_first = match (next_cand, self.later.peek()) {
             (None, None) => return Next::Done,
             (None, Some(_)) => true,

@@ -2,6 +2,7 @@
 //! collapses handed out by cost through buckets sorted only when reached.
 
 use super::geometry::{corner_of, next, prev};
+use super::prefetch::prefetch;
 use super::work::{Tri, Work};
 use super::{NONE, PARALLEL_MIN};
 use rayon::prelude::*;
@@ -137,6 +138,32 @@ impl Slots {
             self.dirs.shrink_to_fit();
         }
         self.live = Some(live);
+    }
+
+    /// Starts loading what [`Slots::get`] and the check of the ends will read for the
+    /// slots a few entries after entry `j` of `list` (slot numbers), a step each: the
+    /// slot's place in the lists, then its triangle, then (through `ends`) what the ends
+    /// are checked by. The slots are spread over the whole mesh, so each step would
+    /// otherwise wait for memory in turn.
+    #[inline]
+    fn prefetch(&self, tris: &[Tri], list: &[u32], j: usize, ends: impl Fn(u32)) {
+        if let Some(&i) = list.get(j + 16) {
+            let place = i as usize / 3;
+            if let Some(live) = &self.live {
+                prefetch(&live[place]);
+            }
+            prefetch(&self.costs[place]);
+            prefetch(&self.dirs[place]);
+        }
+        if let Some(&i) = list.get(j + 8) {
+            prefetch(&tris[self.triangle(i as usize / 3) as usize]);
+        }
+        if let Some(&i) = list.get(j + 4) {
+            let (place, k) = (i as usize / 3, i as usize % 3);
+            let c = tris[self.triangle(place) as usize].c;
+            ends(c[k]);
+            ends(c[next(k)]);
+        }
     }
 
     /// The triangle at place `i` of the live list.
@@ -363,6 +390,7 @@ impl Ranked {
         slots: &Slots,
         tris: &[Tri],
         taken: impl Fn(u32) -> bool,
+        ahead: impl Fn(u32),
     ) -> Option<Candidate> {
         while self.pos == self.chunk.len() {
             if self.bucket + 1 >= self.bounds.len() {
@@ -378,12 +406,16 @@ impl Ranked {
             }
             self.chunk.clear();
             self.pos = 0;
-            self.chunk.extend(
-                self.by_bucket[a..b]
-                    .iter()
-                    .filter_map(|&i| candidate(&slots.get(tris, i as usize)))
-                    .filter(|c| !taken(c.1) && !taken(c.2)),
-            );
+            let bucket = &self.by_bucket[a..b];
+            for (j, &i) in bucket.iter().enumerate() {
+                slots.prefetch(tris, bucket, j, &ahead);
+                let Some(c) = candidate(&slots.get(tris, i as usize)) else {
+                    continue;
+                };
+                if !taken(c.1) && !taken(c.2) {
+                    self.chunk.push(c);
+                }
+            }
             self.chunk.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
         Some(self.chunk[self.pos])
@@ -391,6 +423,12 @@ impl Ranked {
 
     pub(super) fn advance(&mut self) {
         self.pos += 1;
+    }
+
+    /// The ends of the candidate `k` after the next in the current bucket, if any (to
+    /// start loading what its checks read).
+    pub(super) fn upcoming(&self, k: usize) -> Option<[u32; 2]> {
+        self.chunk.get(self.pos + k).map(|c| [c.1, c.2])
     }
 }
 

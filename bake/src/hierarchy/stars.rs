@@ -5,6 +5,8 @@
 //! the number of nodes (a compaction goes through every node: so it costs a few steps per
 //! entry it frees).
 
+use super::prefetch::prefetch;
+
 /// The triangles around every node: node `v`'s are `pool[start[v]..][..len[v]]`.
 #[derive(Default)]
 pub(super) struct Stars {
@@ -64,6 +66,21 @@ impl Stars {
     pub(super) fn reserve_nodes(&mut self, more: usize) {
         self.start.reserve_exact(more);
         self.len.reserve_exact(more);
+    }
+
+    /// Starts loading where node `v`'s list is (a hint, for [`Work::prefetch_around`]).
+    #[inline]
+    pub(super) fn prefetch_place(&self, v: u32) {
+        prefetch(&self.start[v as usize]);
+        prefetch(&self.len[v as usize]);
+    }
+
+    /// Starts loading node `v`'s list (a hint).
+    #[inline]
+    pub(super) fn prefetch_list(&self, v: u32) {
+        if let Some(first) = self.pool.get(self.start[v as usize] as usize) {
+            prefetch(first);
+        }
     }
 
     /// Removes triangle `f` from node `v`'s list, keeping the order of the others.
