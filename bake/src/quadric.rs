@@ -273,6 +273,13 @@ impl Quadrics {
         self.data.shrink_to_fit();
     }
 
+    /// Row `i`'s numbers.
+    #[inline]
+    pub fn row(&self, i: usize) -> &[f64] {
+        let n = self.layout.stride();
+        &self.data[i * n..][..n]
+    }
+
     /// Row `i`'s `Q(p, s)` ([`Quadric::eval`]: the same number), never negative.
     #[inline]
     pub fn eval(&self, i: usize, p: [f64; 3], s: &[f64; M]) -> f64 {

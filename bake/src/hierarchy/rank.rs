@@ -502,11 +502,21 @@ pub(super) fn rank_all(work: &Work<'_>, slots: &mut Slots, threads: usize) -> us
     let (live, marked) = (live.as_deref(), &*changed);
     // Ranks the places from `first` on.
     let rank_part = |first: usize, costs: &mut [[f64; 3]], dirs: &mut [u8]| {
+        let places = costs.len();
         costs
             .iter_mut()
             .zip(dirs)
             .enumerate()
             .map(|(j, (cost, dirs))| {
+                // What the ranking of the places a few ahead reads, a step further each.
+                for (ahead, step) in [(8, 0), (4, 1), (2, 2)] {
+                    if j + ahead < places {
+                        let f = triangle_at(live, first + j + ahead);
+                        if marked[f as usize] != 0 {
+                            work.prefetch_ends(f, step);
+                        }
+                    }
+                }
                 let f = triangle_at(live, first + j);
                 work.rank_triangle(f, marked[f as usize], cost, dirs)
             })
