@@ -8,6 +8,7 @@
 
 use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
 use super::handover::Handover;
+use super::prefetch::prefetch;
 use super::work::{centred, Work};
 use super::NONE;
 use rayon::prelude::*;
@@ -132,13 +133,16 @@ impl Points {
 
     /// The points of the lists that start at `heads` (the lists' heads, changed), into
     /// `points`: the lists are walked side by side, so that their cache misses overlap, and
-    /// their points are interleaved (which no result depends on).
-    fn walk(&self, heads: &mut Vec<u32>, points: &mut Vec<u32>) {
+    /// their points are interleaved (which no result depends on); their coordinates in
+    /// `frame` start loading on the way.
+    fn walk(&self, frame: Frame<'_>, heads: &mut Vec<u32>, points: &mut Vec<u32>) {
         points.clear();
         heads.retain(|&x| x != NONE);
         while !heads.is_empty() {
             for x in heads.iter_mut() {
                 points.push(*x);
+                // The point's coordinates, read once the walk is done.
+                prefetch(&frame.positions[*x as usize]);
                 *x = self.next[*x as usize];
             }
             heads.retain(|&x| x != NONE);
@@ -272,7 +276,7 @@ impl Handover {
                     .chain(self.dying(e))
                     .map(|&(f, _)| points.head[f as usize]),
             );
-            points.walk(&mut walks, &mut list);
+            points.walk(frame, &mut walks, &mut list);
             let to = if given.is_empty() {
                 self.star(e)
             } else {
