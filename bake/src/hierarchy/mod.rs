@@ -54,10 +54,11 @@
 //!   far the collapse moved the surface (`surface`): the largest distance from the moved
 //!   triangles' centroids and edge midpoints to the surface just before it, which catches a
 //!   triangle laid across a gap or a fold that no input point lies near. Both run on the
-//!   other threads while the pass applies its next collapses: the collapses of a pass have
-//!   disjoint stars, which no later collapse of the pass changes, so what they read is
-//!   taken from each run of applied collapses (`handover`) and the settling never reads
-//!   the mesh the pass is changing.
+//!   other threads while the pass applies its next collapses (a pass's last ones while the
+//!   next pass ranks its edges): the collapses of a pass have disjoint stars, which no
+//!   later collapse of the pass changes, so what they read is taken from each run of
+//!   applied collapses (`handover`) and the settling never reads the mesh the pass is
+//!   changing.
 //!
 //! A pass is built for speed without changing its outcome: every edge is ranked by the cost
 //! of its cheaper allowed direction (a ranking stands while the edge's ends are the same

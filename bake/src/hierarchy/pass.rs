@@ -6,6 +6,7 @@ use std::collections::BinaryHeap;
 
 use super::bounds::{Frame, Points};
 use super::geometry::corner_of;
+use super::handover::Handover;
 use super::legality::Verdict;
 use super::prefetch::prefetch;
 use super::rank::{order_key, rank_all, Ranked, Slots};
@@ -36,6 +37,8 @@ pub(super) fn collapse_all(
     let mut points = Points::place(work);
     // The new nodes' errors the settling gives.
     let mut errors = Vec::new();
+    // The last collapses of the pass before, settled beside this one's ranking.
+    let mut carried = Handover::default();
     let most = work.positions().saturating_sub(1) as u64;
     let max_passes = 2 * (most + 1);
     // Whether this pass may apply every ranked collapse (after one that applied none of
@@ -44,16 +47,11 @@ pub(super) fn collapse_all(
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        let (applied, cut, rest) = passes.run(work, &mut points, pass, full, threads)?;
-        // The pass's last collapses are settled beside the merging of the wedges.
-        let rest = work.handover(rest);
-        let frame = Frame::of(work);
-        rayon::join(
-            || work.merge_wedges(threads),
-            || points.settle(&rest, frame, threads, &mut errors),
-        );
+        let (applied, cut, rest) =
+            passes.run(work, (&mut points, &carried), pass, full, threads)?;
+        carried = work.handover(rest);
+        work.merge_wedges(threads);
         work.release_removed_wedges();
-        work.record_errors(&mut errors);
         work.from_kept.clear();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
@@ -71,6 +69,8 @@ pub(super) fn collapse_all(
             ));
         }
         if applied == 0 && (full || !cut) || stop_at > 0 && live_triangles(work) <= stop_at {
+            points.settle(&carried, Frame::of(work), threads, &mut errors);
+            work.record_errors(&mut errors);
             return Ok(());
         }
         if u64::from(pass) >= max_passes || done > most {
@@ -149,30 +149,28 @@ impl Passes {
     /// direction queues at its own cost (in the same order as if it had been ranked with
     /// the others).
     ///
-    /// Every `segment` collapses ([`SEGMENT`]), those before are handed over ([`Work::handover`]) and
-    /// their points settled beside the next ones, on the other threads: the settling reads
-    /// nothing the pass changes, and moves the points after (in order, as if at the end).
+    /// Every `segment` collapses ([`SEGMENT`]), those before are handed over
+    /// ([`Work::handover`]) and their points settled beside the next ones, on the other
+    /// threads: the settling reads nothing the pass changes, and moves the points after (in
+    /// order, as if at the end). The last pass's last ones (`carried`) settle beside the
+    /// ranking, and their nodes' errors are recorded before the first collapse, whose new
+    /// node's error starts from its children's.
     fn run(
         &mut self,
         work: &mut Work<'_>,
-        points: &mut Points,
+        (points, carried): (&mut Points, &Handover),
         pass: u32,
         full: bool,
         threads: usize,
     ) -> Result<(u64, bool, std::ops::Range<usize>), BuildError> {
-        work.stamp.clear();
-        work.shrunk.clear();
-        // Drop the triangles the last pass removed (keeping the order).
-        self.slots.retain_alive(&work.alive);
-        // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
-        // slots per triangle, in order).
-        let count = rank_all(work, &mut self.slots, threads);
-        // The pass stops at the first collapse dearer than its cheapest share.
-        let share = if full { 1.0 } else { PASS_SHARE };
-        let limit = self
-            .ranked
-            .start(&self.slots, &work.tris, count, share, threads);
-        self.later.clear();
+        let mut errors = Vec::new();
+        // The last pass's last collapses settle beside the ranking, which reads no points.
+        let frame = Frame::of(work);
+        let ((count, limit), ()) = rayon::join(
+            || self.rank(work, full, threads),
+            || points.settle(carried, frame, threads, &mut errors),
+        );
+        work.record_errors(&mut errors);
         let mut tries = Tries {
             limit,
             applied: 0,
@@ -180,8 +178,7 @@ impl Passes {
             most: 2 * count as u64,
         };
         let mut handed = work.h.collapses.len();
-        let mut pending = crate::hierarchy::handover::Handover::default();
-        let mut errors = Vec::new();
+        let mut pending = Handover::default();
         loop {
             let frame = Frame::of(work);
             let until = tries.applied + self.segment;
@@ -197,6 +194,26 @@ impl Passes {
             };
             return Ok((tries.applied, cut, handed..work.h.collapses.len()));
         }
+    }
+
+    /// Starts a pass: ranks the live slots and the bucket of its cheapest share (all of
+    /// them when `full`); returns how many it ranked and the cost key of the dearest it
+    /// may apply.
+    fn rank(&mut self, work: &mut Work<'_>, full: bool, threads: usize) -> (usize, u64) {
+        work.stamp.clear();
+        work.shrunk.clear();
+        // Drop the triangles the last pass removed (keeping the order).
+        self.slots.retain_alive(&work.alive);
+        // Each edge's cheaper allowed direction, by cost; equal costs in slot order (three
+        // slots per triangle, in order).
+        let count = rank_all(work, &mut self.slots, threads);
+        // The pass stops at the first collapse dearer than its cheapest share.
+        let share = if full { 1.0 } else { PASS_SHARE };
+        let limit = self
+            .ranked
+            .start(&self.slots, &work.tris, count, share, threads);
+        self.later.clear();
+        (count, limit)
     }
 
     /// Applies the pass's collapses until `until` are applied (`None`) or the pass ends
