@@ -181,7 +181,7 @@ impl Passes {
         let mut pending = Handover::default();
         loop {
             let frame = Frame::of(work);
-            let until = tries.applied + self.segment;
+            let until = tries.applied.saturating_add(self.segment);
             let (end, ()) = rayon::join(
                 || self.apply_until(work, pass, &mut tries, until),
                 || points.settle(&pending, frame, threads, &mut errors),
