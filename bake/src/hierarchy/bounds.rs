@@ -76,8 +76,8 @@ impl Probe {
     }
 }
 
-/// Where the settling reads positions: the welded mesh's, relative to the centre the work
-/// takes them from ([`Work::at`]).
+/// Where positions are read from: the welded mesh's, relative to the centre of its bounding
+/// box ([`Work::at`] reads them through it; the settling holds one apart from the work).
 #[derive(Clone, Copy)]
 pub(super) struct Frame<'a> {
     positions: &'a [[f32; 3]],
@@ -93,7 +93,7 @@ impl<'a> Frame<'a> {
         }
     }
 
-    /// The point of position `x`, as [`Work::at`] gives it.
+    /// The point of position `x`, relative to the centre, in f64.
     #[inline]
     pub(super) fn at(&self, x: u32) -> V3 {
         centred(self.positions[x as usize], self.centre)

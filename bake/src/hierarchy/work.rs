@@ -5,6 +5,7 @@ use std::borrow::Cow;
 
 use caveclod_core::format::PositionClass;
 
+use super::bounds::Frame;
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
 use super::prefetch::prefetch;
 use super::setup::scaled_attributes;
@@ -218,10 +219,10 @@ impl Work<'_> {
     }
 
     /// The point of position `x`, relative to the centre in f64: computed where read (the
-    /// same bits every time) rather than kept, which saves 24 bytes a position.
+    /// same bits every time, [`Frame::at`]) rather than kept, which saves 24 bytes a position.
     #[inline]
     pub(super) fn at(&self, x: usize) -> V3 {
-        centred(self.w.positions[x], self.centre)
+        Frame::of(self).at(x as u32)
     }
 
     /// The number of positions (leaves).
