@@ -33,7 +33,8 @@ impl Work<'_> {
 
     /// Applies a checked collapse; returns the new node. The points of `u`'s triangles
     /// (those dying included) stay in their lists for the settling ([`super::bounds`]) to
-    /// hand to their nearest triangle around the new node, and `u`'s wedges wait for
+    /// hand to their nearest triangle around the new node, from what the collapse adds to
+    /// the handover ([`Work::take_over`]), and `u`'s wedges wait for
     /// [`Work::merge_wedges`].
     pub(super) fn apply(&mut self, c: Collapse) -> u32 {
         let s = self.node_pos.len() as u32;
@@ -43,11 +44,12 @@ impl Work<'_> {
                 self.remove_dying(c, f);
             }
         }
-        self.move_star(c, s);
+        let kept = self.move_star(c, s);
         self.update_valences(c);
         #[cfg(debug_assertions)]
         self.check_valences(s);
         self.h.collapses.push(c);
+        self.take_over(c, s, kept);
         s
     }
 
@@ -77,8 +79,8 @@ impl Work<'_> {
     /// thread. Each kept position takes one collapse's wedges, so the sums do not depend
     /// on the split.
     pub(super) fn merge_wedges(&mut self, threads: usize) {
-        let count = self.from_kept.len();
-        let pairs: Vec<(usize, usize)> = self.h.collapses[self.h.collapses.len() - count..]
+        let count = self.h.collapses.len() - self.pass_start;
+        let pairs: Vec<(usize, usize)> = self.h.collapses[self.pass_start..]
             .iter()
             .map(|c| {
                 let at = |v: u32| self.node_pos[v as usize] as usize;
@@ -119,7 +121,7 @@ impl Work<'_> {
     }
 
     /// Removes the dying triangle `f` (`f_l` or `f_r` of `c`): the triangles across its two
-    /// other edges become neighbours, and its corners forget it.
+    /// other edges become neighbours, and its third corner forgets it.
     fn remove_dying(&mut self, c: Collapse, f: u32) {
         self.alive[f as usize] = false;
         let Tri { c: fc, o, .. } = self.tris[f as usize];
@@ -135,17 +137,18 @@ impl Work<'_> {
                 }
             }
         }
-        for x in fc {
-            self.faces_of.remove(x, f);
-        }
+        // The ends' lists drop it as they merge ([`Work::move_star`]).
+        let third = fc[prev(on_edge)];
+        debug_assert!(third != c.t && third != c.u);
+        self.faces_of.remove(third, f);
     }
 
-    /// The triangles left around `t` and `u` become the new node `s`'s (the kept child's
-    /// first, which the settling ([`Work::handover`]) relies on).
-    fn move_star(&mut self, c: Collapse, s: u32) {
+    /// The triangles left around `t` and `u`, all but the dying ones, become the new node
+    /// `s`'s (the kept child's first, which the settling ([`Work::take_over`]) relies on);
+    /// returns how many came from the kept child.
+    fn move_star(&mut self, c: Collapse, s: u32) -> usize {
         let (t, u) = (c.t, c.u);
-        self.from_kept.push(self.faces_of.of(t).len() as u32);
-        self.faces_of.push_merged(t, u);
+        let kept = self.faces_of.push_merged(t, u, [c.fl, c.fr]);
         for &f in self.faces_of.of(s) {
             let mut tri = self.tris[f as usize];
             for x in tri.c.iter_mut() {
@@ -155,6 +158,7 @@ impl Work<'_> {
             }
             self.tris[f as usize] = tri;
         }
+        kept
     }
 
     /// The ends' rings share just `l` and `r` (the link condition): the new node has the

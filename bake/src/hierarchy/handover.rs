@@ -1,13 +1,12 @@
 //! What the settling of the error bounds reads of a pass's applied collapses, taken from the
-//! work once they are applied ([`Work::handover`]): the new node, the positions of its two
-//! children, and the corners of its triangles and of the two that died. The collapses of a
-//! pass have disjoint stars, which no later collapse of the pass changes, so this is what the
-//! settling would read at the end of the pass, and it can run while the pass goes on.
-
-use std::ops::Range;
+//! work as each is applied ([`Work::take_over`], while what it reads is in cache): the new
+//! node, the positions of its two children, and the corners of its triangles and of the two
+//! that died. The collapses of a pass have disjoint stars, which no later collapse of the
+//! pass changes, so this is what the settling would read at the end of the pass, and it can
+//! run while the pass goes on.
 
 use super::work::Work;
-use super::NONE;
+use super::{Collapse, NONE};
 
 /// A triangle as the settling reads it: its id and its corners' positions.
 pub(super) type Corners = (u32, [u32; 3]);
@@ -70,34 +69,37 @@ impl Handover {
 }
 
 impl Work<'_> {
-    /// The pass's applied collapses `collapses` (indices of [`super::Hierarchy::collapses`])
-    /// as the settling reads them.
-    pub(super) fn handover(&self, collapses: Range<usize>) -> Handover {
-        let first_of_pass = self.h.collapses.len() - self.from_kept.len();
-        let mut out = Handover {
-            entries: Vec::with_capacity(collapses.len()),
-            tris: Vec::new(),
-        };
-        let corners = |f: u32| (f, self.tris[f as usize].c.map(|v| self.at_node(v) as u32));
-        for i in collapses {
-            let c = self.h.collapses[i];
-            let node = (self.positions() + i) as u32;
-            let star = self.faces_of.of(node);
-            let start = out.tris.len() as u32;
-            out.tris.extend(star.iter().map(|&f| corners(f)));
-            let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE);
-            out.tris.extend(dying.map(corners));
-            out.entries.push(Entry {
-                node,
-                error: self.nodes[node as usize].error,
-                at: self.at_node(c.t) as u32,
-                was: self.at_node(c.u) as u32,
-                start,
-                kept: (self.from_kept[i - first_of_pass] as usize).min(star.len()) as u32,
-                star: star.len() as u32,
-                dying: out.tris.len() as u32 - start - star.len() as u32,
-            });
-        }
-        out
+    /// Adds the collapse `c` just applied, which made node `s` with `kept` triangles from
+    /// its kept child (listed first), to the collapses taken for the settling.
+    pub(super) fn take_over(&mut self, c: Collapse, s: u32, kept: usize) {
+        let Work {
+            taken,
+            tris,
+            node_pos,
+            faces_of,
+            nodes,
+            ..
+        } = self;
+        let corners = |f: u32| (f, tris[f as usize].c.map(|v| node_pos[v as usize]));
+        let star = faces_of.of(s);
+        let start = taken.tris.len() as u32;
+        taken.tris.extend(star.iter().map(|&f| corners(f)));
+        let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE);
+        taken.tris.extend(dying.map(corners));
+        taken.entries.push(Entry {
+            node: s,
+            error: nodes[s as usize].error,
+            at: node_pos[c.t as usize],
+            was: node_pos[c.u as usize],
+            start,
+            kept: kept.min(star.len()) as u32,
+            star: star.len() as u32,
+            dying: taken.tris.len() as u32 - start - star.len() as u32,
+        });
+    }
+
+    /// The collapses taken since the last call, for the settling.
+    pub(super) fn handover(&mut self) -> Handover {
+        std::mem::take(&mut self.taken)
     }
 }

@@ -47,12 +47,11 @@ pub(super) fn collapse_all(
     loop {
         work.h.passes += 1;
         let pass = work.h.passes;
-        let (applied, cut, rest) =
-            passes.run(work, (&mut points, &carried), pass, full, threads)?;
-        carried = work.handover(rest);
+        let (applied, cut) = passes.run(work, (&mut points, &carried), pass, full, threads)?;
+        carried = work.handover();
         work.merge_wedges(threads);
         work.release_removed_wedges();
-        work.from_kept.clear();
+        work.pass_start = work.h.collapses.len();
         let done = work.h.collapses.len() as u64;
         progress(done, most);
         let broken = |stage, invariant| BuildError {
@@ -139,8 +138,8 @@ impl Passes {
         }
     }
 
-    /// One pass; returns how many collapses it applied, whether it stopped at its share,
-    /// and the range of its collapses whose points are still to settle.
+    /// One pass; returns how many collapses it applied and whether it stopped at its share.
+    /// Its last collapses are left taken ([`Work::handover`]), their points still to settle.
     ///
     /// The pass applies, in cost order, each edge's cheapest legal direction unless an
     /// earlier collapse of the pass took a neighbourhood its ends are in (stamped), or it
@@ -162,7 +161,7 @@ impl Passes {
         pass: u32,
         full: bool,
         threads: usize,
-    ) -> Result<(u64, bool, std::ops::Range<usize>), BuildError> {
+    ) -> Result<(u64, bool), BuildError> {
         let mut errors = Vec::new();
         // The last pass's last collapses settle beside the ranking, which reads no points.
         let frame = Frame::of(work);
@@ -177,7 +176,6 @@ impl Passes {
             tried: 0,
             most: 2 * count as u64,
         };
-        let mut handed = work.h.collapses.len();
         let mut pending = Handover::default();
         loop {
             let frame = Frame::of(work);
@@ -188,11 +186,10 @@ impl Passes {
             );
             work.record_errors(&mut errors);
             let Some(cut) = end? else {
-                pending = work.handover(handed..work.h.collapses.len());
-                handed = work.h.collapses.len();
+                pending = work.handover();
                 continue;
             };
-            return Ok((tries.applied, cut, handed..work.h.collapses.len()));
+            return Ok((tries.applied, cut));
         }
     }
 

@@ -4,6 +4,7 @@
 use std::borrow::Cow;
 
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
+use super::handover::Handover;
 use super::stars::Stars;
 use super::work::{centred, Marks, NodeOut, PosInfo, Tri, Wedge, Work};
 use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
@@ -71,12 +72,14 @@ pub(super) fn work<'w>(
         wedge_start,
         quadrics,
         wedges_released: 0,
+        wedges_unreleased: 0,
         h: Hierarchy::default(),
         nodes: Vec::new(),
         stamp: Marks::new(np),
         shrunk: Marks::new(np),
         start_valence: vec![0; np],
-        from_kept: Vec::new(),
+        pass_start: 0,
+        taken: Handover::default(),
     };
     work.add_leaves(threads);
     work.reserve_nodes();

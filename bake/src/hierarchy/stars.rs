@@ -98,19 +98,30 @@ impl Stars {
         self.len[v as usize] = kept as u32;
     }
 
-    /// A new node whose list is `a`'s followed by `b`'s; theirs become empty.
-    pub(super) fn push_merged(&mut self, a: u32, b: u32) {
+    /// A new node whose list is `a`'s followed by `b`'s, but for the triangles `dropped`
+    /// (as if removed from both first); theirs become empty. Returns how many of `a`'s it
+    /// took.
+    pub(super) fn push_merged(&mut self, a: u32, b: u32, dropped: [u32; 2]) -> usize {
         // A start past 32 bits: compacted, the pool holds the lists alone, at most three
         // entries a triangle, which the weld keeps within 32 bits.
         if self.pool.len() > u32::MAX as usize {
             self.compact();
         }
         let at = self.pool.len();
+        let mut from_a = 0;
         for v in [a, b] {
             let s = self.start[v as usize] as usize;
             let n = std::mem::take(&mut self.len[v as usize]) as usize;
-            self.pool.extend_from_within(s..s + n);
+            for i in s..s + n {
+                let f = self.pool[i];
+                if f != dropped[0] && f != dropped[1] {
+                    self.pool.push(f);
+                }
+            }
             self.waste += n;
+            if v == a {
+                from_a = self.pool.len() - at;
+            }
         }
         self.start.push(at as u32);
         self.len.push((self.pool.len() - at) as u32);
@@ -118,6 +129,7 @@ impl Stars {
         if self.waste > (held / 4).max(self.start.len()) {
             self.compact();
         }
+        from_a
     }
 
     /// Moves every list down over the entries no list holds, in node order (the order
@@ -141,9 +153,10 @@ impl Stars {
 #[cfg(test)]
 mod tests {
     use super::Stars;
+    use crate::hierarchy::NONE;
 
-    /// The pool holds what a vector per node would, through removals, merges and the
-    /// compactions they set off.
+    /// The pool holds what a vector per node would, through removals, merges (dropping a
+    /// triangle or not) and the compactions they set off.
     #[test]
     fn the_pool_keeps_every_list_through_compactions() {
         // A strip of triangles over 40 positions: triangle f has corners f, f + 1, f + 2.
@@ -156,19 +169,30 @@ mod tests {
             }
         }
         let mut compactions = 0;
-        // Merge neighbours pairwise, removing a triangle of each pair first.
+        // Merge neighbours pairwise, removing a triangle of each pair first: from every
+        // other list, and from the pair's through the merge on every other merge.
         let mut live: Vec<u32> = (0..40).collect();
+        let mut merges = 0;
         while live.len() > 1 {
             let (a, b) = (live.remove(0), live.remove(0));
+            let through_merge = merges % 2 == 0;
+            let mut dropped = [NONE; 2];
             if let Some(&f) = model[a as usize].first() {
                 for x in 0..model.len() as u32 {
-                    stars.remove(x, f);
+                    if !(through_merge && (x == a || x == b)) {
+                        stars.remove(x, f);
+                    }
                     model[x as usize].retain(|&g| g != f);
+                }
+                if through_merge {
+                    dropped[0] = f;
                 }
             }
             let waste = stars.waste;
-            stars.push_merged(a, b);
+            let from_a = stars.push_merged(a, b, dropped);
+            merges += 1;
             compactions += usize::from(stars.waste < waste);
+            assert_eq!(from_a, model[a as usize].len());
             let mut merged = std::mem::take(&mut model[a as usize]);
             merged.append(&mut model[b as usize]);
             model.push(merged);

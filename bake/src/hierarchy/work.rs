@@ -7,6 +7,7 @@ use caveclod_core::format::PositionClass;
 
 use super::bounds::Frame;
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
+use super::handover::Handover;
 use super::prefetch::prefetch;
 use super::setup::scaled_attributes;
 use super::stars::Stars;
@@ -81,6 +82,8 @@ pub(super) struct Work<'w> {
     pub(super) quadrics: Quadrics,
     /// Collapses whose removed positions' wedges are released.
     pub(super) wedges_released: usize,
+    /// The wedges of the positions removed since, not yet released.
+    pub(super) wedges_unreleased: usize,
     pub(super) h: Hierarchy,
     /// Per node: parent, and the bounds of [`Hierarchy`] (kept together here).
     pub(super) nodes: Vec<NodeOut>,
@@ -96,9 +99,10 @@ pub(super) struct Work<'w> {
     /// A node's number of neighbours at the start of the pass it last lost one in, by its
     /// position.
     pub(super) start_valence: Vec<u32>,
-    /// Per collapse of the pass, in order: how many of its new node's triangles came from
-    /// the kept child (they are listed first; the removed child's follow).
-    pub(super) from_kept: Vec<u32>,
+    /// The first collapse of the pass (an index of [`Hierarchy::collapses`]).
+    pub(super) pass_start: usize,
+    /// The collapses applied since the settling last took them ([`Work::handover`]).
+    pub(super) taken: Handover,
 }
 
 impl Work<'_> {
@@ -154,18 +158,22 @@ impl Work<'_> {
     }
 
     /// Starts loading, a step at a time (`step` 0, 1, 2, a candidate or so apart), what the
-    /// checks of a collapse with the end `v` read: where its star is and its position,
-    /// then its star and its figures, then its triangles. A hint, which changes no result.
+    /// checks and the application of a collapse with the end `v` read: where its star is,
+    /// its position and its bounds, then its star, its figures and its point, then its
+    /// triangles. A hint, which changes no result.
     #[inline]
     pub(super) fn prefetch_around(&self, v: u32, step: usize) {
         match step {
             0 => {
                 self.faces_of.prefetch_place(v);
                 prefetch(&self.node_pos[v as usize]);
+                prefetch(&self.nodes[v as usize]);
             }
             1 => {
                 self.faces_of.prefetch_list(v);
-                prefetch(&self.valence[self.at_node(v)]);
+                let p = self.at_node(v);
+                prefetch(&self.valence[p]);
+                prefetch(&self.w.positions[p]);
             }
             _ => {
                 for &f in self.faces_of.of(v) {
@@ -259,15 +267,18 @@ impl Work<'_> {
     /// quadrics go first, so that the first release, which copies the wedges and their
     /// starts out of the welded mesh's lists, does so with the quadrics' memory given back.
     pub(super) fn release_removed_wedges(&mut self) {
-        let removed = &self.h.collapses[self.wedges_released..];
         let gone_at = |c: &Collapse| self.node_pos[c.u as usize] as usize;
-        let count: usize = removed
+        // The wedges of the pass's removed positions, counted once each.
+        let count: usize = self.h.collapses[self.pass_start..]
             .iter()
             .map(|c| self.wedges_at(gone_at(c)).len())
             .sum();
+        self.wedges_unreleased += count;
+        let count = self.wedges_unreleased;
         if count == 0 || RELEASE_PARTS * count < self.positions() {
             return;
         }
+        let removed = &self.h.collapses[self.wedges_released..];
         let mut gone = vec![false; self.positions()];
         for c in removed {
             gone[gone_at(c)] = true;
@@ -297,6 +308,7 @@ impl Work<'_> {
         };
         self.wedge_start = Cow::Owned(start);
         self.wedges_released = self.h.collapses.len();
+        self.wedges_unreleased = 0;
     }
 }
 
@@ -359,7 +371,7 @@ impl Work<'_> {
             std::mem::take(&mut self.stamp),
             std::mem::take(&mut self.shrunk),
             std::mem::take(&mut self.start_valence),
-            std::mem::take(&mut self.from_kept),
+            std::mem::take(&mut self.taken),
         ));
         let mut h = self.h;
         let nodes = self.nodes;
