@@ -6,7 +6,7 @@
 //! once they are applied) and the points' lists, never the mesh being simplified, so it runs
 //! while the pass goes on with its next collapses ([`super::pass`]).
 
-use super::geometry::{cross, dot, len, point_triangle_d2, sub, V3};
+use super::geometry::{cross, dot, len, point_triangle_d2_from, sub, V3};
 use super::handover::Handover;
 use super::prefetch::prefetch;
 use super::work::{centred, Work};
@@ -58,11 +58,11 @@ impl Probe {
     pub(super) fn d2_below(&self, x: V3, best: f64) -> Option<f64> {
         let ax = sub(x, self.a);
         let h = dot(ax, self.n);
+        if self.len2 > 0.0 && h * h >= best * self.len2 {
+            return None;
+        }
+        let (d20, d21) = (dot(self.ab, ax), dot(self.ac, ax));
         if self.len2 > 0.0 {
-            if h * h >= best * self.len2 {
-                return None;
-            }
-            let (d20, d21) = (dot(ax, self.ab), dot(ax, self.ac));
             // Barycentric coordinates of the projection, times `len2`.
             let v = self.d11 * d20 - self.d01 * d21;
             let w = self.d00 * d21 - self.d01 * d20;
@@ -71,7 +71,7 @@ impl Probe {
                 return (d < best).then_some(d);
             }
         }
-        let d = point_triangle_d2(x, self.a, self.b, self.c);
+        let d = point_triangle_d2_from(x, [self.a, self.b, self.c], [self.ab, self.ac], [d20, d21]);
         (d < best).then_some(d)
     }
 }

@@ -27,13 +27,27 @@ pub(super) fn norm(a: V3) -> V3 {
     }
 }
 
-/// Squared distance from `x` to the triangle `a b c` (Ericson, "Real-Time Collision
-/// Detection", 5.1.5: the closest point by the Voronoi region of `x`).
+/// Squared distance from `x` to the triangle `a b c` ([`point_triangle_d2_from`] with
+/// the edges and dot products computed here).
+#[cfg(test)]
 pub(super) fn point_triangle_d2(x: V3, a: V3, b: V3, c: V3) -> f64 {
+    let (ab, ac, ax) = (sub(b, a), sub(c, a), sub(x, a));
+    point_triangle_d2_from(x, [a, b, c], [ab, ac], [dot(ab, ax), dot(ac, ax)])
+}
+
+/// Squared distance from `x` to the triangle `a b c` (Ericson, "Real-Time Collision
+/// Detection", 5.1.5: the closest point by the Voronoi region of `x`), from the triangle's
+/// edges from `a`, `[ab, ac]`, and the dot products `[ab · ax, ac · ax]`, which a caller
+/// has already.
+#[inline]
+pub(super) fn point_triangle_d2_from(
+    x: V3,
+    [a, b, c]: [V3; 3],
+    [ab, ac]: [V3; 2],
+    [d1, d2_]: [f64; 2],
+) -> f64 {
     let d2 = |y: V3| dot(sub(x, y), sub(x, y));
     let along = |p: V3, s: f64, d: V3| [p[0] + s * d[0], p[1] + s * d[1], p[2] + s * d[2]];
-    let (ab, ac, ax) = (sub(b, a), sub(c, a), sub(x, a));
-    let (d1, d2_) = (dot(ab, ax), dot(ac, ax));
     if d1 <= 0.0 && d2_ <= 0.0 {
         return d2(a);
     }
