@@ -318,7 +318,7 @@ impl Quadrics {
     }
 }
 
-impl QuadricsMut<'_> {
+impl<'a> QuadricsMut<'a> {
     /// The same rows, for a shorter borrow.
     pub fn reborrow(&mut self) -> QuadricsMut<'_> {
         QuadricsMut {
@@ -349,23 +349,58 @@ impl QuadricsMut<'_> {
     /// [`Layout::only`]).
     #[inline]
     pub fn add(&mut self, i: usize, q: &Quadric) {
+        let mut row = [0.0; FIXED + 4 * M];
         let n = self.layout.stride();
-        let (fixed, attrs) = self.data[i * n..][..n].split_at_mut(FIXED);
-        let from = [
-            q.app[0], q.app[1], q.app[2], q.app[3], q.app[4], q.app[5], q.ass, q.bp[0], q.bp[1],
-            q.bp[2], q.c,
-        ];
-        for (t, f) in fixed.iter_mut().zip(from) {
+        q.write_row(self.layout, &mut row[..n]);
+        self.add_row(i, &row[..n]);
+    }
+
+    /// Adds a row of numbers of this layout ([`Quadric::write_row`]) to row `i`.
+    #[inline]
+    pub fn add_row(&mut self, i: usize, row: &[f64]) {
+        let n = self.layout.stride();
+        for (t, f) in self.data[i * n..][..n].iter_mut().zip(row) {
             *t += f;
         }
-        let kept = self.layout.attributes();
+    }
+
+    /// The rows one after the other, to fill.
+    pub fn rows(self) -> std::slice::ChunksExactMut<'a, f64> {
+        self.data.chunks_exact_mut(self.layout.stride())
+    }
+
+    /// The rows, to fill on the rayon pool.
+    pub fn par_rows(self) -> rayon::slice::ChunksExactMut<'a, f64> {
+        use rayon::slice::ParallelSliceMut;
+        self.data.par_chunks_exact_mut(self.layout.stride())
+    }
+}
+
+impl Quadric {
+    /// Writes the numbers of `layout`'s row for the quadric into `row` (the attributes the
+    /// layout holds; the others must be zero: [`Layout::only`]).
+    #[inline]
+    pub fn write_row(&self, layout: Layout, row: &mut [f64]) {
+        let (fixed, attrs) = row.split_at_mut(FIXED);
+        fixed.copy_from_slice(&[
+            self.app[0],
+            self.app[1],
+            self.app[2],
+            self.app[3],
+            self.app[4],
+            self.app[5],
+            self.ass,
+            self.bp[0],
+            self.bp[1],
+            self.bp[2],
+            self.c,
+        ]);
+        let kept = layout.attributes();
         let (aps, bs) = attrs.split_at_mut(3 * kept.len());
         for ((g, b), &j) in aps.chunks_exact_mut(3).zip(bs).zip(kept) {
             let j = usize::from(j);
-            for (t, f) in g.iter_mut().zip(q.aps[j]) {
-                *t += f;
-            }
-            *b += q.bs[j];
+            g.copy_from_slice(&self.aps[j]);
+            *b = self.bs[j];
         }
     }
 }

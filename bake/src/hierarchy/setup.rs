@@ -145,26 +145,35 @@ impl<'a> Setup<'a> {
     ) {
         let (w, p) = (self.w, &self.p);
         let nt = w.triangles.len();
+        let mut block = Quadrics::zeros(layout, QUADRIC_BLOCK.min(nt));
         for first in (0..nt).step_by(QUADRIC_BLOCK) {
             let n = (nt - first).min(QUADRIC_BLOCK);
-            let block = par_map(n, self.threads, |i| {
+            let fill = |(i, row): (usize, &mut [f64])| {
                 let t = &w.triangles[first + i];
                 let s = w
                     .corner_attributes(t)
                     .map(|a| layout.only(scaled_attributes(w, a, self.weights, self.diagonal)));
-                Quadric::triangle(t.p.map(|x| p[x as usize]), s)
-            });
+                Quadric::triangle(t.p.map(|x| p[x as usize]), s).write_row(layout, row);
+            };
+            if self.threads <= 1 || n < PARALLEL_MIN {
+                block.as_mut().rows().take(n).enumerate().for_each(fill);
+            } else {
+                let rows = block.as_mut().par_rows().take(n).enumerate();
+                rows.with_min_len(PARALLEL_MIN / 4).for_each(fill);
+            }
             by_positions(
                 &self.ranges,
                 wedge_start,
                 q.reborrow(),
                 |lo, hi, mut rows| {
-                    for (i, q) in block.iter().enumerate() {
+                    for i in 0..n {
                         let t = &w.triangles[first + i];
                         for &x in &t.p {
                             let x = x as usize;
                             if (lo..hi).contains(&x) {
-                                add_to_wedge(wedges, wedge_start, &mut rows, lo, x, t.group, q);
+                                if let Some(r) = wedge_row(wedges, wedge_start, lo, x, t.group) {
+                                    rows.add_row(r, block.row(i));
+                                }
                             }
                         }
                     }
@@ -229,7 +238,9 @@ impl<'a> Setup<'a> {
                 for &x in ends {
                     let x = x as usize;
                     if (lo..hi).contains(&x) {
-                        add_to_wedge(wedges, wedge_start, &mut rows, lo, x, *group, q);
+                        if let Some(r) = wedge_row(wedges, wedge_start, lo, x, *group) {
+                            rows.add(r, q);
+                        }
                     }
                 }
             }
@@ -387,19 +398,18 @@ pub(super) fn by_positions(
         .for_each(|(lo, hi, rows)| f(lo, hi, rows));
 }
 
-/// Adds `q` to the quadric of the wedge of `group` at position `x`, in `rows`, the
-/// quadrics of the wedges of the positions from `lo` on.
-pub(super) fn add_to_wedge(
+/// The row of the wedge of `group` at position `x` among the quadrics of the wedges of the
+/// positions from `lo` on, if `x` has one.
+fn wedge_row(
     wedges: &[Wedge],
     wedge_start: &[u32],
-    rows: &mut QuadricsMut<'_>,
     lo: usize,
     x: usize,
     group: u32,
-    q: &Quadric,
-) {
+) -> Option<usize> {
     let range = wedge_start[x] as usize..wedge_start[x + 1] as usize;
-    if let Some(i) = range.clone().find(|&i| wedges[i].0 == group) {
-        rows.add(i - wedge_start[lo] as usize, q);
-    }
+    range
+        .clone()
+        .find(|&i| wedges[i].0 == group)
+        .map(|i| i - wedge_start[lo] as usize)
 }
