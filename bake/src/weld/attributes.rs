@@ -7,6 +7,7 @@ use super::{Attributes, Repairs, GEOMETRIC_NORMAL_DEGREES, NONE};
 use crate::fxhash::hash_of;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 use hashbrown::hash_table::{Entry, HashTable};
+use rayon::prelude::*;
 
 pub(super) fn sub(a: [f32; 3], b: [f32; 3]) -> [f64; 3] {
     [
@@ -61,10 +62,10 @@ fn source(mesh: &Mesh, kept: &[Kept], corner: u32) -> [u64; 2] {
 
 /// The distinct attribute sets and each kept triangle's per corner.
 ///
-/// The corners are looked up by the first corner read from each source ([`FirstCorners`]:
-/// 8 bytes a normal or position, where a map from the sources would take 24), the distinct
-/// sets in a table of ids that hashes what they point at (4 bytes an entry, where a map from
-/// their 36-byte keys would take 40). On a mesh with a set per position these are the weld's
+/// The corners are looked up by their sources ([`FirstCorners`]: 12 bytes a normal or
+/// position, where a map from the sources would take 24), the distinct sets in a table of
+/// ids that hashes what they point at (4 bytes an entry, where a map from their 36-byte keys
+/// would take 40). On a mesh with a set per position these are the weld's
 /// largest temporaries.
 pub(super) fn corner_attributes(
     mesh: &Mesh,
@@ -118,15 +119,20 @@ pub(super) fn corner_attributes(
     (attributes, tri_attrs)
 }
 
-/// The first corner read from each source with its attribute id (`(corner, id)`): a source
-/// is found by its normal's index, or, for a normal computed here, by its position, in an
-/// array; the sources that share that index with an earlier one (another UV or colour) in a
-/// table that hashes what its corners' sources are rather than storing them.
+/// The attribute id of each source: a source is found by its normal's index, or, for a
+/// normal computed here, by its position, in an array whose entry holds the id and the rest
+/// of the first source found there (its UV's and colour's indices); the sources that share
+/// that index with an earlier one (another UV or colour) are in a table that holds their
+/// first corner and hashes what its source is rather than storing it.
 struct FirstCorners {
-    by_normal: Vec<(u32, u32)>,
-    by_position: Vec<(u32, u32)>,
+    by_normal: Vec<Slot>,
+    by_position: Vec<Slot>,
     more: HashTable<(u32, u32)>,
 }
+
+/// An array entry of [`FirstCorners`]: the id, and the UV's and colour's indices of the
+/// source (`[NONE; 3]`: empty).
+type Slot = [u32; 3];
 
 impl FirstCorners {
     fn new() -> Self {
@@ -137,16 +143,15 @@ impl FirstCorners {
         }
     }
 
-    /// The array entry of source `src`, the array made on first use (`(NONE, NONE)`:
-    /// empty).
-    fn slot(&mut self, mesh: &Mesh, positions: usize, src: [u64; 2]) -> &mut (u32, u32) {
+    /// The array entry of source `src`, the array made on first use.
+    fn slot(&mut self, mesh: &Mesh, positions: usize, src: [u64; 2]) -> &mut Slot {
         let (array, len) = if src[0] >> 32 == 0 {
             (&mut self.by_normal, mesh.normals.len())
         } else {
             (&mut self.by_position, positions)
         };
         if array.is_empty() {
-            array.resize(len, (NONE, NONE));
+            array.resize(len, [NONE; 3]);
         }
         &mut array[src[0] as u32 as usize]
     }
@@ -161,14 +166,15 @@ impl FirstCorners {
         (corner, src): (u32, [u64; 2]),
         new: impl FnOnce() -> u32,
     ) -> u32 {
+        let rest = [(src[1] >> 32) as u32, src[1] as u32];
         let slot = self.slot(mesh, positions, src);
-        if slot.0 == NONE {
+        if slot[0] == NONE {
             let id = new();
-            *slot = (corner, id);
+            *slot = [id, rest[0], rest[1]];
             return id;
         }
-        if source(mesh, kept, slot.0) == src {
-            return slot.1;
+        if slot[1..] == rest {
+            return slot[0];
         }
         let entry = self.more.entry(
             hash_of(&src),
@@ -210,17 +216,33 @@ fn distinct_id(
     }
 }
 
-/// The area-weighted normal of every position (unnormalised).
+/// The area-weighted normal of every position (unnormalised). The positions are split
+/// into a range per thread, each summing its positions' triangles in triangle order, so
+/// the sums do not depend on the threads.
 fn area_normals(kept: &[Kept], positions: &[[f32; 3]]) -> Vec<[f64; 3]> {
     let mut computed = vec![[0f64; 3]; positions.len()];
-    for &(p, _) in kept {
-        let [a, b, c] = p.map(|x| positions[x as usize]);
-        let n = cross(sub(b, a), sub(c, a));
-        for &v in &p {
-            for k in 0..3 {
-                computed[v as usize][k] += n[k];
+    let per = positions
+        .len()
+        .div_ceil(rayon::current_num_threads())
+        .max(1 << 16);
+    computed
+        .par_chunks_mut(per)
+        .enumerate()
+        .for_each(|(i, sums)| {
+            let range = (i * per) as u32..(i * per + sums.len()) as u32;
+            for &(p, _) in kept {
+                if !p.iter().any(|v| range.contains(v)) {
+                    continue;
+                }
+                let [a, b, c] = p.map(|x| positions[x as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                for v in p.iter().filter(|v| range.contains(v)) {
+                    let sum = &mut sums[(v - range.start) as usize];
+                    for k in 0..3 {
+                        sum[k] += n[k];
+                    }
+                }
             }
-        }
-    }
+        });
     computed
 }

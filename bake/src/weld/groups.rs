@@ -7,6 +7,7 @@ use super::repair::Kept;
 use super::{ek, VertexLists, NONE};
 use crate::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
+use rayon::prelude::*;
 
 /// The surface groups of the kept triangles.
 pub(super) struct Groups {
@@ -31,7 +32,12 @@ pub(super) fn grow_groups(
     positions: usize,
 ) -> Groups {
     let nt = kept.len();
-    let surface = |f: usize| mesh.triangles[kept[f].1 as usize].surface;
+    // Each triangle's surface, read at random as the groups grow.
+    let surfaces: Vec<u16> = kept
+        .par_iter()
+        .map(|&(_, i)| mesh.triangles[i as usize].surface)
+        .collect();
+    let surface = |f: usize| surfaces[f];
     let corner_attr = |f: usize, v: u32| {
         let k = kept[f].0.iter().position(|&x| x == v).unwrap_or(0);
         tri_attrs[f][k]
