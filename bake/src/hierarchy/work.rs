@@ -266,6 +266,7 @@ impl Work<'_> {
     /// grows; a release goes through every position, so there are at most that many. The
     /// quadrics go first, so that the first release, which copies the wedges and their
     /// starts out of the welded mesh's lists, does so with the quadrics' memory given back.
+    /// Runs at the end of every pass, whose collapses (from [`Work::pass_start`]) it counts.
     pub(super) fn release_removed_wedges(&mut self) {
         let gone_at = |c: &Collapse| self.node_pos[c.u as usize] as usize;
         // The wedges of the pass's removed positions, counted once each.
