@@ -68,7 +68,8 @@ impl Stars {
         self.len.reserve_exact(more);
     }
 
-    /// Starts loading where node `v`'s list is (a hint, for [`Work::prefetch_around`]).
+    /// Starts loading where node `v`'s list is (a hint, for
+    /// [`super::work::Work::prefetch_around`]).
     #[inline]
     pub(super) fn prefetch_place(&self, v: u32) {
         prefetch(&self.start[v as usize]);
