@@ -407,9 +407,7 @@ fn wedge_row(
     x: usize,
     group: u32,
 ) -> Option<usize> {
-    let range = wedge_start[x] as usize..wedge_start[x + 1] as usize;
-    range
-        .clone()
+    (wedge_start[x] as usize..wedge_start[x + 1] as usize)
         .find(|&i| wedges[i].0 == group)
         .map(|i| i - wedge_start[lo] as usize)
 }
