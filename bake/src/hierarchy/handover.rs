@@ -92,7 +92,7 @@ impl Work<'_> {
             at: node_pos[c.t as usize],
             was: node_pos[c.u as usize],
             start,
-            kept: kept.min(star.len()) as u32,
+            kept: kept as u32,
             star: star.len() as u32,
             dying: taken.tris.len() as u32 - start - star.len() as u32,
         });

@@ -62,7 +62,7 @@ fn source(mesh: &Mesh, kept: &[Kept], corner: u32) -> [u64; 2] {
 
 /// The distinct attribute sets and each kept triangle's per corner.
 ///
-/// The corners are looked up by their sources ([`FirstCorners`]: 12 bytes a normal or
+/// The corners are looked up by their sources ([`SourceIds`]: 12 bytes a normal or
 /// position, where a map from the sources would take 24), the distinct sets in a table of
 /// ids that hashes what they point at (4 bytes an entry, where a map from their 36-byte keys
 /// would take 40). On a mesh with a set per position these are the weld's
@@ -76,7 +76,7 @@ pub(super) fn corner_attributes(
     let computed = area_normals(kept, positions);
     let min_cos = GEOMETRIC_NORMAL_DEGREES.to_radians().cos();
     let mut by_value: HashTable<u32> = HashTable::new();
-    let mut first = FirstCorners::new();
+    let mut first = SourceIds::new();
     let mut attributes: Vec<Attributes> = Vec::new();
     let mut tri_attrs: Vec<[u32; 3]> = Vec::with_capacity(kept.len());
     for (f, &(p, i)) in kept.iter().enumerate() {
@@ -124,17 +124,17 @@ pub(super) fn corner_attributes(
 /// of the first source found there (its UV's and colour's indices); the sources that share
 /// that index with an earlier one (another UV or colour) are in a table that holds their
 /// first corner and hashes what its source is rather than storing it.
-struct FirstCorners {
+struct SourceIds {
     by_normal: Vec<Slot>,
     by_position: Vec<Slot>,
     more: HashTable<(u32, u32)>,
 }
 
-/// An array entry of [`FirstCorners`]: the id, and the UV's and colour's indices of the
+/// An array entry of [`SourceIds`]: the id, and the UV's and colour's indices of the
 /// source (`[NONE; 3]`: empty).
 type Slot = [u32; 3];
 
-impl FirstCorners {
+impl SourceIds {
     fn new() -> Self {
         Self {
             by_normal: Vec::new(),
@@ -217,8 +217,8 @@ fn distinct_id(
 }
 
 /// The area-weighted normal of every position (unnormalised). The positions are split
-/// into a range per thread, each summing its positions' triangles in triangle order, so
-/// the sums do not depend on the threads.
+/// into a range per thread, each going through all the triangles and summing those at its
+/// positions in triangle order, so the sums do not depend on the threads.
 fn area_normals(kept: &[Kept], positions: &[[f32; 3]]) -> Vec<[f64; 3]> {
     let mut computed = vec![[0f64; 3]; positions.len()];
     let per = positions
