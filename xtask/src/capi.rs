@@ -15,7 +15,7 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::{cmd, run, succeeds, workspace_root};
+use crate::process::{cmd, run, show, succeeds, workspace_root};
 
 /// The mesh the C programs refine (baked on the fly).
 const INPUT: &str = "data/spot/spot_triangulated.obj";
@@ -81,7 +81,7 @@ pub fn write_header() -> Result<(), String> {
 
 /// Runs `c`, echoing it, and returns its standard output; `Err` on a non-zero exit.
 fn output(mut c: Command) -> Result<String, String> {
-    let shown = crate::show(&c);
+    let shown = show(&c);
     println!("$ {shown}");
     let out = c
         .output()
@@ -141,8 +141,33 @@ fn coords(p: [f32; 3]) -> Vec<String> {
     p.iter().map(|x| x.to_string()).collect()
 }
 
+/// What the step builds and bakes: the library, the CLI, Spot's two files and the C and C++
+/// programs.
+struct Built {
+    root: PathBuf,
+    dir: PathBuf,
+    library: PathBuf,
+    cli: PathBuf,
+    clod: PathBuf,
+    octree_clod: PathBuf,
+    refine_c: PathBuf,
+    arena_c: PathBuf,
+    test_cpp: PathBuf,
+}
+
 /// The step of `cargo xtask test`.
 pub fn check() -> Result<(), String> {
+    let b = build_library_and_cli()?;
+    bake_spot(&b)?;
+    compile_programs(&b)?;
+    compile_doc_snippets(&b)?;
+    let counts = refine_c_against_the_cli(&b)?;
+    run_cpp_test(&b, &counts)?;
+    arena_c_against_its_twin(&b)
+}
+
+/// Builds the static library and the `caveclod` binary (debug).
+fn build_library_and_cli() -> Result<Built, String> {
     let root = workspace_root();
     let dir = env::temp_dir().join("caveclod-capi-check");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -152,65 +177,146 @@ pub fn check() -> Result<(), String> {
         &["build", "-p", "caveclod-cli", "--bin", "caveclod"],
     ))?;
     let debug = target_dir().join("debug");
-    let library = debug.join("libcaveclod.a");
-    let cli = debug.join("caveclod");
-    let clod = dir.join("spot.clod");
-    let mut bake = Command::new(&cli);
-    bake.arg("bake").arg(root.join(INPUT)).arg("-o").arg(&clod);
-    run(bake)?;
-    let octree_clod = dir.join("spot-ooc.clod");
-    let mut bake = Command::new(&cli);
-    bake.arg("bake")
-        .arg(root.join(INPUT))
-        .arg("-o")
-        .arg(&octree_clod)
-        .arg("--out-of-core");
-    run(bake)?;
+    Ok(Built {
+        library: debug.join("libcaveclod.a"),
+        cli: debug.join("caveclod"),
+        clod: dir.join("spot.clod"),
+        octree_clod: dir.join("spot-ooc.clod"),
+        refine_c: dir.join("refine"),
+        arena_c: dir.join("arena"),
+        test_cpp: dir.join("capi_test"),
+        root,
+        dir,
+    })
+}
 
-    let c99 = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1"];
-    let (refine_c, arena_c, test_cpp) =
-        (dir.join("refine"), dir.join("arena"), dir.join("capi_test"));
+/// Bakes Spot in core and out of core (the octree's file).
+fn bake_spot(b: &Built) -> Result<(), String> {
+    let mut bake = Command::new(&b.cli);
+    bake.arg("bake")
+        .arg(b.root.join(INPUT))
+        .arg("-o")
+        .arg(&b.clod);
+    run(bake)?;
+    let mut bake = Command::new(&b.cli);
+    bake.arg("bake")
+        .arg(b.root.join(INPUT))
+        .arg("-o")
+        .arg(&b.octree_clod)
+        .arg("--out-of-core");
+    run(bake)
+}
+
+/// The C99 flags of every C program and snippet.
+const C99: [&str; 5] = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1"];
+
+/// Compiles the C examples and the C++ test (under the sanitizers where they link).
+fn compile_programs(b: &Built) -> Result<(), String> {
+    let examples = b.root.join("capi/examples");
     compile(
         "cc",
-        &c99,
-        &root.join("capi/examples/refine.c"),
-        &library,
-        &refine_c,
+        &C99,
+        &examples.join("refine.c"),
+        &b.library,
+        &b.refine_c,
     )?;
     compile(
         "cc",
-        &c99,
-        &root.join("capi/examples/arena.c"),
-        &library,
-        &arena_c,
+        &C99,
+        &examples.join("arena.c"),
+        &b.library,
+        &b.arena_c,
     )?;
     let mut cpp = vec!["-std=c++17", "-Wall", "-Wextra", "-Werror", "-O1", "-g"];
-    if sanitizers_work(&dir) {
+    if sanitizers_work(&b.dir) {
         cpp.extend(["-fsanitize=address,undefined", "-fno-sanitize-recover=all"]);
     } else {
         println!(
             "c++ cannot build with -fsanitize=address,undefined here: the C++ test runs without"
         );
     }
-    compile(
-        "c++",
-        &cpp,
-        &root.join("capi/tests/capi_test.cpp"),
-        &library,
-        &test_cpp,
-    )?;
+    let test = b.root.join("capi/tests/capi_test.cpp");
+    compile("c++", &cpp, &test, &b.library, &b.test_cpp)
+}
 
-    // refine.c against `caveclod refine --json`, view by view.
+/// Compiles every C snippet of README.md and `docs/*.md` (a fenced block marked `c`, a
+/// whole translation unit) against the header, as an object file: a snippet cannot drift
+/// from the interface.
+fn compile_doc_snippets(b: &Built) -> Result<(), String> {
+    let mut pages = vec![b.root.join("README.md")];
+    if let Ok(entries) = std::fs::read_dir(b.root.join("docs")) {
+        let mut found: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "md"))
+            .collect();
+        found.sort();
+        pages.extend(found);
+    }
+    let include = b.root.join("capi/include");
+    let mut compiled = 0;
+    for page in pages {
+        let text =
+            std::fs::read_to_string(&page).map_err(|e| format!("{}: {e}", page.display()))?;
+        for (k, (line, snippet)) in c_snippets(&text).into_iter().enumerate() {
+            let name = page
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            let src = b.dir.join(format!("snippet-{name}-{k}.c"));
+            std::fs::write(&src, snippet).map_err(|e| format!("{}: {e}", src.display()))?;
+            let mut c = cmd("cc", &C99);
+            c.arg("-c")
+                .arg("-I")
+                .arg(&include)
+                .arg(&src)
+                .arg("-o")
+                .arg(src.with_extension("o"));
+            run(c).map_err(|e| {
+                format!(
+                    "{}:{line}: the C snippet does not compile: {e}",
+                    page.display()
+                )
+            })?;
+            compiled += 1;
+        }
+    }
+    println!("{compiled} C snippets of the docs compiled");
+    Ok(())
+}
+
+/// The fenced blocks marked `c` in a Markdown text, with the line each starts on.
+pub fn c_snippets(markdown: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut open: Option<(usize, String)> = None;
+    for (i, line) in markdown.lines().enumerate() {
+        let fence = line.trim_start().starts_with("```");
+        match (&mut open, fence) {
+            (None, true) if line.trim() == "```c" => open = Some((i + 1, String::new())),
+            (Some(_), true) => out.extend(open.take()),
+            (Some((_, text)), false) => {
+                text.push_str(line);
+                text.push('\n');
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The Rust API's counts of one view: eye, target, active polygons and indices.
+type Counts = Vec<(Vec<String>, Vec<String>, u64, u64)>;
+
+/// `refine.c` must print exactly what `caveclod refine --json` prints, view by view.
+fn refine_c_against_the_cli(b: &Built) -> Result<Counts, String> {
     let mut rust_counts = Vec::new();
     for [eye, target] in VIEWS {
         let (e, t) = (coords(eye), coords(target));
-        let mut c_run = Command::new(&refine_c);
-        c_run.arg(&clod).args(&e).args(&t);
+        let mut c_run = Command::new(&b.refine_c);
+        c_run.arg(&b.clod).args(&e).args(&t);
         let from_c = output(c_run)?;
-        let mut rust_run = Command::new(&cli);
+        let mut rust_run = Command::new(&b.cli);
         rust_run
             .arg("refine")
-            .arg(&clod)
+            .arg(&b.clod)
             .arg(format!("--eye={}", e.join(",")))
             .arg(format!("--target={}", t.join(",")))
             .arg("--json");
@@ -225,23 +331,29 @@ pub fn check() -> Result<(), String> {
         let indices = field(&from_rust, "indices").ok_or("no indices")?;
         rust_counts.push((e, t, polygons, indices));
     }
+    Ok(rust_counts)
+}
 
-    // The C++ test, with the Rust API's counts of its two views.
-    let mut test = Command::new(&test_cpp);
-    test.arg(&clod);
-    for (e, t, polygons, indices) in rust_counts.iter().take(2) {
+/// The C++ test, with the Rust API's counts of its two views.
+fn run_cpp_test(b: &Built, counts: &Counts) -> Result<(), String> {
+    let mut test = Command::new(&b.test_cpp);
+    test.arg(&b.clod);
+    for (e, t, polygons, indices) in counts.iter().take(2) {
         test.args(e)
             .args(t)
             .arg(polygons.to_string())
             .arg(indices.to_string());
     }
-    test.arg(root.join(OTHER)).arg(&octree_clod);
+    test.arg(b.root.join(OTHER)).arg(&b.octree_clod);
     print!("{}", output(test)?);
+    Ok(())
+}
 
-    // arena.c against its Rust twin, then with an arena too small for the file.
+/// `arena.c` against its Rust twin, then with an arena too small for the file.
+fn arena_c_against_its_twin(b: &Built) -> Result<(), String> {
     let (e, t) = (coords(VIEWS[0][0]), coords(VIEWS[0][1]));
-    let mut c_run = Command::new(&arena_c);
-    c_run.arg(&clod).args(&e).args(&t).arg(BUDGET);
+    let mut c_run = Command::new(&b.arena_c);
+    c_run.arg(&b.clod).args(&e).args(&t).arg(BUDGET);
     let from_c = output(c_run)?;
     let mut twin = cmd(
         "cargo",
@@ -255,7 +367,7 @@ pub fn check() -> Result<(), String> {
             "--",
         ],
     );
-    twin.arg(&clod).args(&e).args(&t).arg(BUDGET);
+    twin.arg(&b.clod).args(&e).args(&t).arg(BUDGET);
     let from_rust = output(twin)?;
     print!("arena.c:     {from_c}fixed_arena: {from_rust}");
     for key in ["active_polygons", "indices", "surfaces"] {
@@ -266,9 +378,9 @@ pub fn check() -> Result<(), String> {
     if field(&from_c, "active_polygons").is_none_or(|p| p > BUDGET.parse::<u64>().unwrap_or(0)) {
         return Err("arena.c went over its polygon budget".into());
     }
-    let mut small = Command::new(&arena_c);
-    small.arg(&clod).args(&e).args(&t).arg(BUDGET).arg("4096");
-    let shown = crate::show(&small);
+    let mut small = Command::new(&b.arena_c);
+    small.arg(&b.clod).args(&e).args(&t).arg(BUDGET).arg("4096");
+    let shown = show(&small);
     let out = small
         .output()
         .map_err(|e| format!("could not start `{shown}`: {e}"))?;
@@ -281,4 +393,21 @@ pub fn check() -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn c_snippets_are_the_blocks_marked_c() {
+        let md = "text\n```c\nint a;\n```\n```rust\nfn f() {}\n```\n```c\nint b;\nint c;\n```\n";
+        assert_eq!(
+            c_snippets(md),
+            vec![
+                (2, "int a;\n".to_string()),
+                (8, "int b;\nint c;\n".to_string())
+            ]
+        );
+    }
 }

@@ -26,23 +26,23 @@
 //! Only std: the tool must build before anything else is installed.
 
 mod capi;
+mod demo;
+mod graph;
+mod limits;
+mod process;
 mod setup;
 mod shader_manifest;
+mod shaders;
 mod test;
 
-use setup::{find_in_path, install_vulkan_packages, setup};
-use test::test;
-
 use std::env;
-use std::ffi::OsStr;
-use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, ExitCode};
+use std::process::ExitCode;
 
-/// The nightly that miri runs on; pinned so a miri or nightly change cannot break CI.
-const NIGHTLY: &str = "nightly-2026-08-15";
-/// A target without `std`: building the core crate for it proves it is `no_std`.
-const NO_STD_TARGET: &str = "thumbv7em-none-eabihf";
+use demo::demo;
+use process::workspace_root;
+use setup::setup;
+use shaders::check_shaders;
+use test::test;
 
 const USAGE: &str = "\
 usage: cargo xtask <command>
@@ -57,6 +57,10 @@ commands:
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   capi-header           write capi/include/caveclod.h from the caveclod-capi sources
   capi-check            test's C interface step alone
+  limits                README < 200 lines, ARCHITECTURE < 150, src files < 800, functions
+                        <= 120 lines, no figures or history in src comments, no import
+                        circle in any crate (test runs it)
+  graph                 each crate's modules in layers, bottom first, and any circle
   demo [ARGS..]         setup's Vulkan packages, then
                         cargo run --release -p caveclod-cli --bin caveclod -- demo ARGS
 ";
@@ -75,6 +79,8 @@ fn main() -> ExitCode {
         "check-shaders" => parse_flags(rest, &[]).and_then(|_| check_shaders()),
         "capi-header" => parse_flags(rest, &[]).and_then(|_| capi::write_header()),
         "capi-check" => parse_flags(rest, &[]).and_then(|_| capi::check()),
+        "limits" => parse_flags(rest, &[]).and_then(|_| limits::check(&workspace_root())),
+        "graph" => parse_flags(rest, &[]).and_then(|_| print_graph()),
         "demo" => demo(rest),
         "help" | "--help" | "-h" => {
             print!("{USAGE}");
@@ -91,6 +97,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// Prints every crate's module layers and circles (`cargo xtask graph`).
+fn print_graph() -> Result<(), String> {
+    let crates = graph::workspace_crates(&workspace_root())?;
+    let mut problems = 0;
+    for g in &crates {
+        print!("{}", graph::report::describe(g));
+        problems += graph::problems(g).len();
+    }
+    if problems == 0 {
+        Ok(())
+    } else {
+        Err(format!("{problems} circle(s)"))
+    }
+}
+
 /// The flags given, each checked against `known`.
 fn parse_flags<'a>(args: &'a [String], known: &[&str]) -> Result<Vec<&'a str>, String> {
     args.iter()
@@ -102,203 +123,4 @@ fn parse_flags<'a>(args: &'a [String], known: &[&str]) -> Result<Vec<&'a str>, S
             }
         })
         .collect()
-}
-
-/// The workspace root: the parent of this package's directory.
-fn workspace_root() -> PathBuf {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    manifest.parent().unwrap_or(manifest).to_path_buf()
-}
-
-/// A command run from the workspace root, with the variables that `cargo run` and the
-/// rustup proxy set for this process removed, so a nested `cargo +toolchain` picks its own
-/// toolchain and tools.
-fn cmd(program: &str, args: &[&str]) -> Command {
-    let mut c = Command::new(program);
-    c.args(args).current_dir(workspace_root());
-    for var in [
-        "RUSTUP_TOOLCHAIN",
-        "RUSTC",
-        "RUSTDOC",
-        "CARGO",
-        "RUSTC_WRAPPER",
-    ] {
-        c.env_remove(var);
-    }
-    c
-}
-
-/// Runs a command, echoing it; `Err` names it if it cannot start or exits non-zero.
-fn run(mut c: Command) -> Result<(), String> {
-    let shown = show(&c);
-    println!("$ {shown}");
-    let status = c
-        .status()
-        .map_err(|e| format!("could not start `{shown}`: {e}"))?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(format!("`{shown}` failed ({status})"))
-    }
-}
-
-/// `true` if the command starts and exits 0; its output is discarded.
-fn succeeds(mut c: Command) -> bool {
-    c.stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-fn show(c: &Command) -> String {
-    let mut s = c.get_program().to_string_lossy().into_owned();
-    for a in c.get_args() {
-        s.push(' ');
-        s.push_str(&a.to_string_lossy());
-    }
-    s
-}
-
-// ---------------------------------------------------------------------------------------
-// check-shaders
-
-/// Checks the committed shader module against the sources and `spirv-val` (see the module
-/// docs); every problem found is reported, not just the first.
-fn check_shaders() -> Result<(), String> {
-    use shader_manifest::{
-        entry_points, manifest_field, manifest_json, source_hash, MANIFEST_FILE, MODULE_FILE,
-        REBUILD_COMMAND, SPIRV_DIR,
-    };
-    let root = workspace_root();
-    let dir = root.join(SPIRV_DIR);
-    let manifest_path = format!("{SPIRV_DIR}/{MANIFEST_FILE}");
-    let module_path = format!("{SPIRV_DIR}/{MODULE_FILE}");
-    let rebuild = format!("run `{REBUILD_COMMAND}` and commit {SPIRV_DIR}");
-    let manifest = fs::read_to_string(dir.join(MANIFEST_FILE))
-        .map_err(|e| format!("reading {manifest_path}: {e}; {rebuild}"))?;
-    let mut problems = Vec::new();
-
-    let current = source_hash(&root).map_err(|e| format!("hashing the shader sources: {e}"))?;
-    let recorded = manifest_field(&manifest, "source_hash").unwrap_or_default();
-    if recorded == current {
-        println!("shader source hash {current} matches {manifest_path}");
-    } else {
-        problems.push(format!(
-            "the shader sources changed since {SPIRV_DIR} was built (manifest hash \
-             {recorded:?}, sources {current}): {rebuild}"
-        ));
-    }
-
-    // The manifest must be exactly what the builder writes for this module.
-    match fs::read(dir.join(MODULE_FILE))
-        .map_err(|e| e.to_string())
-        .and_then(|bytes| entry_points(&bytes))
-    {
-        Err(e) => problems.push(format!("{module_path}: {e}; {rebuild}")),
-        Ok(entries) => {
-            let expected = manifest_json(
-                MODULE_FILE,
-                &entries,
-                &recorded,
-                &manifest_field(&manifest, "toolchain").unwrap_or_default(),
-                &manifest_field(&manifest, "spirv_builder").unwrap_or_default(),
-            );
-            if manifest != expected {
-                problems.push(format!(
-                    "{manifest_path} does not describe {module_path} (entry points {entries:?}): \
-                     {rebuild}"
-                ));
-            }
-        }
-    }
-
-    let Some(spirv_val) = find_in_path("spirv-val") else {
-        problems.push(
-            "spirv-val not found: run `cargo xtask setup` (Debian package spirv-tools)".to_string(),
-        );
-        return Err(problems.join("\n"));
-    };
-    let mut modules: Vec<PathBuf> = fs::read_dir(&dir)
-        .map_err(|e| format!("reading {SPIRV_DIR}: {e}"))?
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.extension() == Some(OsStr::new("spv")))
-        .collect();
-    modules.sort();
-    for module in &modules {
-        let mut c = cmd(&spirv_val.to_string_lossy(), &["--target-env", "vulkan1.2"]);
-        c.arg(module);
-        if let Err(e) = run(c) {
-            problems.push(e);
-        }
-    }
-    if problems.is_empty() {
-        Ok(())
-    } else {
-        Err(problems.join("\n"))
-    }
-}
-
-// ---------------------------------------------------------------------------------------
-// demo
-
-fn demo(args: &[String]) -> Result<(), String> {
-    // The pictures need a Vulkan driver: install it as `setup` does, or say how, and let the
-    // demo keep its CPU figures without it.
-    if let Err(e) = install_vulkan_packages() {
-        eprintln!("xtask demo: no pictures without a Vulkan driver: {e}");
-    }
-    let mut c = cmd(
-        "cargo",
-        &[
-            "run",
-            "--release",
-            "-p",
-            "caveclod-cli",
-            "--bin",
-            "caveclod",
-            "--",
-            "demo",
-        ],
-    );
-    c.args(args);
-    run(c)?;
-    let out = args
-        .iter()
-        .position(|a| a == "--out")
-        .and_then(|i| args.get(i + 1))
-        .map_or_else(|| PathBuf::from("out"), PathBuf::from);
-    update_readme_results(&out.join("results.md"))
-}
-
-const RESULTS_BEGIN: &str = "<!-- results:begin -->";
-const RESULTS_END: &str = "<!-- results:end -->";
-
-/// Puts the demo's results table into README.md between the results markers (through a
-/// temporary file and a rename), so the README's table is always one the demo wrote.
-fn update_readme_results(results: &Path) -> Result<(), String> {
-    let table = fs::read_to_string(results).map_err(|e| format!("{}: {e}", results.display()))?;
-    let readme = Path::new("README.md");
-    let text = fs::read_to_string(readme).map_err(|e| format!("README.md: {e}"))?;
-    let (Some(begin), Some(end)) = (text.find(RESULTS_BEGIN), text.find(RESULTS_END)) else {
-        return Err(format!(
-            "README.md: no {RESULTS_BEGIN} ... {RESULTS_END} block"
-        ));
-    };
-    if end < begin {
-        return Err(format!(
-            "README.md: {RESULTS_END} comes before {RESULTS_BEGIN}"
-        ));
-    }
-    let updated = format!(
-        "{}{RESULTS_BEGIN}\n{}{}",
-        &text[..begin],
-        table.trim_end().to_string() + "\n",
-        &text[end..]
-    );
-    let temp = readme.with_extension("md.tmp");
-    fs::write(&temp, updated).map_err(|e| format!("{}: {e}", temp.display()))?;
-    fs::rename(&temp, readme).map_err(|e| format!("README.md: {e}"))?;
-    println!("README.md: results table from {}", results.display());
-    Ok(())
 }

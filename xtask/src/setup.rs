@@ -8,7 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::{cmd, run, succeeds, NIGHTLY, NO_STD_TARGET};
+use crate::process::{cmd, run, succeeds, NIGHTLY, NO_STD_TARGET};
 
 /// Debian packages that provide the Vulkan pieces `setup` checks for, and the X server
 /// and client libraries the viewer's window check runs with.

@@ -4,8 +4,11 @@
 use std::env;
 use std::time::{Duration, Instant};
 
+use crate::capi;
+use crate::limits;
+use crate::process::{cmd, run, workspace_root, NIGHTLY, NO_STD_TARGET};
 use crate::setup::{install_miri, miri_installed, setup};
-use crate::{capi, check_shaders, cmd, run, NIGHTLY, NO_STD_TARGET};
+use crate::shaders::check_shaders;
 
 /// The mesh the viewer check opens (baked on the fly; its material names its texture) and
 /// the image it writes.
@@ -29,6 +32,12 @@ fn test_steps() -> Vec<(String, Step)> {
         (
             "check-shaders (manifest hash, spirv-val)".to_string(),
             Box::new(check_shaders),
+        ),
+        (
+            "limits (README < 200 lines, ARCHITECTURE < 150, src files < 800, functions <= 120, \
+             no figures or history in src comments, no import circle in any crate)"
+                .to_string(),
+            Box::new(|| limits::check(&workspace_root())),
         ),
         step(
             "cargo fmt --all -- --check",
