@@ -133,9 +133,11 @@ impl CrateGraph {
                 _ => {
                     let mut child = m.clone();
                     child.push(seg.clone());
-                    if let Some((file, _)) = self.modules.get(&child) {
+                    if self.modules.contains_key(&child) {
+                        // A path that ends at a module names no item: a field or a local
+                        // of the same name, or a module used through a longer path.
                         if k + 1 == segments.len() {
-                            return Some((*file, seg.clone()));
+                            return None;
                         }
                         m = child;
                         continue;
