@@ -13,10 +13,10 @@
 
 mod arrays;
 pub mod baked;
+mod base;
 pub mod blocked;
 pub mod clod_file;
 pub mod export;
-mod fxhash;
 pub mod gmesh;
 pub mod hierarchy;
 pub mod import;

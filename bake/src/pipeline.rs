@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use caveclod_core::format::ExtraSection;
 
-use crate::baked::{BakeWriteError, Baked};
+use crate::baked::Baked;
+pub use crate::base::progress::Stage;
+use crate::clod_file::BakeWriteError;
 use crate::hierarchy::{self, AttributeWeights};
 use crate::import::{self, ImportError, ImportOptions};
 use crate::mesh::{Mesh, Surface};
@@ -42,19 +44,6 @@ pub enum BakeError {
     /// The baked arrays did not validate (a baker bug).
     #[error("internal error: the baked hierarchy does not validate: {0}")]
     Invalid(caveclod_core::FormatError),
-}
-
-/// Stages of a bake, for progress reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Reading the input.
-    Import,
-    /// Welding and grouping.
-    Weld,
-    /// Collapsing: `(done, at most)`.
-    Collapse(u64, u64),
-    /// Assembling the arrays.
-    Assemble,
 }
 
 /// The directory a source file's relative paths (its textures) start from.

@@ -9,8 +9,8 @@ use std::time::Instant;
 use caveclod_core::format::ExtraSection;
 
 use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
-use crate::baked::{BakeWriteError, Baked};
-use crate::clod_file::Inspect;
+use crate::baked::Baked;
+use crate::clod_file::{BakeWriteError, Inspect};
 use crate::hierarchy::AttributeWeights;
 use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};

@@ -5,9 +5,8 @@
 use caveclod_core::format::{Position, Vertex, VertexKey};
 use caveclod_core::SurfaceGroupId;
 
-use crate::baked::BakeWriteError;
-use crate::clod_file::{Sections, CHUNK_RECORDS as CHUNK};
-use crate::materials::encode_colour;
+use crate::base::colour::encode_colour;
+use crate::clod_file::{BakeWriteError, Sections, CHUNK_RECORDS as CHUNK};
 use crate::weld::Attributes;
 use crate::weld_store::{StoredTri, WeldedStore};
 

@@ -19,8 +19,10 @@ use caveclod_core::{NodeId, PositionId, SurfaceGroupId, SurfaceId};
 use super::spill::{Record, Spilled};
 use super::store_arrays::{self, Gathered};
 use crate::arrays::{self, Counts, MeshCounts, PolygonOrder};
-use crate::baked::{section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK};
+use crate::baked::section_specs;
+use crate::clod_file::{
+    write_sections, BakeWriteError, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK,
+};
 use crate::mesh::Surface;
 use crate::streamed::Appearance;
 use crate::weld_store::{StoredTri, WeldedStore};

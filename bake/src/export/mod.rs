@@ -5,9 +5,12 @@
 mod materials;
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use caveclod_core::{Hierarchy, NodeId};
+
+use crate::base::atomic::write_atomically_with;
 
 pub use materials::{material_library, MaterialLibrary};
 
@@ -124,15 +127,8 @@ impl ObjExport {
             }
         }
         for (path, bytes) in outputs {
-            crate::baked::write_atomically(&path, bytes).map_err(|e| match e {
-                crate::baked::BakeWriteError::Io { path, source } => {
-                    ExportError::Io { path, source }
-                }
-                other => ExportError::Io {
-                    path: path.clone(),
-                    source: std::io::Error::other(other.to_string()),
-                },
-            })?;
+            write_atomically_with(&path, |f| f.write_all(bytes))
+                .map_err(|source| ExportError::Io { path, source })?;
         }
         Ok(())
     }

@@ -37,7 +37,7 @@ mod npy;
 #[cfg(feature = "obj")]
 mod obj;
 #[cfg(feature = "ply")]
-pub(crate) mod ply;
+mod ply;
 
 use std::panic::{self, AssertUnwindSafe};
 use std::path::Path;
@@ -235,15 +235,6 @@ fn run_importer(
         });
     }
     Ok((mesh, report))
-}
-
-/// sRGB-encoded component in 0..=1 to linear.
-pub(crate) fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Adds a surface, failing when a triangle could no longer name it (`u16` ids).

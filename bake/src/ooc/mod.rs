@@ -49,19 +49,19 @@ pub mod quadric;
 pub mod sort;
 pub mod soup;
 pub mod stream;
-pub mod temp;
 
 use std::io;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub use crate::base::temp::{self, parse_size, TempSpace};
 pub use cluster::{ClusterOptions, Clusterer, Weights};
 pub use multires::{MultiresOctree, MultiresOptions};
-pub use temp::{parse_size, TempSpace};
 
+use crate::base::colour::encode_colour;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 pub use soup::Cube;
-use soup::{encode_normal, linear_to_srgb8, Corner, SoupTriangle, KEY_LEVELS};
+use soup::{encode_normal, Corner, SoupTriangle, KEY_LEVELS};
 
 /// Why an out-of-core simplification failed.
 #[derive(Debug, thiserror::Error)]
@@ -444,13 +444,7 @@ pub fn mesh_soup(mesh: &Mesh, cube: &Cube) -> Vec<SoupTriangle> {
                     c.uv = mesh.uvs[t.uv[k] as usize];
                 }
                 if flags & soup::HAS_COLOR != 0 {
-                    let col = mesh.colors[t.color[k] as usize];
-                    c.color = [
-                        linear_to_srgb8(col[0]),
-                        linear_to_srgb8(col[1]),
-                        linear_to_srgb8(col[2]),
-                        (col[3].clamp(0.0, 1.0) * 255.0).round() as u8,
-                    ];
+                    c.color = encode_colour(mesh.colors[t.color[k] as usize]);
                 }
                 c
             });

@@ -59,7 +59,7 @@
 
 use super::cluster::{cell_position, cluster_attributes, Cluster, Clusterer};
 use super::soup::{HAS_NORMAL, HAS_UV};
-use crate::fxhash::{FxHashMap, FxHashSet};
+use crate::base::fxhash::{FxHashMap, FxHashSet};
 use caveclod_core::format::Vertex;
 use caveclod_core::octree::{OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
 

@@ -4,7 +4,7 @@
 
 use super::repair::Kept;
 use super::{Attributes, Repairs, GEOMETRIC_NORMAL_DEGREES, NONE};
-use crate::fxhash::hash_of;
+use crate::base::fxhash::hash_of;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 use hashbrown::hash_table::{Entry, HashTable};
 use rayon::prelude::*;

@@ -5,7 +5,7 @@ use caveclod_core::format::PositionClass;
 
 use super::repair::Kept;
 use super::{ek, VertexLists, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 

@@ -3,7 +3,7 @@
 
 use super::attributes::{cross, sub};
 use super::{Repairs, WeldError, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 

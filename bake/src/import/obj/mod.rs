@@ -33,8 +33,9 @@ mod tests;
 
 use std::collections::HashMap;
 
-use super::{next_index, srgb_to_linear, ImportError, Loader};
+use super::{next_index, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
+use crate::base::colour::srgb_to_linear;
 use crate::mesh::{Mesh, Triangle, NO_ATTRIBUTE};
 use mtl::{load_materials, push_surfaces, MaterialLibraries};
 

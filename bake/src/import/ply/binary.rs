@@ -13,10 +13,10 @@
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
 use rayon::prelude::*;
 
-use super::properties::{is_index_list, vertex_slot, Vertex};
+use super::properties::{is_index_list, Vertex};
 use super::{scalar_size, Corners, ImportError, ImportReport};
+use crate::base::ply::{vertex_slot, Scalar};
 use crate::mesh::Mesh;
-use crate::ooc::stream::ply_format::Scalar;
 
 /// Where each element's data starts, from a walk that checked every element ends within
 /// the payload.

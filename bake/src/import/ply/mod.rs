@@ -29,20 +29,22 @@
 
 mod ascii;
 mod binary;
-pub(crate) mod properties;
+mod properties;
 #[cfg(test)]
 mod tests;
 mod vertices;
 
 use std::io::{Cursor, ErrorKind};
 
+use crate::base::ply::vertex_slot;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
-use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
+use properties::{is_index_list, Face, Skip, Vertex};
 use vertices::byte_colour;
 
-use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
+use super::{next_index, push_surface, ImportError, Loader};
 use super::{ImportOptions, ImportReport, Source};
+use crate::base::colour::srgb_to_linear;
 use crate::mesh::{Mesh, Surface, Texture, Triangle, NO_ATTRIBUTE};
 
 /// The parser's reader over the file's bytes.

@@ -3,8 +3,10 @@
 
 use rayon::prelude::*;
 
-use super::properties::{self, Vertex, A, NX, R, U, VERTEX_NAMES, X};
-use super::{srgb_to_linear, Corners, ImportError};
+use super::properties::{self, Vertex};
+use super::{Corners, ImportError};
+use crate::base::colour::srgb_to_linear;
+use crate::base::ply::{A, NX, R, U, VERTEX_NAMES, X};
 use crate::mesh::Mesh;
 
 /// Vertices a piece of [`Corners::push_vertices`] converts on one thread.

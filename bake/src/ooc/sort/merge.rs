@@ -12,8 +12,8 @@ use std::path::PathBuf;
 use bytemuck::Pod;
 
 use super::{Run, SortedSoup};
+use crate::base::temp::TempSpace;
 use crate::ooc::soup::{SoupTriangle, KEY_LEVELS, RECORD_BYTES};
-use crate::ooc::temp::TempSpace;
 use crate::ooc::OocError;
 
 /// Counts the depths at which `key` starts a new cell after `prev`.

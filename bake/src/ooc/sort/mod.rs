@@ -100,9 +100,9 @@ pub struct SortedSoup {
 mod tests {
     use super::runs::chunk_bytes_per_triangle;
     use super::*;
+    use crate::base::temp::TempSpace;
     use crate::ooc::soup::RECORD_BYTES;
     use crate::ooc::stream::SoupSink;
-    use crate::ooc::temp::TempSpace;
 
     #[test]
     fn runs_merge_sorted_from_anywhere_and_cells_are_counted() {

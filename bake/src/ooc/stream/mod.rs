@@ -41,8 +41,8 @@ pub use cache::{BlockCache, RecordSource};
 pub use ply::{read_indexed, IndexedHeader, IndexedSink};
 
 use super::soup::{Cube, SoupTriangle};
-use super::temp::TempSpace;
 use super::OocError;
+use crate::base::temp::TempSpace;
 use crate::mesh::Surface;
 
 /// Receives the soup as a reader produces it.

@@ -7,11 +7,11 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::{BlockCache, SoupSink, StreamReport};
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::Surface;
 use crate::ooc::soup::{
     encode_normal, Corner, Cube, Keyer, SoupTriangle, HAS_COLOR, HAS_NORMAL, HAS_UV,
 };
-use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
 
 /// An OBJ file whose `v`, `vt` and `vn` records are in temporary files: the faces can be

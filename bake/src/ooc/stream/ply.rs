@@ -6,11 +6,12 @@ use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
 use std::os::unix::fs::FileExt;
 use std::path::PathBuf;
 
-use super::ply_format::{with_bytes, Field, Format, ItemReader, Property, Scalar};
+use super::ply_format::{with_bytes, Field, Format, ItemReader, Property};
 use super::{BlockCache, RecordSource, SoupSink, StreamReport};
+use crate::base::ply::{Scalar, VERTEX_NAMES};
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::{Surface, Texture};
 use crate::ooc::soup::{encode_normal, Corner, Cube};
-use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
 
 mod header;
@@ -114,9 +115,6 @@ impl<'a> PlyInput<'a> {
         Ok(report)
     }
 }
-
-/// What each vertex slot holds, as errors name it (the in-core importer's names).
-const SLOT_NAMES: [&str; 12] = crate::import::ply::properties::VERTEX_NAMES;
 
 /// An error in the file `name` at `at`.
 fn bad(name: &str, at: &str, message: String) -> OocError {
@@ -251,7 +249,7 @@ impl<'a> Reader<'a> {
             if let Some(k) = v.iter().position(|x| !x.is_finite()) {
                 return Err(self.bad(
                     &format!("vertex {i}"),
-                    format!("{} is {}", SLOT_NAMES[k], v[k]),
+                    format!("{} is {}", VERTEX_NAMES[k], v[k]),
                 ));
             }
             let p = [v[0] as f32, v[1] as f32, v[2] as f32];
@@ -510,7 +508,7 @@ pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Resul
             }
         }
         if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-            return Err(bad(name, &at(), format!("{} is {}", SLOT_NAMES[k], v[k])));
+            return Err(bad(name, &at(), format!("{} is {}", VERTEX_NAMES[k], v[k])));
         }
         sink.vertex(i, &v)?;
     }

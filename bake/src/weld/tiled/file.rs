@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use super::{weld_tiled_into, StreamTiles, TiledWeldError, WeldSink};
+use crate::base::temp::TempSpace;
 use crate::import::{self, ImportOptions};
 use crate::mesh::Surface;
-use crate::ooc::temp::TempSpace;
 use crate::ooc::OocError;
 use crate::pipeline::{weld_mesh, BakeError, Stage};
 use crate::weld::WeldInfo;

@@ -16,7 +16,7 @@ use super::super::{Attributes, Repairs, VertexLists, WeldError};
 use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
 use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink};
-use crate::fxhash::{hash_of, map_with_capacity, FxHashMap};
+use crate::base::fxhash::{hash_of, map_with_capacity, FxHashMap};
 use crate::weld::WeldInfo;
 use crate::weld_store::StoredTri;
 

@@ -59,7 +59,7 @@ use caveclod_core::format::PositionClass;
 use rayon::prelude::*;
 
 use super::{Attributes, Repairs, VertexLists, WeldError, WeldInfo, Welded, WeldedTri, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::weld_store::StoredTri;
 use join::Joiner;
 

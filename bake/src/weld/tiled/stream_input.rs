@@ -19,12 +19,12 @@ use hashbrown::hash_table::{Entry, HashTable};
 
 use super::mesh_input::TileGrid;
 use super::{TileTriangle, TiledMesh, Tiles, SHARED};
-use crate::fxhash::hash_of;
-use crate::import::srgb_to_linear;
+use crate::base::colour::srgb_to_linear;
+use crate::base::fxhash::hash_of;
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::{Surface, Texture};
 use crate::ooc::soup::{HAS_COLOR, HAS_NORMAL, HAS_UV};
 use crate::ooc::stream::{read_indexed, BlockCache, IndexedHeader, IndexedSink};
-use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
 use crate::weld::{MAX_TRIANGLES, NONE};
 

@@ -9,7 +9,7 @@ use super::super::{
     weld_traced, Attributes, Repairs, VertexLists, WeldError, GEOMETRIC_NORMAL_DEGREES, NONE,
 };
 use super::{TileTriangle, TiledMesh, SHARED};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
 /// A copy's key: the first triangle (input number) of the fan that uses it and the corner

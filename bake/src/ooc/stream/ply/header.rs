@@ -6,8 +6,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 
 use super::bad;
+use crate::base::ply::{vertex_slot, Scalar};
 use crate::ooc::soup::{HAS_COLOR, HAS_NORMAL, HAS_UV};
-use crate::ooc::stream::ply_format::{slot, Element, Format, Property, Scalar};
+use crate::ooc::stream::ply_format::{Element, Format, Property};
 use crate::ooc::OocError;
 
 /// The header: the format, the elements and a texture named in a comment.
@@ -143,7 +144,7 @@ impl Layout {
                 if p.list.is_some() {
                     None
                 } else {
-                    slot(&p.name)
+                    vertex_slot(&p.name)
                 }
             })
             .collect();
