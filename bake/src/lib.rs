@@ -28,4 +28,6 @@ pub mod quadric;
 pub mod report;
 pub mod streamed;
 pub mod weld;
-pub mod weld_store;
+
+/// The welded store ([`weld::store`]) under its own name.
+pub use weld::store as weld_store;

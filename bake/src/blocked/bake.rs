@@ -16,9 +16,9 @@ use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};
 use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
+use crate::weld::store::{StoreWriter, WeldedStore};
 use crate::weld::tiled::WeldedMesh;
 use crate::weld::{self, Repairs};
-use crate::weld_store::{StoreWriter, WeldedStore};
 
 /// A blocked bake up to its arrays: the welded mesh and its hierarchy, both on disk.
 #[derive(Debug)]

@@ -7,10 +7,11 @@
 //!   their neighbours and simplified across the old borders, level by level)
 //!
 //! The steps ([`build_spilled`]):
-//! 1. the blocks of the first level: square tiles over the mesh's two widest axes
-//!    (`tiles`), a triangle in the tile of its centroid, as many tiles as keep a block near
+//! 1. the blocks of the first level: square tiles over the mesh's two widest axes, a
+//!    triangle in the tile of its centroid, as many tiles as keep a block near
 //!    [`BlockedOptions::block_triangles`]. The welded mesh is on disk in the tiles' Z order
-//!    ([`crate::weld_store`]), so every block of every level is one range of triangles;
+//!    ([`crate::weld::store`], which cuts the tiles), so every block of every level is one
+//!    range of triangles;
 //! 2. each block of a level becomes a mesh of its own (`block`, read from the store) whose
 //!    positions shared with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
@@ -41,7 +42,6 @@ mod replay;
 mod spill;
 mod stitch;
 mod store_arrays;
-pub(crate) mod tiles;
 pub(crate) mod write;
 
 pub use bake::{
@@ -55,8 +55,8 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
+use crate::weld::store::WeldedStore;
 use crate::weld::Welded;
-use crate::weld_store::WeldedStore;
 
 /// Share of a block's triangles a level leaves (all but the last, which collapses all it
 /// can): four blocks merged into one of the next level hold about as many triangles as one

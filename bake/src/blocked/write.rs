@@ -25,7 +25,7 @@ use crate::clod_file::{
 };
 use crate::mesh::Surface;
 use crate::streamed::Appearance;
-use crate::weld_store::{StoredTri, WeldedStore};
+use crate::weld::store::{StoredTri, WeldedStore};
 
 const NONE: u32 = u32::MAX;
 

@@ -28,6 +28,7 @@ pub use vertex_lists::{Lists, VertexLists};
 mod attributes;
 mod groups;
 mod repair;
+pub mod store;
 #[cfg(test)]
 mod tests;
 pub mod tiled;
@@ -132,7 +133,7 @@ pub struct WeldedTri {
 
 /// What a welded mesh says besides its arrays (the small fields of [`Welded`]): what a weld
 /// that streams its arrays elsewhere ([`tiled`]) hands over at its end, and what the welded
-/// store ([`crate::weld_store`]) keeps in memory.
+/// store ([`crate::weld::store`]) keeps in memory.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct WeldInfo {
     /// Number of surface groups.

@@ -17,8 +17,8 @@ use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
 use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink};
 use crate::base::fxhash::{hash_of, map_with_capacity, FxHashMap};
+use crate::weld::store::StoredTri;
 use crate::weld::WeldInfo;
-use crate::weld_store::StoredTri;
 
 /// A triangle waiting for its group.
 #[repr(C)]

@@ -60,7 +60,7 @@ use rayon::prelude::*;
 
 use super::{Attributes, Repairs, VertexLists, WeldError, WeldInfo, Welded, WeldedTri, NONE};
 use crate::base::fxhash::{map_with_capacity, FxHashMap};
-use crate::weld_store::StoredTri;
+use crate::weld::store::StoredTri;
 use join::Joiner;
 
 /// One input triangle: its welded positions and its corners' attributes as imported.

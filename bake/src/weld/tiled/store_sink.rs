@@ -5,8 +5,8 @@ use std::io;
 use caveclod_core::format::PositionClass;
 
 use super::WeldSink;
+use crate::weld::store::{StoreWriter, StoredTri};
 use crate::weld::Attributes;
-use crate::weld_store::{StoreWriter, StoredTri};
 
 impl WeldSink for StoreWriter {
     fn push_position(
