@@ -29,13 +29,12 @@
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
 //! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
 //! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
-//! in-core build; [`SpilledBuild::write`] writes it from the temporary file and the store
-//! (`write`). A node's bounds hold everything below it across the levels: its radius holds
+//! in-core build; [`crate::pipeline::SpilledBuild::write`] writes it from the temporary
+//! file and the store (`write`). A node's bounds hold everything below it across the levels: its radius holds
 //! its children's spheres, its cone their cones, and its error adds the block's own measure
 //! (the distance of the level's positions from the triangles that replace them) to the
 //! largest error of the nodes the level started from below it.
 
-mod bake;
 mod block;
 mod renumber;
 mod replay;
@@ -44,10 +43,6 @@ mod stitch;
 mod store_arrays;
 pub(crate) mod write;
 
-pub use bake::{
-    bake_file_blocked, bake_mesh_blocked, build_file_blocked, build_file_spilled, BlockedBakeError,
-    SpilledBuild,
-};
 pub use spill::Spilled;
 
 use std::ops::Range;

@@ -1,6 +1,6 @@
-//! A welded mesh on disk: the arrays of a [`Welded`] in unlinked temporary files, ordered so
-//! that each block of a blocked build ([`crate::blocked`]) is read with a few positioned
-//! reads, and only small indexes in memory.
+//! A welded mesh on disk: the arrays of a [`Welded`](super::Welded) in unlinked temporary
+//! files, ordered so that each block of a blocked build ([`crate::blocked`]) is read with a
+//! few positioned reads, and only small indexes in memory.
 //!
 //! The order (made by [`StoreWriter::finish`] from pieces pushed in any order):
 //! - triangles by the tile of their centroid in the Z (Morton) order of the first level's

@@ -65,7 +65,7 @@ impl From<StoredAttributes> for Attributes {
 }
 
 /// Where the store's triangles and positions came from: the producer's id of each, by
-/// store id. Kept when asked ([`StoreWriter::finish`]), for callers that map a result back
+/// store id. Kept when asked ([`super::StoreWriter::finish`]), for callers that map a result back
 /// to the producer's numbering.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Origins {

@@ -37,9 +37,9 @@
 //! store takes it so; [`WeldedBuilder`] makes a [`Welded`] of it), so nothing the size of
 //! the whole mesh's triangles is ever in memory: only per position its coordinates, tile
 //! and class, the distinct attribute sets, the band, and the tiles being welded.
-//! [`import_and_weld`] chooses between this and the in-core import by the file.
+//! [`crate::pipeline::import_and_weld`] chooses between this and the in-core import by the
+//! file.
 
-mod file;
 mod join;
 mod mesh_input;
 mod spool;
@@ -51,7 +51,6 @@ use std::io;
 
 use bytemuck::{Pod, Zeroable};
 
-pub use file::{import_and_weld, WeldedFile, WeldedMesh, TILE_TRIANGLES};
 pub use mesh_input::MeshTiles;
 pub use stream_input::{StreamTiles, StreamedReport};
 
