@@ -1,16 +1,16 @@
-//! One tile welded with its halo by [`super::super::weld`], and what of it the join needs:
+//! One tile welded with its halo by [`crate::weld::weld`], and what of it the join needs:
 //! its own triangles, where their positions come from, and what the tile could not decide
 //! alone (edges and groups across its border, classes where groups or tiles meet).
 
 use caveclod_core::format::PositionClass;
 
-use super::super::attributes::{cross, dot, sub};
-use super::super::{
-    weld_traced, Attributes, Repairs, VertexLists, WeldError, GEOMETRIC_NORMAL_DEGREES, NONE,
-};
-use super::{TileTriangle, TiledMesh, SHARED};
+use super::tiles::{TileTriangle, TiledMesh, SHARED};
 use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use crate::weld::in_core::{weld_traced, Trace};
+use crate::weld::vector::{cross, dot, sub};
+use crate::weld::vertex_lists::VertexLists;
+use crate::weld::welded::{Attributes, Repairs, WeldError, Welded, GEOMETRIC_NORMAL_DEGREES, NONE};
 
 /// A copy's key: the first triangle (input number) of the fan that uses it and the corner
 /// there, flagged; a welded position's key is its id.
@@ -303,7 +303,7 @@ fn count_dropped(t: &TileTriangle, positions: &[[f32; 3]], repairs: &mut Repairs
 
 /// The area-weighted normal at every position of the weld (unnormalised), summed in the
 /// in-core weld's order: at a position the tile's triangles use, the same sum.
-fn area_normals(w: &super::super::Welded) -> Vec<[f64; 3]> {
+fn area_normals(w: &Welded) -> Vec<[f64; 3]> {
     let mut n = vec![[0f64; 3]; w.positions.len()];
     for t in &w.triangles {
         let [a, b, c] = t.p.map(|x| w.positions[x as usize]);
@@ -320,8 +320,8 @@ fn area_normals(w: &super::super::Welded) -> Vec<[f64; 3]> {
 /// Every local position the own triangles use: its key (a welded id, or a copy named by the
 /// first triangle of its fan and the corner there) and whether the join watches it.
 fn local_positions(
-    w: &super::super::Welded,
-    trace: &super::super::Trace,
+    w: &Welded,
+    trace: &Trace,
     base: &[u32],
     source: &[&TileTriangle],
     own_tri: &dyn Fn(usize) -> bool,
