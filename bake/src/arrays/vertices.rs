@@ -5,7 +5,7 @@ use caveclod_core::format::{Vertex, VertexKey};
 use caveclod_core::SurfaceGroupId;
 use rayon::prelude::*;
 
-use super::collect_indexed;
+use super::indexed::collect_indexed;
 use crate::base::colour::encode_colour;
 use crate::weld::Welded;
 

@@ -8,11 +8,13 @@
 //! - [`progress`]: the stages a bake reports;
 //! - [`ply`]: the PLY scalar types and vertex slots both PLY readers decode with;
 //! - [`colour`]: sRGB and linear colour conversions;
-//! - [`fxhash`]: the fast hasher of the baker's hash maps.
+//! - [`fxhash`]: the fast hasher of the baker's hash maps;
+//! - [`memory`]: the process's peak memory, and freed memory handed back to the system.
 
 pub mod atomic;
 pub mod colour;
 pub mod fxhash;
+pub mod memory;
 pub mod ply;
 pub mod progress;
 pub mod temp;

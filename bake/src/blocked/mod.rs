@@ -36,6 +36,7 @@
 //! largest error of the nodes the level started from below it.
 
 mod block;
+mod error;
 mod renumber;
 mod replay;
 mod spill;
@@ -43,13 +44,15 @@ mod stitch;
 mod store_arrays;
 pub(crate) mod write;
 
+pub use error::BlockedError;
 pub use spill::Spilled;
 
 use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
+use crate::base::memory::release_freed;
+use crate::hierarchy::{build_frozen, AttributeWeights, Hierarchy};
 use crate::weld::store::WeldedStore;
 use crate::weld::Welded;
 
@@ -100,23 +103,6 @@ pub struct Blocked {
     pub hierarchy: Hierarchy,
     /// Per level, from the first.
     pub levels: Vec<LevelStats>,
-}
-
-/// Why a blocked build failed.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum BlockedError {
-    /// A block's build broke an invariant.
-    #[error(transparent)]
-    Build(#[from] BuildError),
-    /// A block's hierarchy did not fit the whole (a baker bug).
-    #[error("internal error: a block's hierarchy does not join the whole: {0}")]
-    Stitch(&'static str),
-    /// Writing or reading the collapses' temporary file failed.
-    #[error("the temporary file of the collapses: {0}")]
-    Spill(String),
-    /// Writing or reading the welded mesh's temporary files failed.
-    #[error("the welded mesh's temporary files: {0}")]
-    Store(String),
 }
 
 /// [`build_spilled`] of `w` stored in block order ([`WeldedStore::from_welded`]), the
@@ -266,24 +252,3 @@ fn shared_positions(
     }
     shared
 }
-
-/// Hands the allocator's free memory back to the system (glibc's `malloc_trim`). The blocked
-/// bake frees large working sets between its phases (the weld's tables once the mesh is
-/// stored, a level's block builds, the writer's tables before the written file is
-/// validated); glibc keeps the freed blocks under its mapping threshold resident in its
-/// heaps, where they would count in each later phase's peak.
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn release_freed() {
-    extern "C" {
-        fn malloc_trim(pad: usize) -> i32;
-    }
-    // SAFETY: `malloc_trim` takes glibc's allocator locks and only returns free memory to
-    // the system; no memory in use moves.
-    unsafe {
-        malloc_trim(0);
-    }
-}
-
-/// Other allocators are left as they are.
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn release_freed() {}

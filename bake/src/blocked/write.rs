@@ -20,6 +20,7 @@ use super::spill::{Record, Spilled};
 use super::store_arrays::{self, Gathered};
 use crate::arrays::{self, Counts, MeshCounts, PolygonOrder};
 use crate::baked::section_specs;
+use crate::base::memory::release_freed;
 use crate::clod_file::{
     write_sections, BakeWriteError, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK,
 };
@@ -145,7 +146,7 @@ pub fn write(
         drop((h, polys));
         store_arrays::put_vertex_tables(out, &store)?;
         drop(store);
-        super::release_freed();
+        release_freed();
         for e in &sections {
             out.put(e.bytes)?;
         }

@@ -54,6 +54,7 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub use crate::base::memory::peak_rss_bytes;
 pub use crate::base::temp::{self, parse_size, TempSpace};
 pub use cluster::{ClusterOptions, Clusterer, Weights};
 pub use multires::{MultiresOctree, MultiresOptions};
@@ -473,18 +474,4 @@ pub fn cluster_mesh_in(mesh: &Mesh, cube: Cube, options: ClusterOptions) -> (Mes
         c.add(t);
     }
     (c.finish(&mesh.surfaces), c)
-}
-
-/// Peak resident set size of this process (`VmHWM` of `/proc/self/status`), if known.
-pub fn peak_rss_bytes() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line
-        .trim_start_matches("VmHWM:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kb * 1024)
 }
