@@ -1,7 +1,7 @@
 //! The parser's element records: vertices (named slots), faces and strips (index lists and
 //! per-corner UVs), and elements read past.
 
-use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult};
+use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult, ScalarType};
 
 use crate::base::ply::{vertex_slot, A, R, SLOTS};
 
@@ -148,5 +148,27 @@ pub(super) struct Skip;
 impl PropertyAccess for Skip {
     fn new() -> Self {
         Skip
+    }
+}
+
+/// The value [`Vertex`] stores for the 8-bit colour channel `k`.
+pub(super) fn byte_colour(k: usize) -> f32 {
+    (k as f64 * BYTE_COLOR) as f32
+}
+
+/// The elements the importer uses.
+pub(super) struct Elements {
+    pub(super) vertices: Vec<Vertex>,
+    pub(super) faces: Vec<Face>,
+    pub(super) strips: Vec<Face>,
+}
+
+/// Bytes of one value of the parser's scalar type `t`.
+pub(super) fn scalar_size(t: &ScalarType) -> usize {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
     }
 }
