@@ -5,11 +5,10 @@
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 
-use super::bad;
 use crate::base::ply::{vertex_slot, Scalar};
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{HAS_COLOR, HAS_NORMAL, HAS_UV};
 use crate::ooc::stream::ply_format::{Element, Format, Property};
-use crate::ooc::OocError;
 
 /// The header: the format, the elements and a texture named in a comment.
 pub(super) struct Header {
@@ -21,7 +20,7 @@ pub(super) struct Header {
 impl Header {
     /// Reads the header, up to and with its `end_header` line.
     pub(super) fn read(r: &mut BufReader<File>, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
+        let bad = |at: &str, message: String| OocError::input(name, at, message);
         let mut line = Vec::new();
         let mut lines = 0;
         let mut format = None;
@@ -121,7 +120,7 @@ pub(super) struct Layout {
 
 impl Layout {
     pub(super) fn of(header: &Header, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
+        let bad = |at: &str, message: String| OocError::input(name, at, message);
         let elements = &header.elements;
         let vi = elements
             .iter()
