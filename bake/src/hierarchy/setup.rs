@@ -18,7 +18,8 @@ use rayon::prelude::*;
 /// is where the error would otherwise be largest.
 const BOUNDARY_WEIGHT: f64 = 10.0;
 
-/// Triangle quadrics computed at a time (a block's take about 5 MB).
+/// Triangle quadrics computed at a time, in one reused block of rows: enough to keep every
+/// thread busy, few enough that the block stays small beside the wedges' quadrics.
 const QUADRIC_BLOCK: usize = 16384;
 
 /// What the set-up steps share.
