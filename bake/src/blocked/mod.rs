@@ -30,10 +30,10 @@
 //! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
 //! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
 //! in-core build; [`crate::pipeline::SpilledBuild::write`] writes it from the temporary
-//! file and the store (`write`). A node's bounds hold everything below it across the levels: its radius holds
-//! its children's spheres, its cone their cones, and its error adds the block's own measure
-//! (the distance of the level's positions from the triangles that replace them) to the
-//! largest error of the nodes the level started from below it.
+//! file and the store (`write`). A node's bounds hold everything below it across the
+//! levels: its radius holds its children's spheres, its cone their cones, and its error adds
+//! the block's own measure (the distance of the level's positions from the triangles that
+//! replace them) to the largest error of the nodes the level started from below it.
 
 mod block;
 mod error;

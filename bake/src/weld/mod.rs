@@ -1,4 +1,5 @@
-//! From an imported [`Mesh`](crate::mesh::Mesh) to a clean, manifold, welded mesh with surface groups.
+//! From an imported [`Mesh`](crate::mesh::Mesh) to a clean, manifold, welded mesh with
+//! surface groups.
 //!
 //! Steps, each counted in [`Repairs`]:
 //! 1. positions with identical coordinates are welded into one node position;

@@ -196,8 +196,8 @@ pub enum WeldError {
     /// More surfaces than the format's 16 bits.
     #[error("{0} surfaces, at most 65535 supported")]
     TooManySurfaces(usize),
-    /// The mesh itself is not valid ([`crate::mesh::Mesh::validate`]): an index out of range, a value not
-    /// finite or beyond what single-precision bounds hold.
+    /// The mesh itself is not valid ([`crate::mesh::Mesh::validate`]): an index out of range,
+    /// a value not finite or beyond what single-precision bounds hold.
     #[error("{0}")]
     Invalid(String),
 }

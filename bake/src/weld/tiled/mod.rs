@@ -34,9 +34,10 @@
 //!
 //! The tiles come from a mesh in memory ([`MeshTiles`]) or a PLY file streamed into files
 //! of tiles ([`StreamTiles`]); the result goes to a [`WeldSink`] piece by piece (the welded
-//! store takes it so; [`WeldedBuilder`] makes a [`Welded`](super::Welded) of it), so nothing the size of
-//! the whole mesh's triangles is ever in memory: only per position its coordinates, tile
-//! and class, the distinct attribute sets, the band, and the tiles being welded.
+//! store takes it so; [`WeldedBuilder`] makes a [`Welded`](super::Welded) of it), so nothing
+//! the size of the whole mesh's triangles is ever in memory: only per position its
+//! coordinates, tile and class, the distinct attribute sets, the band, and the tiles being
+//! welded.
 //! [`crate::pipeline::import_and_weld`] chooses between this and the in-core import by the
 //! file.
 

@@ -13,8 +13,8 @@ use super::tiles::{TileTriangle, Tiles, SHARED};
 use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::weld::welded::{WeldError, WeldInfo, Welded};
 
-/// Welds, repairs and groups the mesh of `tiles`, tile by tile, into memory: [`crate::weld::weld`]'s
-/// result (see the module's doc for where it may differ).
+/// Welds, repairs and groups the mesh of `tiles`, tile by tile, into memory: the result of
+/// [`crate::weld::weld`] (see the module's doc for where it may differ).
 pub fn weld_tiled(tiles: &mut dyn Tiles) -> Result<Welded, TiledWeldError> {
     let mut b = WeldedBuilder::default();
     let summary = weld_tiled_into(tiles, &mut b)?;
