@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use caveclod_core::format::ExtraSection;
 
-use super::built::{built, weld_mesh, Built};
+use super::built::{built, source_dir, weld_mesh, Built};
 use super::error::BakeError;
 use super::import_weld::{import_and_weld, WeldedMesh};
 use crate::baked::Baked;
@@ -205,7 +205,7 @@ pub fn build_file_spilled(
         store,
         spilled,
         surfaces: file.surfaces,
-        texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        texture_dir: source_dir(path),
         start,
     };
     Ok((built, levels))
