@@ -11,15 +11,17 @@ use std::path::{Path, PathBuf};
 use caveclod_core::format::materials::vertex_colour_section;
 use caveclod_core::format::{
     serialized_len, validate_parts, write_into, BaseFace, ExtraSection, HierarchyParts, Meta, Node,
-    Polygon, Position, SectionSpec, Split, SplitBounds, Tag, Vertex, VertexKey, WriteError,
-    KNOWN_SECTIONS,
+    Polygon, Position, SectionSpec, Split, SplitBounds, Tag, Vertex, VertexKey, KNOWN_SECTIONS,
 };
 use caveclod_core::{Hierarchy, NodeId};
+
+pub use crate::base::atomic::write_atomically_with;
+pub use crate::clod_file::BakeWriteError;
 
 use crate::arrays::{self, NodeIds, PolygonOrder};
 use crate::clod_file::{write_sections, Check};
 use crate::hierarchy::Hierarchy as Collapses;
-use crate::materials::{has_materials, MaterialSections, TextureError, TexturePaths};
+use crate::materials::{has_materials, MaterialSections, TexturePaths};
 use crate::mesh::Surface;
 use crate::weld::Welded;
 
@@ -59,31 +61,6 @@ pub struct Baked {
     /// The directory the texture files of [`materials`](Self::materials) are relative to:
     /// the source file's (empty: the current directory).
     pub texture_dir: PathBuf,
-}
-
-/// Why writing failed.
-#[derive(Debug, thiserror::Error)]
-pub enum BakeWriteError {
-    /// The arrays do not form a valid hierarchy (a baker bug; nothing was written).
-    #[error("internal error, nothing written: {0}")]
-    Invalid(#[from] WriteError),
-    /// A texture cannot be referred to from the output file (no relative path to it, or
-    /// one the format refuses).
-    #[error("{path}: {source}")]
-    Texture {
-        /// The file being written.
-        path: PathBuf,
-        /// Why.
-        source: TextureError,
-    },
-    /// The file system refused.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
 }
 
 impl Baked {
@@ -337,24 +314,4 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeWriteError>
         path: path.to_path_buf(),
         source,
     })
-}
-
-/// Creates a temporary sibling of `path`, lets `fill` write it, syncs it and renames it over
-/// `path`: a reader never sees a partial file, and the temporary file is removed on failure.
-/// For output streamed as it is made (`write_atomically` for bytes already in memory).
-pub fn write_atomically_with(
-    path: &Path,
-    fill: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let tmp = crate::clod_file::temporary_sibling(path);
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        fill(&mut f)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }

@@ -19,7 +19,33 @@ use caveclod_core::format::{
 use caveclod_core::Hierarchy;
 use rayon::prelude::*;
 
-use crate::baked::BakeWriteError;
+use crate::base::atomic::temporary_sibling;
+use crate::materials::TextureError;
+
+/// Why writing failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeWriteError {
+    /// The arrays do not form a valid hierarchy (a baker bug; nothing was written).
+    #[error("internal error, nothing written: {0}")]
+    Invalid(#[from] WriteError),
+    /// A texture cannot be referred to from the output file (no relative path to it, or
+    /// one the format refuses).
+    #[error("{path}: {source}")]
+    Texture {
+        /// The file being written.
+        path: PathBuf,
+        /// Why.
+        source: TextureError,
+    },
+    /// The file system refused.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
 
 /// Size of the buffer between the section writer and the file.
 const BUFFER: usize = 1 << 20;
@@ -181,20 +207,6 @@ pub fn write_sections(
             Failure::Bake(e) => e,
         }
     })
-}
-
-/// The temporary file `path` is written as before the rename: a hidden sibling, so the
-/// rename stays within one file system.
-pub(crate) fn temporary_sibling(path: &Path) -> PathBuf {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 /// How often the pages of a mapped file read so far are handed back

@@ -25,7 +25,7 @@ use caveclod_core::format::ExtraSection;
 use caveclod_core::gmesh::{gmesh_tags, volume_boundaries, GMesh, GMeshError, GMeshParts};
 use caveclod_core::{CameraState, Hierarchy, NodeId, PolyId};
 
-use crate::fxhash::FxHashMap;
+use crate::base::fxhash::FxHashMap;
 
 /// How far to simplify.
 #[derive(Clone, Copy, Debug, PartialEq)]

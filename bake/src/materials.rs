@@ -26,22 +26,12 @@ use caveclod_core::format::materials::{
     path_problem, BlobRef, MaterialParts, MaterialRecord, TextureKind, DOUBLE_SIDED,
 };
 
+pub use crate::base::colour::encode_colour;
 use crate::mesh::{Surface, Texture};
 
 /// Whether any surface carries a material worth storing (see the module docs).
 pub fn has_materials(surfaces: &[Surface]) -> bool {
     surfaces.iter().any(|s| !s.is_plain())
-}
-
-/// A linear RGBA colour as stored: sRGB8 colour, linear 8-bit alpha.
-pub fn encode_colour(c: [f32; 4]) -> [u8; 4] {
-    use crate::ooc::soup::linear_to_srgb8;
-    [
-        linear_to_srgb8(c[0]),
-        linear_to_srgb8(c[1]),
-        linear_to_srgb8(c[2]),
-        (c[3].clamp(0.0, 1.0) * 255.0).round() as u8,
-    ]
 }
 
 /// Why a surface's texture cannot be stored.

@@ -21,8 +21,8 @@ use std::path::Path;
 use caveclod_core::format::ExtraSection;
 
 use crate::arrays::{self, NodeIds, PolygonOrder, Polygons, VertexOrder};
-use crate::baked::{appearance_then, material_sections, section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check, Inspect};
+use crate::baked::{appearance_then, material_sections, section_specs};
+use crate::clod_file::{write_sections, BakeWriteError, Check, Inspect};
 use crate::hierarchy::Hierarchy as Collapses;
 use crate::materials::{has_materials, MaterialSections, TexturePaths};
 use crate::mesh::Surface;

@@ -3,8 +3,9 @@
 //! back into memory and written depth-first, up to the numbering of the splits, and its bytes
 //! do not depend on how many threads built the blocks.
 
-use caveclod_bake::blocked::{build_file_spilled, BlockedOptions, SpilledBuild};
+use caveclod_bake::blocked::BlockedOptions;
 use caveclod_bake::import::ImportOptions;
+use caveclod_bake::pipeline::{build_file_spilled, SpilledBuild};
 use caveclod_core::format::{Meta, SplitBounds};
 use caveclod_core::{Hierarchy, NodeId, PolyId};
 use caveclod_tests::{generate, AlignedBytes};

@@ -7,12 +7,12 @@
 use std::path::Path;
 
 use caveclod_bake::baked::{BakeWriteError, Baked};
-use caveclod_bake::blocked::{build_file_blocked, BlockedOptions};
+use caveclod_bake::blocked::BlockedOptions;
 use caveclod_bake::gmesh::{build as gmesh_levels, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::mesh::{Mesh, Surface, Texture};
 use caveclod_bake::ooc::{MultiresOptions, OocOptions};
-use caveclod_bake::pipeline::{build_mesh, build_out_of_core, Built};
+use caveclod_bake::pipeline::{build_file_blocked, build_mesh, build_out_of_core, Built};
 use caveclod_bake::report::BakeInfo;
 use caveclod_core::format::{tags, ExtraSection, WriteError};
 use caveclod_core::{FormatError, Hierarchy};

@@ -293,7 +293,8 @@ fn refused_edges(w: &Welded) -> usize {
 /// error naming the file and the face.
 #[test]
 fn ply_files_the_stream_does_not_read_are_welded_in_core_and_bad_ones_named() {
-    use caveclod_bake::weld::tiled::{import_and_weld, WeldedBuilder, WeldedMesh, TILE_TRIANGLES};
+    use caveclod_bake::pipeline::{import_and_weld, WeldedMesh, TILE_TRIANGLES};
+    use caveclod_bake::weld::tiled::WeldedBuilder;
     let dir = tempfile::tempdir().expect("dir");
     let header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
                   property float z\n";

@@ -163,49 +163,66 @@ impl Csv {
     }
 }
 
-fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
+/// An input as both methods take it: the imported mesh, its weld, and the welded triangles
+/// (as indices, for meshopt, and as a soup, for the distances).
+struct Prepared {
+    mesh: Mesh,
+    w: Welded,
+    indices: Vec<u32>,
+    input: Soup,
+}
+
+/// Imports and welds `path`.
+fn prepare(path: &Path) -> Prepared {
     let mesh: Mesh = import::import(path, &ImportOptions::default()).expect("import");
     let w = weld::weld(&mesh).expect("weld");
-    let n = mesh.triangles.len();
     let indices: Vec<u32> = w.triangles.iter().flat_map(|t| t.p).collect();
     let input: Soup = w
         .triangles
         .iter()
         .map(|t| t.p.map(|p| w.positions[p as usize]))
         .collect();
+    Prepared {
+        mesh,
+        w,
+        indices,
+        input,
+    }
+}
+
+fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
+    let p = prepare(path);
     println!(
-        "\n## {name}: {n} input triangles ({} welded, {} positions); load average {}",
-        w.triangles.len(),
-        w.positions.len(),
+        "\n## {name}: {} input triangles ({} welded, {} positions); load average {}",
+        p.mesh.triangles.len(),
+        p.w.triangles.len(),
+        p.w.positions.len(),
         load()
     );
+    let baked = speed(name, path, &p, s, csv);
+    quality(name, &baked, &p, s, csv);
+}
 
-    // Speed.
+/// The bake's wall times (medians of `s.bake_runs`, its stages from one more run) against
+/// meshopt's simplification to 1%, and the peak memory of a file bake of `path`; returns the
+/// bake.
+fn speed(name: &str, path: &Path, p: &Prepared, s: &Settings, csv: &mut Csv) -> Baked {
+    let n = p.mesh.triangles.len();
     let mut bake_times = Vec::new();
     let mut baked = None;
     for _ in 0..s.bake_runs {
         let t = Instant::now();
-        let (b, _) = bake_mesh(&mesh, name, &mut |_| {}).expect("bake");
+        let (b, _) = bake_mesh(&p.mesh, name, &mut |_| {}).expect("bake");
         bake_times.push(t.elapsed().as_secs_f64());
         baked = Some(b);
     }
     let baked = baked.expect("at least one run");
-    let t = Instant::now();
-    let w2 = weld::weld(&mesh).expect("weld");
-    let t_weld = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let hier = hierarchy::build(&w2, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
-    let t_build = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let b2 = Baked::new(&w2, &hier);
-    b2.hierarchy().expect("valid");
-    let t_assemble = t.elapsed().as_secs_f64();
-    drop((b2, hier, w2));
+    let (t_weld, t_build, t_assemble) = stage_times(&p.mesh);
     let one = n.div_ceil(100);
     let mut meshopt_times = Vec::new();
     for _ in 0..s.meshopt_runs {
         let t = Instant::now();
-        let (soup, _) = meshopt_cut(&w, &indices, one);
+        let (soup, _) = meshopt_cut(&p.w, &p.indices, one);
         meshopt_times.push(t.elapsed().as_secs_f64());
         assert!(!soup.is_empty());
     }
@@ -237,6 +254,35 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
         n as f64 / t_build / 1e6
     );
     csv.single(name, "triangles_per_second_bake", n, n as f64 / ours_t);
+    memory(name, path, n, csv);
+    csv.row(name, "seconds_bake_vs_simplify_1pct", one, ours_t, mo_t);
+    csv.row(
+        name,
+        "seconds_hierarchy_vs_simplify_1pct",
+        one,
+        t_build,
+        mo_t,
+    );
+    baked
+}
+
+/// The seconds of a bake's stages, one run each: weld, hierarchy, assembly with validation.
+fn stage_times(mesh: &Mesh) -> (f64, f64, f64) {
+    let t = Instant::now();
+    let w = weld::weld(mesh).expect("weld");
+    let t_weld = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let hier = hierarchy::build(&w, &AttributeWeights::default(), &mut |_, _| {}).expect("build");
+    let t_build = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let b = Baked::new(&w, &hier);
+    b.hierarchy().expect("valid");
+    let t_assemble = t.elapsed().as_secs_f64();
+    (t_weld, t_build, t_assemble)
+}
+
+/// The peak resident set of a file bake of `path` (`n` input triangles) in a child process.
+fn memory(name: &str, path: &Path, n: usize, csv: &mut Csv) {
     match peak_rss(path) {
         Ok(Child {
             bytes,
@@ -259,38 +305,14 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
         }
         Err(why) => println!("peak resident set: not measured ({why})"),
     }
-    csv.row(name, "seconds_bake_vs_simplify_1pct", one, ours_t, mo_t);
-    csv.row(
-        name,
-        "seconds_hierarchy_vs_simplify_1pct",
-        one,
-        t_build,
-        mo_t,
-    );
+}
 
-    // Quality.
+/// Our cut of `baked` and meshopt's simplification at 10% and 1% of the input, measured
+/// against the input by the same sampled distances.
+fn quality(name: &str, baked: &Baked, p: &Prepared, s: &Settings, csv: &mut Csv) {
+    let n = p.mesh.triangles.len();
     let h = baked.hierarchy().expect("valid");
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in &w.positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k] as f64);
-            hi[k] = hi[k].max(p[k] as f64);
-        }
-    }
-    let t = Instant::now();
-    let reference = Reference {
-        bvh: Bvh::new(&input),
-        samples: sample(&input, s.samples, 1),
-        diagonal: d2(lo, hi).sqrt(),
-    };
-    println!(
-        "reference: {} area samples + {} corners, BVH of {} nodes, in {:.2} s; diagonal {:.4}",
-        reference.samples.area.len(),
-        reference.samples.corners.len(),
-        reference.bvh.node_count(),
-        t.elapsed().as_secs_f64(),
-        reference.diagonal
-    );
+    let reference = reference(p, s.samples);
     println!(
         "| target | triangles ours / meshopt | Hausdorff ours | meshopt | ratio | RMS ours | \
          meshopt | ratio | meshopt's own error |"
@@ -301,7 +323,7 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
         let t = Instant::now();
         let ours = our_cut(&h, target);
         let t_cut = t.elapsed().as_secs_f64();
-        let (mo, mo_err) = meshopt_cut(&w, &indices, target);
+        let (mo, mo_err) = meshopt_cut(&p.w, &p.indices, target);
         let t = Instant::now();
         let (oh, or) = distances(&reference, &ours, s.samples, 2);
         let (mh, mr) = distances(&reference, &mo, s.samples, 2);
@@ -325,6 +347,33 @@ fn run(name: &str, path: &Path, s: &Settings, csv: &mut Csv) {
         csv.row(name, &format!("hausdorff_{label}"), target, oh, mh);
         csv.row(name, &format!("rms_{label}"), target, or, mr);
     }
+}
+
+/// The input's samples, BVH and bounding-box diagonal, which both methods are measured
+/// against.
+fn reference(p: &Prepared, samples: usize) -> Reference {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for q in &p.w.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(q[k] as f64);
+            hi[k] = hi[k].max(q[k] as f64);
+        }
+    }
+    let t = Instant::now();
+    let reference = Reference {
+        bvh: Bvh::new(&p.input),
+        samples: sample(&p.input, samples, 1),
+        diagonal: d2(lo, hi).sqrt(),
+    };
+    println!(
+        "reference: {} area samples + {} corners, BVH of {} nodes, in {:.2} s; diagonal {:.4}",
+        reference.samples.area.len(),
+        reference.samples.corners.len(),
+        reference.bvh.node_count(),
+        t.elapsed().as_secs_f64(),
+        reference.diagonal
+    );
+    reference
 }
 
 /// The target directory: this executable lives in `<target>/<profile>/deps/`.

@@ -15,12 +15,13 @@
 use caveclod_core::format::{BaseFace, Creator, Meta, Node, Polygon, Position, Split, SplitBounds};
 use caveclod_core::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 
-use rayon::prelude::*;
-
 use crate::hierarchy::{Collapse, Hierarchy as Collapses};
 use crate::weld::Welded;
 
+mod indexed;
 mod vertices;
+
+use indexed::collect_indexed;
 
 pub(crate) use vertices::{
     vertex_colours, vertex_count, vertex_table, vertex_table_offset_records, vertex_table_offsets,
@@ -396,15 +397,6 @@ pub(crate) fn split_bounds(
 /// Every [`bound`] in split order, made on all cores.
 pub(crate) fn bounds(w: &Welded, h: &Collapses, ids: &NodeIds) -> Vec<SplitBounds> {
     collect_indexed(ids.by_new.len(), |s| bound(w, h, ids, s))
-}
-
-/// `record(0..n)` in order, made on all cores: each record depends on its index alone, so
-/// the array is the same whatever the threads.
-pub(crate) fn collect_indexed<T: Send>(
-    n: usize,
-    record: impl Fn(usize) -> T + Sync + Send,
-) -> Vec<T> {
-    (0..n).into_par_iter().map(record).collect()
 }
 
 /// Welded position `p` with its class.

@@ -5,8 +5,8 @@ use caveclod_core::format::{Vertex, VertexKey};
 use caveclod_core::SurfaceGroupId;
 use rayon::prelude::*;
 
-use super::collect_indexed;
-use crate::materials::encode_colour;
+use super::indexed::collect_indexed;
+use crate::base::colour::encode_colour;
 use crate::weld::Welded;
 
 /// The vertex table in file order: per position, its vertices sorted by surface-group id,

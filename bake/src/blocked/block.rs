@@ -1,8 +1,8 @@
 //! One block of a level: its triangles as a welded mesh of their own, positions renumbered,
 //! with the positions it shares with other blocks frozen, read from the welded store.
 
+use crate::weld::store::WeldedStore;
 use crate::weld::{VertexLists, Welded, WeldedTri};
-use crate::weld_store::WeldedStore;
 
 /// A block's mesh and how it maps to the whole.
 pub(super) struct Block {
@@ -52,7 +52,7 @@ pub(super) fn extract(
         })
         .collect();
     let info = store.info();
-    let group_surfaces = crate::weld_store::group_surfaces(&stored, info.group_count);
+    let group_surfaces = crate::weld::store::group_surfaces(&stored, info.group_count);
     let vertices: VertexLists = (0..lists.len())
         .map(|x| lists.of(x).iter().map(|&[g, a]| (g, attr(a))))
         .collect();

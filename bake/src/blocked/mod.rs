@@ -7,10 +7,11 @@
 //!   their neighbours and simplified across the old borders, level by level)
 //!
 //! The steps ([`build_spilled`]):
-//! 1. the blocks of the first level: square tiles over the mesh's two widest axes
-//!    (`tiles`), a triangle in the tile of its centroid, as many tiles as keep a block near
+//! 1. the blocks of the first level: square tiles over the mesh's two widest axes, a
+//!    triangle in the tile of its centroid, as many tiles as keep a block near
 //!    [`BlockedOptions::block_triangles`]. The welded mesh is on disk in the tiles' Z order
-//!    ([`crate::weld_store`]), so every block of every level is one range of triangles;
+//!    ([`crate::weld::store`], which cuts the tiles), so every block of every level is one
+//!    range of triangles;
 //! 2. each block of a level becomes a mesh of its own (`block`, read from the store) whose
 //!    positions shared with another block are frozen, and is built on its own
 //!    ([`crate::hierarchy::build_frozen`]): every collapse the rules allow that removes no
@@ -28,35 +29,32 @@
 //! The whole hierarchy has the in-core build's conventions: half-edge collapses, nodes
 //! `0..positions` the leaves, collapse `c` creating node `positions + c`, so, read back into
 //! memory ([`build`]), [`crate::baked::Baked::new`] turns it into a `.clod` as it does an
-//! in-core build; [`SpilledBuild::write`] writes it from the temporary file and the store
-//! (`write`). A node's bounds hold everything below it across the levels: its radius holds
-//! its children's spheres, its cone their cones, and its error adds the block's own measure
-//! (the distance of the level's positions from the triangles that replace them) to the
-//! largest error of the nodes the level started from below it.
+//! in-core build; [`crate::pipeline::SpilledBuild::write`] writes it from the temporary
+//! file and the store (`write`). A node's bounds hold everything below it across the
+//! levels: its radius holds its children's spheres, its cone their cones, and its error adds
+//! the block's own measure (the distance of the level's positions from the triangles that
+//! replace them) to the largest error of the nodes the level started from below it.
 
-mod bake;
 mod block;
+mod error;
 mod renumber;
 mod replay;
 mod spill;
 mod stitch;
 mod store_arrays;
-pub(crate) mod tiles;
 pub(crate) mod write;
 
-pub use bake::{
-    bake_file_blocked, bake_mesh_blocked, build_file_blocked, build_file_spilled, BlockedBakeError,
-    SpilledBuild,
-};
+pub use error::BlockedError;
 pub use spill::Spilled;
 
 use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::hierarchy::{build_frozen, AttributeWeights, BuildError, Hierarchy};
+use crate::base::memory::release_freed;
+use crate::hierarchy::{build_frozen, AttributeWeights, Hierarchy};
+use crate::weld::store::WeldedStore;
 use crate::weld::Welded;
-use crate::weld_store::WeldedStore;
 
 /// Share of a block's triangles a level leaves (all but the last, which collapses all it
 /// can): four blocks merged into one of the next level hold about as many triangles as one
@@ -105,23 +103,6 @@ pub struct Blocked {
     pub hierarchy: Hierarchy,
     /// Per level, from the first.
     pub levels: Vec<LevelStats>,
-}
-
-/// Why a blocked build failed.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum BlockedError {
-    /// A block's build broke an invariant.
-    #[error(transparent)]
-    Build(#[from] BuildError),
-    /// A block's hierarchy did not fit the whole (a baker bug).
-    #[error("internal error: a block's hierarchy does not join the whole: {0}")]
-    Stitch(&'static str),
-    /// Writing or reading the collapses' temporary file failed.
-    #[error("the temporary file of the collapses: {0}")]
-    Spill(String),
-    /// Writing or reading the welded mesh's temporary files failed.
-    #[error("the welded mesh's temporary files: {0}")]
-    Store(String),
 }
 
 /// [`build_spilled`] of `w` stored in block order ([`WeldedStore::from_welded`]), the
@@ -271,24 +252,3 @@ fn shared_positions(
     }
     shared
 }
-
-/// Hands the allocator's free memory back to the system (glibc's `malloc_trim`). The blocked
-/// bake frees large working sets between its phases (the weld's tables once the mesh is
-/// stored, a level's block builds, the writer's tables before the written file is
-/// validated); glibc keeps the freed blocks under its mapping threshold resident in its
-/// heaps, where they would count in each later phase's peak.
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn release_freed() {
-    extern "C" {
-        fn malloc_trim(pad: usize) -> i32;
-    }
-    // SAFETY: `malloc_trim` takes glibc's allocator locks and only returns free memory to
-    // the system; no memory in use moves.
-    unsafe {
-        malloc_trim(0);
-    }
-}
-
-/// Other allocators are left as they are.
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn release_freed() {}

@@ -1,9 +1,9 @@
 //! A hierarchy built on a welded store named back by the producer's positions and
-//! triangles ([`crate::weld_store::Origins`]), for callers that hold the welded mesh the
+//! triangles ([`crate::weld::store::Origins`]), for callers that hold the welded mesh the
 //! store was made from.
 
 use crate::hierarchy::Hierarchy;
-use crate::weld_store::Origins;
+use crate::weld::store::Origins;
 
 const NONE: u32 = u32::MAX;
 

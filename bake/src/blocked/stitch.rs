@@ -19,9 +19,9 @@
 use std::collections::HashMap;
 
 use super::block::Block;
+use super::error::BlockedError;
 use super::replay::Replay;
 use super::spill::{Bounds, Record, SpillWriter, Spilled};
-use super::BlockedError;
 use crate::hierarchy::{merge_cones, Collapse, Hierarchy};
 
 const NONE: u32 = u32::MAX;

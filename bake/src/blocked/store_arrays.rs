@@ -5,11 +5,10 @@
 use caveclod_core::format::{Position, Vertex, VertexKey};
 use caveclod_core::SurfaceGroupId;
 
-use crate::baked::BakeWriteError;
-use crate::clod_file::{Sections, CHUNK_RECORDS as CHUNK};
-use crate::materials::encode_colour;
+use crate::base::colour::encode_colour;
+use crate::clod_file::{BakeWriteError, Sections, CHUNK_RECORDS as CHUNK};
+use crate::weld::store::{StoredTri, WeldedStore};
 use crate::weld::Attributes;
-use crate::weld_store::{StoredTri, WeldedStore};
 
 /// A failed read of a temporary file; [`crate::clod_file::write_sections`] names the
 /// target with it.

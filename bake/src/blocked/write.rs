@@ -19,11 +19,14 @@ use caveclod_core::{NodeId, PositionId, SurfaceGroupId, SurfaceId};
 use super::spill::{Record, Spilled};
 use super::store_arrays::{self, Gathered};
 use crate::arrays::{self, Counts, MeshCounts, PolygonOrder};
-use crate::baked::{section_specs, BakeWriteError};
-use crate::clod_file::{write_sections, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK};
+use crate::baked::section_specs;
+use crate::base::memory::release_freed;
+use crate::clod_file::{
+    write_sections, BakeWriteError, Check, Inspect, Sections, CHUNK_RECORDS as CHUNK,
+};
 use crate::mesh::Surface;
 use crate::streamed::Appearance;
-use crate::weld_store::{StoredTri, WeldedStore};
+use crate::weld::store::{StoredTri, WeldedStore};
 
 const NONE: u32 = u32::MAX;
 
@@ -143,7 +146,7 @@ pub fn write(
         drop((h, polys));
         store_arrays::put_vertex_tables(out, &store)?;
         drop(store);
-        super::release_freed();
+        release_freed();
         for e in &sections {
             out.put(e.bytes)?;
         }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use caveclod_core::format::materials::{AlphaMode, TextureRef};
 use caveclod_core::Hierarchy;
 
-use super::ExportError;
+use super::error::ExportError;
 use crate::materials::TexturePaths;
 
 /// An MTL file and the images it names.

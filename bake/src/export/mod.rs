@@ -2,13 +2,18 @@
 //! its materials as an MTL file beside it, and the embedded textures as image files beside
 //! that ([`material_library`]).
 
+mod error;
 mod materials;
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use caveclod_core::{Hierarchy, NodeId};
 
+use crate::base::atomic::write_atomically_with;
+
+pub use error::ExportError;
 pub use materials::{material_library, MaterialLibrary};
 
 /// Which level to export.
@@ -28,34 +33,6 @@ pub fn obj(h: &Hierarchy<'_>, level: Level) -> String {
         .map(|s| format!("surface{s}"))
         .collect();
     obj_text(h, level, None, &names)
-}
-
-/// Why an export failed.
-#[derive(Debug, thiserror::Error)]
-pub enum ExportError {
-    /// A texture file has no path from the OBJ's directory.
-    #[error("surface {surface} ('{name}'): texture '{texture}': {problem}")]
-    Texture {
-        /// The surface.
-        surface: usize,
-        /// Its material's name.
-        name: String,
-        /// The texture as the `.clod` file names it.
-        texture: String,
-        /// Why.
-        problem: String,
-    },
-    /// An output would replace a file the export reads.
-    #[error("{0}: refusing to write over an input of the export")]
-    WouldOverwriteInput(PathBuf),
-    /// The file system refused.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
 }
 
 /// An OBJ export and what goes beside it.
@@ -124,15 +101,8 @@ impl ObjExport {
             }
         }
         for (path, bytes) in outputs {
-            crate::baked::write_atomically(&path, bytes).map_err(|e| match e {
-                crate::baked::BakeWriteError::Io { path, source } => {
-                    ExportError::Io { path, source }
-                }
-                other => ExportError::Io {
-                    path: path.clone(),
-                    source: std::io::Error::other(other.to_string()),
-                },
-            })?;
+            write_atomically_with(&path, |f| f.write_all(bytes))
+                .map_err(|source| ExportError::Io { path, source })?;
         }
         Ok(())
     }

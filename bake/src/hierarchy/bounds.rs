@@ -9,8 +9,9 @@
 use super::geometry::{cross, dot, len, point_triangle_d2_from, sub, V3};
 use super::handover::Handover;
 use super::prefetch::prefetch;
-use super::work::{centred, Work};
-use super::NONE;
+use super::records::Frame;
+use super::types::NONE;
+use super::work::Work;
 use rayon::prelude::*;
 
 /// A triangle as the nearest-triangle search reads it: corners, edges from the first,
@@ -73,37 +74,6 @@ impl Probe {
         }
         let d = point_triangle_d2_from(x, [self.a, self.b, self.c], [self.ab, self.ac], [d20, d21]);
         (d < best).then_some(d)
-    }
-}
-
-/// Where positions are read from: the welded mesh's, relative to the centre of its bounding
-/// box ([`Work::at`] reads them through it; the settling holds one apart from the work).
-#[derive(Clone, Copy)]
-pub(super) struct Frame<'a> {
-    positions: &'a [[f32; 3]],
-    centre: V3,
-}
-
-impl<'a> Frame<'a> {
-    /// The frame of `work`'s positions, borrowing its welded mesh rather than the work.
-    pub(super) fn of(work: &Work<'a>) -> Self {
-        Self {
-            positions: &work.w.positions,
-            centre: work.centre,
-        }
-    }
-
-    /// The point of position `x`, relative to the centre, in f64.
-    #[inline]
-    pub(super) fn at(&self, x: u32) -> V3 {
-        centred(self.positions[x as usize], self.centre)
-    }
-
-    /// The point of the error bounds standing for position `x`: in single precision
-    /// (ample for an error bound), relative to the centre.
-    #[inline]
-    fn point(&self, x: u32) -> V3 {
-        self.at(x).map(|c| c as f32 as f64)
     }
 }
 

@@ -2,9 +2,10 @@
 //! triangles' neighbours, the star moved onto the new node, and the valences.
 
 use super::geometry::{corner_of, len, merge_cones, next, prev, sub};
+use super::records::{NodeOut, Tri, Wedge};
 use super::setup::by_positions;
-use super::work::{NodeOut, Tri, Wedge, Work};
-use super::{Collapse, NONE, PARALLEL_MIN};
+use super::types::{Collapse, NONE, PARALLEL_MIN};
+use super::work::Work;
 use crate::quadric::QuadricsMut;
 
 impl Work<'_> {

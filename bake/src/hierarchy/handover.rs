@@ -1,12 +1,9 @@
 //! What the settling of the error bounds reads of a pass's applied collapses, taken from the
-//! work as each is applied ([`Work::take_over`], while what it reads is in cache): the new
+//! work as each is applied (`Work::take_over`, while what it reads is in cache): the new
 //! node, the positions of its two children, and the corners of its triangles and of the two
 //! that died. The collapses of a pass have disjoint stars, which no later collapse of the
 //! pass changes, so this is what the settling would read at the end of the pass, and it can
 //! run while the pass goes on.
-
-use super::work::Work;
-use super::{Collapse, NONE};
 
 /// A triangle as the settling reads it: its id and its corners' positions.
 pub(super) type Corners = (u32, [u32; 3]);
@@ -39,7 +36,47 @@ pub(super) struct Handover {
     tris: Vec<Corners>,
 }
 
+impl Entry {
+    /// The collapse that made `node`, with its `error` from its children, at position `at`
+    /// (the kept child's), the removed child's being `was`; its triangles are added with it
+    /// ([`Handover::push`]).
+    pub(super) fn new(node: u32, error: f32, at: u32, was: u32) -> Self {
+        Self {
+            node,
+            error,
+            at,
+            was,
+            start: 0,
+            kept: 0,
+            star: 0,
+            dying: 0,
+        }
+    }
+}
+
 impl Handover {
+    /// Adds the collapse `entry` just applied: its new node's triangles `star` (the `kept`
+    /// from the kept child first), then the triangles that died.
+    pub(super) fn push(
+        &mut self,
+        entry: Entry,
+        kept: usize,
+        star: impl Iterator<Item = Corners>,
+        dying: impl Iterator<Item = Corners>,
+    ) {
+        let start = self.tris.len() as u32;
+        self.tris.extend(star);
+        let star = self.tris.len() as u32 - start;
+        self.tris.extend(dying);
+        self.entries.push(Entry {
+            start,
+            kept: kept as u32,
+            star,
+            dying: self.tris.len() as u32 - start - star,
+            ..entry
+        });
+    }
+
     /// The collapses.
     pub(super) fn entries(&self) -> &[Entry] {
         &self.entries
@@ -65,41 +102,5 @@ impl Handover {
     pub(super) fn dying(&self, e: &Entry) -> &[Corners] {
         let s = (e.start + e.star) as usize;
         &self.tris[s..s + e.dying as usize]
-    }
-}
-
-impl Work<'_> {
-    /// Adds the collapse `c` just applied, which made node `s` with `kept` triangles from
-    /// its kept child (listed first), to the collapses taken for the settling.
-    pub(super) fn take_over(&mut self, c: Collapse, s: u32, kept: usize) {
-        let Work {
-            taken,
-            tris,
-            node_pos,
-            faces_of,
-            nodes,
-            ..
-        } = self;
-        let corners = |f: u32| (f, tris[f as usize].c.map(|v| node_pos[v as usize]));
-        let star = faces_of.of(s);
-        let start = taken.tris.len() as u32;
-        taken.tris.extend(star.iter().map(|&f| corners(f)));
-        let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE);
-        taken.tris.extend(dying.map(corners));
-        taken.entries.push(Entry {
-            node: s,
-            error: nodes[s as usize].error,
-            at: node_pos[c.t as usize],
-            was: node_pos[c.u as usize],
-            start,
-            kept: kept as u32,
-            star: star.len() as u32,
-            dying: taken.tris.len() as u32 - start - star.len() as u32,
-        });
-    }
-
-    /// The collapses taken since the last call, for the settling.
-    pub(super) fn handover(&mut self) -> Handover {
-        std::mem::take(&mut self.taken)
     }
 }

@@ -4,8 +4,8 @@
 use caveclod_core::format::PositionClass;
 
 use super::geometry::{corner_of, cross, dot, len, next, prev, sub};
+use super::types::{Collapse, NONE};
 use super::work::Work;
-use super::{Collapse, NONE};
 
 /// What [`Work::verdict`] found.
 pub(super) enum Verdict {

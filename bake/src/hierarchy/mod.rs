@@ -68,170 +68,23 @@
 //! stably by cost. The threads never change the result: sums are added in a fixed order.
 
 mod bounds;
+mod build;
 mod collapse;
 mod geometry;
-pub(crate) use geometry::merge_cones;
 mod handover;
 mod legality;
 mod pass;
 mod prefetch;
 mod rank;
+mod records;
 mod setup;
 mod stars;
 mod surface;
 #[cfg(test)]
 mod tests;
+mod types;
 mod work;
 
-use crate::weld::Welded;
-
-const NONE: u32 = u32::MAX;
-
-/// Weights of the attribute kinds, relative to the mesh's bounding-box diagonal: an
-/// attribute difference of 1 costs as much as a distance of `weight × diagonal`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AttributeWeights {
-    /// Unit normals.
-    pub normal: f64,
-    /// Texture coordinates.
-    pub uv: f64,
-    /// Colours (0..1 per channel).
-    pub color: f64,
-}
-
-impl Default for AttributeWeights {
-    fn default() -> Self {
-        Self {
-            normal: 0.01,
-            uv: 0.02,
-            color: 0.01,
-        }
-    }
-}
-
-/// One collapse, as its split will replay it.
-#[derive(Clone, Copy, Debug)]
-pub struct Collapse {
-    /// The stationary child (kept).
-    pub t: u32,
-    /// The floating child (removed).
-    pub u: u32,
-    /// Triangle left of the edge `t→u` (dies).
-    pub fl: u32,
-    /// Triangle right of it, or `NONE` on a border (dies).
-    pub fr: u32,
-    /// `[fl_ccw, fl_clw, fr_clw, fr_ccw]`, triangle ids or `NONE`.
-    pub neighbours: [u32; 4],
-    /// Corner of `fl` holding `t` (the polygon's rotation).
-    pub rot_l: u8,
-    /// Corner of `fr` holding `t`.
-    pub rot_r: u8,
-}
-
-/// The result: nodes `0..positions` are the leaves; collapse `c` creates node
-/// `positions + c`.
-#[derive(Clone, Debug, Default)]
-pub struct Hierarchy {
-    /// Collapses in the order applied.
-    pub collapses: Vec<Collapse>,
-    /// Parent of every node, `NONE` for roots.
-    pub parent: Vec<u32>,
-    /// Position of every node.
-    pub node_position: Vec<u32>,
-    /// Radius of the sphere around the node's position bounding its descendants' triangles.
-    pub radius: Vec<f32>,
-    /// Normal cone `(axis, half angle)` of every node.
-    pub cone: Vec<([f32; 3], f32)>,
-    /// Error bound of every node (world units; zero for leaves).
-    pub error: Vec<f32>,
-    /// Current corners of every triangle at the end (the base mesh's for those alive).
-    pub corners: Vec<[u32; 3]>,
-    /// Which triangles are in the base mesh.
-    pub alive: Vec<bool>,
-    /// Number of batches (passes).
-    pub passes: u32,
-}
-
-/// Progress of a build: `(collapses so far, at most collapsible)`.
-pub type Progress<'a> = &'a mut dyn FnMut(u64, u64);
-
-/// Share of a pass's ranked collapses it may apply: the cheapest half. Applying every
-/// independent collapse lets an expensive one take a neighbourhood that a cheaper one of
-/// the next pass would have used; the cut costs passes, not depth to speak of.
-const PASS_SHARE: f64 = 0.5;
-
-/// Parts the parallel steps split their work into at most (rayon tasks).
-const MAX_THREADS: usize = 8;
-
-/// Triangles below which work stays on one thread.
-const PARALLEL_MIN: usize = 4096;
-
-/// The step of a build in which an invariant broke.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BuildStage {
-    /// The sequence of passes: one that applies nothing ends it, every other removes a node.
-    Passes,
-    /// A full pass (after one that applied nothing of its share): it goes through every
-    /// ranked collapse.
-    FullPass,
-    /// One pass's collapses: each ranked one is tried once, with at most one other direction.
-    Pass,
-}
-
-impl std::fmt::Display for BuildStage {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Self::Passes => "the collapse passes",
-            Self::FullPass => "a full collapse pass",
-            Self::Pass => "a collapse pass",
-        })
-    }
-}
-
-/// A build that broke an invariant its termination rests on (a baker bug): it stops with
-/// this error instead of looping.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "internal error: the hierarchy build broke an invariant in {stage} (pass {pass}, \
-     {collapses} of at most {most} collapses): {invariant}"
-)]
-pub struct BuildError {
-    /// Where.
-    pub stage: BuildStage,
-    /// The pass (from 1).
-    pub pass: u32,
-    /// Collapses applied so far.
-    pub collapses: u64,
-    /// Collapses the mesh allows at most (its positions less one).
-    pub most: u64,
-    /// The invariant that broke.
-    pub invariant: &'static str,
-}
-
-/// Builds the hierarchy of a welded mesh.
-pub fn build(
-    w: &Welded,
-    weights: &AttributeWeights,
-    progress: Progress<'_>,
-) -> Result<Hierarchy, BuildError> {
-    build_frozen(w, weights, &[], 0, progress)
-}
-
-/// Builds the hierarchy of a welded mesh whose positions `frozen[x]` (absent: not frozen)
-/// stay where they are: a frozen position is never the one a collapse removes, as if it were
-/// RIGID, but others may collapse onto it. A block of a larger mesh is built this way with its
-/// border frozen ([`crate::blocked`]), so that the blocks around it still fit. The passes end
-/// early after the first that leaves `stop_at` triangles or fewer (0: they go on until none
-/// applies anything); the collapses until then are those a full build begins with.
-pub fn build_frozen(
-    w: &Welded,
-    weights: &AttributeWeights,
-    frozen: &[bool],
-    stop_at: usize,
-    progress: Progress<'_>,
-) -> Result<Hierarchy, BuildError> {
-    let threads = rayon::current_num_threads().min(MAX_THREADS);
-    let mut work = setup::work(w, weights, frozen, threads);
-    pass::collapse_all(&mut work, (threads, pass::SEGMENT), stop_at, progress)?;
-    Ok(work.into_hierarchy())
-}
+pub use build::{build, build_frozen};
+pub(crate) use geometry::merge_cones;
+pub use types::{AttributeWeights, BuildError, BuildStage, Collapse, Hierarchy, Progress};

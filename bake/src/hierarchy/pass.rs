@@ -4,14 +4,19 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use super::bounds::{Frame, Points};
+use super::bounds::Points;
 use super::geometry::corner_of;
 use super::handover::Handover;
 use super::legality::Verdict;
 use super::prefetch::prefetch;
 use super::rank::{order_key, rank_all, Ranked, Slots};
+use super::types::{BuildError, BuildStage, Progress, NONE};
 use super::work::Work;
-use super::{BuildError, BuildStage, Progress, NONE, PASS_SHARE};
+
+/// Share of a pass's ranked collapses it may apply: the cheapest half. Applying every
+/// independent collapse lets an expensive one take a neighbourhood that a cheaper one of
+/// the next pass would have used; the cut costs passes, not depth to speak of.
+pub(super) const PASS_SHARE: f64 = 0.5;
 
 /// Collapses a pass applies between handing the ones before over to the settling of the
 /// error bounds, which runs beside the next ones. While a run settles, the next is taken
@@ -71,7 +76,7 @@ pub(super) fn collapse_all(
             ));
         }
         if applied == 0 && (full || !cut) || stop_at > 0 && live_triangles(work) <= stop_at {
-            points.settle(&carried, Frame::of(work), threads, &mut errors);
+            points.settle(&carried, work.frame(), threads, &mut errors);
             work.record_errors(&mut errors);
             return Ok(());
         }
@@ -167,7 +172,7 @@ impl Passes {
     ) -> Result<(u64, bool), BuildError> {
         let mut errors = Vec::new();
         // The last pass's last collapses settle beside the ranking, which reads no points.
-        let frame = Frame::of(work);
+        let frame = work.frame();
         let ((count, limit), ()) = rayon::join(
             || self.rank(work, full, threads),
             || points.settle(carried, frame, threads, &mut errors),
@@ -181,7 +186,7 @@ impl Passes {
         };
         let mut pending = Handover::default();
         loop {
-            let frame = Frame::of(work);
+            let frame = work.frame();
             let until = tries.applied.saturating_add(self.segment);
             let (end, ()) = rayon::join(
                 || self.apply_until(work, pass, &mut tries, until),

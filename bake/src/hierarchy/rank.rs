@@ -3,8 +3,9 @@
 
 use super::geometry::{corner_of, next, prev};
 use super::prefetch::prefetch;
-use super::work::{Tri, Work};
-use super::{NONE, PARALLEL_MIN};
+use super::records::Tri;
+use super::types::{NONE, PARALLEL_MIN};
+use super::work::Work;
 use rayon::prelude::*;
 
 /// A collapse as a pass ranks it: `(cost, t, u)`.

@@ -5,10 +5,11 @@ use std::borrow::Cow;
 
 use super::geometry::{corner_of, cross, dot, len, next, norm, prev, sub, V3};
 use super::handover::Handover;
+use super::records::{centred, Marks, NodeOut, PosInfo, Tri, Wedge};
 use super::stars::Stars;
-use super::work::{centred, Marks, NodeOut, PosInfo, Tri, Wedge, Work};
-use super::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
-use crate::quadric::{Layout, Quadric, Quadrics, QuadricsMut, M};
+use super::types::{AttributeWeights, Hierarchy, NONE, PARALLEL_MIN};
+use super::work::{scaled_attributes, Work};
+use crate::quadric::{Layout, Quadric, Quadrics, QuadricsMut};
 use crate::weld::Welded;
 use rayon::prelude::*;
 
@@ -17,7 +18,8 @@ use rayon::prelude::*;
 /// is where the error would otherwise be largest.
 const BOUNDARY_WEIGHT: f64 = 10.0;
 
-/// Triangle quadrics computed at a time (a block's take about 5 MB).
+/// Triangle quadrics computed at a time, in one reused block of rows: enough to keep every
+/// thread busy, few enough that the block stays small beside the wedges' quadrics.
 const QUADRIC_BLOCK: usize = 16384;
 
 /// What the set-up steps share.
@@ -332,32 +334,6 @@ impl Work<'_> {
         }
         (valence, cone, radius as f32)
     }
-}
-
-/// The attributes `attr` of `w`, each kind scaled by its weight times `scale`.
-pub(super) fn scaled_attributes(
-    w: &Welded,
-    attr: u32,
-    weights: &AttributeWeights,
-    scale: f64,
-) -> [f64; M] {
-    let a = &w.attributes[attr as usize];
-    let normal = if a.normal_from_geometry {
-        0.0
-    } else {
-        weights.normal
-    };
-    let (wn, wu, wc) = (normal * scale, weights.uv * scale, weights.color * scale);
-    [
-        a.normal[0] as f64 * wn,
-        a.normal[1] as f64 * wn,
-        a.normal[2] as f64 * wn,
-        a.uv[0] as f64 * wu,
-        a.uv[1] as f64 * wu,
-        a.color[0] as f64 * wc,
-        a.color[1] as f64 * wc,
-        a.color[2] as f64 * wc,
-    ]
 }
 
 /// `f(i)` for `i` in `0..n`, in order, computed on the rayon pool (on one thread below

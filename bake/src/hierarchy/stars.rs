@@ -154,7 +154,7 @@ impl Stars {
 #[cfg(test)]
 mod tests {
     use super::Stars;
-    use crate::hierarchy::NONE;
+    use crate::hierarchy::types::NONE;
 
     /// The pool holds what a vector per node would, through removals, merges (dropping a
     /// triangle or not) and the compactions they set off.

@@ -9,9 +9,10 @@
 //! (their centroids and edge midpoints) to the surface just before the collapse: the kept
 //! child's triangles, the removed child's as they were, and the two that died.
 
-use super::bounds::{Frame, Probe};
+use super::bounds::Probe;
 use super::geometry::{corner_of, next, prev, V3};
 use super::handover::{Entry, Handover};
+use super::records::Frame;
 
 /// The sample points of a triangle with corners `c` that moved with the node at `s`: its
 /// centroid and the midpoints of its two edges at `s` (the third edge did not move: it is

@@ -1,4 +1,6 @@
 use super::geometry::{point_triangle_d2, V3};
+use super::pass::PASS_SHARE;
+use super::types::{NONE, PARALLEL_MIN};
 use super::*;
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
@@ -100,7 +102,7 @@ fn every_input_position_is_within_the_roots_error_of_the_base_mesh() {
 #[test]
 fn a_full_share_cuts_nothing() {
     use super::rank::{order_key, Ranked, Slots};
-    use super::work::Tri;
+    use super::records::Tri;
     for n in [100usize, 10_000] {
         // A triangle per candidate, its first slot allowed in one direction.
         let mut slots = Slots::new(n);
@@ -308,7 +310,7 @@ fn the_live_list_made_on_the_first_removal_keeps_the_slots() {
     slots.retain_alive(&alive);
     // Triangles 1, 2, 4, 5, 7, 8 are left, with their rankings.
     let tris = vec![
-        super::work::Tri {
+        super::records::Tri {
             c: [0, 1, 2],
             o: [NONE; 3]
         };

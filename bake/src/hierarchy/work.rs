@@ -3,56 +3,14 @@
 
 use std::borrow::Cow;
 
-use caveclod_core::format::PositionClass;
-
-use super::bounds::Frame;
 use super::geometry::{corner_of, cross, next, prev, sub, V3};
-use super::handover::Handover;
+use super::handover::{Entry, Handover};
 use super::prefetch::prefetch;
-use super::setup::scaled_attributes;
+use super::records::{Frame, Marks, NodeOut, PosInfo, Tri, Wedge};
 use super::stars::Stars;
-use super::{AttributeWeights, Collapse, Hierarchy, NONE};
+use super::types::{AttributeWeights, Collapse, Hierarchy, NONE};
 use crate::quadric::{Quadrics, M};
 use crate::weld::Welded;
-
-/// One surface group at a position, with that group's attributes there: `(group,
-/// attribute id)`, a vertex of the welded mesh's lists ([`crate::weld::VertexLists`]), the
-/// attributes an index into the welded mesh's ([`Work::attrs_of`] scales them when a cost
-/// reads them, which keeps the wedge 64 bytes smaller than holding them scaled). Its
-/// quadric is the row of [`Work::quadrics`] with its index, over the attributes the mesh
-/// has.
-pub(super) type Wedge = (u32, u32);
-
-/// A triangle of the mesh being simplified: 24 bytes (its normal is computed where a
-/// check reads it, from the corners, and its surface group read from the welded mesh,
-/// rather than kept).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Tri {
-    /// Current corners (nodes), counter-clockwise.
-    pub(super) c: [u32; 3],
-    /// `o[k]`: the triangle across the edge `c[k] → c[k + 1]`, or `NONE`. The mesh stays
-    /// an oriented manifold, so that triangle holds the edge the other way round.
-    pub(super) o: [u32; 3],
-}
-
-/// What the hierarchy records of a node.
-#[derive(Clone, Copy)]
-pub(super) struct NodeOut {
-    pub(super) parent: u32,
-    pub(super) error: f32,
-    pub(super) radius: f32,
-    pub(super) cone: ([f32; 3], f32),
-}
-
-/// What the surface-group rules read of a position.
-#[derive(Clone, Copy)]
-pub(super) struct PosInfo {
-    pub(super) class: PositionClass,
-    /// Never removed by a collapse ([`super::build_frozen`]).
-    pub(super) frozen: bool,
-    /// The position's one surface group, or `NONE` when it has several.
-    pub(super) group: u32,
-}
 
 /// The mesh being simplified, with per node its triangles.
 pub(super) struct Work<'w> {
@@ -230,7 +188,7 @@ impl Work<'_> {
     /// same bits every time, [`Frame::at`]) rather than kept, which saves 24 bytes a position.
     #[inline]
     pub(super) fn at(&self, x: usize) -> V3 {
-        Frame::of(self).at(x as u32)
+        self.frame().at(x as u32)
     }
 
     /// The number of positions (leaves).
@@ -313,6 +271,63 @@ impl Work<'_> {
     }
 }
 
+impl<'w> Work<'w> {
+    /// The frame of the work's positions, borrowing its welded mesh rather than the work.
+    #[inline]
+    pub(super) fn frame(&self) -> Frame<'w> {
+        Frame::new(&self.w.positions, self.centre)
+    }
+}
+
+impl Work<'_> {
+    /// Adds the collapse `c` just applied, which made node `s` with `kept` triangles from
+    /// its kept child (listed first), to the collapses taken for the settling.
+    pub(super) fn take_over(&mut self, c: Collapse, s: u32, kept: usize) {
+        let (tris, node_pos) = (&self.tris, &self.node_pos);
+        let corners = |f: u32| (f, tris[f as usize].c.map(|v| node_pos[v as usize]));
+        let entry = Entry::new(
+            s,
+            self.nodes[s as usize].error,
+            node_pos[c.t as usize],
+            node_pos[c.u as usize],
+        );
+        let star = self.faces_of.of(s).iter().map(|&f| corners(f));
+        let dying = [c.fl, c.fr].into_iter().filter(|&f| f != NONE).map(corners);
+        self.taken.push(entry, kept, star, dying);
+    }
+
+    /// The collapses taken since the last call, for the settling.
+    pub(super) fn handover(&mut self) -> Handover {
+        std::mem::take(&mut self.taken)
+    }
+}
+
+/// The attributes `attr` of `w`, each kind scaled by its weight times `scale`.
+pub(super) fn scaled_attributes(
+    w: &Welded,
+    attr: u32,
+    weights: &AttributeWeights,
+    scale: f64,
+) -> [f64; M] {
+    let a = &w.attributes[attr as usize];
+    let normal = if a.normal_from_geometry {
+        0.0
+    } else {
+        weights.normal
+    };
+    let (wn, wu, wc) = (normal * scale, weights.uv * scale, weights.color * scale);
+    [
+        a.normal[0] as f64 * wn,
+        a.normal[1] as f64 * wn,
+        a.normal[2] as f64 * wn,
+        a.uv[0] as f64 * wu,
+        a.uv[1] as f64 * wu,
+        a.color[0] as f64 * wc,
+        a.color[1] as f64 * wc,
+        a.color[2] as f64 * wc,
+    ]
+}
+
 /// The runs of wedges of the positions not `gone` between two that are, where each run
 /// moves to (in order, each after the one before), and the positions' wedges' starts
 /// after the move (a gone position's is the next kept one's, so its range is empty).
@@ -349,12 +364,6 @@ pub(super) fn kept_runs(
 /// a time.
 const RELEASE_PARTS: usize = 8;
 
-/// Position `q` relative to `centre`, in f64.
-#[inline]
-pub(super) fn centred(q: [f32; 3], centre: V3) -> V3 {
-    sub(q.map(f64::from), centre)
-}
-
 impl Work<'_> {
     /// The hierarchy, with the bounds gathered per node and the triangles as they end. The
     /// work's tables are freed first, and the nodes and triangles once copied, so that the
@@ -386,34 +395,5 @@ impl Work<'_> {
         drop(self.tris);
         h.alive = self.alive;
         h
-    }
-}
-
-/// A flag per position that a pass sets and the next pass clears: a bit each, so that the
-/// flags of a whole mesh stay in cache while a pass tests them at random.
-#[derive(Debug, Default)]
-pub(super) struct Marks(Vec<u64>);
-
-impl Marks {
-    /// Flags for `n` positions, none set.
-    pub(super) fn new(n: usize) -> Self {
-        Self(vec![0; n.div_ceil(64)])
-    }
-
-    /// Clears every flag.
-    pub(super) fn clear(&mut self) {
-        self.0.fill(0);
-    }
-
-    /// Whether position `p`'s flag is set.
-    #[inline]
-    pub(super) fn get(&self, p: usize) -> bool {
-        self.0[p / 64] >> (p % 64) & 1 != 0
-    }
-
-    /// Sets position `p`'s flag.
-    #[inline]
-    pub(super) fn set(&mut self, p: usize) {
-        self.0[p / 64] |= 1 << (p % 64);
     }
 }

@@ -21,8 +21,9 @@
 //! feet are converted; arc-seconds and radians need [`ImportOptions::spacing`], which, when
 //! given, also overrides the spacing of metre and foot grids.
 
+use super::error::{ImportError, Source};
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
+use super::options::{ImportOptions, ImportReport, Loader};
 use crate::mesh::Mesh;
 
 const BLOCK: usize = 1024;

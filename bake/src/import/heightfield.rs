@@ -11,8 +11,9 @@
 //! and holes) and UV (`u` west to east, `v` north to south, both 0..=1 over the grid's extent);
 //! posts that no cell uses are not emitted at all.
 
-use super::{next_index, push_surface, HeightfieldInfo, ImportReport, Source};
-use crate::import::ImportError;
+use super::error::{ImportError, Source};
+use super::ids::{next_index, push_surface};
+use super::options::{HeightfieldInfo, ImportReport};
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
 /// A grid of heights in metres.

@@ -32,56 +32,24 @@ mod error;
 mod gltf;
 #[cfg(any(feature = "dem", feature = "npy"))]
 mod heightfield;
+mod ids;
 #[cfg(feature = "npy")]
 mod npy;
 #[cfg(feature = "obj")]
 mod obj;
+mod options;
 #[cfg(feature = "ply")]
-pub(crate) mod ply;
+mod ply;
 
 use std::panic::{self, AssertUnwindSafe};
 use std::path::Path;
 
 pub use error::ImportError;
-pub(crate) use error::Source;
+pub use options::{HeightfieldInfo, ImportOptions, ImportReport, Loader};
+
+use error::Source;
 
 use crate::mesh::Mesh;
-
-/// Options that formats without units or scale need.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ImportOptions {
-    /// Metres per grid cell: required for `.npy` heightfields; for `.dem` it overrides the
-    /// spacing the header gives (and is required when the header's ground units are
-    /// arc-seconds or radians). Ignored by mesh formats.
-    pub spacing: Option<f32>,
-}
-
-/// What an import skipped or wants the user to know, beside the mesh.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ImportReport {
-    /// Primitives that are not triangles and were skipped: glTF primitives in `POINTS` or
-    /// `LINE*` modes, OBJ `p` and `l` statements, PLY faces with fewer than three vertices.
-    pub skipped_primitives: usize,
-    /// Human-readable notes (a missing MTL file, holes in a heightfield, ...), each a sentence.
-    pub notes: Vec<String>,
-    /// The grid, for heightfields (`.dem`, `.npy`).
-    pub heightfield: Option<HeightfieldInfo>,
-}
-
-/// The grid a heightfield was read into.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HeightfieldInfo {
-    /// Posts along x (east).
-    pub columns: usize,
-    /// Posts along z (south).
-    pub rows: usize,
-    /// Posts with a height (the grid's other posts are missing: voids, irregular corners).
-    pub posts: usize,
-    /// Metres between neighbouring posts along x and z.
-    pub spacing: [f32; 2],
-    /// Lowest and highest height over all posts, in metres.
-    pub height_range: [f32; 2],
-}
 
 /// Reads the mesh in `path`, choosing the importer by extension.
 ///
@@ -89,10 +57,6 @@ pub struct HeightfieldInfo {
 pub fn import(path: &Path, options: &ImportOptions) -> Result<Mesh, ImportError> {
     import_with_report(path, options).map(|(mesh, _)| mesh)
 }
-
-/// Reads a file that an input refers to (an OBJ's `mtllib`, a glTF buffer's URI) by the name
-/// the input gives.
-pub type Loader<'a> = dyn FnMut(&str) -> std::io::Result<Vec<u8>> + 'a;
 
 /// Like [`import`], and also returns what was skipped and any notes.
 pub fn import_with_report(
@@ -235,37 +199,4 @@ fn run_importer(
         });
     }
     Ok((mesh, report))
-}
-
-/// sRGB-encoded component in 0..=1 to linear.
-pub(crate) fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Adds a surface, failing when a triangle could no longer name it (`u16` ids).
-pub(crate) fn push_surface(
-    source: &Source,
-    mesh: &mut Mesh,
-    surface: crate::mesh::Surface,
-) -> Result<u16, ImportError> {
-    let id = u16::try_from(mesh.surfaces.len()).map_err(|_| {
-        source.unsupported(
-            format!("material '{}'", surface.name),
-            "more than 65,536 materials",
-        )
-    })?;
-    mesh.surfaces.push(surface);
-    Ok(id)
-}
-
-/// `u32` index for the next element of a stream of length `len`.
-pub(crate) fn next_index(source: &Source, len: usize, what: &str) -> Result<u32, ImportError> {
-    u32::try_from(len)
-        .ok()
-        .filter(|&i| i != crate::mesh::NO_ATTRIBUTE)
-        .ok_or_else(|| source.unsupported("mesh", format!("more than 2^32 - 1 {what}")))
 }

@@ -10,8 +10,9 @@
 //! SRTM void), become holes. Rejected with an error: Fortran order, other ranks, structured
 //! or other dtypes, ±inf heights, a data section of the wrong length.
 
+use super::error::{ImportError, Source};
 use super::heightfield::{heightfield_to_mesh, Heightfield};
-use super::{ImportError, ImportOptions, ImportReport, Loader, Source};
+use super::options::{ImportOptions, ImportReport, Loader};
 use crate::mesh::Mesh;
 
 pub(crate) fn import_npy(

@@ -22,8 +22,9 @@
 //! input: the soup streams through [`Clusterer::add`] leaf by leaf.
 
 use super::quadric::{Quadric, DIM};
-use super::soup::{decode_normal, srgb8_table, Cube, SoupTriangle, HAS_COLOR, HAS_NORMAL, HAS_UV};
-use crate::fxhash::{FxHashMap, FxHashSet};
+use super::soup::{decode_normal, Cube, SoupTriangle, HAS_COLOR, HAS_NORMAL, HAS_UV};
+use crate::base::colour::srgb8_table;
+use crate::base::fxhash::{FxHashMap, FxHashSet};
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
 /// Attribute weights, in cell units per unit of the attribute.

@@ -27,8 +27,8 @@
 //!
 //! Two passes over the faces with keys alone on disk, rather than one pass that writes every
 //! triangle's record to sorted runs: writing temporary files is what a large bake spends its
-//! time on (fresh pages of the page cache), while reading the input again is cheap; the 20M
-//! triangle terrain writes 320 MB of temporary files instead of 2.5 GB.
+//! time on (fresh pages of the page cache), while reading the input again is cheap, and a key
+//! is 8 bytes where a triangle's record is 96 ([`soup`]).
 //!
 //! The finest level is an ordinary [`Mesh`], which [`crate::pipeline::bake_out_of_core`] hands
 //! to the in-core pipeline for the view-dependent hierarchy. The target size comes from the
@@ -42,144 +42,30 @@
 //! [`cluster_mesh`].
 
 pub mod cluster;
+mod error;
 pub mod multires;
 pub mod octree;
+mod options;
 pub mod pass;
 pub mod quadric;
 pub mod sort;
 pub mod soup;
 pub mod stream;
-pub mod temp;
 
-use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
+pub use crate::base::memory::peak_rss_bytes;
+pub use crate::base::temp::{self, parse_size, TempSpace};
 pub use cluster::{ClusterOptions, Clusterer, Weights};
+pub use error::OocError;
 pub use multires::{MultiresOctree, MultiresOptions};
-pub use temp::{parse_size, TempSpace};
+pub use options::{OocOptions, OocStage};
 
+use crate::base::colour::encode_colour;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 pub use soup::Cube;
-use soup::{encode_normal, linear_to_srgb8, Corner, SoupTriangle, KEY_LEVELS};
-
-/// Why an out-of-core simplification failed.
-#[derive(Debug, thiserror::Error)]
-pub enum OocError {
-    /// The input could not be read.
-    #[error("{file}: {what}: {source}")]
-    Io {
-        /// The input.
-        file: String,
-        /// What was being done.
-        what: String,
-        /// The operating-system error.
-        #[source]
-        source: io::Error,
-    },
-    /// The input is malformed or ends early, at a named element.
-    #[error("{file}: {at}: {message}")]
-    Input {
-        /// The input.
-        file: String,
-        /// The element at fault (`face 12`, `line 7`, `header`).
-        at: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// The input is valid but not something the streaming readers take.
-    #[error("{file}: {message}")]
-    Unsupported {
-        /// The input.
-        file: String,
-        /// Why.
-        message: String,
-    },
-    /// The input has no triangles.
-    #[error("{file}: no triangles")]
-    Empty {
-        /// The input.
-        file: String,
-    },
-    /// A temporary file could not be written or read (a full disk, a quota).
-    #[error("temporary files: {what}: {source}")]
-    Temp {
-        /// What was being done.
-        what: String,
-        /// The operating-system error.
-        #[source]
-        source: io::Error,
-    },
-    /// The memory budget cannot hold what one step needs.
-    #[error("memory budget of {budget} bytes is too small: {what} needs {needed} bytes (raise --memory-budget{hint})")]
-    Budget {
-        /// The budget.
-        budget: u64,
-        /// What does not fit.
-        what: String,
-        /// Bytes it needs.
-        needed: u64,
-        /// A further way out, if any.
-        hint: &'static str,
-    },
-}
-
-impl OocError {
-    pub(crate) fn io(file: &str, what: &str, source: io::Error) -> Self {
-        Self::Io {
-            file: file.to_string(),
-            what: what.to_string(),
-            source,
-        }
-    }
-    pub(crate) fn temp(what: &str, source: io::Error) -> Self {
-        Self::Temp {
-            what: what.to_string(),
-            source,
-        }
-    }
-}
-
-/// Settings of an out-of-core run.
-#[derive(Clone, Debug, PartialEq)]
-pub struct OocOptions {
-    /// Bytes the whole bake may use (approximately: the chunks, caches and output are sized
-    /// from it).
-    pub memory_budget: u64,
-    /// Where to make the temporary directory (the system's temporary directory if `None`).
-    pub temp_dir: Option<PathBuf>,
-    /// Most bytes of temporary files (unlimited if `None`): a full disk on demand.
-    pub temp_quota: Option<u64>,
-    /// Most triangles in an octree leaf (below the maximum depth).
-    pub leaf_triangles: u64,
-    /// Maximum octree depth (at most 21).
-    pub max_depth: u32,
-    /// Output triangles to aim for (from the budget if `None`).
-    pub target_triangles: Option<u64>,
-    /// Attribute weights of the quadrics.
-    pub weights: Weights,
-    /// Clustering threads.
-    pub threads: usize,
-    /// Build the multiresolution octree ([`multires`]) with these settings, or not.
-    pub octree: Option<MultiresOptions>,
-}
-
-impl OocOptions {
-    /// Defaults for a budget.
-    pub fn with_budget(memory_budget: u64) -> Self {
-        Self {
-            memory_budget,
-            temp_dir: None,
-            temp_quota: None,
-            leaf_triangles: 1 << 16,
-            max_depth: 12,
-            target_triangles: None,
-            weights: Weights::default(),
-            threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(8)),
-            octree: Some(MultiresOptions::default()),
-        }
-    }
-}
+use soup::{encode_normal, Corner, SoupTriangle, KEY_LEVELS};
 
 /// Output triangles whose in-core hierarchy build fits `budget` (about 1.6 KB each, with room
 /// for the clustering).
@@ -231,17 +117,6 @@ pub struct Simplified {
     pub octree: Option<MultiresOctree>,
     /// What the run did.
     pub stats: OocStats,
-}
-
-/// Progress of a run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OocStage {
-    /// Reading the input: triangles `(done, expected)`.
-    Read(u64, u64),
-    /// Merging sorted runs: `(done, total)`.
-    Merge(u64, u64),
-    /// Clustering at a grid resolution: triangles `(resolution, done, total)`.
-    Cluster(u32, u64, u64),
 }
 
 /// Simplifies the mesh in `path` (`.ply` or `.obj`) out of core.
@@ -444,13 +319,7 @@ pub fn mesh_soup(mesh: &Mesh, cube: &Cube) -> Vec<SoupTriangle> {
                     c.uv = mesh.uvs[t.uv[k] as usize];
                 }
                 if flags & soup::HAS_COLOR != 0 {
-                    let col = mesh.colors[t.color[k] as usize];
-                    c.color = [
-                        linear_to_srgb8(col[0]),
-                        linear_to_srgb8(col[1]),
-                        linear_to_srgb8(col[2]),
-                        (col[3].clamp(0.0, 1.0) * 255.0).round() as u8,
-                    ];
+                    c.color = encode_colour(mesh.colors[t.color[k] as usize]);
                 }
                 c
             });
@@ -479,18 +348,4 @@ pub fn cluster_mesh_in(mesh: &Mesh, cube: Cube, options: ClusterOptions) -> (Mes
         c.add(t);
     }
     (c.finish(&mesh.surfaces), c)
-}
-
-/// Peak resident set size of this process (`VmHWM` of `/proc/self/status`), if known.
-pub fn peak_rss_bytes() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line
-        .trim_start_matches("VmHWM:")
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kb * 1024)
 }

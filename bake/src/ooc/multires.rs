@@ -31,9 +31,9 @@
 //! lies in, so neighbouring nodes overlap by the triangles crossing their border: where both
 //! are drawn at the same level the shared triangles are drawn twice in the same place (same
 //! vertices, same depth), and where they are drawn at different levels each side reaches
-//! past the border and covers the gap the other leaves (on a test terrain seen low, the pixels
-//! open through the surface at level changes went from 123 to 6 of 42,291; the overlap costs
-//! about 25% more triangles at 8 cells per block, less at the default 32). The vertices are
+//! past the border and covers the gap the other leaves, so the surface stays closed where
+//! levels change. The overlap draws the border triangles twice, a smaller share of a node's
+//! triangles the more cells a block has. The vertices are
 //! the level's cluster representatives, shared by every node of the level that uses them, in
 //! one vertex buffer for all levels.
 //!
@@ -59,7 +59,7 @@
 
 use super::cluster::{cell_position, cluster_attributes, Cluster, Clusterer};
 use super::soup::{HAS_NORMAL, HAS_UV};
-use crate::fxhash::{FxHashMap, FxHashSet};
+use crate::base::fxhash::{FxHashMap, FxHashSet};
 use caveclod_core::format::Vertex;
 use caveclod_core::octree::{OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
 

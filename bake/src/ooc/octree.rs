@@ -12,8 +12,8 @@
 use std::fs::File;
 use std::os::unix::fs::FileExt;
 
+use super::error::OocError;
 use super::soup::{key_prefix, KEY_LEVELS};
-use super::OocError;
 
 /// "No child".
 pub const NO_NODE: u32 = u32::MAX;

@@ -19,10 +19,11 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::Arc;
 
 use super::cluster::{ClusterOptions, Clusterer};
+use super::error::OocError;
 use super::octree::Node;
+use super::options::{OocOptions, OocStage};
 use super::soup::{Cube, SoupTriangle, KEY_LEVELS};
 use super::stream::{Input, SoupSink};
-use super::{OocError, OocOptions, OocStage};
 
 /// Parts the leaves are shared into: the most clustering threads, and independent of their
 /// number so that the result is too.

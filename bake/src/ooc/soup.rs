@@ -9,6 +9,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+pub use crate::base::colour::{linear_to_srgb8, srgb8_table};
+
 /// Levels of the Morton key (3 bits each).
 pub const KEY_LEVELS: u32 = 21;
 
@@ -181,22 +183,6 @@ pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
     } else {
         [0.0, 0.0, 1.0]
     }
-}
-
-/// Linear colour component in 0..=1 to sRGB8.
-pub fn linear_to_srgb8(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0).round() as u8
-}
-
-/// sRGB8 to linear, for all 256 values.
-pub fn srgb8_table() -> [f32; 256] {
-    std::array::from_fn(|i| crate::import::srgb_to_linear(i as f32 / 255.0))
 }
 
 #[cfg(test)]

@@ -3,33 +3,14 @@
 //! given normals follow from the geometry.
 
 use super::repair::Kept;
-use super::{Attributes, Repairs, GEOMETRIC_NORMAL_DEGREES, NONE};
-use crate::fxhash::hash_of;
+use super::vector::{cross, dot, sub};
+use super::welded::{Attributes, Repairs, GEOMETRIC_NORMAL_DEGREES, NONE};
+use crate::base::fxhash::hash_of;
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
 use hashbrown::hash_table::{Entry, HashTable};
 use rayon::prelude::*;
 
-pub(super) fn sub(a: [f32; 3], b: [f32; 3]) -> [f64; 3] {
-    [
-        (a[0] - b[0]) as f64,
-        (a[1] - b[1]) as f64,
-        (a[2] - b[2]) as f64,
-    ]
-}
-
-pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(super) fn normalize(v: [f64; 3]) -> [f32; 3] {
+fn normalize(v: [f64; 3]) -> [f32; 3] {
     let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     if l > 0.0 {
         [(v[0] / l) as f32, (v[1] / l) as f32, (v[2] / l) as f32]

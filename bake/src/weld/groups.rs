@@ -4,10 +4,17 @@
 use caveclod_core::format::PositionClass;
 
 use super::repair::Kept;
-use super::{ek, VertexLists, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use super::vertex_lists::VertexLists;
+use super::welded::NONE;
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
+
+/// Directed edge `a → b` as a map key.
+#[inline]
+fn ek(a: u32, b: u32) -> u64 {
+    (a as u64) << 32 | b as u64
+}
 
 /// The surface groups of the kept triangles.
 pub(super) struct Groups {

@@ -1,9 +1,9 @@
 //! Steps 1–4: welding identical positions, dropping degenerate and duplicate triangles,
 //! cutting non-manifold edges and splitting non-manifold vertices.
 
-use super::attributes::{cross, sub};
-use super::{Repairs, WeldError, NONE};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use super::vector::{cross, sub};
+use super::welded::{Repairs, WeldError, NONE};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 

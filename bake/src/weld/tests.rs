@@ -1,5 +1,6 @@
 use super::*;
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use caveclod_core::format::PositionClass;
 
 /// A mesh of the given points and triangles, one surface, no attributes.
 fn mesh(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Mesh {

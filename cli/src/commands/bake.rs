@@ -2,12 +2,14 @@
 //! levels, write the .clod file and print its report.
 
 use caveclod_bake::baked::{BakeWriteError, Baked};
-use caveclod_bake::blocked::{build_file_spilled, BlockedOptions, LevelStats, SpilledBuild};
+use caveclod_bake::blocked::{BlockedOptions, LevelStats};
 use caveclod_bake::clod_file::Inspect;
 use caveclod_bake::gmesh::{GMeshData, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::ooc::{MultiresOctree, OocOptions, OocStage, OocStats};
-use caveclod_bake::pipeline::{build_file, build_out_of_core, Built, Stage};
+use caveclod_bake::pipeline::{
+    build_file, build_file_spilled, build_out_of_core, Built, SpilledBuild, Stage,
+};
 use caveclod_bake::report::BakeInfo;
 use caveclod_cli::info as report;
 use caveclod_cli::outputs;

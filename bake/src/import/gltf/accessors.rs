@@ -4,8 +4,8 @@
 use ::gltf::json;
 use json::accessor::{ComponentType, Type};
 
-use super::{Expect, Importer, Raw, Source};
-use crate::import::ImportError;
+use super::importer::{Expect, Importer, Raw};
+use crate::import::error::{ImportError, Source};
 
 impl Importer<'_> {
     pub(super) fn accessor_label(&self, index: usize, what: &str) -> String {

@@ -3,8 +3,8 @@
 
 use ::gltf::json;
 
-use super::{Loader, Source};
-use crate::import::ImportError;
+use crate::import::error::{ImportError, Source};
+use crate::import::options::Loader;
 
 /// The JSON and BIN chunks of a GLB file.
 pub(super) fn split_glb<'a>(

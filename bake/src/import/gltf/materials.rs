@@ -6,8 +6,9 @@ use ::gltf::json;
 use ::gltf::json::validation::Checked;
 
 use super::buffers::{decode_base64, decode_uri};
-use super::Importer;
-use crate::import::{push_surface, ImportError};
+use super::importer::Importer;
+use crate::import::error::ImportError;
+use crate::import::ids::push_surface;
 use crate::mesh::{AlphaMode, Surface, Texture};
 
 impl Importer<'_> {

@@ -29,6 +29,7 @@
 
 mod accessors;
 mod buffers;
+mod importer;
 mod materials;
 mod primitives;
 mod scene;
@@ -40,10 +41,11 @@ use std::collections::HashMap;
 use ::gltf::json;
 use ::gltf::Semantic;
 
-use super::{ImportError, Loader};
-use super::{ImportOptions, ImportReport, Source};
+use crate::import::error::{ImportError, Source};
+use crate::import::options::{ImportOptions, ImportReport, Loader};
 use crate::mesh::Mesh;
 use buffers::{load_buffers, split_glb};
+use importer::Importer;
 
 pub(crate) fn import_gltf(
     source: &Source,
@@ -270,70 +272,4 @@ fn fill_position_bounds(
         ));
     }
     Ok(())
-}
-
-/// What an attribute accessor must look like.
-struct Expect {
-    semantic: &'static str,
-    dims: &'static [usize],
-}
-
-/// An accessor's values and components per element.
-struct Raw {
-    values: Vec<f64>,
-    dims: usize,
-}
-
-/// The mesh being built from a validated document and its loaded buffers.
-struct Importer<'a> {
-    source: &'a Source,
-    root: &'a json::Root,
-    buffers: &'a [Vec<u8>],
-    mesh: Mesh,
-    /// Material index (`None`: no material) to surface id.
-    surfaces: HashMap<Option<usize>, u16>,
-    report: &'a mut ImportReport,
-    strip_joints: usize,
-    ignored_targets: usize,
-    ignored_skins: usize,
-}
-
-impl Importer<'_> {
-    /// The mesh, with notes about what was dropped or ignored.
-    fn finish(self) -> Mesh {
-        let Importer {
-            mesh,
-            report,
-            strip_joints,
-            ignored_targets,
-            ignored_skins,
-            source,
-            ..
-        } = self;
-        if strip_joints > 0 {
-            report.notes.push(format!(
-                "{}: {strip_joints} degenerate triangles joining strips or fans dropped",
-                source.name
-            ));
-        }
-        if report.skipped_primitives > 0 {
-            report.notes.push(format!(
-                "{}: {} POINTS or LINES primitives skipped",
-                source.name, report.skipped_primitives
-            ));
-        }
-        if ignored_targets > 0 {
-            report.notes.push(format!(
-                "{}: morph targets of {ignored_targets} primitives ignored (base shape imported)",
-                source.name
-            ));
-        }
-        if ignored_skins > 0 {
-            report.notes.push(format!(
-                "{}: skins of {ignored_skins} nodes ignored (bind pose imported)",
-                source.name
-            ));
-        }
-        mesh
-    }
 }

@@ -4,9 +4,10 @@
 use ::gltf::mesh::Mode;
 use ::gltf::Semantic;
 
+use super::importer::{Expect, Importer};
 use super::scene::{Mat4, Placement};
-use super::{Expect, Importer};
-use crate::import::{next_index, ImportError};
+use crate::import::error::ImportError;
+use crate::import::ids::next_index;
 use crate::mesh::{Triangle, NO_ATTRIBUTE};
 
 /// Names a primitive's parts in errors and notes: "POSITION of mesh 'Tri' primitive 0".

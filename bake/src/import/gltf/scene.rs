@@ -1,8 +1,8 @@
 //! The scene's node hierarchy: which nodes are drawn, their world matrices, and how a matrix
 //! maps positions and normals.
 
-use super::{Importer, Source};
-use crate::import::ImportError;
+use super::importer::Importer;
+use crate::import::error::{ImportError, Source};
 
 /// Column-major 4 x 4 matrix, as glTF stores it.
 pub(super) type Mat4 = [[f64; 4]; 4];

@@ -33,10 +33,12 @@ mod tests;
 
 use std::collections::HashMap;
 
-use super::{next_index, srgb_to_linear, ImportError, Loader};
-use super::{ImportOptions, ImportReport, Source};
+use crate::base::colour::srgb_to_linear;
+use crate::import::error::{ImportError, Source};
+use crate::import::ids::next_index;
+use crate::import::options::{ImportOptions, ImportReport, Loader};
 use crate::mesh::{Mesh, Triangle, NO_ATTRIBUTE};
-use mtl::{load_materials, push_surfaces, MaterialLibraries};
+use mtl::{load_materials, push_surfaces, MaterialLibraries, NamedSurface};
 
 pub(crate) fn import_obj(
     source: &Source,
@@ -68,11 +70,6 @@ struct Face {
     /// Range into the corner list.
     first: usize,
     count: usize,
-}
-
-/// A surface as the OBJ names it, before the MTL files are consulted.
-struct NamedSurface {
-    name: String,
 }
 
 /// The passes: every statement read, every index checked once the whole file is read, the

@@ -6,9 +6,15 @@ use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
-use super::{Loader, NamedSurface};
-use crate::import::{push_surface, ImportError, ImportReport, Source};
+use crate::import::error::{ImportError, Source};
+use crate::import::ids::push_surface;
+use crate::import::options::{ImportReport, Loader};
 use crate::mesh::{AlphaMode, Mesh, Surface, Texture};
+
+/// A surface as the OBJ names it, before the MTL files are consulted.
+pub(super) struct NamedSurface {
+    pub(super) name: String,
+}
 
 /// The materials the MTL libraries define, and whether the OBJ named any library.
 pub(super) struct MaterialLibraries<'a> {

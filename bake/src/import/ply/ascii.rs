@@ -9,8 +9,9 @@
 use ply_rs_bw::ply::{ElementDef, Header, PropertyAccess, PropertyAccessResult};
 use ply_rs_bw::ply::{PropertyType, ScalarType};
 
+use super::properties::Elements;
 use super::properties::{Face, Skip, Vertex};
-use super::{Elements, ImportError, Source};
+use crate::import::error::{ImportError, Source};
 
 /// The payload's lines, numbered as in the file.
 pub(super) struct Lines<'a> {

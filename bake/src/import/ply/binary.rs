@@ -13,10 +13,13 @@
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
 use rayon::prelude::*;
 
-use super::properties::{is_index_list, vertex_slot, Vertex};
-use super::{scalar_size, Corners, ImportError, ImportReport};
+use super::corners::Corners;
+use super::properties::scalar_size;
+use super::properties::{is_index_list, Vertex};
+use crate::base::ply::{vertex_slot, Scalar};
+use crate::import::error::ImportError;
+use crate::import::options::ImportReport;
 use crate::mesh::Mesh;
-use crate::ooc::stream::ply_format::Scalar;
 
 /// Where each element's data starts, from a walk that checked every element ends within
 /// the payload.

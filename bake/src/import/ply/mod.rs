@@ -29,21 +29,23 @@
 
 mod ascii;
 mod binary;
-pub(crate) mod properties;
+mod corners;
+mod properties;
 #[cfg(test)]
 mod tests;
 mod vertices;
 
 use std::io::{Cursor, ErrorKind};
 
+use corners::{Corners, Present};
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType, ScalarType};
-use properties::{is_index_list, vertex_slot, Face, Skip, Vertex};
-use vertices::byte_colour;
+use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyType};
+use properties::{scalar_size, Elements, Skip};
 
-use super::{next_index, push_surface, srgb_to_linear, ImportError, Loader};
-use super::{ImportOptions, ImportReport, Source};
-use crate::mesh::{Mesh, Surface, Texture, Triangle, NO_ATTRIBUTE};
+use crate::import::error::{ImportError, Source};
+use crate::import::ids::push_surface;
+use crate::import::options::{ImportOptions, ImportReport, Loader};
+use crate::mesh::{Mesh, Surface, Texture};
 
 /// The parser's reader over the file's bytes.
 type ByteReader<'a> = Reader<Cursor<&'a [u8]>>;
@@ -56,15 +58,6 @@ pub(crate) fn import_ply(
     report: &mut ImportReport,
 ) -> Result<Mesh, ImportError> {
     parse_ply(source, bytes, report)
-}
-
-fn scalar_size(t: &ScalarType) -> usize {
-    match t {
-        ScalarType::Char | ScalarType::UChar => 1,
-        ScalarType::Short | ScalarType::UShort => 2,
-        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
-        ScalarType::Double => 8,
-    }
 }
 
 /// The fewest bytes a binary payload can have (every list empty), or `None` on overflow.
@@ -268,68 +261,6 @@ fn check_binary_size(
     }
 }
 
-/// The optional vertex attributes the file has (all their components).
-#[derive(Clone, Copy)]
-struct Present {
-    normals: bool,
-    uvs: bool,
-    colors: bool,
-}
-
-impl Present {
-    /// Checks the elements the importer reads (a `vertex` element with scalar `x y z`; index
-    /// lists on faces and strips) and finds the optional attributes.
-    fn check(source: &Source, header: &Header) -> Result<Self, ImportError> {
-        let vertex_def = header
-            .elements
-            .get("vertex")
-            .ok_or_else(|| source.malformed("header", "no 'vertex' element"))?;
-        let has = |name: &str| {
-            vertex_def
-                .properties
-                .keys()
-                .any(|k| vertex_slot(k) == vertex_slot(name))
-        };
-        for axis in ["x", "y", "z"] {
-            if !has(axis) {
-                return Err(source.malformed("element 'vertex'", format!("no '{axis}' property")));
-            }
-        }
-        for (name, property) in &vertex_def.properties {
-            if vertex_slot(name).is_some() && !matches!(property.data_type, PropertyType::Scalar(_))
-            {
-                return Err(source.malformed(
-                    "element 'vertex'",
-                    format!("property '{name}' is a list, not a number"),
-                ));
-            }
-        }
-        let present = Present {
-            normals: has("nx") && has("ny") && has("nz"),
-            uvs: has("u") && has("v"),
-            colors: has("red") && has("green") && has("blue"),
-        };
-        for def in header.elements.values() {
-            if (def.name == "face" || def.name == "tristrips")
-                && !def.properties.keys().any(|k| is_index_list(k))
-            {
-                return Err(source.malformed(
-                    format!("element '{}'", def.name),
-                    "no 'vertex_indices' list",
-                ));
-            }
-        }
-        Ok(present)
-    }
-}
-
-/// The elements the importer uses.
-struct Elements {
-    vertices: Vec<Vertex>,
-    faces: Vec<Face>,
-    strips: Vec<Face>,
-}
-
 /// Every element in file order; the ones not used are read past.
 fn read_elements(
     source: &Source,
@@ -374,150 +305,4 @@ fn push_texture_surface(
             ..Surface::plain("default")
         },
     )
-}
-
-/// Turns vertices into positions and attributes, faces and strips into triangles: vertex
-/// indices checked, per-vertex attributes sharing the position's index.
-struct Corners<'a> {
-    source: &'a Source,
-    vertex_count: usize,
-    present: Present,
-    surface: u16,
-    /// A face's corners, reused from face to face.
-    face: Vec<u32>,
-    /// The linear value of each 8-bit colour channel ([`Self::linear`]).
-    byte_linear: [f32; 256],
-}
-
-impl<'a> Corners<'a> {
-    fn new(source: &'a Source, vertex_count: usize, present: Present) -> Self {
-        Corners {
-            source,
-            vertex_count,
-            present,
-            surface: 0,
-            face: Vec::new(),
-            byte_linear: std::array::from_fn(|k| srgb_to_linear(byte_colour(k))),
-        }
-    }
-
-    /// Whether `index` names a vertex.
-    fn in_range(&self, index: i64) -> bool {
-        (0..self.vertex_count as i64).contains(&index)
-    }
-
-    fn vertex(&self, at: &dyn Fn() -> String, index: i64) -> Result<u32, ImportError> {
-        if self.in_range(index) {
-            Ok(index as u32)
-        } else {
-            Err(self.source.out_of_range(
-                at(),
-                "vertex index",
-                index,
-                self.vertex_count,
-                "vertices",
-            ))
-        }
-    }
-
-    fn vertices(&self, at: &dyn Fn() -> String, indices: &[i64]) -> Result<Vec<u32>, ImportError> {
-        indices.iter().map(|&i| self.vertex(at, i)).collect()
-    }
-
-    /// A triangle whose attributes share the position's indices (where present); `uv`
-    /// overrides the UVs.
-    fn triangle(&self, position: [u32; 3], uv: Option<[u32; 3]>) -> Triangle {
-        let same = |present: bool| position.map(|i| if present { i } else { NO_ATTRIBUTE });
-        Triangle {
-            position,
-            normal: same(self.present.normals),
-            uv: uv.unwrap_or_else(|| same(self.present.uvs)),
-            color: same(self.present.colors),
-            surface: self.surface,
-        }
-    }
-
-    /// Face `f` (its vertex `indices`, and per-corner UVs `texcoord` or none) as a fan; a
-    /// face under three vertices skipped and counted.
-    fn push_face(
-        &mut self,
-        mesh: &mut Mesh,
-        f: usize,
-        indices: &[i64],
-        texcoord: &[f32],
-        report: &mut ImportReport,
-    ) -> Result<(), ImportError> {
-        let at = || format!("face {f}");
-        let n = indices.len();
-        if n < 3 {
-            report.skipped_primitives += 1;
-            return Ok(());
-        }
-        let mut corners = std::mem::take(&mut self.face);
-        corners.clear();
-        for &i in indices {
-            corners.push(self.vertex(&at, i)?);
-        }
-        let corner_uvs = self.push_corner_uvs(mesh, f, n, texcoord)?;
-        for k in 1..n - 1 {
-            let pick = [0, k, k + 1];
-            let uv = corner_uvs.as_ref().map(|ids| pick.map(|c| ids[c]));
-            mesh.triangles
-                .push(self.triangle(pick.map(|c| corners[c]), uv));
-        }
-        self.face = corners;
-        Ok(())
-    }
-
-    /// The per-corner UVs (`texcoord`, two for each of the face's `n` corners) of face `f`
-    /// appended; their indices.
-    fn push_corner_uvs(
-        &self,
-        mesh: &mut Mesh,
-        f: usize,
-        n: usize,
-        texcoord: &[f32],
-    ) -> Result<Option<Vec<u32>>, ImportError> {
-        let source = self.source;
-        if texcoord.is_empty() {
-            return Ok(None);
-        }
-        if texcoord.len() != 2 * n {
-            return Err(source.malformed(
-                format!("face {f}"),
-                format!("{} texcoord values for {n} vertices", texcoord.len()),
-            ));
-        }
-        let mut ids = Vec::with_capacity(n);
-        for (k, uv) in texcoord.chunks_exact(2).enumerate() {
-            source.check_finite(&[uv[0], uv[1]], &["texcoord u", "texcoord v"], || {
-                format!("face {f} corner {k}")
-            })?;
-            ids.push(next_index(source, mesh.uvs.len(), "texture coordinates")?);
-            mesh.uvs.push([uv[0], 1.0 - uv[1]]);
-        }
-        Ok(Some(ids))
-    }
-
-    /// Strips (`-1` restarts) with alternating winding; the degenerate joint triangles
-    /// dropped and counted.
-    fn push_strips(&mut self, mesh: &mut Mesh, strips: &[Face]) -> Result<usize, ImportError> {
-        let mut joints = 0usize;
-        for (s, strip) in strips.iter().enumerate() {
-            let at = || format!("tristrips {s}");
-            for run in strip.indices.split(|&i| i == -1) {
-                let run = self.vertices(&at, run)?;
-                for k in 0..run.len().saturating_sub(2) {
-                    let (a, b, c) = (run[k], run[k + 1], run[k + 2]);
-                    if a == b || b == c || a == c {
-                        joints += 1;
-                        continue;
-                    }
-                    let position = if k % 2 == 0 { [a, b, c] } else { [b, a, c] };
-                    mesh.triangles.push(self.triangle(position, None));
-                }
-            }
-        }
-        Ok(joints)
-    }
 }

@@ -1,54 +1,14 @@
 //! The parser's element records: vertices (named slots), faces and strips (index lists and
 //! per-corner UVs), and elements read past.
 
-use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult};
+use ply_rs_bw::ply::{PropertyAccess, PropertyAccessResult, ScalarType};
 
-/// Slots of a vertex, in the order of [`VERTEX_NAMES`].
-pub(super) const X: usize = 0;
-pub(super) const NX: usize = 3;
-pub(super) const U: usize = 6;
-pub(super) const R: usize = 8;
-pub(super) const A: usize = 11;
-pub(crate) const SLOTS: usize = 12;
-
-/// What each slot holds, as errors name it.
-pub(crate) const VERTEX_NAMES: [&str; SLOTS] = [
-    "coordinate x",
-    "coordinate y",
-    "coordinate z",
-    "normal x",
-    "normal y",
-    "normal z",
-    "texture coordinate u",
-    "texture coordinate v",
-    "red",
-    "green",
-    "blue",
-    "alpha",
-];
+use crate::base::ply::{vertex_slot, A, R, SLOTS};
 
 /// One vertex as the parser fills it.
 #[derive(Clone, Copy)]
 pub(super) struct Vertex {
     pub(super) values: [f32; SLOTS],
-}
-
-pub(super) fn vertex_slot(name: &str) -> Option<usize> {
-    Some(match name {
-        "x" => X,
-        "y" => X + 1,
-        "z" => X + 2,
-        "nx" => NX,
-        "ny" => NX + 1,
-        "nz" => NX + 2,
-        "u" | "s" | "texture_u" | "texture_s" => U,
-        "v" | "t" | "texture_v" | "texture_t" => U + 1,
-        "red" | "diffuse_red" => R,
-        "green" | "diffuse_green" => R + 1,
-        "blue" | "diffuse_blue" => R + 2,
-        "alpha" | "diffuse_alpha" => A,
-        _ => return None,
-    })
 }
 
 impl Vertex {
@@ -188,5 +148,27 @@ pub(super) struct Skip;
 impl PropertyAccess for Skip {
     fn new() -> Self {
         Skip
+    }
+}
+
+/// The value [`Vertex`] stores for the 8-bit colour channel `k`.
+pub(super) fn byte_colour(k: usize) -> f32 {
+    (k as f64 * BYTE_COLOR) as f32
+}
+
+/// The elements the importer uses.
+pub(super) struct Elements {
+    pub(super) vertices: Vec<Vertex>,
+    pub(super) faces: Vec<Face>,
+    pub(super) strips: Vec<Face>,
+}
+
+/// Bytes of one value of the parser's scalar type `t`.
+pub(super) fn scalar_size(t: &ScalarType) -> usize {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
     }
 }

@@ -1,4 +1,6 @@
+use super::properties::byte_colour;
 use super::*;
+use crate::base::colour::srgb_to_linear;
 
 fn src() -> Source {
     Source {

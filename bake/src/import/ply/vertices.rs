@@ -3,8 +3,11 @@
 
 use rayon::prelude::*;
 
-use super::properties::{self, Vertex, A, NX, R, U, VERTEX_NAMES, X};
-use super::{srgb_to_linear, Corners, ImportError};
+use super::corners::Corners;
+use super::properties::{byte_colour, Vertex};
+use crate::base::colour::srgb_to_linear;
+use crate::base::ply::{A, NX, R, U, VERTEX_NAMES, X};
+use crate::import::error::ImportError;
 use crate::mesh::Mesh;
 
 /// Vertices a piece of [`Corners::push_vertices`] converts on one thread.
@@ -99,9 +102,4 @@ impl Corners<'_> {
             srgb_to_linear(c)
         }
     }
-}
-
-/// The value [`Vertex`] stores for the 8-bit colour channel `k`.
-pub(super) fn byte_colour(k: usize) -> f32 {
-    (k as f64 * properties::BYTE_COLOR) as f32
 }

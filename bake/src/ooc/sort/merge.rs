@@ -12,9 +12,9 @@ use std::path::PathBuf;
 use bytemuck::Pod;
 
 use super::{Run, SortedSoup};
+use crate::base::temp::TempSpace;
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{SoupTriangle, KEY_LEVELS, RECORD_BYTES};
-use crate::ooc::temp::TempSpace;
-use crate::ooc::OocError;
 
 /// Counts the depths at which `key` starts a new cell after `prev`.
 fn count_new_cells(occupied: &mut [u64; KEY_LEVELS as usize + 1], prev: Option<u64>, key: u64) {

@@ -11,10 +11,10 @@ use bytemuck::Zeroable;
 use super::merge::merge_keys;
 use super::radix::{radix_sort, radix_sort_by};
 use super::{Run, RunItem, SortedSoup};
+use crate::base::temp::{SpillWriter, TempSpace};
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{Cube, SoupTriangle};
 use crate::ooc::stream::SoupSink;
-use crate::ooc::temp::{SpillWriter, TempSpace};
-use crate::ooc::OocError;
 
 /// Bytes of chunk a triangle takes: its item, and twice its `(key, index)` sort pair (the
 /// radix sort's scatter buffer) for records, or twice the key (sorted in place) for keys.

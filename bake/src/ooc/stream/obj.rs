@@ -6,13 +6,14 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
-use super::{BlockCache, SoupSink, StreamReport};
+use super::cache::BlockCache;
+use super::sink::{SoupSink, StreamReport};
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::Surface;
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{
     encode_normal, Corner, Cube, Keyer, SoupTriangle, HAS_COLOR, HAS_NORMAL, HAS_UV,
 };
-use crate::ooc::temp::{SpillWriter, TempSpace};
-use crate::ooc::OocError;
 
 /// An OBJ file whose `v`, `vt` and `vn` records are in temporary files: the faces can be
 /// read any number of times, each a pass over the file's lines.

@@ -6,12 +6,14 @@ use std::io::{BufRead, BufReader, Seek, SeekFrom, Write};
 use std::os::unix::fs::FileExt;
 use std::path::PathBuf;
 
-use super::ply_format::{with_bytes, Field, Format, ItemReader, Property, Scalar};
-use super::{BlockCache, RecordSource, SoupSink, StreamReport};
+use super::cache::{BlockCache, RecordSource};
+use super::ply_format::{with_bytes, Field, Format, ItemReader, Property};
+use super::sink::{SoupSink, StreamReport};
+use crate::base::ply::{Scalar, VERTEX_NAMES};
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::{Surface, Texture};
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{encode_normal, Corner, Cube};
-use crate::ooc::temp::{SpillWriter, TempSpace};
-use crate::ooc::OocError;
 
 mod header;
 
@@ -115,18 +117,6 @@ impl<'a> PlyInput<'a> {
     }
 }
 
-/// What each vertex slot holds, as errors name it (the in-core importer's names).
-const SLOT_NAMES: [&str; 12] = crate::import::ply::properties::VERTEX_NAMES;
-
-/// An error in the file `name` at `at`.
-fn bad(name: &str, at: &str, message: String) -> OocError {
-    OocError::Input {
-        file: name.to_string(),
-        at: at.to_string(),
-        message,
-    }
-}
-
 /// The reader past the header.
 struct Reader<'a> {
     name: &'a str,
@@ -161,7 +151,7 @@ impl<'a> Reader<'a> {
     }
 
     fn bad(&self, at: &str, message: String) -> OocError {
-        bad(self.name, at, message)
+        OocError::input(self.name, at, message)
     }
 
     /// Reads past the items of the elements `range`.
@@ -170,7 +160,7 @@ impl<'a> Reader<'a> {
             for i in 0..el.count {
                 self.items
                     .read(&mut self.r, el, &mut |_, _, _| {})
-                    .map_err(|m| bad(self.name, &format!("{} {i}", el.name), m))?;
+                    .map_err(|m| OocError::input(self.name, &format!("{} {i}", el.name), m))?;
             }
         }
         Ok(())
@@ -233,7 +223,7 @@ impl<'a> Reader<'a> {
                     with_bytes(&mut self.r, &mut self.record, *stride, |b| {
                         decode_fixed(b, fields, big, &mut v);
                     })
-                    .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?;
+                    .map_err(|m| OocError::input(self.name, &format!("vertex {i}"), m))?;
                 }
                 Dest::File(..) => self
                     .items
@@ -246,12 +236,12 @@ impl<'a> Reader<'a> {
                             };
                         }
                     })
-                    .map_err(|m| bad(self.name, &format!("vertex {i}"), m))?,
+                    .map_err(|m| OocError::input(self.name, &format!("vertex {i}"), m))?,
             }
             if let Some(k) = v.iter().position(|x| !x.is_finite()) {
                 return Err(self.bad(
                     &format!("vertex {i}"),
-                    format!("{} is {}", SLOT_NAMES[k], v[k]),
+                    format!("{} is {}", VERTEX_NAMES[k], v[k]),
                 ));
             }
             let p = [v[0] as f32, v[1] as f32, v[2] as f32];
@@ -390,16 +380,20 @@ impl<'a> Reader<'a> {
                 let n = with_bytes(&mut self.r, &mut self.record, ct.size(), |b| {
                     ct.decode_int(b, big)
                 })
-                .map_err(|m| bad(name, &at(), m))?;
+                .map_err(|m| OocError::input(name, &at(), m))?;
                 if !(0..=1_000_000).contains(&n) {
                     let list = &self.header.elements[fi].properties[0].name;
-                    return Err(bad(name, &at(), format!("list '{list}' has {n} entries")));
+                    return Err(OocError::input(
+                        name,
+                        &at(),
+                        format!("list '{list}' has {n} entries"),
+                    ));
                 }
                 let s = ty.size();
                 with_bytes(&mut self.r, &mut self.record, n as usize * s, |b| {
                     raw.extend(b.chunks_exact(s).map(|c| ty.decode_int(c, big)));
                 })
-                .map_err(|m| bad(name, &at(), m))?;
+                .map_err(|m| OocError::input(name, &at(), m))?;
             }
             None => {
                 let mut fraction = None;
@@ -415,10 +409,10 @@ impl<'a> Reader<'a> {
                             }
                         }
                     })
-                    .map_err(|m| bad(name, &at(), m))?;
+                    .map_err(|m| OocError::input(name, &at(), m))?;
                 if let (Some(i), 3..) = (fraction, raw.len()) {
                     let vcount = self.header.elements[self.layout.vi].count;
-                    return Err(bad(
+                    return Err(OocError::input(
                         name,
                         &at(),
                         format!("vertex index {i} out of range ({vcount} vertices)"),
@@ -483,7 +477,7 @@ pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Resul
                 with_bytes(&mut reader.r, &mut reader.record, *stride, |b| {
                     decode_fixed(b, fields, big, &mut v);
                 })
-                .map_err(|m| bad(name, &at(), m))?;
+                .map_err(|m| OocError::input(name, &at(), m))?;
             }
             None => {
                 let Layout {
@@ -506,11 +500,15 @@ pub fn read_indexed(name: &str, file: File, sink: &mut dyn IndexedSink) -> Resul
                             }
                         },
                     )
-                    .map_err(|m| bad(name, &at(), m))?;
+                    .map_err(|m| OocError::input(name, &at(), m))?;
             }
         }
         if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-            return Err(bad(name, &at(), format!("{} is {}", SLOT_NAMES[k], v[k])));
+            return Err(OocError::input(
+                name,
+                &at(),
+                format!("{} is {}", VERTEX_NAMES[k], v[k]),
+            ));
         }
         sink.vertex(i, &v)?;
     }

@@ -1,108 +1,14 @@
-//! What the PLY reader reads with: the scalar types, the header's elements and properties,
-//! the vertex slots, and reading one element item (ascii or binary) or a run of bytes.
+//! What the streaming PLY reader reads with: the header's elements and properties, and
+//! reading one element item (ascii or binary) or a run of bytes. The scalar types and the
+//! vertex slots are the in-core importer's too ([`crate::base::ply`]).
 
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 
+use crate::base::ply::Scalar;
+
 /// A vertex property read at a fixed offset: (offset, type, slot, colour scale).
 pub(super) type Field = (usize, Scalar, usize, f64);
-
-/// A PLY scalar type, which decodes its values from bytes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Scalar {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    F32,
-    F64,
-}
-
-impl Scalar {
-    pub(super) fn parse(s: &str) -> Option<Self> {
-        Some(match s {
-            "char" | "int8" => Self::I8,
-            "uchar" | "uint8" => Self::U8,
-            "short" | "int16" => Self::I16,
-            "ushort" | "uint16" => Self::U16,
-            "int" | "int32" => Self::I32,
-            "uint" | "uint32" => Self::U32,
-            "float" | "float32" => Self::F32,
-            "double" | "float64" => Self::F64,
-            _ => return None,
-        })
-    }
-    pub(super) fn size(self) -> usize {
-        match self {
-            Self::I8 | Self::U8 => 1,
-            Self::I16 | Self::U16 => 2,
-            Self::I32 | Self::U32 | Self::F32 => 4,
-            Self::F64 => 8,
-        }
-    }
-    /// Divisor that maps the type's range to 0..=1, for colours.
-    pub(super) fn color_scale(self) -> f64 {
-        match self {
-            Self::U16 => 65535.0,
-            Self::F32 | Self::F64 => 1.0,
-            _ => 255.0,
-        }
-    }
-    pub(crate) fn is_int(self) -> bool {
-        !matches!(self, Self::F32 | Self::F64)
-    }
-    /// An integer type's value (a float type's, truncated).
-    #[inline]
-    pub(crate) fn decode_int(self, b: &[u8], big: bool) -> i64 {
-        macro_rules! get {
-            ($t:ty, $n:expr) => {{
-                let mut a = [0u8; $n];
-                a.copy_from_slice(&b[..$n]);
-                if big {
-                    i64::from(<$t>::from_be_bytes(a))
-                } else {
-                    i64::from(<$t>::from_le_bytes(a))
-                }
-            }};
-        }
-        match self {
-            Self::I8 => i64::from(b[0] as i8),
-            Self::U8 => i64::from(b[0]),
-            Self::I16 => get!(i16, 2),
-            Self::U16 => get!(u16, 2),
-            Self::I32 => get!(i32, 4),
-            Self::U32 => get!(u32, 4),
-            Self::F32 | Self::F64 => self.decode(b, big) as i64,
-        }
-    }
-    /// The value, of any type, as an `f64`.
-    #[inline]
-    pub(crate) fn decode(self, b: &[u8], big: bool) -> f64 {
-        macro_rules! get {
-            ($t:ty, $n:expr) => {{
-                let mut a = [0u8; $n];
-                a.copy_from_slice(&b[..$n]);
-                if big {
-                    <$t>::from_be_bytes(a) as f64
-                } else {
-                    <$t>::from_le_bytes(a) as f64
-                }
-            }};
-        }
-        match self {
-            Self::I8 => f64::from(b[0] as i8),
-            Self::U8 => f64::from(b[0]),
-            Self::I16 => get!(i16, 2),
-            Self::U16 => get!(u16, 2),
-            Self::I32 => get!(i32, 4),
-            Self::U32 => get!(u32, 4),
-            Self::F32 => get!(f32, 4),
-            Self::F64 => get!(f64, 8),
-        }
-    }
-}
 
 #[derive(Clone, Debug)]
 pub(super) struct Property {
@@ -123,25 +29,6 @@ pub(super) struct Element {
 pub(super) enum Format {
     Ascii,
     Binary { big: bool },
-}
-
-/// Vertex slots: x y z nx ny nz u v r g b a.
-pub(super) fn slot(name: &str) -> Option<usize> {
-    Some(match name {
-        "x" => 0,
-        "y" => 1,
-        "z" => 2,
-        "nx" => 3,
-        "ny" => 4,
-        "nz" => 5,
-        "u" | "s" | "texture_u" | "texture_s" => 6,
-        "v" | "t" | "texture_v" | "texture_t" => 7,
-        "red" | "diffuse_red" => 8,
-        "green" | "diffuse_green" => 9,
-        "blue" | "diffuse_blue" => 10,
-        "alpha" | "diffuse_alpha" => 11,
-        _ => return None,
-    })
 }
 
 /// Reads one element item's properties, calling `scalar(index, value)` for scalars and

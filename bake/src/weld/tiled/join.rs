@@ -11,14 +11,16 @@ use bytemuck::{Pod, Zeroable};
 use caveclod_core::format::PositionClass;
 use hashbrown::hash_table::{Entry, HashTable};
 
-use super::super::groups::{colour_groups, Groups, VertexOf};
-use super::super::{Attributes, Repairs, VertexLists, WeldError};
+use super::error::TiledWeldError;
+use super::sink::WeldSink;
 use super::spool::Spool;
 use super::tile::{Across, TileWeld, COPY};
-use super::{add_repairs, TiledMesh, TiledWeldError, WeldSink};
-use crate::fxhash::{hash_of, map_with_capacity, FxHashMap};
-use crate::weld::WeldInfo;
-use crate::weld_store::StoredTri;
+use super::tiles::TiledMesh;
+use crate::base::fxhash::{hash_of, map_with_capacity, FxHashMap};
+use crate::weld::groups::{colour_groups, Groups, VertexOf};
+use crate::weld::store::StoredTri;
+use crate::weld::vertex_lists::VertexLists;
+use crate::weld::welded::{Attributes, Repairs, WeldError, WeldInfo};
 
 /// A triangle waiting for its group.
 #[repr(C)]
@@ -473,4 +475,13 @@ fn merge_consistent(a: &[(u32, u32)], b: &[(u32, u32)]) -> Option<Vec<(u32, u32)
     out.extend_from_slice(&a[i..]);
     out.extend_from_slice(&b[j..]);
     Some(out)
+}
+
+/// The repairs of the tiles' own triangles, summed.
+fn add_repairs(total: &mut Repairs, r: &Repairs) {
+    total.degenerate_triangles += r.degenerate_triangles;
+    total.duplicate_triangles += r.duplicate_triangles;
+    total.non_manifold_edges += r.non_manifold_edges;
+    total.non_manifold_vertices += r.non_manifold_vertices;
+    total.computed_normals += r.computed_normals;
 }

@@ -3,9 +3,11 @@
 
 use std::io;
 
-use super::super::{repair, Repairs, WeldError, NONE};
-use super::{TileTriangle, TiledMesh, Tiles, SHARED};
+use super::tiles::{TileTriangle, TiledMesh, Tiles, SHARED};
 use crate::mesh::{Mesh, NO_ATTRIBUTE};
+use crate::weld::in_core::check_weldable;
+use crate::weld::repair;
+use crate::weld::welded::{Repairs, WeldError, NONE};
 
 /// A [`Mesh`] cut into `side × side` tiles over its bounding box's two widest axes.
 pub struct MeshTiles {
@@ -17,7 +19,7 @@ impl MeshTiles {
     /// Welds the positions of `mesh` (step 1 of [`super::super::weld`]) and cuts its
     /// triangles into `side × side` tiles.
     pub fn new(mesh: &Mesh, side: u32) -> Result<Self, WeldError> {
-        super::super::check_weldable(mesh)?;
+        check_weldable(mesh)?;
         let mut repairs = Repairs::default();
         let (positions, remap) = repair::weld_positions(mesh, &mut repairs);
         let grid = TileGrid::new(&positions, side);

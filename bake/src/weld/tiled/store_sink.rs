@@ -4,9 +4,9 @@ use std::io;
 
 use caveclod_core::format::PositionClass;
 
-use super::WeldSink;
-use crate::weld::Attributes;
-use crate::weld_store::{StoreWriter, StoredTri};
+use super::sink::WeldSink;
+use crate::weld::store::{StoreWriter, StoredTri};
+use crate::weld::welded::Attributes;
 
 impl WeldSink for StoreWriter {
     fn push_position(

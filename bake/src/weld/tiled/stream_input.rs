@@ -18,15 +18,15 @@ use std::path::{Path, PathBuf};
 use hashbrown::hash_table::{Entry, HashTable};
 
 use super::mesh_input::TileGrid;
-use super::{TileTriangle, TiledMesh, Tiles, SHARED};
-use crate::fxhash::hash_of;
-use crate::import::srgb_to_linear;
+use super::tiles::{TileTriangle, TiledMesh, Tiles, SHARED};
+use crate::base::colour::srgb_to_linear;
+use crate::base::fxhash::hash_of;
+use crate::base::temp::{SpillWriter, TempSpace};
 use crate::mesh::{Surface, Texture};
 use crate::ooc::soup::{HAS_COLOR, HAS_NORMAL, HAS_UV};
 use crate::ooc::stream::{read_indexed, BlockCache, IndexedHeader, IndexedSink};
-use crate::ooc::temp::{SpillWriter, TempSpace};
 use crate::ooc::OocError;
-use crate::weld::{MAX_TRIANGLES, NONE};
+use crate::weld::welded::{MAX_TRIANGLES, NONE};
 
 /// A vertex's attributes: normal, texture coordinates, linear colour.
 type VertexAttributes = [f32; 9];

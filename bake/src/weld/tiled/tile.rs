@@ -1,16 +1,16 @@
-//! One tile welded with its halo by [`super::super::weld`], and what of it the join needs:
+//! One tile welded with its halo by [`crate::weld::weld`], and what of it the join needs:
 //! its own triangles, where their positions come from, and what the tile could not decide
 //! alone (edges and groups across its border, classes where groups or tiles meet).
 
 use caveclod_core::format::PositionClass;
 
-use super::super::attributes::{cross, dot, sub};
-use super::super::{
-    weld_traced, Attributes, Repairs, VertexLists, WeldError, GEOMETRIC_NORMAL_DEGREES, NONE,
-};
-use super::{TileTriangle, TiledMesh, SHARED};
-use crate::fxhash::{map_with_capacity, FxHashMap};
+use super::tiles::{TileTriangle, TiledMesh, SHARED};
+use crate::base::fxhash::{map_with_capacity, FxHashMap};
 use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use crate::weld::in_core::{weld_traced, Trace};
+use crate::weld::vector::{cross, dot, sub};
+use crate::weld::vertex_lists::VertexLists;
+use crate::weld::welded::{Attributes, Repairs, WeldError, Welded, GEOMETRIC_NORMAL_DEGREES, NONE};
 
 /// A copy's key: the first triangle (input number) of the fan that uses it and the corner
 /// there, flagged; a welded position's key is its id.
@@ -94,39 +94,69 @@ pub(super) fn weld_tile(
     let (local_mesh, base) = local_mesh(mesh, &all);
     let (w, trace) = match weld_traced(&local_mesh) {
         Ok(r) => r,
-        Err(WeldError::Empty { .. }) => {
-            // Nothing of the tile is left; its triangles still count as dropped.
-            let mut repairs = Repairs::default();
-            for t in core {
-                count_dropped(t, &mesh.positions, &mut repairs);
-            }
-            return Ok(TileWeld {
-                group_count: 0,
-                positions: Vec::new(),
-                attributes: Vec::new(),
-                classes: Vec::new(),
-                vertices: VertexLists::default(),
-                triangles: Vec::new(),
-                class_edges: Vec::new(),
-                joins: Vec::new(),
-                band_groups: Vec::new(),
-                repairs,
-            });
-        }
+        Err(WeldError::Empty { .. }) => return Ok(TileWeld::dropped(core, &mesh.positions)),
         Err(e) => return Err(e),
     };
-    let is_own: Vec<bool> = all.iter().map(|&(_, own)| own).collect();
     let source: Vec<&TileTriangle> = trace.source.iter().map(|&i| &all[i as usize].0).collect();
-    let own_tri = |f: usize| is_own[trace.source[f] as usize];
+    let own_tri = |f: usize| all[trace.source[f] as usize].1;
+    let mut repairs = own_repairs(&all, &w, &trace, &own_tri, &mesh.positions);
+    let positions = local_positions(&w, &trace, &base, &source, &own_tri, mesh);
+    let attributes = own_attributes(&w, &source, &own_tri, &mut repairs);
+    let own = own_parts(&w, mesh, &positions, &source, &own_tri);
+    Ok(TileWeld {
+        group_count: w.group_count,
+        positions,
+        attributes,
+        classes: w.classes,
+        vertices: w.vertices,
+        triangles: own.triangles,
+        class_edges: own.class_edges,
+        joins: own.joins,
+        band_groups: own.band_groups,
+        repairs,
+    })
+}
 
+impl TileWeld {
+    /// What a tile gives when its weld keeps nothing: its triangles, counted as dropped.
+    fn dropped(core: &[TileTriangle], positions: &[[f32; 3]]) -> Self {
+        let mut repairs = Repairs::default();
+        for t in core {
+            count_dropped(t, positions, &mut repairs);
+        }
+        TileWeld {
+            group_count: 0,
+            positions: Vec::new(),
+            attributes: Vec::new(),
+            classes: Vec::new(),
+            vertices: VertexLists::default(),
+            triangles: Vec::new(),
+            class_edges: Vec::new(),
+            joins: Vec::new(),
+            band_groups: Vec::new(),
+            repairs,
+        }
+    }
+}
+
+/// The repairs of the tile's own triangles (`all[i].1`) in the weld `w`: those it dropped
+/// as degenerate or duplicate, and the edges it cut (the computed normals are counted with
+/// the attributes, [`own_attributes`]). `own_tri(f)`: whether welded triangle `f` is own.
+fn own_repairs(
+    all: &[(TileTriangle, bool)],
+    w: &Welded,
+    trace: &Trace,
+    own_tri: &dyn Fn(usize) -> bool,
+    positions: &[[f32; 3]],
+) -> Repairs {
     let mut repairs = Repairs::default();
     let mut kept_own = vec![false; all.len()];
     for f in 0..w.triangles.len() {
         kept_own[trace.source[f] as usize] = own_tri(f);
     }
-    for (i, (t, _)) in all.iter().enumerate() {
-        if is_own[i] && !kept_own[i] {
-            count_dropped(t, &mesh.positions, &mut repairs);
+    for (i, (t, own)) in all.iter().enumerate() {
+        if *own && !kept_own[i] {
+            count_dropped(t, positions, &mut repairs);
         }
     }
     for &(f, n) in &trace.cut {
@@ -134,30 +164,24 @@ pub(super) fn weld_tile(
             repairs.non_manifold_edges += u64::from(n);
         }
     }
+    repairs
+}
 
-    let positions = local_positions(&w, &trace, &base, &source, &own_tri, mesh);
-    let watched = |x: u32| positions[x as usize].is_some_and(|p| p.watched);
-    // The triangle of every edge at a watched position: only there does what lies across
-    // an own triangle's edge matter (an edge to another tile's triangle has both ends on
-    // the border, which is watched).
-    let mut by_edge: FxHashMap<(u32, u32), u32> = map_with_capacity(0);
-    for (f, t) in w.triangles.iter().enumerate() {
-        if t.p.iter().any(|&x| watched(x)) {
-            for k in 0..3 {
-                by_edge.insert((t.p[k], t.p[(k + 1) % 3]), f as u32);
-            }
-        }
-    }
-    let normals = area_normals(&w);
+/// The weld's attribute sets, each one's `normal_from_geometry` decided over the own
+/// corners alone (as the in-core weld decides it over the whole mesh's); counts in
+/// `repairs` the own corners whose normal was computed.
+fn own_attributes(
+    w: &Welded,
+    source: &[&TileTriangle],
+    own_tri: &dyn Fn(usize) -> bool,
+    repairs: &mut Repairs,
+) -> Vec<Attributes> {
+    let normals = area_normals(w);
     let min_cos = GEOMETRIC_NORMAL_DEGREES.to_radians().cos();
     let mut attributes = w.attributes.clone();
     for a in &mut attributes {
         a.normal_from_geometry = true;
     }
-    let mut triangles = Vec::new();
-    let mut class_edges = Vec::new();
-    let mut joins = Vec::new();
-    let mut band_groups = Vec::new();
     for (f, t) in w.triangles.iter().enumerate() {
         if !own_tri(f) {
             continue;
@@ -177,8 +201,40 @@ pub(super) fn weld_tile(
             };
             attributes[ta[k] as usize].normal_from_geometry &= from_geometry;
         }
+    }
+    attributes
+}
+
+/// What the tile's own triangles give the join besides their attributes.
+#[derive(Default)]
+struct OwnParts {
+    triangles: Vec<OwnTriangle>,
+    class_edges: Vec<ClassEdge>,
+    joins: Vec<(u32, u32)>,
+    band_groups: Vec<(u32, u32)>,
+}
+
+/// The own triangles of the weld `w`, the groups of those in the band, and what lies across
+/// their edges at watched positions: the edges whose classes the join counts, and the
+/// matching edges to other tiles' triangles, along which it joins groups.
+fn own_parts(
+    w: &Welded,
+    mesh: &TiledMesh,
+    positions: &[Option<LocalPosition>],
+    source: &[&TileTriangle],
+    own_tri: &dyn Fn(usize) -> bool,
+) -> OwnParts {
+    let watched = |x: u32| positions[x as usize].is_some_and(|p| p.watched);
+    let by_edge = triangles_by_edge(w, &watched);
+    let mut own = OwnParts::default();
+    for (f, t) in w.triangles.iter().enumerate() {
+        if !own_tri(f) {
+            continue;
+        }
+        let src = source[f];
+        let ta = w.corner_attributes(t);
         if src.p.iter().any(|&x| mesh.owner[x as usize] == SHARED) {
-            band_groups.push((src.index, t.group));
+            own.band_groups.push((src.index, t.group));
         }
         for k in 0..3 {
             let (a, b) = (t.p[k], t.p[(k + 1) % 3]);
@@ -198,7 +254,7 @@ pub(super) fn weld_tile(
                     && corner(a) == Some(ta[k])
                     && corner(b) == Some(ta[(k + 1) % 3]);
                 if matching {
-                    joins.push((t.group, source[o as usize].index));
+                    own.joins.push((t.group, source[o as usize].index));
                 }
                 Across::Triangle(source[o as usize].index)
             };
@@ -207,14 +263,14 @@ pub(super) fn weld_tile(
                 _ => src.index < source[o as usize].index,
             };
             if once {
-                class_edges.push(ClassEdge {
+                own.class_edges.push(ClassEdge {
                     ends: [a, b],
                     group: t.group,
                     across,
                 });
             }
         }
-        triangles.push(OwnTriangle {
+        own.triangles.push(OwnTriangle {
             index: src.index,
             p: t.p,
             a: ta,
@@ -222,18 +278,22 @@ pub(super) fn weld_tile(
             group: t.group,
         });
     }
-    Ok(TileWeld {
-        group_count: w.group_count,
-        positions,
-        attributes,
-        classes: w.classes,
-        vertices: w.vertices,
-        triangles,
-        class_edges,
-        joins,
-        band_groups,
-        repairs,
-    })
+    own
+}
+
+/// The triangle of every directed edge at a watched position: only there does what lies
+/// across an own triangle's edge matter (an edge to another tile's triangle has both ends on
+/// the border, which is watched).
+fn triangles_by_edge(w: &Welded, watched: &dyn Fn(u32) -> bool) -> FxHashMap<(u32, u32), u32> {
+    let mut by_edge: FxHashMap<(u32, u32), u32> = map_with_capacity(0);
+    for (f, t) in w.triangles.iter().enumerate() {
+        if t.p.iter().any(|&x| watched(x)) {
+            for k in 0..3 {
+                by_edge.insert((t.p[k], t.p[(k + 1) % 3]), f as u32);
+            }
+        }
+    }
+    by_edge
 }
 
 /// The tile's triangles and its halo, in input order, each marked whether it is the tile's.
@@ -303,7 +363,7 @@ fn count_dropped(t: &TileTriangle, positions: &[[f32; 3]], repairs: &mut Repairs
 
 /// The area-weighted normal at every position of the weld (unnormalised), summed in the
 /// in-core weld's order: at a position the tile's triangles use, the same sum.
-fn area_normals(w: &super::super::Welded) -> Vec<[f64; 3]> {
+fn area_normals(w: &Welded) -> Vec<[f64; 3]> {
     let mut n = vec![[0f64; 3]; w.positions.len()];
     for t in &w.triangles {
         let [a, b, c] = t.p.map(|x| w.positions[x as usize]);
@@ -320,8 +380,8 @@ fn area_normals(w: &super::super::Welded) -> Vec<[f64; 3]> {
 /// Every local position the own triangles use: its key (a welded id, or a copy named by the
 /// first triangle of its fan and the corner there) and whether the join watches it.
 fn local_positions(
-    w: &super::super::Welded,
-    trace: &super::super::Trace,
+    w: &Welded,
+    trace: &Trace,
     base: &[u32],
     source: &[&TileTriangle],
     own_tri: &dyn Fn(usize) -> bool,

@@ -5,10 +5,10 @@
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 
-use super::bad;
+use crate::base::ply::{vertex_slot, Scalar};
+use crate::ooc::error::OocError;
 use crate::ooc::soup::{HAS_COLOR, HAS_NORMAL, HAS_UV};
-use crate::ooc::stream::ply_format::{slot, Element, Format, Property, Scalar};
-use crate::ooc::OocError;
+use crate::ooc::stream::ply_format::{Element, Format, Property};
 
 /// The header: the format, the elements and a texture named in a comment.
 pub(super) struct Header {
@@ -20,7 +20,7 @@ pub(super) struct Header {
 impl Header {
     /// Reads the header, up to and with its `end_header` line.
     pub(super) fn read(r: &mut BufReader<File>, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
+        let bad = |at: &str, message: String| OocError::input(name, at, message);
         let mut line = Vec::new();
         let mut lines = 0;
         let mut format = None;
@@ -120,7 +120,7 @@ pub(super) struct Layout {
 
 impl Layout {
     pub(super) fn of(header: &Header, name: &str) -> Result<Self, OocError> {
-        let bad = |at: &str, message: String| bad(name, at, message);
+        let bad = |at: &str, message: String| OocError::input(name, at, message);
         let elements = &header.elements;
         let vi = elements
             .iter()
@@ -143,7 +143,7 @@ impl Layout {
                 if p.list.is_some() {
                     None
                 } else {
-                    slot(&p.name)
+                    vertex_slot(&p.name)
                 }
             })
             .collect();

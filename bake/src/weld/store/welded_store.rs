@@ -1,191 +1,34 @@
-//! A welded mesh on disk: the arrays of a [`Welded`] in unlinked temporary files, ordered so
-//! that each block of a blocked build ([`crate::blocked`]) is read with a few positioned
-//! reads, and only small indexes in memory.
-//!
-//! The order (made by [`StoreWriter::finish`] from pieces pushed in any order):
-//! - triangles by the tile of their centroid in the Z (Morton) order of the first level's
-//!   `side × side` tiles, in push order within a tile. A tile of the next level is four
-//!   consecutive tiles of this one, so every block of every level is one range of triangle
-//!   ids ([`WeldedStore::block`]);
-//! - positions by first use in that triangle order (corners in order), positions no triangle
-//!   uses last: a block's positions are mostly one range, its border's in a few runs;
-//! - attribute sets by first use in the positions' vertex lists in that position order;
-//! - each position's vertex list `(surface group, attribute set)`, by group.
-//!
-//! A corner's attributes are its position's vertex of the triangle's group, so triangles
-//! store no attribute ids ([`StoredTri`]).
-
-mod column;
-mod writer;
-
-pub use writer::StoreWriter;
+//! Reading the welded store: its arrays by range or by ids, its blocks, and the whole
+//! welded mesh back into memory.
 
 use std::ops::Range;
 
-use bytemuck::{Pod, Zeroable};
 use caveclod_core::format::PositionClass;
 
+use super::column::Column;
+use super::records::{class, group_surfaces, Origins, PositionLists, StoredAttributes, StoredTri};
 use crate::weld::{Attributes, VertexLists, WeldInfo, Welded, WeldedTri};
-use column::Column;
-
-/// One triangle as stored: its positions (counter-clockwise), surface group and surface.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct StoredTri {
-    /// Position ids.
-    pub p: [u32; 3],
-    /// Surface group (before colouring, as [`WeldedTri::group`]).
-    pub group: u32,
-    /// Surface.
-    pub surface: u16,
-    /// Zero.
-    pub reserved: u16,
-}
-
-impl StoredTri {
-    /// Welded triangle `t` of surface `surface`.
-    pub fn of(t: &WeldedTri, surface: u16) -> Self {
-        Self {
-            p: t.p,
-            group: t.group,
-            surface,
-            reserved: 0,
-        }
-    }
-}
-
-/// One attribute set as stored ([`Attributes`], its flag a word).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub(crate) struct StoredAttributes {
-    normal: [f32; 3],
-    uv: [f32; 2],
-    color: [f32; 4],
-    normal_from_geometry: u32,
-}
-
-impl From<&Attributes> for StoredAttributes {
-    fn from(a: &Attributes) -> Self {
-        Self {
-            normal: a.normal,
-            uv: a.uv,
-            color: a.color,
-            normal_from_geometry: u32::from(a.normal_from_geometry),
-        }
-    }
-}
-
-impl From<StoredAttributes> for Attributes {
-    fn from(a: StoredAttributes) -> Self {
-        Self {
-            normal: a.normal,
-            uv: a.uv,
-            color: a.color,
-            normal_from_geometry: a.normal_from_geometry != 0,
-        }
-    }
-}
-
-/// Where the store's triangles and positions came from: the producer's id of each, by
-/// store id. Kept when asked ([`StoreWriter::finish`]), for callers that map a result back
-/// to the producer's numbering.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Origins {
-    /// The pushed index of each stored triangle.
-    pub triangles: Vec<u32>,
-    /// The pushed index of each stored position.
-    pub positions: Vec<u32>,
-}
-
-/// Some positions' vertex lists: position `i`'s entries are
-/// `entries[start[i]..start[i + 1]]`, `[group, attribute set]` by group.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct PositionLists {
-    /// Where each position's entries start, and the end.
-    pub start: Vec<u32>,
-    /// `[group, attribute set]`.
-    pub entries: Vec<[u32; 2]>,
-}
-
-impl PositionLists {
-    /// Position `i`'s entries.
-    pub fn of(&self, i: usize) -> &[[u32; 2]] {
-        &self.entries[self.start[i] as usize..self.start[i + 1] as usize]
-    }
-
-    /// Positions.
-    pub fn len(&self) -> usize {
-        self.start.len().saturating_sub(1)
-    }
-
-    /// No position.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
 
 /// A welded mesh on disk in block order (see the module's doc).
 #[derive(Debug)]
 pub struct WeldedStore {
-    positions: Column<[f32; 3]>,
-    classes: Column<u8>,
+    pub(super) positions: Column<[f32; 3]>,
+    pub(super) classes: Column<u8>,
     /// `vertex_start[p]..vertex_start[p + 1]`: position `p`'s range of `vertices`.
-    vertex_start: Column<u32>,
-    vertices: Column<[u32; 2]>,
-    attributes: Column<StoredAttributes>,
-    triangles: Column<StoredTri>,
-    info: WeldInfo,
-    bounds: ([f32; 3], [f32; 3]),
+    pub(super) vertex_start: Column<u32>,
+    pub(super) vertices: Column<[u32; 2]>,
+    pub(super) attributes: Column<StoredAttributes>,
+    pub(super) triangles: Column<StoredTri>,
+    pub(super) info: WeldInfo,
+    pub(super) bounds: ([f32; 3], [f32; 3]),
     /// First-level tiles along each axis (a power of two).
-    side: u32,
+    pub(super) side: u32,
     /// The first triangle of each first-level tile in Z order, and the end.
-    tile_start: Vec<u32>,
-    origins: Option<Origins>,
+    pub(super) tile_start: Vec<u32>,
+    pub(super) origins: Option<Origins>,
 }
 
 impl WeldedStore {
-    /// Stores `w` in block order for first-level tiles of about `block_triangles` triangles
-    /// (keeping the [`Origins`] when `keep_origins`), freeing each of its arrays once
-    /// stored.
-    pub fn from_welded(
-        w: Welded,
-        block_triangles: usize,
-        keep_origins: bool,
-    ) -> std::io::Result<Self> {
-        let info = WeldInfo::of(&w);
-        let Welded {
-            positions,
-            classes,
-            attributes,
-            triangles,
-            vertices,
-            group_surfaces,
-            ..
-        } = w;
-        let mut out = StoreWriter::new()?;
-        for (x, (p, c)) in positions.iter().zip(&classes).enumerate() {
-            let list: Vec<[u32; 2]> = vertices[x].iter().map(|&(g, a)| [g, a]).collect();
-            out.push_position(*p, *c, &list)?;
-        }
-        drop((positions, classes, vertices));
-        for a in attributes.chunks(1 << 16) {
-            out.push_attributes(a)?;
-        }
-        drop(attributes);
-        let mut stored = Vec::with_capacity(1 << 16);
-        for chunk in triangles.chunks(1 << 16) {
-            stored.clear();
-            stored.extend(
-                chunk
-                    .iter()
-                    .map(|t| StoredTri::of(t, group_surfaces[t.group as usize])),
-            );
-            out.push_triangles(&stored)?;
-        }
-        drop(triangles);
-        out.finish(info, block_triangles, keep_origins)
-    }
-
     /// Positions.
     pub fn positions(&self) -> usize {
         self.positions.len()
@@ -362,21 +205,4 @@ impl WeldedStore {
             repairs: self.info.repairs,
         })
     }
-}
-
-/// The surface of each of `groups` groups, from the triangles `stored` (a group lies on one
-/// surface; a group without a triangle there gets surface 0).
-pub(crate) fn group_surfaces(stored: &[StoredTri], groups: u32) -> Vec<u16> {
-    let mut surfaces = vec![0u16; groups as usize];
-    for t in stored {
-        if let Some(s) = surfaces.get_mut(t.group as usize) {
-            *s = t.surface;
-        }
-    }
-    surfaces
-}
-
-/// A stored class.
-fn class(c: u8) -> PositionClass {
-    PositionClass::from_u32(u32::from(c)).unwrap_or(PositionClass::Rigid)
 }

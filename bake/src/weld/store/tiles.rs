@@ -1,4 +1,5 @@
-//! The blocks: square tiles over the mesh's two widest axes, a triangle in the tile of its
+//! The tiles the store orders its triangles by, which are the blocked build's first-level
+//! blocks: square tiles over the mesh's two widest axes, a triangle in the tile of its
 //! centroid, tiles numbered in Z (Morton) order, so that a level's tiles merge two by two on
 //! each axis into the next level's by dropping two bits of the code, and the four tiles of
 //! one are consecutive.

@@ -1,5 +1,5 @@
 //! A whole bake in blocks: import, weld, the blocked hierarchy, the `.clod` arrays and
-//! their validation, as [`crate::pipeline::bake_file`] does in one build. The hierarchy's
+//! their validation, as [`super::bake_file`] does in one build. The hierarchy's
 //! collapses are on disk ([`SpilledBuild`]) until written ([`SpilledBuild::write`]) or read
 //! back into memory ([`SpilledBuild::into_built`]).
 
@@ -8,17 +8,19 @@ use std::time::Instant;
 
 use caveclod_core::format::ExtraSection;
 
-use super::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
-use crate::baked::{BakeWriteError, Baked};
-use crate::clod_file::Inspect;
+use super::built::{built, source_dir, weld_mesh, Built};
+use super::error::BakeError;
+use super::import_weld::{import_and_weld, WeldedMesh};
+use crate::baked::Baked;
+use crate::base::progress::Stage;
+use crate::blocked::{build, build_spilled, BlockedError, BlockedOptions, LevelStats, Spilled};
+use crate::clod_file::{BakeWriteError, Inspect};
 use crate::hierarchy::AttributeWeights;
 use crate::import::ImportOptions;
 use crate::mesh::{Mesh, Surface};
-use crate::pipeline::{built, weld_mesh, BakeError, Built, Stage};
 use crate::report::BakeInfo;
-use crate::weld::tiled::WeldedMesh;
-use crate::weld::{self, Repairs};
-use crate::weld_store::{StoreWriter, WeldedStore};
+use crate::weld::store::{StoreWriter, WeldedStore};
+use crate::weld::{Repairs, Welded};
 
 /// A blocked bake up to its arrays: the welded mesh and its hierarchy, both on disk.
 #[derive(Debug)]
@@ -52,7 +54,7 @@ impl SpilledBuild {
         extra: &[ExtraSection<'_>],
         inspect: Inspect<'_>,
     ) -> Result<u64, BakeWriteError> {
-        super::write::write(
+        crate::blocked::write::write(
             self.store,
             self.spilled,
             &self.surfaces,
@@ -139,7 +141,7 @@ pub fn build_file_blocked(
 
 /// Imports `path` and builds its hierarchy in blocks, the welded mesh and the collapses on
 /// disk. A PLY file is streamed and welded tile by tile straight into the store
-/// ([`weld::tiled::import_and_weld`]), never held whole; other files are imported and welded
+/// ([`import_and_weld`]), never held whole; other files are imported and welded
 /// in core, the imported mesh dropped once welded (only its surfaces are kept) and the
 /// welded mesh once stored in block order ([`WeldedStore::from_welded`]), so no two of them
 /// take memory at once and the build holds only the blocks in flight and what stitching
@@ -159,7 +161,7 @@ pub fn build_file_spilled(
     let store_failed = |e: std::io::Error| failed(BlockedError::Store(e.to_string()));
     let mut writer = StoreWriter::new().map_err(store_failed)?;
     // A tile's weld takes no more than a block's build, and as many of each run at once.
-    let file = weld::tiled::import_and_weld(
+    let file = import_and_weld(
         path,
         import_options,
         options.block_triangles,
@@ -203,14 +205,14 @@ pub fn build_file_spilled(
         store,
         spilled,
         surfaces: file.surfaces,
-        texture_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        texture_dir: source_dir(path),
         start,
     };
     Ok((built, levels))
 }
 
 /// Bakes a mesh in blocks: welds it, builds its hierarchy level by level
-/// ([`super::build`]), assembles and validates the arrays.
+/// ([`crate::blocked::build`]), assembles and validates the arrays.
 pub fn bake_mesh_blocked(
     mesh: &Mesh,
     name: &str,
@@ -234,7 +236,7 @@ pub fn bake_mesh_blocked(
 
 /// The step after welding: the blocked hierarchy.
 fn build_welded(
-    w: weld::Welded,
+    w: Welded,
     surfaces: Vec<Surface>,
     input_triangles: usize,
     name: &str,

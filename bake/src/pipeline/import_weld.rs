@@ -4,14 +4,15 @@
 
 use std::path::Path;
 
-use super::{weld_tiled_into, StreamTiles, TiledWeldError, WeldSink};
+use super::built::weld_mesh;
+use super::error::BakeError;
+use crate::base::progress::Stage;
+use crate::base::temp::TempSpace;
 use crate::import::{self, ImportOptions};
 use crate::mesh::Surface;
-use crate::ooc::temp::TempSpace;
 use crate::ooc::OocError;
-use crate::pipeline::{weld_mesh, BakeError, Stage};
-use crate::weld::WeldInfo;
-use crate::weld::Welded;
+use crate::weld::tiled::{weld_tiled_into, StreamTiles, TiledWeldError, WeldSink};
+use crate::weld::{WeldInfo, Welded};
 
 /// Triangles a tile holds at most: its weld (with the mesh it is built from) takes some
 /// hundreds of bytes a triangle, and as many tiles as threads are welded at once, so callers

@@ -6,10 +6,10 @@
 use caveclod_core::format::PositionClass;
 
 use super::column::{Column, ColumnWriter};
-use super::{Origins, StoredAttributes, StoredTri, WeldedStore};
-use crate::blocked::tiles::{side_for, Grid};
-use crate::weld::Attributes;
-use crate::weld::WeldInfo;
+use super::records::{Origins, StoredAttributes, StoredTri};
+use super::tiles::{side_for, Grid};
+use super::welded_store::WeldedStore;
+use crate::weld::{Attributes, WeldInfo, Welded};
 
 const NONE: u32 = u32::MAX;
 
@@ -145,6 +145,50 @@ impl StoreWriter {
                 positions: order,
             }),
         })
+    }
+}
+
+impl WeldedStore {
+    /// Stores `w` in block order for first-level tiles of about `block_triangles` triangles
+    /// (keeping the [`Origins`] when `keep_origins`), freeing each of its arrays once
+    /// stored.
+    pub fn from_welded(
+        w: Welded,
+        block_triangles: usize,
+        keep_origins: bool,
+    ) -> std::io::Result<Self> {
+        let info = WeldInfo::of(&w);
+        let Welded {
+            positions,
+            classes,
+            attributes,
+            triangles,
+            vertices,
+            group_surfaces,
+            ..
+        } = w;
+        let mut out = StoreWriter::new()?;
+        for (x, (p, c)) in positions.iter().zip(&classes).enumerate() {
+            let list: Vec<[u32; 2]> = vertices[x].iter().map(|&(g, a)| [g, a]).collect();
+            out.push_position(*p, *c, &list)?;
+        }
+        drop((positions, classes, vertices));
+        for a in attributes.chunks(1 << 16) {
+            out.push_attributes(a)?;
+        }
+        drop(attributes);
+        let mut stored = Vec::with_capacity(1 << 16);
+        for chunk in triangles.chunks(1 << 16) {
+            stored.clear();
+            stored.extend(
+                chunk
+                    .iter()
+                    .map(|t| StoredTri::of(t, group_surfaces[t.group as usize])),
+            );
+            out.push_triangles(&stored)?;
+        }
+        drop(triangles);
+        out.finish(info, block_triangles, keep_origins)
     }
 }
 
