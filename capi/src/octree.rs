@@ -270,9 +270,6 @@ pub unsafe extern "C" fn caveclod_octree_cut_select(
         let cut = unsafe { cut_for(cut, o) }?;
         // SAFETY: the caller's contract.
         let view = unsafe { ffi::input(view) }?.to_view()?;
-        if tolerance_px.is_nan() || tolerance_px < 0.0 {
-            return Err(CaveclodStatus::InvalidArgument);
-        }
         let s = cut.select(o, &view, tolerance_px)?;
         let s = CaveclodSelectStats {
             selected: s.selected,

@@ -38,8 +38,9 @@ pub enum CaveclodStatus {
     InvalidConfig = 10,
     /// An output buffer (index list, offsets, per-surface counts) is too small.
     OutputTooSmall = 11,
-    /// An argument is out of range: a surface index, a non-finite or degenerate view, a
-    /// negative tolerance.
+    /// An argument is out of range: a surface index, a non-finite or degenerate view,
+    /// refinement parameters the core refuses (a tolerance that is not a finite number above
+    /// 0, a negative or NaN time, speed or bound, a guard band outside [0, π/2)).
     InvalidArgument = 12,
     /// The hierarchy's connectivity contradicts the camera's state (data corrupt in a way
     /// validation cannot see); reset the camera. Emitted indices are unusable.
@@ -104,6 +105,7 @@ impl From<OpError> for CaveclodStatus {
     fn from(e: OpError) -> Self {
         match e {
             OpError::WrongHierarchy => Self::WrongHierarchy,
+            OpError::InvalidParams(_) => Self::InvalidArgument,
             _ => Self::Inconsistent,
         }
     }
@@ -129,6 +131,7 @@ impl From<CutError> for CaveclodStatus {
             CutError::TooFewOutputs { .. } | CutError::OutputTooSmall { .. } => {
                 Self::OutputTooSmall
             }
+            CutError::InvalidParams(_) => Self::InvalidArgument,
         }
     }
 }

@@ -126,22 +126,12 @@ impl From<RefineParams> for CaveclodRefineParams {
 }
 
 impl CaveclodRefineParams {
-    /// The core's parameters (fields this struct lacks keep their defaults), if in range.
-    pub fn to_params(&self) -> Result<RefineParams> {
-        let times = [self.dt_s, self.refine_morph_s, self.coarsen_morph_s];
-        let sane = self.tolerance_px >= 0.0
-            && !self.tolerance_px.is_nan()
-            && times.iter().all(|t| t.is_finite() && *t >= 0.0)
-            && self.morph_speed_px_s >= 0.0
-            && self.morph_radius_tolerances >= 0.0
-            && self.morph_guard_rad.is_finite()
-            && self.morph_guard_rad >= 0.0;
-        if !sane {
-            return Err(CaveclodStatus::InvalidArgument);
-        }
+    /// The core's parameters (fields this struct lacks keep their defaults), as given: the
+    /// core checks their ranges when it refines (`RefineParams::validate`).
+    pub fn to_params(&self) -> RefineParams {
         // Parameters the core gains later keep their defaults.
         #[allow(clippy::needless_update)]
-        Ok(RefineParams {
+        RefineParams {
             tolerance_px: self.tolerance_px,
             max_ops: self.max_ops,
             frustum_culling: self.frustum_culling,
@@ -153,7 +143,7 @@ impl CaveclodRefineParams {
             morph_radius_tolerances: self.morph_radius_tolerances,
             morph_guard_rad: self.morph_guard_rad,
             ..RefineParams::default()
-        })
+        }
     }
 }
 

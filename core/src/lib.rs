@@ -72,13 +72,15 @@ pub mod octree;
 mod outputs;
 #[cfg(feature = "alloc")]
 mod owned;
+mod params;
 mod prefetch;
 mod regulator;
+mod screen;
 mod view;
 
 pub use camera::{
     CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, MorphVertex,
-    OpError, RefineParams, RefineStats,
+    OpError, RefineStats,
 };
 pub use format::error::FormatError;
 pub use glam;
@@ -89,5 +91,6 @@ pub use octree::model::{Octree, OctreeFormatError};
 pub use octree::select::{CutError, OctreeCut, SelectStats};
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
+pub use params::{ParamField, ParamsError, RefineParams};
 pub use regulator::Regulator;
 pub use view::{LookAt, View};

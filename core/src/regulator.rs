@@ -64,7 +64,7 @@
 //! polygons than the target even at full resolution keeps the tolerance at the floor: no
 //! tolerance reaches that target.
 
-use crate::camera::RefineParams;
+use crate::params::RefineParams;
 
 /// Holds a camera's active polygons near a target by adapting its pixel tolerance each frame.
 ///

@@ -56,7 +56,7 @@ use glam::{BVec4A, Vec3, Vec4};
 use super::ActiveVertex;
 use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;
-use crate::view::View;
+use crate::screen::ScreenTest;
 
 /// Relative margin kept between a distance and the distance at which a test's answer
 /// would change; it dwarfs the `f32` tests' rounding (under 2⁻²⁰).
@@ -166,27 +166,24 @@ impl Odometer {
         }
     }
 
-    /// Moves to `view` for a pass with squared tolerance `tz2`, the share of a node's radius
-    /// that counts as uniform error (`RefineParams::radius_error`) and the given culling
-    /// switches, forgetting every certificate in `records` when they no longer apply.
-    #[allow(clippy::too_many_arguments)]
+    /// Moves to the view of `test` for a pass with its squared tolerance, its share of a
+    /// node's radius that counts as uniform error and its culling switches, forgetting every
+    /// certificate in `records` when they no longer apply.
     pub fn advance(
         &mut self,
         h: &Hierarchy<'_>,
-        view: &View,
-        tz2: f32,
-        radius_error: f32,
-        frustum: bool,
-        backface: bool,
+        test: &ScreenTest,
         records: &mut [ActiveVertex],
     ) -> Readings {
+        let view = test.view();
+        let (tz2, frustum) = (test.scale2(), test.frustum());
         let planes = (view.plane_count as usize).min(view.planes.len());
         let key = Key {
             tz2_bits: tz2.to_bits(),
-            radius_error_bits: radius_error.to_bits(),
+            radius_error_bits: test.radius_share().to_bits(),
             planes: planes as u32,
             frustum,
-            backface,
+            backface: test.backface(),
         };
         let finite = view.eye.is_finite()
             && view.planes[..planes].iter().all(|p| p.is_finite())

@@ -17,6 +17,7 @@ mod ops;
 mod pair_map;
 mod queries;
 mod refine;
+mod stats;
 
 pub use compact_step::CompactProgress;
 pub use config::{CameraConfig, CameraError};
@@ -24,7 +25,7 @@ pub use emit::EmitError;
 pub use lag::FrontLag;
 pub use morph::MorphVertex;
 pub use ops::OpError;
-pub use refine::{RefineParams, RefineStats};
+pub use stats::RefineStats;
 
 use bytemuck::{Pod, Zeroable};
 

@@ -57,10 +57,11 @@ use bytemuck::{Pod, Zeroable};
 use super::criterion::Criterion;
 use super::morph_map::MorphMap;
 use super::morph_pool::{MorphState, Morphs, COARSENING, REFINING, VERTICES_PER_MORPH};
-use super::refine::{RefineParams, RefineStats};
+use super::stats::RefineStats;
 use super::{CameraState, Front, OpError, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
+use crate::params::RefineParams;
 use glam::Vec3;
 
 /// One morphing vertex as the GPU reads it: blend from `from` towards persistent vertex `to`

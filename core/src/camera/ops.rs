@@ -20,6 +20,7 @@ mod split;
 use super::{CameraState, Front, PolySlot, NONE};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyKey};
+use crate::params::ParamsError;
 
 /// Why an operation was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +63,15 @@ pub enum OpError {
         /// The node being split or collapsed.
         node: NodeId,
     },
+    /// Refinement parameters out of range ([`RefineParams::validate`](crate::RefineParams::validate)):
+    /// the pass did nothing.
+    InvalidParams(ParamsError),
+}
+
+impl From<ParamsError> for OpError {
+    fn from(e: ParamsError) -> Self {
+        Self::InvalidParams(e)
+    }
 }
 
 impl core::fmt::Display for OpError {
@@ -83,6 +93,7 @@ impl core::fmt::Display for OpError {
                     node.0
                 )
             }
+            Self::InvalidParams(e) => write!(f, "refinement parameters refused: {e}"),
         }
     }
 }
