@@ -79,15 +79,17 @@ mod screen;
 mod view;
 
 pub use camera::{
-    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, MorphVertex,
-    OpError, RefineStats,
+    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, OpError,
+    RefineStats,
 };
 pub use format::error::FormatError;
 pub use glam;
+pub use gpu::MorphVertex;
 pub use hierarchy::Hierarchy;
 pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
-pub use octree::model::{Octree, OctreeFormatError};
+pub use octree::error::OctreeFormatError;
+pub use octree::model::Octree;
 pub use octree::select::{CutError, OctreeCut, SelectStats};
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};

@@ -53,7 +53,7 @@
 
 use glam::{BVec4A, Vec3, Vec4};
 
-use super::ActiveVertex;
+use super::records::{ActiveVertex, UNKNOWN};
 use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;
 use crate::screen::ScreenTest;
@@ -108,9 +108,6 @@ pub(crate) struct Readings {
     pub path: f32,
     pub sweep: f32,
 }
-
-/// A certificate that says nothing: it holds at no reading, read as either sign.
-pub(crate) const UNKNOWN: f32 = 0.0;
 
 /// Whether an own certificate still says the node's split is not wanted: a positive one
 /// until the path reads it, a negative one until the sweep reads its magnitude.

@@ -13,7 +13,7 @@ pub struct CameraConfig {
     pub stack_len: u32,
     /// Keep each active polygon's vertex indices between frames, so emission copies them
     /// instead of looking every polygon up in the hierarchy (16 bytes per polygon slot; see
-    /// the [`CameraState`](super::CameraState) docs). On in [`full`](Self::full) and
+    /// the [`CameraState`](crate::CameraState) docs). On in [`full`](Self::full) and
     /// [`with_polygon_budget`](Self::with_polygon_budget).
     pub index_cache: bool,
     /// Keep only the split nodes in the map from split to pair, hashed, where that is smaller
@@ -24,10 +24,10 @@ pub struct CameraConfig {
     /// together and the table scatters them.
     pub hashed_pair_map: bool,
     /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the
-    /// [`CameraState`](super::CameraState) docs): each moves a split's floating child, one or
+    /// [`CameraState`](crate::CameraState) docs): each moves a split's floating child, one or
     /// two vertices, between its parent's position and its own over
-    /// [`RefineParams::refine_morph_s`](super::RefineParams::refine_morph_s) or
-    /// [`coarsen_morph_s`](super::RefineParams::coarsen_morph_s). 72 bytes per morph, and a
+    /// [`RefineParams::refine_morph_s`](crate::RefineParams::refine_morph_s) or
+    /// [`coarsen_morph_s`](crate::RefineParams::coarsen_morph_s). 72 bytes per morph, and a
     /// bit per vertex of the hierarchy and per pair; 0 in
     /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
     /// camera without morphs splits and collapses at once.
@@ -62,7 +62,7 @@ impl CameraConfig {
     /// This configuration with room for `max_morphs` geomorphs at once: enough for the
     /// splits and collapses of visible nodes the camera makes within one morph's duration.
     /// When the room is taken, a split happens at once
-    /// ([`RefineStats::morphs_dropped`](super::RefineStats::morphs_dropped)).
+    /// ([`RefineStats::morphs_dropped`](crate::RefineStats::morphs_dropped)).
     pub fn with_morphs(self, max_morphs: u32) -> Self {
         Self { max_morphs, ..self }
     }

@@ -4,7 +4,9 @@
 //! at the cost of a full pass's reads, so it is for reports and tests, not for a frame loop.
 
 use super::criterion::Criterion;
-use super::{CameraState, OpError, FREE};
+use super::ops::OpError;
+use super::records::FREE;
+use super::state::CameraState;
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 use crate::params::RefineParams;

@@ -28,7 +28,10 @@
 
 use super::certificate::{own_holds, parent_says, Readings};
 use super::criterion::Criterion;
-use super::{ActiveVertex, CameraState, Front, OpError, RefineStats, FREE, NONE};
+use super::ops::OpError;
+use super::records::{ActiveVertex, FREE, NONE};
+use super::state::{CameraState, Front};
+use super::stats::RefineStats;
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 use crate::params::RefineParams;
