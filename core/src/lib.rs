@@ -95,4 +95,4 @@ pub use octree::select::{CutError, OctreeCut, SelectStats};
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
 pub use params::{ParamField, ParamsError, RefineParams};
 pub use regulator::Regulator;
-pub use view::{LookAt, View};
+pub use view::{LookAt, View, ViewError};

@@ -6,9 +6,9 @@
 //! it lies outside the frustum, or it faces away), and, for a stationary child, is its
 //! parent's split still wanted (yes: no collapse; or no, and the collapse was refused
 //! before). Each answer costs a read of a 32-byte bounds record wherever the hierarchy
-//! keeps it, one cache line per question; four cameras' worth of those lines no longer fit
-//! the caches that one camera's fit, which is what made four cameras cost more than four
-//! times one. Yet each answer can only change once the view has moved by some distance the
+//! keeps it, one cache line per question; several cameras' worth of those lines do not fit
+//! the caches that one camera's fit, so cameras sharing a hierarchy slow each other down
+//! through them. Yet each answer can only change once the view has moved by some distance the
 //! visit can compute, so the visit writes into the node's active record the odometer
 //! reading up to which its answer holds, and later visits skip the bounds until the
 //! odometer gets there.
@@ -30,8 +30,10 @@
 //!   under the tolerance (path, as above), the sphere lies outside a frustum plane (that
 //!   plane's distance past the radius, of sweep), or the cone faces away from the eye (the
 //!   test's margin over the Lipschitz constant, of path). (A fourth, a directional error
-//!   seen too edge-on, is left uncertified: it never decided a visit on the St. Helens
-//!   flights, where every unwanted split read got a certificate from the three.)
+//!   seen too edge-on, is left uncertified: the three above need only distances to the eye
+//!   and to the planes, while this one would need a bound on how fast the angle between
+//!   the cone's axis and the line of sight turns as the eye moves; such a visit reads its
+//!   bounds.)
 //!
 //! Each record holds two `f32` certificates, the sign saying which answer and odometer:
 //! the own one is positive for "not wanted" until a path reading, negative for "not

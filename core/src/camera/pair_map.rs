@@ -6,7 +6,7 @@
 //! layouts, fixed when the camera is made (the branch on it is the same for every access, so
 //! the predictor takes it for free):
 //! - **Narrow**, an array of 16-bit pair indices by node, for a camera with fewer than 65,535
-//!   pairs (every budgeted camera of the demo; a quarter of a million active polygons).
+//!   pairs (a budget of up to about a quarter of a million active polygons).
 //! - **Wide**, an array of 32-bit pair indices by node, for cameras with more pairs.
 //! - **Hashed**, when [`CameraConfig::hashed_pair_map`](crate::CameraConfig) asks for it and
 //!   it is smaller than the narrow array (a `max_pairs` below about a sixth of the splittable

@@ -54,14 +54,14 @@ use crate::{gpu::MorphVertex, CameraConfig, Hierarchy, RefineStats};
 ///   set when the record is written (by a split, a collapse or a reset, which read the node
 ///   records anyway), so a refinement pass decides whether a node may trigger a collapse
 ///   from its own record, without reading the node records of the node and its parent on
-///   every visit: those reads were a fifth of a pass's cache misses, and four cameras' worth
-///   of them no longer fit the caches one camera's fit.
+///   every visit: those are two reads at unrelated addresses per visit, and several cameras'
+///   worth of them do not fit the caches one camera's fit.
 /// - **A refused collapse is remembered until something it depends on changes.** Most
 ///   collapses that refinement wants are illegal (a neighbour is still finer than the split
 ///   left it, or the floating child is split), and asking again costs a chain of dependent
 ///   reads across the hierarchy and the camera (split record, `pair_of`, both slots, the
-///   neighbours' entries in `pair_of`): on the St. Helens flyover, about ten refused checks
-///   per collapse applied, every frame. Legality depends only on the pair's two slots (their
+///   neighbours' entries in `pair_of`), and a coarsening front meets many refusals for each
+///   collapse it applies, every frame. Legality depends only on the pair's two slots (their
 ///   links and corners) and on the children being unsplit, so one bit per pair, set on a
 ///   refusal, is cleared by every write to either slot and by the collapse of either child;
 ///   a set bit answers "refused" from 4 bytes per 32 pairs. Compaction and reset clear every
@@ -71,9 +71,9 @@ use crate::{gpu::MorphVertex, CameraConfig, Hierarchy, RefineStats};
 ///   rarely changes, yet each question reads a bounds record from wherever the hierarchy
 ///   keeps it. The record keeps, per question, the answer and the odometer reading up to
 ///   which it provably stands (the eye's path length, or that plus the frustum planes'
-///   sweep), and a visit before then reads nothing but its record (see `certificate`): on
-///   the St. Helens flyover about five questions in six of a moving pass are answered so,
-///   and all but a handful of a settled pass. 8 bytes per record.
+///   sweep), and a visit before then reads nothing but its record (see `certificate`): a
+///   view that moves little between passes leaves most answers standing, and a view that
+///   holds still leaves all of them. 8 bytes per record.
 /// - **Emission copies; operations keep the copy exact.** A polygon's vertex indices change
 ///   only when a corner moves to another active-vertex record: a record keeps its position
 ///   for life (a split hands it to the stationary child, which shares the position). So the
@@ -81,8 +81,8 @@ use crate::{gpu::MorphVertex, CameraConfig, Hierarchy, RefineStats};
 ///   operation rewrites just the corners it moves (one vertex-table row for all of them:
 ///   every moved corner lands on the same position) and the pair it creates; a
 ///   pair filling a hole brings its entries. Emission then copies the cache in slot order.
-///   Without it, every frame followed five dependent reads per polygon across the hierarchy,
-///   which four cameras' emissions pushed out of each other's caches. 16 bytes per slot;
+///   Without it, every frame follows five dependent reads per polygon across the hierarchy,
+///   which several cameras' emissions push out of each other's caches. 16 bytes per slot;
 ///   [`CameraConfig::index_cache`] turns it off for a runtime short of memory.
 /// - **Capacity is a choice.** `max_pairs` bounds the live splits; a full camera refuses
 ///   further splits (counted in [`RefineStats`]) rather than failing, so a runtime with fixed

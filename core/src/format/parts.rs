@@ -39,7 +39,7 @@ pub struct HierarchyParts<'a> {
 /// A section this version does not define, carried along (g-mesh levels, octrees, ...).
 #[derive(Clone, Copy, Debug)]
 pub struct ExtraSection<'a> {
-    /// Its tag; must not be one of [`tags`].
+    /// Its tag; must not be one of [`tags`](crate::format::tags).
     pub tag: Tag,
     /// Size of one record; `bytes.len()` must be a multiple of it.
     pub record_size: u32,
