@@ -1,11 +1,11 @@
 //! Per-camera refinement state in caller-owned memory: [`CameraState`] and its operations;
 //! the layout and the design decisions are in its docs.
 //!
-//! The files form layers, each importing only those below it:
-//! - leaves: `records` (the records in a camera's words and their marks), `config`,
-//!   `stats`, `compact_progress`, `pair_map`, `morph_map`, `morph_pool`, `certificate`,
-//!   `criterion`;
-//! - `state`: the [`CameraState`] and `Front` types, built of the leaves' types;
+//! The files form layers, each importing only files listed before it:
+//! - `records`: the records in a camera's words and the values that mark them;
+//! - the parts a camera is made of and a pass's tools: `config`, `stats`,
+//!   `compact_progress`, `pair_map`, `morph_map`, `morph_pool`, `certificate`, `criterion`;
+//! - `state`: the [`CameraState`] and `Front` types, built of those parts;
 //! - `layout` (where the arrays lie in the words) and `lifecycle` (making and resetting a
 //!   camera);
 //! - the operations, each an `impl` of the state: `queries`, `index_cache`, `ops`
