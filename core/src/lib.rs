@@ -10,6 +10,9 @@
 //!   [`CameraState::words_needed`].
 //! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
 //!   operations that meet contradictions return errors.
+//! - Inputs are checked in one place each: [`RefineParams::validate`] ([`ParamsError`], which
+//!   refinement, [`CameraState::lag`] and [`OctreeCut::select`] return for values out of
+//!   range) and [`LookAt::validate`] ([`ViewError`]).
 //! - The `.clod` format ([`format`]) is defined here, reader and writer.
 //! - The multiresolution octree of out-of-core bakes ([`octree`]) is selected per camera and
 //!   emitted the same way, as a cut of its nodes in caller memory.
