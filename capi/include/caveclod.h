@@ -13,8 +13,9 @@
 
 // The version of this C ABI: the major version in the high 16 bits, the minor in the low.
 // A program built against a header checks `caveclod_abi_version() >> 16` against
-// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature.
-#define CAVECLOD_ABI_VERSION (1 << 16)
+// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
+// a higher minor version only adds calls or status values.
+#define CAVECLOD_ABI_VERSION ((1 << 16) | 1)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -48,7 +49,8 @@ typedef enum CaveclodStatus {
     // `CAVECLOD_BYTES_ALIGN`, camera and cut memory to `CAVECLOD_MEMORY_ALIGN`, structs to
     // their type's alignment.
     CAVECLOD_STATUS_MISALIGNED = 2,
-    // The file is shorter than its header or its recorded length says: truncated.
+    // The file is shorter than its header or its recorded length says: truncated. (Longer
+    // than its recorded length is `CAVECLOD_STATUS_TRAILING_BYTES`.)
     CAVECLOD_STATUS_TRUNCATED = 3,
     // The bytes are not a `.clod` file this library reads (magic or major version).
     CAVECLOD_STATUS_NOT_A_CLOD_FILE = 4,
@@ -68,8 +70,9 @@ typedef enum CaveclodStatus {
     CAVECLOD_STATUS_INVALID_CONFIG = 10,
     // An output buffer (index list, offsets, per-surface counts) is too small.
     CAVECLOD_STATUS_OUTPUT_TOO_SMALL = 11,
-    // An argument is out of range: a surface index, a non-finite or degenerate view, a
-    // negative tolerance.
+    // An argument is out of range: a surface index, a non-finite or degenerate view,
+    // refinement parameters the core refuses (a tolerance that is not a finite number above
+    // 0, a negative or NaN time, speed or bound, a guard band outside [0, π/2)).
     CAVECLOD_STATUS_INVALID_ARGUMENT = 12,
     // The hierarchy's connectivity contradicts the camera's state (data corrupt in a way
     // validation cannot see); reset the camera. Emitted indices are unusable.
@@ -81,6 +84,9 @@ typedef enum CaveclodStatus {
     // A bug in this library: a panic was caught at the boundary. Nothing unwound into
     // the caller; the handles the call was given must not be used again.
     CAVECLOD_STATUS_INTERNAL = 16,
+    // The bytes run on past the length the file's header records: extra bytes after the
+    // file's end (pass the file's own length, not a larger buffer's).
+    CAVECLOD_STATUS_TRAILING_BYTES = 17,
 } CaveclodStatus;
 
 // A bump arena: `used` of `size` bytes at `base` are taken. Plain data: the caller may
@@ -130,29 +136,33 @@ typedef struct CaveclodCamera {
 } CaveclodCamera;
 
 // The knobs of one refinement pass (`caveclod_refine_params_default` fills the defaults).
+// The library checks their ranges as the core does (`RefineParams::validate`): a value out
+// of range makes the pass return `CAVECLOD_STATUS_INVALID_ARGUMENT` and do nothing.
 typedef struct CaveclodRefineParams {
-    // Screen-space tolerance in pixels: split while a node's error projects larger
-    // (default 1).
+    // Screen-space tolerance in pixels: split while a node's error projects larger; a
+    // finite number above 0 (default 1).
     float tolerance_px;
     // Most splits + collapses in one pass; `UINT32_MAX` for no limit (the default).
     uint32_t max_ops;
-    // Seconds since this camera's previous pass: how far its morphs move (default 1/60).
+    // Seconds since this camera's previous pass: how far its morphs move; finite, 0 or
+    // more (default 1/60).
     float dt_s;
-    // Seconds a refine morph takes; 0 splits at once (default 32/60). Only a camera with
-    // morph memory morphs.
+    // Seconds a refine morph takes, finite; 0 splits at once (default 32/60). Only a
+    // camera with morph memory morphs.
     float refine_morph_s;
-    // Seconds a coarsen morph takes; 0 collapses at once (default 16/60).
+    // Seconds a coarsen morph takes, finite; 0 collapses at once (default 16/60).
     float coarsen_morph_s;
     // Fastest a morphing vertex may glide across the screen, pixels per second: a morph
     // whose path is long on the screen then takes longer than its duration (0 or infinity,
-    // the default: no limit).
+    // the default: no limit; negative or NaN is refused).
     float morph_speed_px_s;
     // How large on the screen a morphing camera's nodes may stay, in tolerances: a node
     // whose bounding sphere projects larger splits, which keeps morphs' paths short on the
-    // screen for more polygons (0 or infinity, the default: no bound).
+    // screen for more polygons (0 or infinity, the default: no bound; negative or NaN is
+    // refused).
     float morph_radius_tolerances;
     // How far beyond the view's sides a morphing camera refines, in radians, so what
-    // turns into view was refined before it shows (default 0.15; 0 for none).
+    // turns into view was refined before it shows (default 0.15; 0 for none; below π/2).
     float morph_guard_rad;
     // Coarsen outside the view frustum (default true).
     bool frustum_culling;
@@ -277,6 +287,14 @@ typedef struct CaveclodHierarchyCounts {
     // Polygons of the full-resolution mesh (the most a camera shows).
     uint32_t polygons;
 } CaveclodHierarchyCounts;
+
+// An axis-aligned bounding box, world space.
+typedef struct CaveclodBounds {
+    // The least x, y and z.
+    float min[3];
+    // The greatest x, y and z.
+    float max[3];
+} CaveclodBounds;
 
 // The validated octree of a file baked out of core: an opaque value like
 // `CaveclodHierarchy` (nothing to free, may be copied, shared by any number of threads).
@@ -546,9 +564,10 @@ enum CaveclodStatus caveclod_camera_morph_vertices(struct CaveclodCamera *cam,
 //
 // Returns `CAVECLOD_STATUS_NULL_POINTER` for a null `bytes` or `out`,
 // `CAVECLOD_STATUS_MISALIGNED` when `bytes` is not aligned to `CAVECLOD_BYTES_ALIGN`,
-// `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_NOT_A_CLOD_FILE`,
-// `CAVECLOD_STATUS_CORRUPT` or `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a
-// valid file. On failure `out` is left a handle every other call refuses.
+// `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_TRAILING_BYTES` (more bytes than the file
+// records), `CAVECLOD_STATUS_NOT_A_CLOD_FILE`, `CAVECLOD_STATUS_CORRUPT` or
+// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file. On failure `out` is
+// left a handle every other call refuses.
 //
 // Thread-safety: any thread; `out` must not be used by another thread during the call.
 // Once open, one hierarchy may be shared by any number of threads and cameras at once:
@@ -571,6 +590,16 @@ enum CaveclodStatus caveclod_hierarchy_open(const uint8_t *bytes,
 // `h` is null or an opened hierarchy; `out` is null or writable.
 enum CaveclodStatus caveclod_hierarchy_counts(const struct CaveclodHierarchy *h,
                                               struct CaveclodHierarchyCounts *out);
+
+// Writes the bounding box of `h`'s positions (the model's extent, as baked) to `out`:
+// where to place a first camera without reading the vertex buffer.
+//
+// Thread-safety: any thread, concurrently with any call that reads `h`.
+//
+// # Safety
+// `h` is null or an opened hierarchy; `out` is null or writable.
+enum CaveclodStatus caveclod_hierarchy_bounds(const struct CaveclodHierarchy *h,
+                                              struct CaveclodBounds *out);
 
 // Points `*vertices` at the persistent vertex buffer inside the file's bytes
 // (`counts.vertex_buffer_bytes` bytes, `counts.vertex_stride` per vertex; upload it once)
@@ -640,6 +669,9 @@ enum CaveclodStatus caveclod_octree_cut_init(const struct CaveclodOctree *o,
 
 // Chooses the cut's nodes for `view`: culled by the frustum, refined while a node's error
 // projects to more than `tolerance_px` pixels. Writes what it did to `stats` unless null.
+//
+// Returns `CAVECLOD_STATUS_INVALID_ARGUMENT` for a view out of range or a tolerance that is
+// not a finite number above 0 (the cut is then left as it was).
 //
 // Thread-safety: the thread that owns `cut`; any number of cuts select over one `o` at
 // once.

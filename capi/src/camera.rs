@@ -302,7 +302,7 @@ pub unsafe extern "C" fn caveclod_camera_refine(
             RefineParams::default()
         } else {
             // SAFETY: the caller's contract.
-            unsafe { ffi::input(params) }?.to_params()?
+            unsafe { ffi::input(params) }?.to_params()
         };
         let s = cam.state.refine(h, &view, &params)?;
         // SAFETY: the caller's contract.

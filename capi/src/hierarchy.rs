@@ -4,7 +4,7 @@ use caveclod_core::Hierarchy;
 
 use crate::ffi::{self, guarded, Result};
 use crate::status::CaveclodStatus;
-use crate::types::CaveclodHierarchyCounts;
+use crate::types::{CaveclodBounds, CaveclodHierarchyCounts};
 
 /// Words (of 8 bytes) of a `CaveclodHierarchy`.
 pub const CAVECLOD_HIERARCHY_WORDS: usize = 64;
@@ -47,9 +47,10 @@ pub(crate) unsafe fn hierarchy<'a>(h: *const CaveclodHierarchy) -> Result<&'a Hi
 ///
 /// Returns `CAVECLOD_STATUS_NULL_POINTER` for a null `bytes` or `out`,
 /// `CAVECLOD_STATUS_MISALIGNED` when `bytes` is not aligned to `CAVECLOD_BYTES_ALIGN`,
-/// `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_NOT_A_CLOD_FILE`,
-/// `CAVECLOD_STATUS_CORRUPT` or `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a
-/// valid file. On failure `out` is left a handle every other call refuses.
+/// `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_TRAILING_BYTES` (more bytes than the file
+/// records), `CAVECLOD_STATUS_NOT_A_CLOD_FILE`, `CAVECLOD_STATUS_CORRUPT` or
+/// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file. On failure `out` is
+/// left a handle every other call refuses.
 ///
 /// Thread-safety: any thread; `out` must not be used by another thread during the call.
 /// Once open, one hierarchy may be shared by any number of threads and cameras at once:
@@ -125,6 +126,31 @@ pub(crate) fn counts_of(h: &Hierarchy<'_>) -> CaveclodHierarchyCounts {
 }
 
 const _: () = assert!(core::mem::size_of::<caveclod_core::format::Vertex>() == 32);
+
+/// Writes the bounding box of `h`'s positions (the model's extent, as baked) to `out`:
+/// where to place a first camera without reading the vertex buffer.
+///
+/// Thread-safety: any thread, concurrently with any call that reads `h`.
+///
+/// # Safety
+/// `h` is null or an opened hierarchy; `out` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn caveclod_hierarchy_bounds(
+    h: *const CaveclodHierarchy,
+    out: *mut CaveclodBounds,
+) -> CaveclodStatus {
+    guarded(|| {
+        // SAFETY: the caller's contract.
+        let h = unsafe { hierarchy(h) }?;
+        let m = h.meta();
+        let bounds = CaveclodBounds {
+            min: m.bounds_min,
+            max: m.bounds_max,
+        };
+        // SAFETY: the caller's contract.
+        unsafe { ffi::output(out, bounds) }
+    })
+}
 
 /// Points `*vertices` at the persistent vertex buffer inside the file's bytes
 /// (`counts.vertex_buffer_bytes` bytes, `counts.vertex_stride` per vertex; upload it once)

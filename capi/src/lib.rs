@@ -50,8 +50,9 @@ pub use types::*;
 
 /// The version of this C ABI: the major version in the high 16 bits, the minor in the low.
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
-/// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature.
-pub const CAVECLOD_ABI_VERSION: u32 = 1 << 16;
+/// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
+/// a higher minor version only adds calls or status values.
+pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 1;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

@@ -249,6 +249,9 @@ pub unsafe extern "C" fn caveclod_octree_cut_init(
 /// Chooses the cut's nodes for `view`: culled by the frustum, refined while a node's error
 /// projects to more than `tolerance_px` pixels. Writes what it did to `stats` unless null.
 ///
+/// Returns `CAVECLOD_STATUS_INVALID_ARGUMENT` for a view out of range or a tolerance that is
+/// not a finite number above 0 (the cut is then left as it was).
+///
 /// Thread-safety: the thread that owns `cut`; any number of cuts select over one `o` at
 /// once.
 ///
@@ -270,9 +273,6 @@ pub unsafe extern "C" fn caveclod_octree_cut_select(
         let cut = unsafe { cut_for(cut, o) }?;
         // SAFETY: the caller's contract.
         let view = unsafe { ffi::input(view) }?.to_view()?;
-        if tolerance_px.is_nan() || tolerance_px < 0.0 {
-            return Err(CaveclodStatus::InvalidArgument);
-        }
         let s = cut.select(o, &view, tolerance_px)?;
         let s = CaveclodSelectStats {
             selected: s.selected,

@@ -1,7 +1,9 @@
 //! Status codes: what every entry point returns, one static message each, and the mapping
 //! from the core crate's typed errors.
 
-use caveclod_core::{CameraError, CutError, EmitError, FormatError, OctreeFormatError, OpError};
+use caveclod_core::{
+    CameraError, CutError, EmitError, FormatError, OctreeFormatError, OpError, ViewError,
+};
 use core::ffi::c_char;
 
 /// What a call did. `CAVECLOD_STATUS_OK` is zero; every other value names one reason a call
@@ -18,7 +20,8 @@ pub enum CaveclodStatus {
     /// `CAVECLOD_BYTES_ALIGN`, camera and cut memory to `CAVECLOD_MEMORY_ALIGN`, structs to
     /// their type's alignment.
     Misaligned = 2,
-    /// The file is shorter than its header or its recorded length says: truncated.
+    /// The file is shorter than its header or its recorded length says: truncated. (Longer
+    /// than its recorded length is `CAVECLOD_STATUS_TRAILING_BYTES`.)
     Truncated = 3,
     /// The bytes are not a `.clod` file this library reads (magic or major version).
     NotAClodFile = 4,
@@ -38,8 +41,9 @@ pub enum CaveclodStatus {
     InvalidConfig = 10,
     /// An output buffer (index list, offsets, per-surface counts) is too small.
     OutputTooSmall = 11,
-    /// An argument is out of range: a surface index, a non-finite or degenerate view, a
-    /// negative tolerance.
+    /// An argument is out of range: a surface index, a non-finite or degenerate view,
+    /// refinement parameters the core refuses (a tolerance that is not a finite number above
+    /// 0, a negative or NaN time, speed or bound, a guard band outside [0, π/2)).
     InvalidArgument = 12,
     /// The hierarchy's connectivity contradicts the camera's state (data corrupt in a way
     /// validation cannot see); reset the camera. Emitted indices are unusable.
@@ -51,6 +55,9 @@ pub enum CaveclodStatus {
     /// A bug in this library: a panic was caught at the boundary. Nothing unwound into
     /// the caller; the handles the call was given must not be used again.
     Internal = 16,
+    /// The bytes run on past the length the file's header records: extra bytes after the
+    /// file's end (pass the file's own length, not a larger buffer's).
+    TrailingBytes = 17,
 }
 
 impl CaveclodStatus {
@@ -74,6 +81,7 @@ impl CaveclodStatus {
             Self::NoOctree => c"the file has no octree",
             Self::ArenaFull => c"the arena is full",
             Self::Internal => c"internal error (a bug): a panic was caught at the C boundary",
+            Self::TrailingBytes => c"the file has bytes after the end its header records",
         }
     }
 
@@ -81,6 +89,7 @@ impl CaveclodStatus {
     pub fn from_format(e: FormatError) -> Self {
         match e {
             FormatError::Truncated { .. } | FormatError::LengthMismatch { .. } => Self::Truncated,
+            FormatError::TrailingBytes { .. } => Self::TrailingBytes,
             FormatError::BadMagic | FormatError::UnsupportedVersion { .. } => Self::NotAClodFile,
             FormatError::ChecksumMismatch { .. } => Self::Corrupt,
             FormatError::Misaligned { .. } => Self::Misaligned,
@@ -104,6 +113,7 @@ impl From<OpError> for CaveclodStatus {
     fn from(e: OpError) -> Self {
         match e {
             OpError::WrongHierarchy => Self::WrongHierarchy,
+            OpError::InvalidParams(_) => Self::InvalidArgument,
             _ => Self::Inconsistent,
         }
     }
@@ -129,7 +139,14 @@ impl From<CutError> for CaveclodStatus {
             CutError::TooFewOutputs { .. } | CutError::OutputTooSmall { .. } => {
                 Self::OutputTooSmall
             }
+            CutError::InvalidParams(_) => Self::InvalidArgument,
         }
+    }
+}
+
+impl From<ViewError> for CaveclodStatus {
+    fn from(_: ViewError) -> Self {
+        Self::InvalidArgument
     }
 }
 
@@ -145,7 +162,7 @@ impl From<OctreeFormatError> for CaveclodStatus {
 /// Thread-safe: any thread, any time.
 #[no_mangle]
 pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
-    const ALL: [CaveclodStatus; 17] = [
+    const ALL: [CaveclodStatus; 18] = [
         CaveclodStatus::Ok,
         CaveclodStatus::NullPointer,
         CaveclodStatus::Misaligned,
@@ -163,6 +180,7 @@ pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
         CaveclodStatus::NoOctree,
         CaveclodStatus::ArenaFull,
         CaveclodStatus::Internal,
+        CaveclodStatus::TrailingBytes,
     ];
     let status = ALL
         .iter()

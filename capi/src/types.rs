@@ -32,75 +32,51 @@ pub struct CaveclodView {
 
 impl CaveclodView {
     /// The refinement view: the frustum of the view-projection for `aspect` and the pixels
-    /// per radian of the viewport's height, as `LookAt::view` computes them.
+    /// per radian of the viewport's height, as the core's `LookAt::checked_view` makes and
+    /// checks them.
     pub fn to_view(&self) -> Result<View> {
-        let scalars = [self.fov_y, self.aspect, self.near, self.far];
-        let all = self
-            .eye
-            .iter()
-            .chain(&self.target)
-            .chain(&self.up)
-            .chain(&scalars);
-        let (eye, target, up) = (
-            Vec3::from_array(self.eye),
-            Vec3::from_array(self.target),
-            Vec3::from_array(self.up),
-        );
-        let sane = all.into_iter().all(|x| x.is_finite())
-            && self.fov_y > 0.0
-            && self.fov_y < core::f32::consts::PI
-            && self.aspect > 0.0
-            && self.near > 0.0
-            && self.far > self.near
-            && self.viewport_height > 0
-            && (target - eye).cross(up).length_squared() > 0.0;
-        if !sane {
-            return Err(CaveclodStatus::InvalidArgument);
-        }
         let look = LookAt {
-            eye,
-            target,
-            up,
+            eye: Vec3::from_array(self.eye),
+            target: Vec3::from_array(self.target),
+            up: Vec3::from_array(self.up),
             fov_y: self.fov_y,
             near: self.near,
             far: self.far,
         };
-        // `libm`, as `LookAt::view`: the same pixel scale bit for bit.
-        let pixels_per_radian = self.viewport_height as f32 / (2.0 * libm::tanf(self.fov_y * 0.5));
-        Ok(View::from_view_projection(
-            look.view_projection(self.aspect),
-            eye,
-            pixels_per_radian,
-        ))
+        Ok(look.checked_view(self.aspect, self.viewport_height)?)
     }
 }
 
 /// The knobs of one refinement pass (`caveclod_refine_params_default` fills the defaults).
+/// The library checks their ranges as the core does (`RefineParams::validate`): a value out
+/// of range makes the pass return `CAVECLOD_STATUS_INVALID_ARGUMENT` and do nothing.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CaveclodRefineParams {
-    /// Screen-space tolerance in pixels: split while a node's error projects larger
-    /// (default 1).
+    /// Screen-space tolerance in pixels: split while a node's error projects larger; a
+    /// finite number above 0 (default 1).
     pub tolerance_px: f32,
     /// Most splits + collapses in one pass; `UINT32_MAX` for no limit (the default).
     pub max_ops: u32,
-    /// Seconds since this camera's previous pass: how far its morphs move (default 1/60).
+    /// Seconds since this camera's previous pass: how far its morphs move; finite, 0 or
+    /// more (default 1/60).
     pub dt_s: f32,
-    /// Seconds a refine morph takes; 0 splits at once (default 32/60). Only a camera with
-    /// morph memory morphs.
+    /// Seconds a refine morph takes, finite; 0 splits at once (default 32/60). Only a
+    /// camera with morph memory morphs.
     pub refine_morph_s: f32,
-    /// Seconds a coarsen morph takes; 0 collapses at once (default 16/60).
+    /// Seconds a coarsen morph takes, finite; 0 collapses at once (default 16/60).
     pub coarsen_morph_s: f32,
     /// Fastest a morphing vertex may glide across the screen, pixels per second: a morph
     /// whose path is long on the screen then takes longer than its duration (0 or infinity,
-    /// the default: no limit).
+    /// the default: no limit; negative or NaN is refused).
     pub morph_speed_px_s: f32,
     /// How large on the screen a morphing camera's nodes may stay, in tolerances: a node
     /// whose bounding sphere projects larger splits, which keeps morphs' paths short on the
-    /// screen for more polygons (0 or infinity, the default: no bound).
+    /// screen for more polygons (0 or infinity, the default: no bound; negative or NaN is
+    /// refused).
     pub morph_radius_tolerances: f32,
     /// How far beyond the view's sides a morphing camera refines, in radians, so what
-    /// turns into view was refined before it shows (default 0.15; 0 for none).
+    /// turns into view was refined before it shows (default 0.15; 0 for none; below π/2).
     pub morph_guard_rad: f32,
     /// Coarsen outside the view frustum (default true).
     pub frustum_culling: bool,
@@ -126,22 +102,12 @@ impl From<RefineParams> for CaveclodRefineParams {
 }
 
 impl CaveclodRefineParams {
-    /// The core's parameters (fields this struct lacks keep their defaults), if in range.
-    pub fn to_params(&self) -> Result<RefineParams> {
-        let times = [self.dt_s, self.refine_morph_s, self.coarsen_morph_s];
-        let sane = self.tolerance_px >= 0.0
-            && !self.tolerance_px.is_nan()
-            && times.iter().all(|t| t.is_finite() && *t >= 0.0)
-            && self.morph_speed_px_s >= 0.0
-            && self.morph_radius_tolerances >= 0.0
-            && self.morph_guard_rad.is_finite()
-            && self.morph_guard_rad >= 0.0;
-        if !sane {
-            return Err(CaveclodStatus::InvalidArgument);
-        }
+    /// The core's parameters (fields this struct lacks keep their defaults), as given: the
+    /// core checks their ranges when it refines (`RefineParams::validate`).
+    pub fn to_params(&self) -> RefineParams {
         // Parameters the core gains later keep their defaults.
         #[allow(clippy::needless_update)]
-        Ok(RefineParams {
+        RefineParams {
             tolerance_px: self.tolerance_px,
             max_ops: self.max_ops,
             frustum_culling: self.frustum_culling,
@@ -153,7 +119,7 @@ impl CaveclodRefineParams {
             morph_radius_tolerances: self.morph_radius_tolerances,
             morph_guard_rad: self.morph_guard_rad,
             ..RefineParams::default()
-        })
+        }
     }
 }
 
@@ -300,6 +266,16 @@ pub struct CaveclodHierarchyCounts {
     pub base_polygons: u32,
     /// Polygons of the full-resolution mesh (the most a camera shows).
     pub polygons: u32,
+}
+
+/// An axis-aligned bounding box, world space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CaveclodBounds {
+    /// The least x, y and z.
+    pub min: [f32; 3],
+    /// The greatest x, y and z.
+    pub max: [f32; 3],
 }
 
 /// The state of a camera.

@@ -156,11 +156,19 @@ void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHi
     CHECK_STATUS(caveclod_hierarchy_open(file.data(), 10, &bad), CAVECLOD_STATUS_TRUNCATED);
     CHECK_STATUS(caveclod_hierarchy_open(file.data(), file.len - 100, &bad),
                  CAVECLOD_STATUS_TRUNCATED);
+    // Bytes after the end the header records (the buffer has zeroed room past the file).
+    CHECK_STATUS(caveclod_hierarchy_open(file.data(), file.len + 8, &bad),
+                 CAVECLOD_STATUS_TRAILING_BYTES);
+    CHECK(std::strcmp(caveclod_status_message(CAVECLOD_STATUS_TRAILING_BYTES),
+                      caveclod_status_message(CAVECLOD_STATUS_TRUNCATED)) != 0);
     // A failed open leaves a handle every call refuses.
     CaveclodHierarchyCounts unused{};
     CHECK_STATUS(caveclod_hierarchy_counts(&bad, &unused), CAVECLOD_STATUS_INVALID_HANDLE);
     CaveclodHierarchy zeroed{};
     CHECK_STATUS(caveclod_hierarchy_counts(&zeroed, &unused), CAVECLOD_STATUS_INVALID_HANDLE);
+    CaveclodBounds no_bounds{};
+    CHECK_STATUS(caveclod_hierarchy_bounds(&zeroed, &no_bounds), CAVECLOD_STATUS_INVALID_HANDLE);
+    CHECK_STATUS(caveclod_hierarchy_bounds(&h, nullptr), CAVECLOD_STATUS_NULL_POINTER);
     // A misaligned pointer: the same bytes one byte in.
     {
         std::vector<std::uint64_t> shifted(file.words.size() + 1, 0);
@@ -224,7 +232,19 @@ void bad_inputs(AlignedBytes &file, const CaveclodHierarchy &h, const CaveclodHi
                  CAVECLOD_STATUS_INVALID_ARGUMENT);
     CaveclodRefineParams params;
     caveclod_refine_params_default(&params);
-    params.tolerance_px = -1.0f;
+    // Parameters out of the core's ranges: a tolerance that is not a finite number above
+    // 0, a negative time, a guard band of a right angle.
+    for (float tolerance : {-1.0f, 0.0f}) {
+        params.tolerance_px = tolerance;
+        CHECK_STATUS(caveclod_camera_refine(&cam, &h, &view, &params, nullptr),
+                     CAVECLOD_STATUS_INVALID_ARGUMENT);
+    }
+    caveclod_refine_params_default(&params);
+    params.dt_s = -1.0f;
+    CHECK_STATUS(caveclod_camera_refine(&cam, &h, &view, &params, nullptr),
+                 CAVECLOD_STATUS_INVALID_ARGUMENT);
+    caveclod_refine_params_default(&params);
+    params.morph_guard_rad = 1.5708f;
     CHECK_STATUS(caveclod_camera_refine(&cam, &h, &view, &params, nullptr),
                  CAVECLOD_STATUS_INVALID_ARGUMENT);
     CHECK_STATUS(caveclod_camera_refine(&cam, &h, &view, nullptr, nullptr), CAVECLOD_STATUS_OK);
@@ -327,6 +347,8 @@ void octree_cuts(const char *path) {
         CHECK(stats.selected > 0 && stats.triangles > 0);
         CHECK_STATUS(caveclod_octree_cut_select(&cuts[c], &o, &view, -1.0f, nullptr),
                      CAVECLOD_STATUS_INVALID_ARGUMENT);
+        CHECK_STATUS(caveclod_octree_cut_select(&cuts[c], &o, &view, 0.0f, nullptr),
+                     CAVECLOD_STATUS_INVALID_ARGUMENT);
         std::size_t total = 0, emitted = 0;
         CHECK_STATUS(caveclod_octree_cut_total_index_count(&cuts[c], &o, &total), CAVECLOD_STATUS_OK);
         CHECK(total == 3 * static_cast<std::size_t>(stats.triangles));
@@ -371,6 +393,21 @@ int main(int argc, char **argv) {
     std::size_t vertex_bytes = 0;
     CHECK_STATUS(caveclod_hierarchy_vertices(&h, &vertices, &vertex_bytes), CAVECLOD_STATUS_OK);
     CHECK(vertices != nullptr && vertex_bytes == hc.vertex_buffer_bytes);
+    // The model's bounds: a box with extent that holds every vertex of the buffer.
+    CaveclodBounds bounds{};
+    CHECK_STATUS(caveclod_hierarchy_bounds(&h, &bounds), CAVECLOD_STATUS_OK);
+    bool inside = true;
+    const unsigned char *vertex_bytes_at = static_cast<const unsigned char *>(vertices);
+    for (std::uint32_t v = 0; v < hc.vertices; ++v) {
+        float p[3];
+        std::memcpy(p, vertex_bytes_at + 32ull * v + hc.position_offset, sizeof p);
+        for (int k = 0; k < 3; ++k) {
+            inside = inside && p[k] >= bounds.min[k] && p[k] <= bounds.max[k];
+        }
+    }
+    CHECK(inside);
+    CHECK(bounds.min[0] < bounds.max[0] && bounds.min[1] < bounds.max[1] &&
+          bounds.min[2] < bounds.max[2]);
 
     AlignedBytes other_file = read_file(argv[18]);
     CaveclodHierarchy other;

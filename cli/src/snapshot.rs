@@ -120,12 +120,6 @@ fn placement(desc: &SnapshotDesc) -> Result<Placement> {
             desc.cameras
         )));
     }
-    if !(desc.tolerance_px.is_finite() && desc.tolerance_px > 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "tolerance {} px: must be positive",
-            desc.tolerance_px
-        )));
-    }
     Ok(match desc.layout {
         Layout::SplitScreen => (
             Viewport::split_screen(desc.width, desc.height, desc.cameras)?

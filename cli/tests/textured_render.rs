@@ -11,7 +11,7 @@ use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;
 use caveclod_cli::materials::GpuMaterials;
 use caveclod_core::format::Vertex;
-use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_core::{CameraState, Hierarchy, LookAt, NodeId};
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, Renderer, RendererDesc,
     RgbaImage, VertexBuffer, Viewport,
@@ -138,20 +138,13 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
     };
     let mut memory = vec![0u32; CameraState::words_needed(&h)];
     let mut cam = ok(CameraState::new(&h, &mut memory), "camera");
-    let everything = RefineParams {
-        tolerance_px: 0.0,
-        max_ops: u32::MAX,
-        frustum_culling: false,
-        backface_culling: false,
-        ..RefineParams::default()
-    };
-    while ok(
-        cam.refine(&h, &look.view(SIZE, SIZE), &everything),
-        "refine",
-    )
-    .splits
-        > 0
-    {}
+    // Full resolution: nodes are numbered parents first, so forcing every split in order
+    // splits them all.
+    for v in (0..h.splits().len() as u32).map(NodeId) {
+        if !cam.is_split(v) {
+            ok(cam.force_split_own_stack(&h, v), "split");
+        }
+    }
     let baked_vertices = ok(VertexBuffer::from_hierarchy(&ctx, "baked", &h), "vertices");
     let hierarchy_image = draw(
         &ctx,

@@ -10,6 +10,9 @@
 //!   [`CameraState::words_needed`].
 //! - Never panics on data: [`Hierarchy::from_bytes`] validates every index and invariant once;
 //!   operations that meet contradictions return errors.
+//! - Inputs are checked in one place each: [`RefineParams::validate`] ([`ParamsError`], which
+//!   refinement, [`CameraState::lag`] and [`OctreeCut::select`] return for values out of
+//!   range) and [`LookAt::validate`] ([`ViewError`]).
 //! - The `.clod` format ([`format`]) is defined here, reader and writer.
 //! - The multiresolution octree of out-of-core bakes ([`octree`]) is selected per camera and
 //!   emitted the same way, as a cut of its nodes in caller memory.
@@ -72,22 +75,27 @@ pub mod octree;
 mod outputs;
 #[cfg(feature = "alloc")]
 mod owned;
+mod params;
 mod prefetch;
 mod regulator;
+mod screen;
 mod view;
 
 pub use camera::{
-    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, MorphVertex,
-    OpError, RefineParams, RefineStats,
+    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, OpError,
+    RefineStats,
 };
 pub use format::error::FormatError;
 pub use glam;
+pub use gpu::MorphVertex;
 pub use hierarchy::Hierarchy;
 pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
-pub use octree::model::{Octree, OctreeFormatError};
+pub use octree::error::OctreeFormatError;
+pub use octree::model::Octree;
 pub use octree::select::{CutError, OctreeCut, SelectStats};
 #[cfg(feature = "alloc")]
 pub use owned::{CameraGuard, HierarchyBuf, OwnedCamera};
+pub use params::{ParamField, ParamsError, RefineParams};
 pub use regulator::Regulator;
-pub use view::{LookAt, View};
+pub use view::{LookAt, View, ViewError};

@@ -210,7 +210,7 @@ impl Drop for CameraGuard<'_> {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
-    use crate::camera::RefineParams;
+    use crate::params::RefineParams;
     use crate::view::View;
     use glam::Vec3;
 

@@ -57,14 +57,16 @@
 //! ([`RefineStats::active_polygons`](crate::RefineStats)) after each frame refined with
 //! [`Regulator::tolerance`]. A camera at its budget refuses splits
 //! ([`RefineStats::capacity_refusals`](crate::RefineStats)); adding two polygons per refusal
-//! tells the regulator how far beyond its budget the front wants to grow.
+//! tells the regulator how far beyond its budget the front wants to grow. A camera with
+//! geomorphs calls [`Regulator::update_settling`] instead, with the refused splits' polygons
+//! added to both of its counts.
 //!
 //! The tolerance stays within a floor and a ceiling ([`Regulator::with_limits`]); every input
 //! (zero polygons included) gives a finite positive tolerance. A view that holds fewer
 //! polygons than the target even at full resolution keeps the tolerance at the floor: no
 //! tolerance reaches that target.
 
-use crate::camera::RefineParams;
+use crate::params::RefineParams;
 
 /// Holds a camera's active polygons near a target by adapting its pixel tolerance each frame.
 ///
@@ -340,8 +342,10 @@ impl Regulator {
     }
 
     /// Takes the count of active polygons of the frame refined with
-    /// [`tolerance`](Self::tolerance) (see the module docs) and returns the tolerance for the
-    /// next frame.
+    /// [`tolerance`](Self::tolerance) and returns the tolerance for the next frame. For a
+    /// camera that refuses splits at its capacity, pass the polygons the front wants:
+    /// `stats.active_polygons + 2 * stats.capacity_refusals` (each refused split would have
+    /// added up to two).
     pub fn update(&mut self, active_polygons: u32) -> f32 {
         self.update_settling(active_polygons, active_polygons)
     }
@@ -349,6 +353,13 @@ impl Regulator {
     /// [`update`](Self::update) for a camera with geomorphs: `active_polygons` on the screen,
     /// of which `settled_polygons` remain once the collapses waiting for their coarsen
     /// morphs are applied ([`CameraState::settled_polygon_count`](crate::CameraState)).
+    ///
+    /// Capacity refusals count as in [`update`](Self::update), and in both counts: add
+    /// `2 * stats.capacity_refusals` to `active_polygons` and to `settled_polygons` alike.
+    /// A refused split is polygons the front wants to keep, not a collapse waiting for its
+    /// morph, and the difference of the two counts is read as waiting collapses: added to
+    /// `active_polygons` alone, refusals would count only through the waiting share's
+    /// smoothing, frames late.
     ///
     /// A raise of tolerance shows in the settled count at once but on the screen only when
     /// the coarsen morphs end (16 frames by default); regulated on the screen's count, the

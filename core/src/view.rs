@@ -1,5 +1,7 @@
 //! What a camera sees: eye point, frustum planes and the pixel scale of the screen-space
-//! error criterion.
+//! error criterion. A [`LookAt`] describes a perspective camera; it owns the checks of such
+//! a description ([`LookAt::validate`], refusing with a [`ViewError`]) and the pixel scale
+//! of a viewport ([`LookAt::pixels_per_radian`]).
 
 use glam::camera::rh::{proj, view::look_at_mat4};
 use glam::{Mat4, Vec3, Vec4};
@@ -48,15 +50,156 @@ impl LookAt {
             * look_at_mat4(self.eye, self.target, self.up)
     }
 
+    /// Pixels per radian at the centre of a viewport `viewport_height` pixels high:
+    /// `viewport_height / (2 tan(fov_y / 2))`, the scale that turns the pixel tolerance into
+    /// an angle.
+    pub fn pixels_per_radian(&self, viewport_height: u32) -> f32 {
+        viewport_height as f32 / (2.0 * libm::tanf(self.fov_y * 0.5))
+    }
+
     /// The refinement view: the frustum of [`view_projection`](Self::view_projection) and
     /// the pixels per radian of a viewport `viewport_width` × `viewport_height` pixels
-    /// (`height / (2 tan(fov_y / 2))`).
+    /// ([`pixels_per_radian`](Self::pixels_per_radian)). Unchecked: see
+    /// [`checked_view`](Self::checked_view).
     pub fn view(&self, viewport_width: u32, viewport_height: u32) -> View {
         let aspect = viewport_width as f32 / viewport_height.max(1) as f32;
-        let pixels_per_radian = viewport_height as f32 / (2.0 * libm::tanf(self.fov_y * 0.5));
-        View::from_view_projection(self.view_projection(aspect), self.eye, pixels_per_radian)
+        self.view_for_aspect(aspect, viewport_height)
+    }
+
+    /// [`view`](Self::view) for a viewport given by its `aspect` (width / height) and its
+    /// height in pixels.
+    pub fn view_for_aspect(&self, aspect: f32, viewport_height: u32) -> View {
+        View::from_view_projection(
+            self.view_projection(aspect),
+            self.eye,
+            self.pixels_per_radian(viewport_height),
+        )
+    }
+
+    /// `Ok` for a camera that looks somewhere: every field finite, `fov_y` in (0, π),
+    /// `near` above 0, `far` beyond `near`, `target` away from `eye`, and `up` not parallel
+    /// to the view direction; else the first rule broken.
+    pub fn validate(&self) -> Result<(), ViewError> {
+        let points = [("eye", self.eye), ("target", self.target), ("up", self.up)];
+        if let Some((field, _)) = points.iter().find(|(_, p)| !p.is_finite()) {
+            return Err(ViewError::NotFinite { field });
+        }
+        let scalars = [
+            ("fov_y", self.fov_y),
+            ("near", self.near),
+            ("far", self.far),
+        ];
+        if let Some((field, _)) = scalars.iter().find(|(_, x)| !x.is_finite()) {
+            return Err(ViewError::NotFinite { field });
+        }
+        if !(self.fov_y > 0.0 && self.fov_y < core::f32::consts::PI) {
+            return Err(ViewError::FieldOfView { fov_y: self.fov_y });
+        }
+        if self.near <= 0.0 {
+            return Err(ViewError::Near { near: self.near });
+        }
+        if self.far <= self.near {
+            return Err(ViewError::Far {
+                near: self.near,
+                far: self.far,
+            });
+        }
+        let forward = self.target - self.eye;
+        if forward.length_squared() <= 0.0 {
+            return Err(ViewError::EyeAtTarget);
+        }
+        if forward.cross(self.up).length_squared() <= 0.0 {
+            return Err(ViewError::UpAlongView);
+        }
+        Ok(())
+    }
+
+    /// [`view_for_aspect`](Self::view_for_aspect) for a checked camera
+    /// ([`validate`](Self::validate)) and viewport: `aspect` a finite number above 0,
+    /// `viewport_height` at least 1.
+    pub fn checked_view(&self, aspect: f32, viewport_height: u32) -> Result<View, ViewError> {
+        self.validate()?;
+        if !(aspect.is_finite() && aspect > 0.0) {
+            return Err(ViewError::Aspect { aspect });
+        }
+        if viewport_height == 0 {
+            return Err(ViewError::ViewportHeight);
+        }
+        Ok(self.view_for_aspect(aspect, viewport_height))
     }
 }
+
+/// Why a [`LookAt`] (with its viewport) describes no view: the rule it breaks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ViewError {
+    /// A point (`eye`, `target`, `up`) has a coordinate, or a scalar (`fov_y`, `near`,
+    /// `far`) a value, that is not a finite number.
+    NotFinite {
+        /// The field.
+        field: &'static str,
+    },
+    /// The vertical field of view is not in (0, π).
+    FieldOfView {
+        /// Its value, radians.
+        fov_y: f32,
+    },
+    /// The near distance is not above 0.
+    Near {
+        /// Its value.
+        near: f32,
+    },
+    /// The far distance is not beyond the near one.
+    Far {
+        /// The near distance.
+        near: f32,
+        /// The far distance.
+        far: f32,
+    },
+    /// `target` is `eye`: the view has no direction.
+    EyeAtTarget,
+    /// `up` is zero or parallel to the view direction: the view's roll is undefined.
+    UpAlongView,
+    /// The viewport's width / height is not a finite number above 0.
+    Aspect {
+        /// Its value.
+        aspect: f32,
+    },
+    /// The viewport is 0 pixels high.
+    ViewportHeight,
+}
+
+impl core::fmt::Display for ViewError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::NotFinite { field } => {
+                write!(f, "{field} is not finite: expected finite numbers")
+            }
+            Self::FieldOfView { fov_y } => {
+                write!(f, "fov_y is {fov_y}: expected radians above 0 and below pi")
+            }
+            Self::Near { near } => write!(f, "near is {near}: expected a distance above 0"),
+            Self::Far { near, far } => {
+                write!(f, "far is {far}: expected a distance beyond near ({near})")
+            }
+            Self::EyeAtTarget => write!(f, "eye and target are one point: no view direction"),
+            Self::UpAlongView => {
+                write!(
+                    f,
+                    "up is zero or parallel to the view direction (target - eye)"
+                )
+            }
+            Self::Aspect { aspect } => {
+                write!(
+                    f,
+                    "aspect is {aspect}: expected a finite width / height above 0"
+                )
+            }
+            Self::ViewportHeight => write!(f, "viewport_height is 0: expected at least 1 pixel"),
+        }
+    }
+}
+
+impl core::error::Error for ViewError {}
 
 /// A camera's view for refinement.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -206,6 +349,96 @@ mod tests {
             p.w += 1.0;
         }
         assert_eq!(ortho.widened(angle), ortho);
+    }
+
+    /// Every rule of a camera description is checked, the first broken one named; a sound
+    /// description gives the unchecked view bit for bit.
+    #[test]
+    fn a_look_at_is_checked_rule_by_rule() {
+        let ok = look();
+        assert_eq!(ok.validate(), Ok(()));
+        assert_eq!(ok.checked_view(1.5, 600), Ok(ok.view(900, 600)));
+        let nan = f32::NAN;
+        let cases = [
+            (
+                LookAt {
+                    eye: Vec3::new(nan, 0.0, 0.0),
+                    ..ok
+                },
+                ViewError::NotFinite { field: "eye" },
+            ),
+            (
+                LookAt {
+                    target: Vec3::INFINITY,
+                    ..ok
+                },
+                ViewError::NotFinite { field: "target" },
+            ),
+            (
+                LookAt {
+                    up: Vec3::NAN,
+                    ..ok
+                },
+                ViewError::NotFinite { field: "up" },
+            ),
+            (
+                LookAt {
+                    far: f32::INFINITY,
+                    ..ok
+                },
+                ViewError::NotFinite { field: "far" },
+            ),
+            (
+                LookAt { fov_y: 0.0, ..ok },
+                ViewError::FieldOfView { fov_y: 0.0 },
+            ),
+            (
+                LookAt { fov_y: 3.2, ..ok },
+                ViewError::FieldOfView { fov_y: 3.2 },
+            ),
+            (LookAt { near: 0.0, ..ok }, ViewError::Near { near: 0.0 }),
+            (
+                LookAt { far: 0.1, ..ok },
+                ViewError::Far {
+                    near: 0.1,
+                    far: 0.1,
+                },
+            ),
+            (
+                LookAt {
+                    target: ok.eye,
+                    ..ok
+                },
+                ViewError::EyeAtTarget,
+            ),
+            (
+                LookAt {
+                    up: ok.target - ok.eye,
+                    ..ok
+                },
+                ViewError::UpAlongView,
+            ),
+            (
+                LookAt {
+                    up: Vec3::ZERO,
+                    ..ok
+                },
+                ViewError::UpAlongView,
+            ),
+        ];
+        for (look, error) in cases {
+            assert_eq!(look.validate(), Err(error), "{look:?}");
+            assert_eq!(look.checked_view(1.0, 100), Err(error));
+        }
+        assert_eq!(
+            ok.checked_view(0.0, 100),
+            Err(ViewError::Aspect { aspect: 0.0 })
+        );
+        assert!(matches!(
+            ok.checked_view(nan, 100),
+            Err(ViewError::Aspect { .. })
+        ));
+        assert_eq!(ok.checked_view(1.0, 0), Err(ViewError::ViewportHeight));
     }
 
     #[test]

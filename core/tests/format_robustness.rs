@@ -50,6 +50,7 @@ fn kind(e: &FormatError) -> &'static str {
         FormatError::UnsupportedVersion { .. } => "UnsupportedVersion",
         FormatError::BadHeader { .. } => "BadHeader",
         FormatError::LengthMismatch { .. } => "LengthMismatch",
+        FormatError::TrailingBytes { .. } => "TrailingBytes",
         FormatError::ChecksumMismatch { .. } => "ChecksumMismatch",
         FormatError::Misaligned { .. } => "Misaligned",
         FormatError::SectionTable { .. } => "SectionTable",
@@ -345,12 +346,18 @@ fn a_wrong_length_is_refused() {
     let mut longer = f.bytes().to_vec();
     longer.extend_from_slice(&[0; 16]);
     let longer = Aligned::new(&longer);
+    let extended = Hierarchy::from_bytes(longer.bytes()).err();
     assert_eq!(
-        Hierarchy::from_bytes(longer.bytes()).err(),
-        Some(FormatError::LengthMismatch {
-            header: len,
-            actual: len + 16
+        extended,
+        Some(FormatError::TrailingBytes {
+            expected: len,
+            len: len + 16
         })
+    );
+    let message = extended.map(|e| e.to_string()).unwrap_or_default();
+    assert!(
+        message.contains("16 more than its header records"),
+        "{message}"
     );
     let mut lying = f.clone();
     let mut h = header(lying.bytes());
@@ -358,8 +365,17 @@ fn a_wrong_length_is_refused() {
     set_header(lying.bytes_mut(), &h);
     assert_eq!(
         Hierarchy::from_bytes(lying.bytes()).err(),
+        Some(FormatError::TrailingBytes {
+            expected: len - 8,
+            len
+        })
+    );
+    h.file_len = len + 8;
+    set_header(lying.bytes_mut(), &h);
+    assert_eq!(
+        Hierarchy::from_bytes(lying.bytes()).err(),
         Some(FormatError::LengthMismatch {
-            header: len - 8,
+            header: len + 8,
             actual: len
         })
     );

@@ -13,7 +13,8 @@ use caveclod_core::format::{serialized_len, write_into, ExtraSection, HierarchyP
 use caveclod_core::glam::Vec3;
 use caveclod_core::octree::{octree_tags, OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
 use caveclod_core::{
-    CutError, Hierarchy, LookAt, Octree, OctreeCut, OctreeFormatError, SelectStats, SurfaceId, View,
+    CutError, Hierarchy, LookAt, Octree, OctreeCut, OctreeFormatError, ParamField, ParamsError,
+    SelectStats, SurfaceId, View,
 };
 use common::{golden, Aligned};
 use counting::{allocations, assert_counting};
@@ -837,9 +838,18 @@ fn selection_bounds_and_odd_views() {
     )
     .expect("select");
     assert_eq!(cut.selected(), &[3, 4, 5, 6]);
-    // A NaN tolerance takes nothing above level 0.
-    cut.select(&o, &far(), f32::NAN).expect("select");
-    assert_eq!(cut.selected(), &[3, 4, 5, 6]);
+    // A tolerance that is not a finite number above 0 is refused, as refinement refuses
+    // it, and the cut stays as it was.
+    for bad in [f32::NAN, 0.0, -1.0, f32::INFINITY] {
+        assert_eq!(
+            cut.select(&o, &far(), bad),
+            Err(CutError::InvalidParams(ParamsError {
+                field: ParamField::TolerancePx,
+                value: bad
+            }))
+        );
+        assert_eq!(cut.selected(), &[3, 4, 5, 6]);
+    }
 }
 
 // ---- No allocation in select + emit -------------------------------------------------

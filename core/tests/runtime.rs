@@ -444,6 +444,10 @@ fn a_camera_is_refused_by_another_hierarchy() {
         cam.refine(&other, &view, &RefineParams::default()),
         Err(OpError::WrongHierarchy)
     );
+    assert_eq!(
+        cam.lag(&other, &view, &RefineParams::default()),
+        Err(OpError::WrongHierarchy)
+    );
     let mut out = vec![0u32; 3 * h.polygon_count()];
     let mut offsets = vec![0u32; h.surface_count() + 1];
     assert_eq!(

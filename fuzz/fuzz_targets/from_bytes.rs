@@ -191,7 +191,11 @@ fuzz_target!(|data: &[u8]| {
             exercise_appearance(&h);
             false
         }
-        Err(FormatError::LengthMismatch { .. } | FormatError::ChecksumMismatch { .. }) => true,
+        Err(
+            FormatError::LengthMismatch { .. }
+            | FormatError::TrailingBytes { .. }
+            | FormatError::ChecksumMismatch { .. },
+        ) => true,
         Err(_) => false,
     };
     if retry && data.len() >= HEADER_LEN {

@@ -266,15 +266,12 @@ fn frames_create_no_resource_once_the_ring_is_sized() {
             );
         });
     };
-    let everything = caveclod_core::RefineParams {
-        tolerance_px: 0.0,
-        max_ops: u32::MAX,
-        frustum_culling: false,
-        backface_culling: false,
-        ..caveclod_core::RefineParams::default()
-    };
-    let view = scene.look.view(SIZE, SIZE);
-    while ok(cam.refine(&h, &view, &everything), "split everything").splits > 0 {}
+    // Nodes are numbered parents first, so forcing every split in order splits them all.
+    for v in (0..h.splits().len() as u32).map(caveclod_core::NodeId) {
+        if !cam.is_split(v) {
+            ok(cam.force_split_own_stack(&h, v), "split everything");
+        }
+    }
     for frame in 0..3 {
         run(frame, &cam, &mut indices);
     }

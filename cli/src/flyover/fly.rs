@@ -301,7 +301,7 @@ pub fn frame(
     let t2 = Instant::now();
     rec.push(&st, t1 - t0, t2 - t1, n);
     rec.refine_cpu_ns.push(c1.saturating_sub(c0));
-    rec.push_lag(&cam.lag(h, view, params));
+    rec.push_lag(&cam.lag(h, view, params).map_err(|e| format!("lag: {e}"))?);
     Ok(())
 }
 

@@ -295,11 +295,8 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     if !(1..=4).contains(&options.cameras) {
         return Err(format!("cameras must be 1 to 4, not {}", options.cameras));
     }
-    if options.frames < 2 || !options.tolerance.is_finite() || options.tolerance <= 0.0 {
-        return Err("need at least 2 frames and a positive tolerance".into());
-    }
-    if !(options.visit_fraction > 0.0 && options.visit_fraction <= 1.0) {
-        return Err("the visit fraction must be above 0 and at most 1".into());
+    if options.frames < 2 {
+        return Err("need at least 2 frames".into());
     }
     if options.target_polygons.is_some() && options.mode != Mode::PerCamera {
         return Err("a polygon target flies a state per camera on one thread".into());
@@ -308,16 +305,18 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     let morphing = options.geomorphs && options.mode != Mode::Shared;
     let params = RefineParams {
         tolerance_px: options.tolerance,
-        // The shared state's baseline re-refines to each camera's view in full.
-        visit_fraction: if options.mode == Mode::Shared {
-            1.0
-        } else {
-            options.visit_fraction
-        },
+        visit_fraction: options.visit_fraction,
         morph_speed_px_s: options.morph_speed_px_s,
         morph_radius_tolerances: options.morph_radius_tolerances,
         morph_guard_rad: options.morph_guard_rad,
         ..RefineParams::default()
+    };
+    params.validate().map_err(|e| e.to_string())?;
+    // The shared state's baseline re-refines to each camera's view in full.
+    let params = if options.mode == Mode::Shared {
+        params.amortised(1.0)
+    } else {
+        params
     };
     let params = if morphing {
         params

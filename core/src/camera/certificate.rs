@@ -6,9 +6,9 @@
 //! it lies outside the frustum, or it faces away), and, for a stationary child, is its
 //! parent's split still wanted (yes: no collapse; or no, and the collapse was refused
 //! before). Each answer costs a read of a 32-byte bounds record wherever the hierarchy
-//! keeps it, one cache line per question; four cameras' worth of those lines no longer fit
-//! the caches that one camera's fit, which is what made four cameras cost more than four
-//! times one. Yet each answer can only change once the view has moved by some distance the
+//! keeps it, one cache line per question; several cameras' worth of those lines do not fit
+//! the caches that one camera's fit, so cameras sharing a hierarchy slow each other down
+//! through them. Yet each answer can only change once the view has moved by some distance the
 //! visit can compute, so the visit writes into the node's active record the odometer
 //! reading up to which its answer holds, and later visits skip the bounds until the
 //! odometer gets there.
@@ -30,8 +30,10 @@
 //!   under the tolerance (path, as above), the sphere lies outside a frustum plane (that
 //!   plane's distance past the radius, of sweep), or the cone faces away from the eye (the
 //!   test's margin over the Lipschitz constant, of path). (A fourth, a directional error
-//!   seen too edge-on, is left uncertified: it never decided a visit on the St. Helens
-//!   flights, where every unwanted split read got a certificate from the three.)
+//!   seen too edge-on, is left uncertified: the three above need only distances to the eye
+//!   and to the planes, while this one would need a bound on how fast the angle between
+//!   the cone's axis and the line of sight turns as the eye moves; such a visit reads its
+//!   bounds.)
 //!
 //! Each record holds two `f32` certificates, the sign saying which answer and odometer:
 //! the own one is positive for "not wanted" until a path reading, negative for "not
@@ -53,10 +55,10 @@
 
 use glam::{BVec4A, Vec3, Vec4};
 
-use super::ActiveVertex;
+use super::records::{ActiveVertex, UNKNOWN};
 use crate::format::SplitBounds;
 use crate::hierarchy::Hierarchy;
-use crate::view::View;
+use crate::screen::ScreenTest;
 
 /// Relative margin kept between a distance and the distance at which a test's answer
 /// would change; it dwarfs the `f32` tests' rounding (under 2⁻²⁰).
@@ -108,9 +110,6 @@ pub(crate) struct Readings {
     pub path: f32,
     pub sweep: f32,
 }
-
-/// A certificate that says nothing: it holds at no reading, read as either sign.
-pub(crate) const UNKNOWN: f32 = 0.0;
 
 /// Whether an own certificate still says the node's split is not wanted: a positive one
 /// until the path reads it, a negative one until the sweep reads its magnitude.
@@ -166,27 +165,24 @@ impl Odometer {
         }
     }
 
-    /// Moves to `view` for a pass with squared tolerance `tz2`, the share of a node's radius
-    /// that counts as uniform error (`RefineParams::radius_error`) and the given culling
-    /// switches, forgetting every certificate in `records` when they no longer apply.
-    #[allow(clippy::too_many_arguments)]
+    /// Moves to the view of `test` for a pass with its squared tolerance, its share of a
+    /// node's radius that counts as uniform error and its culling switches, forgetting every
+    /// certificate in `records` when they no longer apply.
     pub fn advance(
         &mut self,
         h: &Hierarchy<'_>,
-        view: &View,
-        tz2: f32,
-        radius_error: f32,
-        frustum: bool,
-        backface: bool,
+        test: &ScreenTest,
         records: &mut [ActiveVertex],
     ) -> Readings {
+        let view = test.view();
+        let (tz2, frustum) = (test.scale2(), test.frustum());
         let planes = (view.plane_count as usize).min(view.planes.len());
         let key = Key {
             tz2_bits: tz2.to_bits(),
-            radius_error_bits: radius_error.to_bits(),
+            radius_error_bits: test.radius_share().to_bits(),
             planes: planes as u32,
             frustum,
-            backface,
+            backface: test.backface(),
         };
         let finite = view.eye.is_finite()
             && view.planes[..planes].iter().all(|p| p.is_finite())

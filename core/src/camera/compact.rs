@@ -30,7 +30,10 @@
 //! exceeds the active node count, or reach the same order by bounded steps with
 //! [`CameraState::compact_step`] (see `compact_step`).
 
-use super::{ActiveVertex, CameraState, Front, PolySlot, SlotTriangle, FREE, NONE};
+use super::compact_progress::Progress;
+use super::index_cache::EMPTY;
+use super::records::{ActiveVertex, PolySlot, SlotTriangle, FREE, NONE};
+use super::state::{CameraState, Front};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 
@@ -63,7 +66,7 @@ impl Front<'_> {
         }
         self.churn = 0;
         self.visit_cursor = 0;
-        self.compaction = super::compact_step::Progress::IDLE;
+        self.compaction = Progress::IDLE;
     }
 
     /// Rewrites every link into a pair's slot as `base + 2 * owner + side`, which survives
@@ -139,7 +142,7 @@ impl Front<'_> {
             let t = if cached {
                 [f.triangles[base + 2 * k], f.triangles[base + 2 * k + 1]]
             } else {
-                [super::index_cache::EMPTY; 2]
+                [EMPTY; 2]
             };
             (s, t)
         };

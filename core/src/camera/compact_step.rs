@@ -27,79 +27,14 @@
 //! under ends less than sorted, and the next cycle sorts further. A cycle run while the front
 //! holds still ends in exactly the order of [`CameraState::compact`].
 
-use super::{CameraState, Front, FREE, NONE};
+use super::compact_progress::{Progress, GAPS, IDLE, PAIRS, RECORDS, SQUEEZE};
+use super::records::{next, prev, PolySlot, FREE, NONE};
+use super::state::{CameraState, Front};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
 
-/// Ciura's gaps, extended by a factor of 2.25: past the largest a list would need more
-/// records than a camera can address.
-const GAPS: [u32; 24] = [
-    1,
-    4,
-    10,
-    23,
-    57,
-    132,
-    301,
-    701,
-    1750,
-    3937,
-    8858,
-    19930,
-    44842,
-    100_894,
-    227_011,
-    510_774,
-    1_149_241,
-    2_585_792,
-    5_818_032,
-    13_090_572,
-    29_453_787,
-    66_271_020,
-    149_109_795,
-    335_497_038,
-];
-
 /// A corner or link value no record or slot has: the middle of a three-way rename.
 const PARKED: u32 = NONE - 1;
-
-const IDLE: u32 = 0;
-const SQUEEZE: u32 = 1;
-const RECORDS: u32 = 2;
-const PAIRS: u32 = 3;
-
-/// How far an incremental compaction has come: its phase, and in a sort the gap's index, the
-/// element being inserted and where it stands now.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Progress {
-    phase: u32,
-    gap: u32,
-    i: u32,
-    j: u32,
-}
-
-impl Progress {
-    /// No compaction under way.
-    pub(crate) const IDLE: Self = Self {
-        phase: IDLE,
-        gap: 0,
-        i: 0,
-        j: 0,
-    };
-
-    /// The first insertion of a sort of `n` elements in `phase`, with the largest gap below
-    /// `n`.
-    fn sort(phase: u32, n: u32) -> Self {
-        let gap = GAPS.iter().rposition(|&g| g < n.max(2)).unwrap_or(0);
-        let first = GAPS.get(gap).copied().unwrap_or(1);
-        Self {
-            phase,
-            gap: gap as u32,
-            i: first,
-            j: first,
-        }
-    }
-}
 
 /// What one [`CameraState::compact_step`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -116,24 +51,6 @@ pub struct CompactProgress {
 enum FanStart {
     At(u32),
     Empty,
-}
-
-/// The next corner round a triangle.
-fn next(j: usize) -> usize {
-    if j == 2 {
-        0
-    } else {
-        j + 1
-    }
-}
-
-/// The previous corner round a triangle.
-fn prev(j: usize) -> usize {
-    if j == 0 {
-        2
-    } else {
-        j - 1
-    }
 }
 
 impl Front<'_> {
@@ -364,12 +281,7 @@ impl Front<'_> {
     /// Visits the fan of record `r` from slot `s0` (each slot with the corner naming `r`),
     /// round one way and, from a border, the other way; `false` as soon as `visit` says so,
     /// a slot does not name `r`, or the walk runs longer than the front has polygons.
-    fn walk_fan(
-        &self,
-        s0: u32,
-        r: u32,
-        mut visit: impl FnMut(&super::PolySlot, usize) -> bool,
-    ) -> bool {
+    fn walk_fan(&self, s0: u32, r: u32, mut visit: impl FnMut(&PolySlot, usize) -> bool) -> bool {
         let bound = self.active_polygons.saturating_add(1);
         for back in [false, true] {
             let mut s = s0;

@@ -13,7 +13,7 @@ pub struct CameraConfig {
     pub stack_len: u32,
     /// Keep each active polygon's vertex indices between frames, so emission copies them
     /// instead of looking every polygon up in the hierarchy (16 bytes per polygon slot; see
-    /// the [`CameraState`](super::CameraState) docs). On in [`full`](Self::full) and
+    /// the [`CameraState`](crate::CameraState) docs). On in [`full`](Self::full) and
     /// [`with_polygon_budget`](Self::with_polygon_budget).
     pub index_cache: bool,
     /// Keep only the split nodes in the map from split to pair, hashed, where that is smaller
@@ -23,11 +23,11 @@ pub struct CameraConfig {
     /// but makes refinement slower, because the array keeps the entries of nearby nodes
     /// together and the table scatters them.
     pub hashed_pair_map: bool,
-    /// Most geomorphs at once ([`with_morphs`](Self::with_morphs); see the
-    /// [`CameraState`](super::CameraState) docs): each moves a split's floating child, one or
-    /// two vertices, between its parent's position and its own over
-    /// [`RefineParams::refine_morph_s`](super::RefineParams::refine_morph_s) or
-    /// [`coarsen_morph_s`](super::RefineParams::coarsen_morph_s). 72 bytes per morph, and a
+    /// Most geomorphs at once ([`with_morphs`](Self::with_morphs), which says how to size
+    /// it; see the [`CameraState`](crate::CameraState) docs): each moves a split's floating
+    /// child, one or two vertices, between its parent's position and its own over
+    /// [`RefineParams::refine_morph_s`](crate::RefineParams::refine_morph_s) or
+    /// [`coarsen_morph_s`](crate::RefineParams::coarsen_morph_s). 72 bytes per morph, and a
     /// bit per vertex of the hierarchy and per pair; 0 in
     /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
     /// camera without morphs splits and collapses at once.
@@ -59,16 +59,36 @@ impl CameraConfig {
         }
     }
 
-    /// This configuration with room for `max_morphs` geomorphs at once: enough for the
-    /// splits and collapses of visible nodes the camera makes within one morph's duration.
-    /// When the room is taken, a split happens at once
-    /// ([`RefineStats::morphs_dropped`](super::RefineStats::morphs_dropped)).
+    /// This configuration with room for `max_morphs` geomorphs at once.
+    ///
+    /// How to size it: a morph starts with each split of a visible node and each wanted
+    /// collapse of a visible parent, and lives for its duration
+    /// ([`RefineParams::refine_morph_s`](crate::RefineParams::refine_morph_s) or
+    /// [`coarsen_morph_s`](crate::RefineParams::coarsen_morph_s); longer under a
+    /// [`morph_speed_px_s`](crate::RefineParams::morph_speed_px_s) limit). So the morphs in
+    /// progress are about the visible splits and collapses per pass times the passes one
+    /// morph lasts (`refine_morph_s / dt_s`, 32 at the defaults): a view that moves fast
+    /// over fine detail needs the most. Measure the peak of
+    /// [`RefineStats::morphing`](crate::RefineStats::morphing) (or
+    /// [`CameraState::morph_count`](crate::CameraState::morph_count)) over a flight like the
+    /// application's and leave headroom. A morph belongs to a live split, so a camera never
+    /// holds more morphs than `max_pairs`: that many suffices for any flight. Each morph costs
+    /// 72 bytes (see [`max_morphs`](Self::max_morphs)).
+    ///
+    /// When the room is taken, a split or collapse that wanted a morph happens at once, a
+    /// pop, counted in
+    /// [`RefineStats::morphs_dropped`](crate::RefineStats::morphs_dropped): a count above 0
+    /// says the room is too small for the flight.
     pub fn with_morphs(self, max_morphs: u32) -> Self {
         Self { max_morphs, ..self }
     }
 
-    /// A forced split pushes at most a few nodes per level; 32 per level of depth (and at
-    /// least 256) has never been exceeded in our tests. Overflow is reported, not fatal.
+    /// The default forced-split stack: 32 entries per level of the hierarchy's depth, at
+    /// least 256. A forced split pushes, for each node it cannot split yet, that node's
+    /// parent or the creators of its missing neighbours (at most four), so the stack grows
+    /// with the depth of the chain of splits it forces; an overflow abandons that one wanted
+    /// split ([`RefineStats::stack_overflows`](crate::RefineStats::stack_overflows)), it
+    /// is not an error.
     pub fn default_stack(h: &Hierarchy<'_>) -> u32 {
         (h.meta().max_depth + 1).saturating_mul(32).max(256)
     }

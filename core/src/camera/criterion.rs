@@ -1,11 +1,13 @@
 //! The refinement criterion (Hoppe's `qrefine`): whether a node's split is wanted from
 //! where a view looks, its bounds against the frustum, the normal cone and the screen-space
-//! tolerance; [`Criterion`] answers it for a pass (see `refine`) and for the morphs.
+//! tolerance; [`Criterion`] answers it for a pass (see `refine`) and for the morphs, in the
+//! form of the call's [`ScreenTest`] that a pass asks fastest.
 
 use glam::{Vec3, Vec4};
 
-use super::refine::RefineParams;
 use crate::format::SplitBounds;
+use crate::screen::ScreenTest;
+#[cfg(doc)]
 use crate::view::View;
 
 /// `rhs` scaled just below itself: a squared error under `rhs · SHY` stays under any product
@@ -28,7 +30,7 @@ pub(super) struct Criterion {
     forward: Vec3,
     tz2: f32,
     /// The square of the share of a node's bounding radius that counts as uniform error
-    /// ([`RefineParams::radius_error`]); 0 for none.
+    /// ([`ScreenTest::radius_share`]); 0 for none.
     radius2: f32,
     /// Whether `radius2` is positive: without the bound (the default), the split test takes
     /// the uniform error alone and never multiplies the radius in (a branch every visit
@@ -44,7 +46,9 @@ pub(super) struct Criterion {
 }
 
 impl Criterion {
-    pub(super) fn new(view: &View, tz2: f32, radius_error: f32, params: &RefineParams) -> Self {
+    pub(super) fn new(test: &ScreenTest) -> Self {
+        let view = test.view();
+        let radius_share = test.radius_share();
         let mut planes = [[Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, Vec4::INFINITY]; 2];
         let used = (view.plane_count as usize).min(view.planes.len());
         for (k, p) in view.planes[..used].iter().enumerate() {
@@ -59,12 +63,12 @@ impl Criterion {
                 Some(near) if view.plane_count > 4 => near.truncate(),
                 _ => Vec3::ZERO,
             },
-            tz2,
-            radius2: radius_error * radius_error,
-            radius_bound: radius_error * radius_error > 0.0,
+            tz2: test.scale2(),
+            radius2: radius_share * radius_share,
+            radius_bound: radius_share * radius_share > 0.0,
             planes,
-            frustum: params.frustum_culling,
-            backface: params.backface_culling,
+            frustum: test.frustum(),
+            backface: test.backface(),
         }
     }
 
@@ -158,9 +162,10 @@ mod tests {
 
     /// The criterion as plainly written: the frustum through [`View::sphere_visible`], then the
     /// screen-space error and the cone, with no early answer.
-    fn plain(view: &View, tz2: f32, re: f32, p: &RefineParams, b: &SplitBounds) -> bool {
+    fn plain(t: &ScreenTest, b: &SplitBounds) -> bool {
+        let (view, tz2, re) = (t.view(), t.scale2(), t.radius_share());
         let pt = Vec3::from_array(b.point);
-        if p.frustum_culling && !view.sphere_visible(pt, b.radius) {
+        if t.frustum() && !view.sphere_visible(pt, b.radius) {
             return false;
         }
         let pe = pt - view.eye;
@@ -170,11 +175,11 @@ mod tests {
         if b.cone_sin2 >= 1.0 {
             return big_uniform || b.dir_error * b.dir_error >= rhs;
         }
-        if !p.backface_culling && b.dir_error <= 0.0 {
+        if !t.backface() && b.dir_error <= 0.0 {
             return big_uniform;
         }
         let vdot = pe.dot(Vec3::from_array(b.cone_normal()));
-        if p.backface_culling && vdot > 0.0 && vdot * vdot > pem2 * b.cone_sin2 {
+        if t.backface() && vdot > 0.0 && vdot * vdot > pem2 * b.cone_sin2 {
             return false;
         }
         big_uniform || b.dir_error * b.dir_error * (pem2 - vdot * vdot) >= rhs * pem2
@@ -221,17 +226,13 @@ mod tests {
             let height = rng.range(100.0, 2000.0);
             let mut view = look.view((height * aspect) as u32, height as u32);
             view.plane_count = (rng.next() % 7) as u32;
-            let params = RefineParams {
-                frustum_culling: rng.next() % 4 != 0,
-                backface_culling: rng.next() % 3 != 0,
-                ..RefineParams::default()
-            };
-            let tz2 = if case % 97 == 0 {
+            let cull = (rng.next() % 4 != 0, rng.next() % 3 != 0);
+            let scale = if case % 97 == 0 {
                 0.0
             } else {
-                let t = rng.range(1e-4, 1e-2);
-                t * t
+                rng.range(1e-4, 1e-2)
             };
+            let tz2 = scale * scale;
             let point = rng.vec(150.0);
             let pem2 = (point - eye).length_squared();
             let rhs = tz2 * pem2;
@@ -270,12 +271,9 @@ mod tests {
                 0 => rng.range(0.0, 0.5),
                 _ => 0.0,
             };
-            let fast = Criterion::new(&view, tz2, re, &params).wants_split(&b);
-            assert_eq!(
-                fast,
-                plain(&view, tz2, re, &params, &b),
-                "case {case}: {b:?}"
-            );
+            let test = ScreenTest::from_parts(view, scale, re, cull);
+            let fast = Criterion::new(&test).wants_split(&b);
+            assert_eq!(fast, plain(&test, &b), "case {case}: {b:?}");
             answers[usize::from(fast)] += 1;
         }
         // Both answers were asked for often.

@@ -15,7 +15,8 @@
 
 use super::index_cache::BATCH;
 use super::morph::MorphRemap;
-use super::{CameraState, SlotTriangle, NONE, NO_POLYGON};
+use super::records::{SlotTriangle, NONE, NO_POLYGON};
+use super::state::CameraState;
 use crate::hierarchy::Hierarchy;
 use crate::ids::{PolyId, SurfaceId};
 use crate::outputs::{check_lists, start_packed};

@@ -25,7 +25,8 @@
 //! for twice the stack. A reset fills the base slots' entries the same way; compaction moves
 //! each pair's entries with the pair.
 
-use super::{Front, SlotTriangle, NONE, NO_POLYGON};
+use super::records::{SlotTriangle, NONE, NO_POLYGON};
+use super::state::Front;
 use crate::format::Polygon;
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};

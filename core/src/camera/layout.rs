@@ -2,11 +2,14 @@
 //! view the same words as the same camera again.
 
 use super::certificate::Odometer;
-use super::compact_step::Progress;
+use super::compact_progress::Progress;
+use super::config::CameraConfig;
 use super::morph_map::MorphMap;
+use super::morph_pool;
 use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
-use super::{CameraConfig, CameraState, Front, ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
+use super::records::{ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
+use super::state::{CameraState, Front};
 use crate::hierarchy::Hierarchy;
 
 /// Where a camera's arrays lie in its words: the hierarchy's counts the arrays are sized by,
@@ -49,7 +52,7 @@ impl Layout {
             0
         };
         let [morph_vertices, morph_states, morph_map, coarsening, morph_free] =
-            super::morph_pool::words(c.max_morphs as usize, self.vertices, mp);
+            morph_pool::words(c.max_morphs as usize, self.vertices, mp);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
             mp,

@@ -52,54 +52,18 @@
 //! default): a floating child far from its parent on the screen then takes longer than the
 //! duration, so no vertex slides far in one frame however coarse the node that splits.
 
-use bytemuck::{Pod, Zeroable};
-
 use super::criterion::Criterion;
 use super::morph_map::MorphMap;
 use super::morph_pool::{MorphState, Morphs, COARSENING, REFINING, VERTICES_PER_MORPH};
-use super::refine::{RefineParams, RefineStats};
-use super::{CameraState, Front, OpError, NONE};
+use super::ops::OpError;
+use super::records::NONE;
+use super::state::{CameraState, Front};
+use super::stats::RefineStats;
+use crate::gpu::{MorphVertex, MAX_MORPH_CHAIN};
 use crate::hierarchy::Hierarchy;
 use crate::ids::NodeId;
+use crate::params::RefineParams;
 use glam::Vec3;
-
-/// One morphing vertex as the GPU reads it: blend from `from` towards persistent vertex `to`
-/// at `t` ([`gpu::morph_slot_vertex`](crate::gpu::morph_slot_vertex)) and write the result
-/// where morphed emission points, `vertex_count + slot`. An idle slot has
-/// `from == to == u32::MAX` ([`MorphVertex::IDLE`]): nothing points at it and it is skipped.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct MorphVertex {
-    /// Where the blend starts: the persistent vertex `coarse` (`< vertex_count`), or, while
-    /// `coarse` itself morphs, `vertex_count + s`: the blend of slot `s`, so a vertex that
-    /// splits again while it morphs starts its child where it is drawn (chains span at most
-    /// [`gpu::MAX_MORPH_CHAIN`](crate::gpu::MAX_MORPH_CHAIN) slots).
-    pub from: u32,
-    /// The fine vertex: the floating child's own.
-    pub to: u32,
-    /// 0 gives `from`, 1 gives `to`.
-    pub t: f32,
-    /// The coarse persistent vertex: the parent's, in the same surface group where it has
-    /// one. `from` once `coarse` no longer morphs.
-    pub coarse: u32,
-}
-
-const _: () = assert!(core::mem::size_of::<MorphVertex>() == 16);
-
-impl MorphVertex {
-    /// A slot without a morphing vertex.
-    pub const IDLE: Self = Self {
-        from: NONE,
-        to: NONE,
-        t: 0.0,
-        coarse: NONE,
-    };
-
-    /// `true` for a slot without a morphing vertex.
-    pub fn is_idle(&self) -> bool {
-        self.to == NONE
-    }
-}
 
 /// How far `t` moves in `dt` seconds of a morph lasting `duration` seconds: all the way for
 /// a duration that is zero, negative or not a number (morphs off).
@@ -357,7 +321,7 @@ impl Front<'_> {
                 px += (pb - pa).length() * c.magnification(pa).max(c.magnification(pb));
             }
             links += 1;
-            if v.from < base || links >= crate::gpu::MAX_MORPH_CHAIN {
+            if v.from < base || links >= MAX_MORPH_CHAIN {
                 break;
             }
             share *= 0.5;
@@ -544,7 +508,7 @@ impl CameraState<'_> {
             .saturating_sub(self.coarsening_count().saturating_mul(2))
     }
 
-    /// Most morphs this camera holds at once ([`CameraConfig::max_morphs`](super::CameraConfig));
+    /// Most morphs this camera holds at once ([`CameraConfig::max_morphs`](crate::CameraConfig));
     /// its vertex slots are twice as many.
     pub fn max_morphs(&self) -> u32 {
         self.front.morphs.capacity() as u32

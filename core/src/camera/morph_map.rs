@@ -11,7 +11,7 @@
 //! once thousands of vertices morph. The bits cost one per vertex, an eighth of a byte,
 //! against the pair map's two bytes per splittable node.
 
-use super::NONE;
+use super::records::NONE;
 use bytemuck::{Pod, Zeroable};
 
 /// One entry: a vertex index (`NONE` when empty) and its morph slot.

@@ -3,9 +3,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::morph::MorphVertex;
 use super::morph_map::MorphMap;
-use super::FREE;
+use super::records::FREE;
+use crate::gpu::MorphVertex;
 
 /// Vertex slots per morph.
 pub(crate) const VERTICES_PER_MORPH: usize = 2;

@@ -17,9 +17,12 @@
 mod collapse;
 mod split;
 
-use super::{CameraState, Front, PolySlot, NONE};
+use super::certificate::Odometer;
+use super::records::{PolySlot, NONE};
+use super::state::{CameraState, Front};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyKey};
+use crate::params::ParamsError;
 
 /// Why an operation was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +65,15 @@ pub enum OpError {
         /// The node being split or collapsed.
         node: NodeId,
     },
+    /// Refinement parameters out of range ([`RefineParams::validate`](crate::RefineParams::validate)):
+    /// the pass did nothing.
+    InvalidParams(ParamsError),
+}
+
+impl From<ParamsError> for OpError {
+    fn from(e: ParamsError) -> Self {
+        Self::InvalidParams(e)
+    }
 }
 
 impl core::fmt::Display for OpError {
@@ -83,29 +95,12 @@ impl core::fmt::Display for OpError {
                     node.0
                 )
             }
+            Self::InvalidParams(e) => write!(f, "refinement parameters refused: {e}"),
         }
     }
 }
 
 impl core::error::Error for OpError {}
-
-#[inline]
-fn next(j: usize) -> usize {
-    if j == 2 {
-        0
-    } else {
-        j + 1
-    }
-}
-
-#[inline]
-fn prev(j: usize) -> usize {
-    if j == 0 {
-        2
-    } else {
-        j - 1
-    }
-}
 
 impl Front<'_> {
     /// Slot of a neighbour that must be active, or `NONE` for an absent one; `None` if a
@@ -275,7 +270,7 @@ impl CameraState<'_> {
     /// it exists so tests and benchmarks can compare refinement with and without them.
     #[doc(hidden)]
     pub fn forget_certificates(&mut self) {
-        self.front.odometer = super::certificate::Odometer::new();
+        self.front.odometer = Odometer::new();
     }
 
     /// `true` if `node` is split, both children are active, and `f_l`, `f_r` have exactly

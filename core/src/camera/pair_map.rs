@@ -6,9 +6,9 @@
 //! layouts, fixed when the camera is made (the branch on it is the same for every access, so
 //! the predictor takes it for free):
 //! - **Narrow**, an array of 16-bit pair indices by node, for a camera with fewer than 65,535
-//!   pairs (every budgeted camera of the demo; a quarter of a million active polygons).
+//!   pairs (a budget of up to about a quarter of a million active polygons).
 //! - **Wide**, an array of 32-bit pair indices by node, for cameras with more pairs.
-//! - **Hashed**, when [`CameraConfig::hashed_pair_map`](super::CameraConfig) asks for it and
+//! - **Hashed**, when [`CameraConfig::hashed_pair_map`](crate::CameraConfig) asks for it and
 //!   it is smaller than the narrow array (a `max_pairs` below about a sixth of the splittable
 //!   nodes): only the split nodes, in an open-addressed table of `2 × max_pairs + 1` entries of
 //!   6 bytes (the node, and the pair in 16 bits), never more than half full. Linear probing
@@ -21,7 +21,7 @@
 //!   together does not win that locality back). So the array is the default, and the table
 //!   is for a runtime that counts bytes.
 
-use super::NONE;
+use super::records::NONE;
 use bytemuck::{Pod, Zeroable};
 
 /// 16-bit entries' "no pair".

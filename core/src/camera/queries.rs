@@ -1,7 +1,8 @@
 //! Questions about a camera's front: which nodes and polygons are active, where a polygon
 //! sits, the counts and the bytes, answered in O(1) from the map from split to pair.
 
-use super::{CameraState, Front, FREE, NONE};
+use super::records::{FREE, NONE};
+use super::state::{CameraState, Front};
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PolyId, PolyKey};
 
@@ -53,7 +54,7 @@ impl CameraState<'_> {
     }
 
     /// Bytes of this camera's morph memory (part of [`bytes`](Self::bytes)): 0 without
-    /// morphs ([`CameraConfig::max_morphs`](super::CameraConfig::max_morphs)).
+    /// morphs ([`CameraConfig::max_morphs`](crate::CameraConfig::max_morphs)).
     pub fn morph_bytes(&self) -> usize {
         let m = &self.front.morphs;
         core::mem::size_of_val(&*m.vertices)

@@ -29,13 +29,20 @@ pub enum FormatError {
         /// Its value.
         value: u64,
     },
-    /// The header's file length differs from the number of bytes given (a truncated or
-    /// extended file).
+    /// Fewer bytes were given than the header's file length records: a truncated file.
     LengthMismatch {
         /// Length the header records.
         header: u64,
         /// Bytes given.
         actual: u64,
+    },
+    /// More bytes were given than the header's file length records: bytes after the file's
+    /// end (a file appended to, or a buffer passed whole instead of its file's bytes).
+    TrailingBytes {
+        /// Length the header records.
+        expected: u64,
+        /// Bytes given.
+        len: u64,
     },
     /// The checksum does not match: the file is corrupt.
     ChecksumMismatch {
@@ -153,7 +160,18 @@ impl core::fmt::Display for FormatError {
                 write!(f, "header field `{field}` = {value} is not allowed")
             }
             Self::LengthMismatch { header, actual } => {
-                write!(f, "header says {header} bytes but {actual} bytes were given (truncated or extended file)")
+                write!(
+                    f,
+                    "truncated: the header records {header} bytes but {actual} were given"
+                )
+            }
+            Self::TrailingBytes { expected, len } => {
+                write!(
+                    f,
+                    "the file is {len} bytes, {} more than its header records; expected \
+                     exactly {expected} (extra bytes after its end)",
+                    len - expected
+                )
             }
             Self::ChecksumMismatch { stored, computed } => {
                 write!(f, "checksum mismatch: stored {stored:#018x}, computed {computed:#018x} (corrupt file)")

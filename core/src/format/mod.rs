@@ -37,6 +37,7 @@
 
 pub(crate) mod error;
 pub mod materials;
+mod parts;
 mod plan;
 pub(crate) mod records;
 pub(crate) mod validate;
@@ -44,15 +45,14 @@ mod writer;
 
 pub(crate) use error::FormatError;
 pub use error::WriteError;
+pub use parts::{ExtraSection, HierarchyParts};
 pub use plan::{FilePlan, SectionList, SectionSpec, SectionWriter, Sink, StreamError};
 pub use records::{
     octahedral_decode, octahedral_encode, BaseFace, Creator, Meta, Node, Polygon, Position,
     PositionClass, Split, SplitBounds, Vertex, VertexKey,
 };
 pub use validate::{OnePiece, Pieces};
-pub use writer::{
-    serialized_len, validate_parts, write_into, ExtraSection, HierarchyParts, KNOWN_SECTIONS,
-};
+pub use writer::{serialized_len, validate_parts, write_into, KNOWN_SECTIONS};
 
 pub use crate::checksum::{checksum64, Checksum64};
 

@@ -1,7 +1,10 @@
-//! Why octree sections were refused.
+//! Why octree sections were refused, and the format's limit on levels.
 
-use super::model::MAX_OCTREE_LEVELS;
 use crate::format::Tag;
+
+/// The most levels an octree may have. Selection needs no stack, so this is a format limit
+/// (what 32-bit cell coordinates can address), not a run-time one.
+pub const MAX_OCTREE_LEVELS: u32 = 32;
 
 /// Why octree sections were refused. Each names the section and the record.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -55,11 +55,12 @@
 //! # let _ = stats; Ok(()) }
 //! ```
 
-mod error;
+pub(crate) mod error;
 pub(crate) mod model;
 pub(crate) mod select;
 
-pub use model::{octree_tags, OctreeMeta, OctreeNode, OctreeParts, OctreeRange, MAX_OCTREE_LEVELS};
+pub use error::MAX_OCTREE_LEVELS;
+pub use model::{octree_tags, OctreeMeta, OctreeNode, OctreeParts, OctreeRange};
 pub use select::Difference;
 
 // At the crate root (what an engine calls every frame); named here for the module's links.

@@ -19,7 +19,7 @@ use crate::format::Vertex;
 use crate::format::{ExtraSection, Tag};
 use crate::Hierarchy;
 
-pub use super::error::OctreeFormatError;
+use super::error::{OctreeFormatError, MAX_OCTREE_LEVELS};
 
 /// Section tags of the multiresolution octree.
 pub mod octree_tags {
@@ -37,10 +37,6 @@ pub mod octree_tags {
     /// All of them, in file order.
     pub const ALL: [Tag; 5] = [META, NODES, RANGES, VERTICES, INDICES];
 }
-
-/// The most levels an octree may have. Selection needs no stack, so this is a format limit
-/// (what 32-bit cell coordinates can address), not a run-time one.
-pub const MAX_OCTREE_LEVELS: u32 = 32;
 
 /// Counts of an octree (the `OCMT` section, one record).
 #[repr(C)]

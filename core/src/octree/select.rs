@@ -15,6 +15,8 @@ use glam::Vec3;
 use super::model::{Octree, OctreeNode};
 use crate::ids::SurfaceId;
 use crate::outputs::{check_lists, start_packed};
+use crate::params::ParamsError;
+use crate::screen::ScreenTest;
 use crate::view::View;
 
 /// Why a cut could not be made, selected or emitted.
@@ -45,9 +47,19 @@ pub enum CutError {
         /// Room given.
         given: usize,
     },
+    /// The tolerance is not a finite number of pixels above 0 (the rule of
+    /// [`RefineParams::tolerance_px`](crate::RefineParams::tolerance_px)): nothing was
+    /// selected.
+    InvalidParams(ParamsError),
 }
 
 crate::outputs::from_shortfall!(CutError);
+
+impl From<ParamsError> for CutError {
+    fn from(e: ParamsError) -> Self {
+        Self::InvalidParams(e)
+    }
+}
 
 impl core::fmt::Display for CutError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -64,6 +76,7 @@ impl core::fmt::Display for CutError {
                 needed,
                 given,
             } => crate::outputs::write_too_small(f, surface, needed, given),
+            Self::InvalidParams(e) => write!(f, "octree selection refused: {e}"),
         }
     }
 }
@@ -203,6 +216,9 @@ impl<'m> OctreeCut<'m> {
     /// eye to its box) or it is at level 0; otherwise its children are looked at. The
     /// previous cut is kept for [`entered`](Self::entered) and [`left`](Self::left).
     /// Allocates nothing; work is proportional to the nodes visited.
+    ///
+    /// The tolerance is checked as refinement checks it: [`CutError::InvalidParams`] for one
+    /// that is not a finite number above 0, and the cut is left as it was.
     pub fn select(
         &mut self,
         o: &Octree<'_>,
@@ -212,13 +228,9 @@ impl<'m> OctreeCut<'m> {
         if !self.is_for(o) {
             return Err(CutError::WrongOctree);
         }
-        // As in the hierarchy's refinement: error / distance is compared with
-        // tolerance / pixels_per_radian; no pixel scale means nothing needs refining.
-        let scale = if view.pixels_per_radian > 0.0 {
-            tolerance_px / view.pixels_per_radian
-        } else {
-            f32::INFINITY
-        };
+        // The hierarchy's screen-space test: error / distance against the tolerance in
+        // radians; no pixel scale means nothing needs refining.
+        let test = ScreenTest::of_tolerance(view, tolerance_px)?;
         let n = self.node_count as usize;
         let next_half = 1 - self.current;
         let (first, second) = self.halves.split_at_mut(n);
@@ -248,9 +260,7 @@ impl<'m> OctreeCut<'m> {
                 stats.culled += 1;
                 continue;
             }
-            let take = node.level == 0
-                || scale == f32::INFINITY
-                || node.error <= scale * box_distance(view.eye, node);
+            let take = node.level == 0 || test.error_fits(node.error, box_distance(view.eye, node));
             if take {
                 next[write] = id;
                 write += 1;

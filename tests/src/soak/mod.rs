@@ -285,7 +285,10 @@ fn camera_frame(
         r.update(stats.active_polygons + 2 * stats.capacity_refusals);
     }
     if one_in(rng, 100) {
-        black_box(cam.lag(h, &view, &params));
+        black_box(
+            cam.lag(h, &view, &params)
+                .map_err(|e| format!("lag: {e}"))?,
+        );
     }
     emit(h, cam, rng, out, slices, report)
 }

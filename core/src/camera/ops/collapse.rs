@@ -1,10 +1,11 @@
 //! Edge collapse: undoing one split on the front (the walk that moves corners back to the
 //! stationary record, the pair's removal and the hole it leaves filled by the last pair).
 
-use super::{next, prev};
+use super::OpError;
 use crate::camera::index_cache::Known;
-use crate::camera::OpError;
-use crate::camera::{ActiveVertex, Front, FREE, NONE, UNKNOWN};
+use crate::camera::records::{next, prev};
+use crate::camera::records::{ActiveVertex, FREE, NONE, UNKNOWN};
+use crate::camera::state::Front;
 use crate::hierarchy::Hierarchy;
 use crate::ids::{NodeId, PositionId};
 

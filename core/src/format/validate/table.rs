@@ -72,10 +72,17 @@ fn header(bytes: &[u8]) -> Result<FileHeader, FormatError> {
             value: header.header_len.into(),
         });
     }
-    if header.file_len != bytes.len() as u64 {
+    let len = bytes.len() as u64;
+    if header.file_len > len {
         return Err(FormatError::LengthMismatch {
             header: header.file_len,
-            actual: bytes.len() as u64,
+            actual: len,
+        });
+    }
+    if header.file_len < len {
+        return Err(FormatError::TrailingBytes {
+            expected: header.file_len,
+            len,
         });
     }
     if header.flags != 0 {

@@ -1,0 +1,109 @@
+//! Making a camera and putting it back at the base mesh: sizing its memory, carving it,
+//! and [`CameraState::reset`].
+
+use super::compact_progress::Progress;
+use super::config::{CameraConfig, CameraError};
+use super::layout::{Layout, Scalars};
+use super::records::{ActiveVertex, PolySlot, NONE, UNKNOWN};
+use super::state::CameraState;
+use crate::hierarchy::Hierarchy;
+
+impl<'m> CameraState<'m> {
+    /// Words of memory a camera needs for full resolution anywhere ([`CameraConfig::full`]).
+    pub fn words_needed(h: &Hierarchy<'_>) -> usize {
+        Layout::of(h, &CameraConfig::full(h)).words()
+    }
+
+    /// Words of memory a camera with `config` needs.
+    pub fn words_needed_for(h: &Hierarchy<'_>, config: &CameraConfig) -> usize {
+        Layout::of(h, config).words()
+    }
+
+    /// A camera at the base mesh, able to reach full resolution, in `memory`
+    /// (at least [`words_needed`](Self::words_needed) words; extra words are left unused).
+    pub fn new(h: &Hierarchy<'_>, memory: &'m mut [u32]) -> Result<Self, CameraError> {
+        Self::with_config(h, memory, &CameraConfig::full(h))
+    }
+
+    /// A camera at the base mesh with the given capacity.
+    pub fn with_config(
+        h: &Hierarchy<'_>,
+        memory: &'m mut [u32],
+        config: &CameraConfig,
+    ) -> Result<Self, CameraError> {
+        let layout = Self::checked_layout(h, config)?;
+        let needed = layout.words();
+        if memory.len() < needed {
+            return Err(CameraError::Capacity {
+                needed,
+                given: memory.len(),
+            });
+        }
+        let mut cam = Self::carve(memory, &layout, Scalars::initial(h));
+        cam.reset(h);
+        Ok(cam)
+    }
+
+    /// The layout of a camera with `config` over `h`, if the hierarchy has the splits.
+    pub(crate) fn checked_layout(
+        h: &Hierarchy<'_>,
+        config: &CameraConfig,
+    ) -> Result<Layout, CameraError> {
+        let ns = h.splits().len();
+        if config.max_pairs as usize > ns {
+            return Err(CameraError::TooManyPairs {
+                max_pairs: config.max_pairs,
+                split_count: ns as u32,
+            });
+        }
+        let slots = 2 * u64::from(config.max_morphs);
+        if h.vertices().len() as u64 + slots >= u64::from(NONE) {
+            return Err(CameraError::TooManyMorphs {
+                max_morphs: config.max_morphs,
+                vertex_count: h.vertices().len() as u32,
+            });
+        }
+        Ok(Layout::of(h, config))
+    }
+
+    /// Back to the base mesh.
+    pub fn reset(&mut self, h: &Hierarchy<'_>) {
+        let f = &mut self.front;
+        f.pair_of.clear();
+        f.pairs = 0;
+        f.free_head = NONE;
+        f.surface_polygons.fill(0);
+        f.refused.fill(0);
+        // Active-vertex record `i` of the base mesh is root `i`.
+        for (i, r) in h.roots().iter().enumerate() {
+            f.active[i] = ActiveVertex {
+                node: r.0,
+                coarsen: NONE,
+                own_cert: UNKNOWN,
+                parent_cert: UNKNOWN,
+            };
+        }
+        f.active_len = h.roots().len() as u32;
+        f.active_nodes = f.active_len;
+        for (i, b) in h.base().iter().enumerate() {
+            let mut corners = [NONE; 3];
+            for (k, c) in b.corners.iter().enumerate() {
+                // Validated at load: every corner is a root; roots are sorted.
+                corners[k] = h.roots().binary_search(c).map_or(NONE, |x| x as u32);
+            }
+            f.slots[i] = PolySlot {
+                corners,
+                neighbours: b.neighbours.map(|n| n.0),
+            };
+            let s = h.polygons()[i].surface.index();
+            f.surface_polygons[s] += 1;
+        }
+        f.active_polygons = f.base;
+        f.churn = 0;
+        f.visit_cursor = 0;
+        f.refined = false;
+        f.compaction = Progress::IDLE;
+        f.morphs.clear();
+        f.cache_slots(h, 0, f.base as usize);
+    }
+}
