@@ -24,104 +24,21 @@
 //! [`Pieces`] says how, and the first error in record order is the one reported whatever the
 //! pieces, so the answer is the one a single piece gives.
 
+mod checks;
 mod materials;
 mod nodes;
 mod polygons;
 mod table;
 mod vertices;
 
+pub use checks::{OnePiece, Pieces};
 pub(crate) use materials::{appearance, Appearance};
 #[cfg(feature = "alloc")]
 pub(crate) use table::parse_checked;
 pub(crate) use table::{appearance_extras, parse, section_table_checked};
 
-use core::ops::Range;
-
-use crate::format::{tags, FormatError, HierarchyParts, Meta, Tag, VertexKey};
-use crate::ids::PositionId;
-
-/// How the validation runs each pass over its records: split into consecutive ranges that
-/// may be checked at once, on other threads (the core has none of its own; a caller with a
-/// thread pool implements this over it). Validation is the same whatever the split.
-pub trait Pieces: Sync {
-    /// `map` of consecutive ranges that cover `0..n` in order (at least one range, which may
-    /// be empty), folded from the first to the last by `join`.
-    fn fold<T: Send>(
-        &self,
-        n: usize,
-        map: &(dyn Fn(Range<usize>) -> T + Sync),
-        join: &dyn Fn(T, T) -> T,
-    ) -> T;
-}
-
-/// Every pass in one piece, on the caller's thread.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct OnePiece;
-
-impl Pieces for OnePiece {
-    fn fold<T: Send>(
-        &self,
-        n: usize,
-        map: &(dyn Fn(Range<usize>) -> T + Sync),
-        _join: &dyn Fn(T, T) -> T,
-    ) -> T {
-        map(0..n)
-    }
-}
-
-/// `pass` over the records `0..n`, in pieces; the first error in record order.
-fn in_pieces(
-    pieces: &impl Pieces,
-    n: usize,
-    pass: &(dyn Fn(Range<usize>) -> Result<(), FormatError> + Sync),
-) -> Result<(), FormatError> {
-    pieces.fold(n, pass, &|a, b| a.and(b))
-}
-
-fn invalid(
-    tag: Tag,
-    record: usize,
-    field: &'static str,
-    problem: &'static str,
-    value: u64,
-) -> FormatError {
-    FormatError::Invalid {
-        tag,
-        record: record as u64,
-        field,
-        problem,
-        value,
-    }
-}
-
-/// The sections of a parsed file, before validation.
-pub(crate) struct Parsed<'a> {
-    pub parts: HierarchyParts<'a>,
-    pub meta: Meta,
-    pub checksum: u64,
-    pub appearance: materials::AppearanceSections<'a>,
-}
-
-fn finite(v: &[f32]) -> bool {
-    v.iter().all(|x| x.is_finite())
-}
-
-/// The sorted vertex-table entries of a position (offsets already validated).
-fn keys<'a>(parts: &HierarchyParts<'a>, p: PositionId) -> &'a [VertexKey] {
-    let o = parts.vertex_table_offsets;
-    &parts.vertex_table[o[p.index()] as usize..o[p.index() + 1] as usize]
-}
-
-fn count(tag: Tag, expected: usize, found: usize) -> Result<(), FormatError> {
-    if expected != found {
-        return Err(FormatError::Count {
-            tag,
-            expected: expected as u64,
-            found: found as u64,
-        });
-    }
-    Ok(())
-}
+use crate::format::{tags, FormatError, HierarchyParts, Meta};
+use checks::invalid;
 
 /// Validates every invariant of `parts`; returns the counts and bounds. With `file_meta`,
 /// the file's `META` must agree with them.

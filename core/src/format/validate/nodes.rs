@@ -2,7 +2,7 @@
 
 use core::ops::Range;
 
-use super::{count, in_pieces, invalid, keys, Pieces};
+use super::checks::{count, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, FormatError, HierarchyParts, PositionClass, Split};
 use crate::ids::{NodeId, PolyId};
 

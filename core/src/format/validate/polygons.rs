@@ -2,7 +2,7 @@
 
 use core::ops::Range;
 
-use super::{count, in_pieces, invalid, keys, Pieces};
+use super::checks::{count, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, BaseFace, Creator, FormatError, HierarchyParts, Node, Polygon};
 use crate::ids::{NodeId, PolyId};
 

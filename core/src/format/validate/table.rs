@@ -3,13 +3,20 @@
 use bytemuck::Pod;
 
 use super::materials::AppearanceSections;
-use super::Parsed;
 use crate::checksum::checksum64;
 use crate::format::materials::material_tags;
 use crate::format::{
     tags, ExtraSection, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag, MAGIC,
     MAX_SECTIONS, SECTION_ALIGN, VERSION_MAJOR,
 };
+
+/// The sections of a parsed file, before validation.
+pub(crate) struct Parsed<'a> {
+    pub parts: HierarchyParts<'a>,
+    pub meta: Meta,
+    pub checksum: u64,
+    pub appearance: AppearanceSections<'a>,
+}
 
 /// The section table of `bytes` after its header checks, with the checksum of every byte
 /// after the header verified or not (a file a [`Hierarchy`](crate::Hierarchy) was made from

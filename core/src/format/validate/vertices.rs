@@ -2,7 +2,7 @@
 
 use core::ops::Range;
 
-use super::{count, finite, in_pieces, invalid, keys, Pieces};
+use super::checks::{count, finite, in_pieces, invalid, keys, Pieces};
 use crate::format::{tags, FormatError, HierarchyParts, PositionClass};
 use crate::ids::PositionId;
 
