@@ -216,8 +216,8 @@ impl CameraState<'_> {
     /// Re-orders the active list by node id and the polygon pairs by split, for locality
     /// (sorting the records by node and the pairs by their owning split). The front is
     /// unchanged; only the emission order of polygons changes. Costs O(n_a log n_a + p_a log
-    /// p_a) at once (several milliseconds on a 64,000-node front; see
-    /// [`compact_step`](Self::compact_step) for bounded steps) and ends any incremental cycle
+    /// p_a) at once, a spike on a large front (see [`compact_step`](Self::compact_step) for
+    /// bounded steps), and ends any incremental cycle
     /// under way; never called by [`refine`](Self::refine).
     pub fn compact(&mut self, h: &Hierarchy<'_>) {
         if self.is_for(h) {
