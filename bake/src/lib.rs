@@ -17,6 +17,7 @@ pub mod blocked;
 pub mod clod_file;
 pub mod export;
 mod fxhash;
+pub mod generate;
 pub mod gmesh;
 pub mod hierarchy;
 pub mod import;

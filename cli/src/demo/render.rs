@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::snapshot::{palette, write_png};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_host::{palette, write_png};
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt,
     MorphStage, Renderer, RendererDesc, VertexBuffer, Viewport,

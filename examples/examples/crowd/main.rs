@@ -33,6 +33,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use caveclod_bake::baked::Baked;
+use caveclod_bake::generate::meshes::{self, Rng};
+use caveclod_bake::generate::to_mesh;
 use caveclod_bake::gmesh::GMeshData;
 use caveclod_bake::gmesh::{build as build_gmesh, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
@@ -44,8 +46,6 @@ use caveclod_core::gmesh::{
     Partitions,
 };
 use caveclod_core::{Hierarchy, LookAt};
-use caveclod_tests::meshes::{self, Rng};
-use caveclod_tests::to_mesh;
 
 mod plot;
 mod render;

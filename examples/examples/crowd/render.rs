@@ -99,9 +99,7 @@ fn render_with(
         },
     )
     .map_err(e)?;
-    let colours: Vec<[f32; 4]> = (0..gm.surfaces())
-        .map(caveclod_cli::snapshot::palette)
-        .collect();
+    let colours: Vec<[f32; 4]> = (0..gm.surfaces()).map(caveclod_host::palette).collect();
     let scene = Scene {
         gm,
         levels: &levels,
@@ -294,5 +292,5 @@ fn draw_levels(
         .render(ctx, &mut draws)
         .and_then(|_| renderer.read_target(ctx, 0))
         .map_err(|err| err.to_string())?;
-    caveclod_cli::snapshot::write_png(&image, file).map_err(|err| err.to_string())
+    caveclod_host::write_png(&image, file).map_err(|err| err.to_string())
 }

@@ -14,7 +14,7 @@ use winit::event::WindowEvent;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
-use caveclod_cli::materials::GpuMaterials;
+use caveclod_host::GpuMaterials;
 
 use crate::depth::DepthBands;
 use crate::gpu::{vk_err, Gpu};
@@ -146,7 +146,7 @@ impl Viewer {
             None,
         );
         let surface_colours = (0..scene.h.surface_count())
-            .map(caveclod_cli::snapshot::palette)
+            .map(caveclod_host::palette)
             .collect();
         let band_colours = bands.colours();
         let swapchains_made = u64::from(res.swapchain.is_some());

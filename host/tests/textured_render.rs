@@ -9,9 +9,9 @@ use std::path::Path;
 use caveclod_bake::import::{import, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;
-use caveclod_cli::materials::GpuMaterials;
 use caveclod_core::format::Vertex;
 use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_host::{write_png, GpuMaterials};
 use caveclod_vulkan::{
     CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, Renderer, RendererDesc,
     RgbaImage, VertexBuffer, Viewport,
@@ -114,7 +114,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
     let (baked, _) = ok(bake_mesh(&mesh, "FlightHelmet", &mut |_| {}), "bake");
     // Texture paths relative to the source's directory, as `to_bytes` keeps them.
     let bytes = ok(baked.to_bytes(&[]), "serialise");
-    let file = caveclod_cli::aligned::AlignedBytes::from_slice(&bytes);
+    let file = caveclod_io::AlignedBytes::from_slice(&bytes);
     let h = ok(file.hierarchy(), "load");
     assert_eq!(h.materials().map(|m| m.len()), Some(6));
 
@@ -179,7 +179,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         let dir = Path::new(&dir);
         ok(std::fs::create_dir_all(dir), "image directory");
         ok(
-            caveclod_cli::snapshot::write_png(&hierarchy_image, &dir.join("helmet_full.png")),
+            write_png(&hierarchy_image, &dir.join("helmet_full.png")),
             "png",
         );
     }
