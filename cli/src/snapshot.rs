@@ -13,7 +13,7 @@ use caveclod_core::LookAt;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
 use caveclod_host::{orbit, orbit_box, palette, GpuMaterials};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, Error, FrameStats, IndexSource, Renderer, RendererDesc,
+    CameraIndices, Context, Error, FrameStats, IndexSource, RecordCamera, Renderer, RendererDesc,
     Result, RgbaImage, VertexBuffer, Viewport,
 };
 
@@ -232,24 +232,25 @@ fn draw(
         .map(|i| CameraIndices::new(&format!("camera {i}"), surfaces, 1))
         .collect();
     let result = (|| -> Result<Snapshot> {
-        let mut draws: Vec<CameraDraw<'_, '_>> = indices
-            .iter_mut()
-            .zip(sources)
+        let slot = renderer.begin_frame(ctx)?;
+        for (ind, source) in indices.iter_mut().zip(sources) {
+            ind.fill(ctx, slot, source)?;
+        }
+        let draws: Vec<(usize, RecordCamera<'_>)> = indices
+            .iter()
             .enumerate()
-            .map(|(i, (ind, source))| CameraDraw {
-                target: viewports[i].0,
-                viewport: viewports[i].1,
-                view_proj: looks[i].view_projection(viewports[i].1.aspect()),
-                vertices: &vertices,
-                indices: ind,
-                source,
-                colours: &colours,
-                materials: gpu.as_ref().map(|g| &g.set),
-                refine_morphs: None,
-                morph: None,
+            .map(|(i, ind)| {
+                let (target, viewport) = viewports[i];
+                let view_proj = looks[i].view_projection(viewport.aspect());
+                let camera = RecordCamera::new(viewport, view_proj, &vertices, ind);
+                let camera = match &gpu {
+                    Some(g) => camera.materials(&g.set),
+                    None => camera.colours(&colours),
+                };
+                (target, camera)
             })
             .collect();
-        let stats = renderer.render(ctx, &mut draws)?;
+        let stats = renderer.render(ctx, &draws)?;
         let images = (0..renderer.desc().targets.len())
             .map(|t| renderer.read_target(ctx, t))
             .collect::<Result<Vec<_>>>()?;

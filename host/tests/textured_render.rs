@@ -13,7 +13,7 @@ use caveclod_core::format::Vertex;
 use caveclod_core::{CameraState, Hierarchy, LookAt, RefineParams};
 use caveclod_host::{write_png, GpuMaterials};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, Renderer, RendererDesc,
+    CameraIndices, Context, HeadlessDesc, IndexSource, RecordCamera, Renderer, RendererDesc,
     RgbaImage, VertexBuffer, Viewport,
 };
 use glam::Vec3;
@@ -75,28 +75,16 @@ fn draw(
     assert_eq!(materials.texture_count(), 5);
     let mut indices = CameraIndices::new("camera", h.surface_count(), 2);
     let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices,
-                indices: &mut indices,
-                source,
-                colours: &[],
-                materials: Some(&materials.set),
-                refine_morphs: None,
-                morph: None,
-            }],
-        ),
-        "render",
-    );
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
+    ok(indices.fill(ctx, slot, source), "fill");
+    let view_proj = look.view_projection(viewport.aspect());
+    let camera =
+        RecordCamera::new(viewport, view_proj, vertices, &indices).materials(&materials.set);
+    ok(renderer.render(ctx, &[(0, camera)]), "render");
     let image = ok(renderer.read_target(ctx, 0), "read back");
-    ok(renderer.destroy(ctx), "destroy renderer");
     ok(materials.destroy(ctx), "destroy materials");
     ok(indices.destroy(ctx), "destroy indices");
+    ok(renderer.destroy(ctx), "destroy renderer");
     image
 }
 
