@@ -34,6 +34,9 @@
 //! 7. blocked ([`blocked`]): the hierarchy built in blocks, its collapses on disk, and their
 //!    file;
 //! 8. pipeline ([`pipeline`]): every bake's entry points, in core, out of core and in blocks.
+//!
+//! Beside them, [`generate`] makes procedural meshes (terrains, spheres) and terrain files to
+//! try and test bakes on, from the model and base layers only.
 
 mod arrays;
 pub mod baked;
@@ -41,6 +44,7 @@ mod base;
 pub mod blocked;
 pub mod clod_file;
 pub mod export;
+pub mod generate;
 pub mod gmesh;
 pub mod hierarchy;
 pub mod import;

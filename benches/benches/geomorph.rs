@@ -28,8 +28,8 @@ use caveclod_core::gmesh::GMesh;
 use caveclod_core::gpu::{morph_vertex, MorphInstance};
 use caveclod_tests::{bake, meshes};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, Geomorph, HeadlessDesc, IndexSource, LookAt, Morph,
-    MorphInstances, Renderer, RendererDesc, VertexBuffer, Viewport,
+    CameraIndices, Context, Geomorph, HeadlessDesc, IndexSource, LookAt, Morph, MorphInstances,
+    RecordCamera, Renderer, RendererDesc, VertexBuffer, Viewport,
 };
 use criterion::{Criterion, Throughput};
 
@@ -167,27 +167,17 @@ fn main() {
     let viewport = Viewport::full(128, 128);
     group.bench_function("vertex_stage", |bench| {
         bench.iter(|| {
-            or_exit(
-                renderer.render(
-                    &ctx,
-                    &mut [CameraDraw {
-                        target: 0,
-                        viewport,
-                        view_proj: look.view_projection(viewport.aspect()),
-                        vertices: &coarse,
-                        indices: &mut indices,
-                        source: IndexSource::Lists(&list_refs),
-                        colours: &COLOURS,
-                        materials: None,
-                        refine_morphs: None,
-                        morph: Some(Morph {
-                            fine: &fine,
-                            instances: &inst_buffer,
-                        }),
-                    }],
-                ),
-                "render",
-            );
+            let slot = or_exit(renderer.begin_frame(&ctx), "begin frame");
+            let source = IndexSource::Lists(&list_refs);
+            or_exit(indices.fill(&ctx, slot, source), "fill");
+            let view_proj = look.view_projection(viewport.aspect());
+            let camera = RecordCamera::new(viewport, view_proj, &coarse, &indices)
+                .colours(&COLOURS)
+                .morph(Morph {
+                    fine: &fine,
+                    instances: &inst_buffer,
+                });
+            or_exit(renderer.render(&ctx, &[(0, camera)]), "render");
             or_exit(renderer.wait(&ctx), "wait");
         })
     });

@@ -28,11 +28,11 @@ use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 use caveclod_benches::low_pass_view;
-use caveclod_cli::aligned::CameraPool;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{
     CameraConfig, CameraState, Hierarchy, LookAt, NodeId, RefineParams, RefineStats, View,
 };
+use caveclod_io::CameraPool;
 use caveclod_tests::{bake, meshes};
 use criterion::{Criterion, Throughput};
 

@@ -32,7 +32,7 @@ pub fn wide(p: [f32; 3]) -> P3 {
 }
 
 /// SplitMix64 (the tests' generator): deterministic samples, so runs compare.
-pub use caveclod_tests::rng::SplitMix64 as Rng;
+pub use caveclod_bake::generate::SplitMix64 as Rng;
 
 /// A triangle soup: three corners per triangle.
 pub type Soup = Vec<[[f32; 3]; 3]>;

@@ -139,15 +139,15 @@ pub struct FlyoverArgs {
     pub compact_every: usize,
     /// Work per frame of an incremental compaction (comparisons and moves), advanced every
     /// frame of a state until its cycle ends; 0 compacts whole when due (a spike).
-    #[arg(long, default_value_t = caveclod_cli::flyover::COMPACT_STEP)]
+    #[arg(long, default_value_t = crate::flyover::COMPACT_STEP)]
     pub compact_step: u32,
     /// Share of its active list a camera's refinement visits per frame, resuming where the
     /// last frame stopped (1: every node every frame).
-    #[arg(long, default_value_t = caveclod_cli::flyover::VISIT_FRACTION)]
+    #[arg(long, default_value_t = crate::flyover::VISIT_FRACTION)]
     pub visit_fraction: f32,
     /// Frames in flight: index lists per camera, and with --threads how far apart the
     /// camera threads may run (1: a barrier every frame).
-    #[arg(long, default_value_t = caveclod_cli::flyover::gate::FRAMES_IN_FLIGHT as u8,
+    #[arg(long, default_value_t = crate::flyover::gate::FRAMES_IN_FLIGHT as u8,
           value_parser = clap::value_parser!(u8).range(1..=8))]
     pub frames_in_flight: u8,
     /// Emit without the index cache: look every active polygon up every frame, as the

@@ -1,7 +1,21 @@
 //! `caveclod`: bake meshes into view-dependent hierarchies, inspect and export them.
+//!
+//! The application around the caveclod libraries: the commands ([`commands`], their
+//! arguments in [`args`]), the demo ([`demo`]), the CAVECLOD fly-over experiment
+//! ([`flyover`]), headless snapshots ([`snapshot`]), the `info` report ([`info`]) and the
+//! checks every command makes on its outputs before any work ([`outputs`]). Loading `.clod`
+//! files is caveclod-io's, generated meshes are caveclod-bake's, and the Vulkan host's
+//! pieces (materials, palette, PNG files) are caveclod-host's.
 
 mod args;
 mod commands;
+mod demo;
+mod flyover;
+mod info;
+mod outputs;
+mod snapshot;
+#[cfg(test)]
+mod tests;
 
 use std::process::ExitCode;
 

@@ -4,19 +4,16 @@
 //! the multiresolution octree of an out-of-core bake (`caveclod render --octree`), each
 //! camera drawing its own cut.
 //!
-//! A `.clod` file stores no materials, so surfaces get colours from a fixed palette
-//! ([`palette`]): distinct hues, so surface boundaries show. [`write_png`] writes a
-//! read-back image.
+//! Surfaces draw with the file's materials where asked and it has them, else with colours
+//! from caveclod-host's fixed palette: distinct hues, so surface boundaries show.
 
 use std::path::{Path, PathBuf};
 
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
-use glam::Vec3;
-
-use crate::materials::GpuMaterials;
 use caveclod_core::LookAt;
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, Octree, OctreeCut, RefineParams};
+use caveclod_host::{orbit, orbit_box, palette, GpuMaterials};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, Error, FrameStats, IndexSource, Renderer, RendererDesc,
+    CameraIndices, Context, Error, FrameStats, IndexSource, RecordCamera, Renderer, RendererDesc,
     Result, RgbaImage, VertexBuffer, Viewport,
 };
 
@@ -56,57 +53,6 @@ pub struct Snapshot {
     pub stats: FrameStats,
     /// Active polygons of each camera's front.
     pub active_polygons: Vec<u32>,
-}
-
-/// Colour of surface `s`: hues a golden angle apart, fully opaque.
-pub fn palette(s: usize) -> [f32; 4] {
-    let h = (s as f32 * 0.618_034 + 0.08).fract() * 6.0;
-    let x = 1.0 - ((h % 2.0) - 1.0).abs();
-    let (r, g, b) = match h as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        4 => (x, 0.0, 1.0),
-        _ => (1.0, 0.0, x),
-    };
-    // Pastel: mix with white so lighting stays readable.
-    [0.35 + 0.65 * r, 0.35 + 0.65 * g, 0.35 + 0.65 * b, 1.0]
-}
-
-/// `n` cameras around the hierarchy's bounding box, 30° above it, evenly spaced in angle,
-/// far enough for a 60° field of view to see the whole box.
-pub fn orbit(h: &Hierarchy<'_>, n: usize) -> Vec<LookAt> {
-    let m = h.meta();
-    orbit_box(m.bounds_min, m.bounds_max, n)
-}
-
-/// [`orbit`] around a box.
-pub fn orbit_box(min: [f32; 3], max: [f32; 3], n: usize) -> Vec<LookAt> {
-    let (lo, hi) = (Vec3::from_array(min), Vec3::from_array(max));
-    let centre = (lo + hi) * 0.5;
-    let radius = ((hi - lo).length() * 0.5).max(1e-6);
-    let fov_y = 60f32.to_radians();
-    let distance = radius / (fov_y * 0.5).sin() * 1.05;
-    (0..n)
-        .map(|i| {
-            let angle = 0.6 + std::f32::consts::TAU * i as f32 / n.max(1) as f32;
-            let elevation = 30f32.to_radians();
-            let dir = Vec3::new(
-                angle.sin() * elevation.cos(),
-                elevation.sin(),
-                angle.cos() * elevation.cos(),
-            );
-            LookAt {
-                eye: centre + dir * distance,
-                target: centre,
-                up: Vec3::Y,
-                fov_y,
-                near: distance * 1e-3,
-                far: distance + 2.0 * radius,
-            }
-        })
-        .collect()
 }
 
 /// Per camera its target and viewport; per target its size.
@@ -280,24 +226,25 @@ fn draw(
         .map(|i| CameraIndices::new(&format!("camera {i}"), surfaces, 1))
         .collect();
     let result = (|| -> Result<Snapshot> {
-        let mut draws: Vec<CameraDraw<'_, '_>> = indices
-            .iter_mut()
-            .zip(sources)
+        let slot = renderer.begin_frame(ctx)?;
+        for (ind, source) in indices.iter_mut().zip(sources) {
+            ind.fill(ctx, slot, source)?;
+        }
+        let draws: Vec<(usize, RecordCamera<'_>)> = indices
+            .iter()
             .enumerate()
-            .map(|(i, (ind, source))| CameraDraw {
-                target: viewports[i].0,
-                viewport: viewports[i].1,
-                view_proj: looks[i].view_projection(viewports[i].1.aspect()),
-                vertices: &vertices,
-                indices: ind,
-                source,
-                colours: &colours,
-                materials: gpu.as_ref().map(|g| &g.set),
-                refine_morphs: None,
-                morph: None,
+            .map(|(i, ind)| {
+                let (target, viewport) = viewports[i];
+                let view_proj = looks[i].view_projection(viewport.aspect());
+                let camera = RecordCamera::new(viewport, view_proj, &vertices, ind);
+                let camera = match &gpu {
+                    Some(g) => camera.materials(&g.set),
+                    None => camera.colours(&colours),
+                };
+                (target, camera)
             })
             .collect();
-        let stats = renderer.render(ctx, &mut draws)?;
+        let stats = renderer.render(ctx, &draws)?;
         let images = (0..renderer.desc().targets.len())
             .map(|t| renderer.read_target(ctx, t))
             .collect::<Result<Vec<_>>>()?;
@@ -315,105 +262,4 @@ fn draw(
     let snapshot = result?;
     destroyed?;
     Ok(snapshot)
-}
-
-/// Why [`write_png`] failed: the file, and the encoder's error (which carries I/O errors).
-#[derive(Debug)]
-pub struct PngWriteError {
-    /// The file being written.
-    pub path: PathBuf,
-    /// Why.
-    pub source: png::EncodingError,
-}
-
-impl std::fmt::Display for PngWriteError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.path.display(), self.source)
-    }
-}
-
-impl std::error::Error for PngWriteError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        Some(&self.source)
-    }
-}
-
-/// Writes `image` as an RGBA PNG at `path`, through a temporary file renamed into place, so
-/// a reader never sees a partial image.
-pub fn write_png(image: &RgbaImage, path: &Path) -> std::result::Result<(), PngWriteError> {
-    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
-    tmp_name.push(".tmp");
-    let tmp = path.with_file_name(tmp_name);
-    let result = encode_png(image, &tmp).and_then(|()| Ok(std::fs::rename(&tmp, path)?));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(|source| PngWriteError {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// Encodes `image` into a new file at `path` and syncs it.
-fn encode_png(image: &RgbaImage, path: &Path) -> std::result::Result<(), png::EncodingError> {
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    {
-        let mut enc = png::Encoder::new(&mut w, image.width, image.height);
-        enc.set_color(png::ColorType::Rgba);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header()?;
-        writer.write_image_data(&image.pixels)?;
-        writer.finish()?;
-    }
-    let file = w.into_inner().map_err(|e| e.into_error())?;
-    file.sync_all()?;
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn png_round_trip_through_a_temp_file() {
-        let mut pixels = Vec::new();
-        for y in 0..2u8 {
-            for x in 0..3u8 {
-                pixels.extend_from_slice(&[x * 80, y * 100, 7, 255]);
-            }
-        }
-        let a = RgbaImage {
-            width: 3,
-            height: 2,
-            pixels,
-        };
-        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
-        let path = dir.path().join("a.png");
-        write_png(&a, &path).unwrap_or_else(|e| panic!("{e}"));
-        let decoder = png::Decoder::new(std::io::BufReader::new(
-            std::fs::File::open(&path).unwrap_or_else(|e| panic!("{e}")),
-        ));
-        let mut reader = decoder.read_info().unwrap_or_else(|e| panic!("{e}"));
-        let mut buf = vec![0; reader.output_buffer_size().unwrap_or(0)];
-        let info = reader
-            .next_frame(&mut buf)
-            .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!((info.width, info.height), (3, 2));
-        assert_eq!(&buf[..info.buffer_size()], &a.pixels[..]);
-        assert!(!dir.path().join("a.png.tmp").exists());
-    }
-
-    #[test]
-    fn a_png_into_a_missing_directory_names_the_file() {
-        let a = RgbaImage {
-            width: 1,
-            height: 1,
-            pixels: vec![0, 0, 0, 255],
-        };
-        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
-        let path = dir.path().join("missing").join("a.png");
-        let e = write_png(&a, &path).err();
-        assert!(e.as_ref().is_some_and(|e| e.path == path), "{e:?}");
-        assert!(e.is_some_and(|e| e.to_string().contains("a.png")));
-    }
 }

@@ -9,7 +9,7 @@ use caveclod_core::format::{
     Sink, StreamError, Tag, WriteError, MAX_SECTIONS,
 };
 use caveclod_core::Hierarchy;
-use common::{golden, header, Aligned};
+use common::{golden, header, AlignedBytes};
 
 struct VecSink(Vec<u8>);
 
@@ -102,7 +102,8 @@ fn sections_in_any_pieces_give_the_write_into_bytes() {
         out[..size_of::<FileHeader>()].copy_from_slice(bytemuck::bytes_of(&head));
         assert!(out == want, "pieces of {step}: bytes differ");
     }
-    Hierarchy::from_bytes(Aligned::new(&want).bytes()).expect("the written file reads back");
+    Hierarchy::from_bytes(AlignedBytes::from_slice(&want).bytes())
+        .expect("the written file reads back");
 }
 
 #[test]

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 
 use caveclod_core::format::{tags, FileHeader, Node, Pieces, Position, SectionEntry, Split, Tag};
 use caveclod_core::{FormatError, Hierarchy, PolyKey};
-use common::{exercise, fix_checksum, golden, header, set_header, Aligned, Rng};
+use common::{exercise, fix_checksum, golden, header, set_header, AlignedBytes, Rng};
 
 const HEADER_LEN: usize = size_of::<FileHeader>();
 
@@ -83,7 +83,7 @@ fn every_truncation_is_refused() {
     let file = golden();
     let full = file.bytes();
     for len in truncation_lengths(full.len()) {
-        let cut = Aligned::new(&full[..len]);
+        let cut = AlignedBytes::from_slice(&full[..len]);
         let expected = if len < HEADER_LEN {
             FormatError::Truncated {
                 needed: HEADER_LEN as u64,
@@ -113,7 +113,7 @@ fn every_truncation_with_a_consistent_header_is_refused() {
         if len < HEADER_LEN {
             continue;
         }
-        let mut cut = Aligned::new(&full[..len]);
+        let mut cut = AlignedBytes::from_slice(&full[..len]);
         let mut h = header(cut.bytes());
         h.file_len = len as u64;
         set_header(cut.bytes_mut(), &h);
@@ -345,7 +345,7 @@ fn a_wrong_length_is_refused() {
     let len = f.bytes().len() as u64;
     let mut longer = f.bytes().to_vec();
     longer.extend_from_slice(&[0; 16]);
-    let longer = Aligned::new(&longer);
+    let longer = AlignedBytes::from_slice(&longer);
     let extended = Hierarchy::from_bytes(longer.bytes()).err();
     assert_eq!(
         extended,
@@ -517,8 +517,8 @@ fn a_nan_position_is_refused() {
 
 #[test]
 fn a_misaligned_buffer_is_refused_not_copied() {
-    let f = Aligned::with_offset(common::GOLDEN, 1);
-    let bytes = f.at(1);
+    let f = common::with_offset(common::GOLDEN, 1);
+    let bytes = &f[1..];
     assert_eq!(bytes.as_ptr() as usize % 2, 1);
     assert!(matches!(
         Hierarchy::from_bytes(bytes),
@@ -532,8 +532,8 @@ fn a_misaligned_buffer_is_refused_not_copied() {
 /// `Misaligned { tag: "SECT" }` (found as a bug, fixed: the table is read unaligned).
 #[test]
 fn a_four_byte_aligned_buffer_is_accepted_as_documented() {
-    let f = Aligned::with_offset(common::GOLDEN, 4);
-    let bytes = f.at(4);
+    let f = common::with_offset(common::GOLDEN, 4);
+    let bytes = &f[4..];
     assert_eq!(bytes.as_ptr() as usize % 8, 4);
     let h = Hierarchy::from_bytes(bytes);
     assert!(h.is_ok(), "{:?}", h.err());

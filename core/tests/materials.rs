@@ -12,7 +12,7 @@ use caveclod_core::format::{
     serialized_len, write_into, ExtraSection, FileHeader, Meta, SectionEntry, Tag, WriteError,
 };
 use caveclod_core::{FormatError, Hierarchy};
-use common::{fix_checksum, golden, header, Aligned};
+use common::{fix_checksum, golden, header, AlignedBytes};
 
 /// Records and blob built string by string, as a baker would.
 #[derive(Default)]
@@ -67,18 +67,18 @@ const SURFACES: usize = 3;
 
 /// The golden hierarchy with [`SURFACES`] surfaces and `extra` sections, or the writer's
 /// error.
-fn write(extra: &[ExtraSection<'_>]) -> Result<Aligned, WriteError> {
+fn write(extra: &[ExtraSection<'_>]) -> Result<AlignedBytes, WriteError> {
     write_with(SURFACES, extra)
 }
 
 /// The golden hierarchy with `surfaces` surfaces and `extra` sections.
-fn write_with(surfaces: usize, extra: &[ExtraSection<'_>]) -> Result<Aligned, WriteError> {
+fn write_with(surfaces: usize, extra: &[ExtraSection<'_>]) -> Result<AlignedBytes, WriteError> {
     let g = golden();
     let h = Hierarchy::from_bytes(g.bytes()).expect("golden");
     assert!(h.surface_count() <= surfaces);
     let mut parts = *h.parts();
     parts.surface_count = surfaces as u32;
-    let mut out = Aligned::new(&vec![0u8; serialized_len(&parts, extra)]);
+    let mut out = AlignedBytes::zeroed(serialized_len(&parts, extra));
     write_into(&parts, extra, out.bytes_mut())?;
     Ok(out)
 }

@@ -16,7 +16,7 @@ use caveclod_core::{
     CutError, Hierarchy, LookAt, Octree, OctreeCut, OctreeFormatError, ParamField, ParamsError,
     SelectStats, SurfaceId, View,
 };
-use common::{golden, Aligned};
+use common::{golden, AlignedBytes};
 use counting::{allocations, assert_counting};
 
 /// An owned octree: a strip of quads along x in the plane z = 0, `y` in `0..1`, a complete
@@ -440,12 +440,12 @@ fn index_totals_past_u32_are_refused() {
 
 /// `base` (the golden hierarchy's arrays) with `surfaces` surfaces, written with `extra`
 /// sections.
-fn file_with(base: &HierarchyParts<'_>, surfaces: u32, extra: &[ExtraSection<'_>]) -> Aligned {
+fn file_with(base: &HierarchyParts<'_>, surfaces: u32, extra: &[ExtraSection<'_>]) -> AlignedBytes {
     let mut parts = *base;
     parts.surface_count = surfaces;
     let mut out = vec![0u8; serialized_len(&parts, extra)];
     write_into(&parts, extra, &mut out).expect("write");
-    Aligned::new(&out)
+    AlignedBytes::from_slice(&out)
 }
 
 #[test]

@@ -218,7 +218,7 @@ fn main() -> Fallible<()> {
         d.queue_wait_idle(queue)?;
     }
     std::fs::create_dir_all("out")?;
-    caveclod_cli::snapshot::write_png(&shot.image()?, Path::new("out/embed.png"))?;
+    caveclod_host::write_png(&shot.image()?, Path::new("out/embed.png"))?;
 
     // Teardown: caveclod's objects, then the host's, in reverse order of creation.
     materials.destroy(&ctx);

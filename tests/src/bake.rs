@@ -3,42 +3,11 @@
 //! The tests, examples and benchmarks of the runtime use exactly the hierarchies users get
 //! from `caveclod bake`: no second, test-only builder whose behaviour could drift from it.
 
-pub use crate::aligned::AlignedBytes;
 use caveclod_bake::baked::Baked;
-use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
+use caveclod_bake::generate::{to_mesh, TestMesh};
 use caveclod_bake::pipeline::bake_mesh;
 use caveclod_core::Hierarchy;
-
-use crate::meshes::TestMesh;
-
-/// A test mesh as an imported mesh: per-corner normal and UV streams (so seams stay seams),
-/// no colours, one surface per distinct surface id.
-pub fn to_mesh(t: &TestMesh) -> Mesh {
-    let mut m = Mesh {
-        positions: t.positions.clone(),
-        ..Mesh::default()
-    };
-    for tri in &t.triangles {
-        let mut out = Triangle {
-            position: tri.p,
-            normal: [0; 3],
-            uv: [0; 3],
-            color: [NO_ATTRIBUTE; 3],
-            surface: tri.surface,
-        };
-        for k in 0..3 {
-            out.normal[k] = m.normals.len() as u32;
-            m.normals.push(tri.normal[k]);
-            out.uv[k] = m.uvs.len() as u32;
-            m.uvs.push(tri.uv[k]);
-        }
-        m.triangles.push(out);
-    }
-    m.surfaces = (0..t.surface_count())
-        .map(|s| Surface::plain(format!("s{s}")))
-        .collect();
-    m
-}
+use caveclod_io::AlignedBytes;
 
 /// A baked test mesh; dereferences to the baker's arrays.
 #[derive(Clone, Debug)]

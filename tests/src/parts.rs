@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use caveclod_bake::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
-use crate::rng::SplitMix64;
+use caveclod_bake::generate::SplitMix64;
 
 /// One axis-aligned box part with its faces' grid resolution and its material.
 #[derive(Clone, Debug, PartialEq)]

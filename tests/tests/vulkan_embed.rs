@@ -17,6 +17,7 @@ mod vulkan_support;
 
 use caveclod_core::gpu::MorphInstance;
 use caveclod_core::CameraState;
+use caveclod_host::{Host, TargetRendering};
 use caveclod_tests::meshes;
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
@@ -24,7 +25,7 @@ use caveclod_vulkan::{
     MaterialSet, Morph, MorphInstances, RecordCamera, Recorder, RecorderDesc, RgbaImage,
     SurfaceMaterial, TargetFormats, Texture, TextureDesc, VertexBuffer, Viewport,
 };
-use vulkan_support::host::{Host, HostRendering, HostTarget};
+use vulkan_support::host_frame::HostFrame;
 use vulkan_support::*;
 
 const SIZE: u32 = 96;
@@ -36,7 +37,7 @@ const TEXEL: [u8; 4] = [230, 60, 20, 255];
 fn frame(
     host: &Host,
     ctx: &Context,
-    target: &mut HostTarget,
+    target: &mut HostFrame,
     recorder: &Recorder,
     cameras: &[RecordCamera<'_>],
 ) -> Result<RgbaImage, Error> {
@@ -56,20 +57,20 @@ fn frame(
 
 #[test]
 fn a_host_frame_through_the_embedding_conveniences() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
+    let host = host();
     let handles = HostDevice::new(
-        &host.instance,
-        &host.device,
-        host.physical_device,
-        host.family,
-        host.queue,
+        host.instance(),
+        host.device(),
+        host.physical_device(),
+        host.queue_family(),
+        host.queue(),
     )
-    .allocator(host.allocator.clone());
+    .allocator(host.allocator().clone());
     assert_eq!(handles.enabled, DeviceFeatures::REQUIRED);
     // SAFETY: the host's live handles and allocator, which outlive the context (destroyed
-    // first); `Host::new` enabled the required features through `DeviceFeatures::chain`.
+    // first); `Host::headless` enabled the required features through `DeviceFeatures::chain`.
     let ctx =
-        ok(unsafe { Context::from_raw(handles) }, "embed").with_validation_log(host.log.clone());
+        ok(unsafe { Context::from_raw(handles) }, "embed").with_validation_log(host.log().clone());
 
     let baked = caveclod_tests::bake(&meshes::terrain(12, 12, 9));
     let h = baked.hierarchy();
@@ -84,8 +85,8 @@ fn a_host_frame_through_the_embedding_conveniences() {
         colour: vk::Format::B8G8R8A8_SRGB,
         ..TargetFormats::HEADLESS
     };
-    let mut target = HostTarget::new(&host, formats, HostRendering::RenderPass, SIZE, SIZE);
-    let desc = RecorderDesc::render_pass(formats, target.render_pass, 0);
+    let mut target = HostFrame::new(&host, formats, TargetRendering::RenderPass, SIZE, SIZE);
+    let desc = RecorderDesc::render_pass(formats, target.render_pass(), 0);
     let recorder = ok(Recorder::new(&ctx, desc), "recorder");
     let mut uploads = None;
     target.submit(&host, |cmd| {
@@ -255,5 +256,5 @@ fn a_host_frame_through_the_embedding_conveniences() {
     ok(recorder.destroy(&ctx), "destroy recorder");
     target.destroy(&host);
     ok(ctx.destroy(), "context");
-    host.destroy();
+    destroy_host(host);
 }

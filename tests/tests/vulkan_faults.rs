@@ -15,14 +15,15 @@
 mod vulkan_support;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_host::{Host, TargetRendering};
 use caveclod_tests::meshes;
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, CameraMorphs, Context, DeviceFeatures, Error, IndexSource,
-    MaterialSet, MorphStage, RecordCamera, Recorder, RecorderDesc, Renderer, RendererDesc,
-    RgbaImage, SurfaceMaterial, TargetFormats, Texture, TextureDesc, VertexBuffer, Viewport,
+    CameraIndices, CameraMorphs, Context, Error, IndexSource, MaterialSet, MorphStage,
+    RecordCamera, Recorder, RecorderDesc, Renderer, RendererDesc, RgbaImage, SurfaceMaterial,
+    TargetFormats, Texture, TextureDesc, VertexBuffer, Viewport,
 };
-use vulkan_support::host::{Host, HostRendering, HostTarget};
+use vulkan_support::host_frame::HostFrame;
 use vulkan_support::*;
 
 const SIZE: u32 = 96;
@@ -142,14 +143,19 @@ fn frames(
             },
             None => IndexSource::camera(h, &scene.cam),
         };
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                materials: parts.materials.as_ref(),
-                refine_morphs: parts.morphs.as_mut(),
-                ..plain_draw(0, viewport, &scene.look, vertices, indices, source)
-            }],
-        )?;
+        let slot = renderer.begin_frame(ctx)?;
+        indices.fill(ctx, slot, source)?;
+        if let Some(m) = parts.morphs.as_mut() {
+            m.fill(slot, h.vertices(), &scene.cam)?;
+        }
+        let mut camera = plain_camera(viewport, &scene.look, vertices, indices);
+        if let Some(set) = &parts.materials {
+            camera = camera.materials(set);
+        }
+        if let Some(m) = &parts.morphs {
+            camera = camera.refine_morphs(m);
+        }
+        renderer.render(ctx, &[(0, camera)])?;
     }
     renderer.read_target(ctx, 0)
 }
@@ -347,13 +353,13 @@ impl Embedded {
 fn embedded_frame(
     host: &Host,
     ctx: &Context,
-    target: &mut HostTarget,
+    target: &mut HostFrame,
     scene: &Scene<'_>,
     parts: &mut Embedded,
 ) -> Result<RgbaImage, Error> {
     let h = scene.h;
     if parts.recorder.is_none() {
-        let desc = RecorderDesc::render_pass(target.formats, target.render_pass, 0);
+        let desc = RecorderDesc::render_pass(target.formats(), target.render_pass(), 0);
         parts.recorder = Some(Recorder::new(ctx, desc)?);
     }
     if parts.vertices.is_none() {
@@ -389,13 +395,13 @@ fn embedded_frame(
 #[test]
 fn memory_exhausted_at_every_allocation_of_an_embedded_first_frame() {
     with_scene(None, |scene| {
-        let host = Host::new(DeviceFeatures::REQUIRED);
-        let ctx = host.context(DeviceFeatures::REQUIRED);
+        let host = host();
+        let ctx = ok(host.context(), "context");
         let formats = TargetFormats {
             colour: vk::Format::B8G8R8A8_SRGB,
             ..TargetFormats::HEADLESS
         };
-        let mut target = HostTarget::new(&host, formats, HostRendering::RenderPass, SIZE, SIZE);
+        let mut target = HostFrame::new(&host, formats, TargetRendering::RenderPass, SIZE, SIZE);
         // The host's own allocations (its target) share the allocator and stay.
         let host_allocations = ok(ctx.allocator_report(), "report").allocations.len();
         let before = ctx.faults().allocations();
@@ -434,6 +440,6 @@ fn memory_exhausted_at_every_allocation_of_an_embedded_first_frame() {
         ok(ctx.destroy(), "destroy context");
         target.destroy(&host);
         // Checks that the allocator is empty and no validation message came.
-        host.destroy();
+        destroy_host(host);
     });
 }

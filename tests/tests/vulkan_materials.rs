@@ -14,8 +14,8 @@ mod vulkan_support;
 use caveclod_core::CameraState;
 use caveclod_tests::meshes;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, IndexSource, MaterialSet, RgbaImage, SurfaceMaterial,
-    Texture, TextureDesc, VertexBuffer, Viewport,
+    CameraIndices, Context, IndexSource, MaterialSet, RgbaImage, SurfaceMaterial, Texture,
+    TextureDesc, VertexBuffer, Viewport,
 };
 use vulkan_support::*;
 
@@ -40,23 +40,13 @@ fn render_with(ctx: &Context, materials: &[SurfaceMaterial<'_>]) -> RgbaImage {
         "material set",
     );
     let mut indices = CameraIndices::new("camera", h.surface_count(), 2);
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
     ok(
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                materials: Some(&set),
-                ..plain_draw(
-                    0,
-                    viewport,
-                    &look,
-                    &vertices,
-                    &mut indices,
-                    IndexSource::camera(&h, &cam),
-                )
-            }],
-        ),
-        "render",
+        indices.fill(ctx, slot, IndexSource::camera(&h, &cam)),
+        "fill",
     );
+    let camera = plain_camera(viewport, &look, &vertices, &indices).materials(&set);
+    ok(renderer.render(ctx, &[(0, camera)]), "render");
     let image = ok(renderer.read_target(ctx, 0), "read back");
     ok(renderer.wait(ctx), "wait");
     set.destroy(ctx);
@@ -204,23 +194,14 @@ fn triangle_pixel(
     let set = material.map(|m| ok(MaterialSet::new(ctx, renderer.recorder(), &[m, m]), "set"));
     let mut indices = CameraIndices::new("triangle", 2, 2);
     let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                materials: set.as_ref(),
-                ..plain_draw(
-                    0,
-                    viewport,
-                    &look,
-                    &buffer,
-                    &mut indices,
-                    IndexSource::Lists(&list),
-                )
-            }],
-        ),
-        "render",
-    );
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
+    ok(indices.fill(ctx, slot, IndexSource::Lists(&list)), "fill");
+    let camera = plain_camera(viewport, &look, &buffer, &indices);
+    let camera = match &set {
+        Some(set) => camera.materials(set),
+        None => camera,
+    };
+    ok(renderer.render(ctx, &[(0, camera)]), "render");
     let image = ok(renderer.read_target(ctx, 0), "read back");
     ok(renderer.destroy(ctx), "destroy renderer");
     if let Some(s) = set {

@@ -15,13 +15,14 @@
 mod vulkan_support;
 
 use caveclod_core::{CameraState, Hierarchy};
+use caveclod_host::{Host, TargetRendering};
 use caveclod_tests::meshes;
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
-    CameraIndices, Context, DeviceFeatures, Error, IndexSource, LookAt, RecordCamera, Recorder,
-    RecorderDesc, RgbaImage, TargetFormats, VertexBuffer, Viewport,
+    CameraIndices, Context, Error, IndexSource, LookAt, RecordCamera, Recorder, RecorderDesc,
+    RgbaImage, TargetFormats, VertexBuffer, Viewport,
 };
-use vulkan_support::host::{Host, HostRendering, HostTarget};
+use vulkan_support::host_frame::HostFrame;
 use vulkan_support::*;
 
 const SIZE: u32 = 160;
@@ -94,12 +95,12 @@ fn host_frame(
     cam: &CameraState<'_>,
     scene: &Scene,
     formats: TargetFormats,
-    rendering: HostRendering,
+    rendering: TargetRendering,
 ) -> RgbaImage {
-    let mut target = HostTarget::new(host, formats, rendering, SIZE, SIZE);
+    let mut target = HostFrame::new(host, formats, rendering, SIZE, SIZE);
     let desc = match rendering {
-        HostRendering::RenderPass => RecorderDesc::render_pass(formats, target.render_pass, 0),
-        HostRendering::Dynamic => RecorderDesc::dynamic(formats),
+        TargetRendering::RenderPass => RecorderDesc::render_pass(formats, target.render_pass(), 0),
+        TargetRendering::Dynamic => RecorderDesc::dynamic(formats),
     };
     let recorder = ok(Recorder::new(ctx, desc), "recorder");
     let mut upload = None;
@@ -151,8 +152,8 @@ fn reference(ctx: &Context, h: &Hierarchy<'_>, cam: &CameraState<'_>, scene: &Sc
 
 #[test]
 fn host_render_pass_bgra_srgb_msaa_matches_the_renderer() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
-    let ctx = host.context(DeviceFeatures::REQUIRED);
+    let host = host();
+    let ctx = ok(host.context(), "context");
     let baked = caveclod_tests::bake(&meshes::terrain(16, 16, 3));
     let h = baked.hierarchy();
     let scene = Scene::new();
@@ -161,10 +162,13 @@ fn host_render_pass_bgra_srgb_msaa_matches_the_renderer() {
     let want = to_srgb(&reference(&ctx, &h, &cam, &scene));
     let formats = TargetFormats {
         colour: vk::Format::B8G8R8A8_SRGB,
-        depth: host.depth_format(&[
-            vk::Format::D24_UNORM_S8_UINT,
-            vk::Format::D32_SFLOAT_S8_UINT,
-        ]),
+        depth: ok(
+            host.depth_format(&[
+                vk::Format::D24_UNORM_S8_UINT,
+                vk::Format::D32_SFLOAT_S8_UINT,
+            ]),
+            "depth format",
+        ),
         samples: vk::SampleCountFlags::TYPE_4,
     };
     let got = host_frame(
@@ -174,7 +178,7 @@ fn host_render_pass_bgra_srgb_msaa_matches_the_renderer() {
         &cam,
         &scene,
         formats,
-        HostRendering::RenderPass,
+        TargetRendering::RenderPass,
     );
     save(&want, "record_reference_srgb.png");
     save(&got, "record_render_pass_msaa.png");
@@ -204,13 +208,13 @@ fn host_render_pass_bgra_srgb_msaa_matches_the_renderer() {
     );
     assert_clean(&ctx, "recording into the host's render pass");
     ok(ctx.destroy(), "destroy context");
-    host.destroy();
+    destroy_host(host);
 }
 
 #[test]
 fn host_dynamic_rendering_rgba8_equals_the_renderer() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
-    let ctx = host.context(DeviceFeatures::REQUIRED);
+    let host = host();
+    let ctx = ok(host.context(), "context");
     let baked = caveclod_tests::bake(&meshes::terrain(16, 16, 4));
     let h = baked.hierarchy();
     let scene = Scene::new();
@@ -224,25 +228,25 @@ fn host_dynamic_rendering_rgba8_equals_the_renderer() {
         &cam,
         &scene,
         TargetFormats::HEADLESS,
-        HostRendering::Dynamic,
+        TargetRendering::Dynamic,
     );
     let diff = ok(got.diff(&want), "diff");
     assert_eq!(diff.equal, diff.pixels, "the record path differs: {diff:?}");
     assert!(want.covered(BACKGROUND) > u64::from(SIZE * SIZE) / 4);
     assert_clean(&ctx, "recording into the host's dynamic rendering");
     ok(ctx.destroy(), "destroy context");
-    host.destroy();
+    destroy_host(host);
 }
 
 #[test]
 fn frames_create_no_resource_once_the_ring_is_sized() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
-    let ctx = host.context(DeviceFeatures::REQUIRED);
+    let host = host();
+    let ctx = ok(host.context(), "context");
     let baked = caveclod_tests::bake(&meshes::terrain(20, 20, 5));
     let h = baked.hierarchy();
     let scene = Scene::new();
     let formats = TargetFormats::HEADLESS;
-    let mut target = HostTarget::new(&host, formats, HostRendering::Dynamic, SIZE, SIZE);
+    let mut target = HostFrame::new(&host, formats, TargetRendering::Dynamic, SIZE, SIZE);
     let recorder = ok(
         Recorder::new(&ctx, RecorderDesc::dynamic(formats)),
         "recorder",
@@ -300,7 +304,7 @@ fn frames_create_no_resource_once_the_ring_is_sized() {
     target.destroy(&host);
     assert_clean(&ctx, "the frame loop");
     ok(ctx.destroy(), "destroy context");
-    host.destroy();
+    destroy_host(host);
 }
 
 #[test]

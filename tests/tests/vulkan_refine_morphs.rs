@@ -12,10 +12,10 @@ use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
 use caveclod_tests::bake::bake;
 use caveclod_tests::meshes;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, CameraMorphs, Context, IndexSource, LookAt, MorphStage, Renderer,
+    CameraIndices, CameraMorphs, Context, IndexSource, LookAt, MorphStage, RecordCamera, Renderer,
     RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
-use vulkan_support::{assert_clean, context, ok, plain_draw, save, terrain_camera};
+use vulkan_support::{assert_clean, context, ok, plain_camera, save, terrain_camera};
 
 const SIZE: u32 = 384;
 const MAX_MORPHS: u32 = 4096;
@@ -133,31 +133,36 @@ fn draw(
             .collect(),
         None => Vec::new(),
     };
-    let mut slots = morphs
-        .iter_mut()
-        .map(Some)
-        .chain(std::iter::repeat_with(|| None));
-    let mut draws: Vec<CameraDraw<'_, '_>> = cams
-        .iter()
-        .zip(indices.iter_mut())
-        .zip(quadrants())
-        .zip(looks)
-        .map(|(((cam, indices), viewport), look)| {
-            let refine_morphs = slots.next().flatten();
-            let source = match refine_morphs {
-                Some(_) => IndexSource::MorphedCamera {
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
+    for (c, (cam, ind)) in cams.iter().zip(indices.iter_mut()).enumerate() {
+        match morphs.get_mut(c) {
+            Some(m) => {
+                let source = IndexSource::MorphedCamera {
                     hierarchy: h,
                     camera: cam,
-                },
-                None => IndexSource::camera(h, cam),
-            };
-            CameraDraw {
-                refine_morphs,
-                ..plain_draw(0, viewport, look, vertices, indices, source)
+                };
+                ok(ind.fill(ctx, slot, source), "fill");
+                ok(m.fill(slot, h.vertices(), cam), "fill morphs");
+            }
+            None => {
+                ok(ind.fill(ctx, slot, IndexSource::camera(h, cam)), "fill");
+            }
+        }
+    }
+    let draws: Vec<(usize, RecordCamera<'_>)> = indices
+        .iter()
+        .zip(quadrants())
+        .zip(looks)
+        .enumerate()
+        .map(|(c, ((ind, viewport), look))| {
+            let camera = plain_camera(viewport, look, vertices, ind);
+            match morphs.get(c) {
+                Some(m) => (0, camera.refine_morphs(m)),
+                None => (0, camera),
             }
         })
         .collect();
-    ok(renderer.render(ctx, &mut draws), "render");
+    ok(renderer.render(ctx, &draws), "render");
     drop(draws);
     let image = ok(renderer.read_target(ctx, 0), "read back");
     ok(renderer.destroy(ctx), "destroy renderer");
@@ -353,14 +358,20 @@ fn morph_draws_are_refused_where_they_cannot_work() {
     let viewport = Viewport::full(64, 64);
     let look = terrain_camera(1.0, 0.0, 2.0, 1.0);
     let mut attempt = |source, morphs: Option<&mut CameraMorphs>| {
+        let slot = ok(renderer.begin_frame(&ctx), "begin frame");
+        ok(indices.fill(&ctx, slot, source), "fill");
+        let camera = plain_camera(viewport, &look, &vertices, &indices);
+        let camera = match morphs {
+            Some(m) => {
+                if let Err(e) = m.fill(slot, h.vertices(), &cam) {
+                    return Some(e.to_string());
+                }
+                camera.refine_morphs(m)
+            }
+            None => camera,
+        };
         renderer
-            .render(
-                &ctx,
-                &mut [CameraDraw {
-                    refine_morphs: morphs,
-                    ..plain_draw(0, viewport, &look, &vertices, &mut indices, source)
-                }],
-            )
+            .render(&ctx, &[(0, camera)])
             .err()
             .map(|e| e.to_string())
     };

@@ -16,7 +16,7 @@ use caveclod_core::{CameraConfig, CameraState};
 use caveclod_tests::check::split_all;
 use caveclod_tests::meshes::{self, Rng};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Geomorph, IndexSource, Morph, MorphInstances, Renderer,
+    CameraIndices, Geomorph, IndexSource, Morph, MorphInstances, RecordCamera, Renderer,
     RendererDesc, VertexBuffer, Viewport,
 };
 use vulkan_support::*;
@@ -133,20 +133,13 @@ fn vertex_buffer_written_once_index_bytes_reported() {
         let look = terrain_camera(20.0, 0.1 * frame as f32, 1.2 - 0.07 * frame as f32, 0.5);
         refine(&h, &mut cam, &look, viewport, 0.5);
         let expected: usize = (0..h.surface_count()).map(|s| cam.index_count(s)).sum();
-        let stats = ok(
-            renderer.render(
-                &ctx,
-                &mut [plain_draw(
-                    0,
-                    viewport,
-                    &look,
-                    &vertices,
-                    &mut indices,
-                    IndexSource::camera(&h, &cam),
-                )],
-            ),
-            "render",
+        let slot = ok(renderer.begin_frame(&ctx), "begin frame");
+        ok(
+            indices.fill(&ctx, slot, IndexSource::camera(&h, &cam)),
+            "fill",
         );
+        let camera = plain_camera(viewport, &look, &vertices, &indices);
+        let stats = ok(renderer.render(&ctx, &[(0, camera)]), "render");
         assert_eq!(stats.index_bytes, 4 * expected as u64, "frame {frame}");
         assert_eq!(stats.camera_index_bytes, vec![stats.index_bytes]);
         assert_eq!(stats.slot, frame % frames_in_flight);
@@ -222,15 +215,16 @@ fn four_quadrants_in_one_submission_equal_each_camera_alone() {
             )
         })
         .collect();
-    let mut draws: Vec<CameraDraw<'_, '_>> = indices
-        .iter_mut()
+    let slot = ok(renderer.begin_frame(&ctx), "begin frame");
+    for (ind, cam) in indices.iter_mut().zip(&cams) {
+        ok(ind.fill(&ctx, slot, IndexSource::camera(&h, cam)), "fill");
+    }
+    let draws: Vec<(usize, RecordCamera<'_>)> = indices
+        .iter()
         .enumerate()
-        .map(|(i, ind)| {
-            let source = IndexSource::camera(&h, &cams[i]);
-            plain_draw(0, quadrants[i], &looks[i], &vertices, ind, source)
-        })
+        .map(|(i, ind)| (0, plain_camera(quadrants[i], &looks[i], &vertices, ind)))
         .collect();
-    let stats = ok(renderer.render(&ctx, &mut draws), "render four");
+    let stats = ok(renderer.render(&ctx, &draws), "render four");
     assert_eq!(stats.camera_index_bytes.len(), 4);
     drop(draws);
     let split = ok(renderer.read_target(&ctx, 0), "read back");
@@ -472,16 +466,19 @@ fn separate_targets_in_one_submission_equal_each_camera_alone() {
             )
         })
         .collect();
-    let mut draws: Vec<CameraDraw<'_, '_>> = indices
-        .iter_mut()
+    let slot = ok(renderer.begin_frame(&ctx), "begin frame");
+    for (ind, cam) in indices.iter_mut().zip(&cams) {
+        ok(ind.fill(&ctx, slot, IndexSource::camera(&h, cam)), "fill");
+    }
+    let draws: Vec<(usize, RecordCamera<'_>)> = indices
+        .iter()
         .enumerate()
         .map(|(i, ind)| {
             let viewport = Viewport::full(sizes[i].0, sizes[i].1);
-            let source = IndexSource::camera(&h, &cams[i]);
-            plain_draw(i, viewport, &looks[i], &vertices, ind, source)
+            (i, plain_camera(viewport, &looks[i], &vertices, ind))
         })
         .collect();
-    let stats = ok(renderer.render(&ctx, &mut draws), "render two targets");
+    let stats = ok(renderer.render(&ctx, &draws), "render two targets");
     drop(draws);
     assert_eq!(stats.camera_index_bytes.len(), 2);
     let images: Vec<_> = (0..2)

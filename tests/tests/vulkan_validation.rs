@@ -14,7 +14,6 @@ use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
     Buffer, BufferDesc, CameraIndices, Context, DeviceFeatures, Error, IndexSource, VertexBuffer,
 };
-use vulkan_support::host::Host;
 use vulkan_support::*;
 
 #[test]
@@ -79,8 +78,8 @@ fn a_leaked_buffer_is_reported_by_destroy() {
 
 #[test]
 fn embedded_in_a_host_engine() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
-    let ctx = host.context(DeviceFeatures::REQUIRED);
+    let host = host();
+    let ctx = ok(host.context(), "context");
 
     let mesh = meshes::terrain(12, 12, 5);
     let baked = caveclod_tests::bake(&mesh);
@@ -113,23 +112,23 @@ fn embedded_in_a_host_engine() {
     ok(ctx.destroy(), "destroy the embedded context");
     // The host tears down what it owns, in order, checking that its allocator is empty
     // and that the validation layer said nothing.
-    host.destroy();
+    destroy_host(host);
 }
 
 #[test]
 fn a_host_device_without_a_required_feature_is_refused_by_name() {
-    let host = Host::new(DeviceFeatures::REQUIRED);
+    let host = host();
     let claimed = DeviceFeatures {
         dynamic_rendering: false,
         ..DeviceFeatures::REQUIRED
     };
     // SAFETY: the host's live handles; it enabled more than it claims.
-    match unsafe { Context::from_raw(host.device(claimed)) } {
+    match unsafe { Context::from_raw(host.handles(claimed)) } {
         Err(Error::Unsupported { missing, .. }) => {
             assert_eq!(missing, vec!["dynamicRendering (not enabled)".to_string()]);
         }
         Err(e) => panic!("expected Unsupported, got {e}"),
         Ok(_) => panic!("a device without dynamicRendering was accepted"),
     }
-    host.destroy();
+    destroy_host(host);
 }

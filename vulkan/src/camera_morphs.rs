@@ -11,14 +11,13 @@ use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::mesh::VertexBuffer;
 use crate::pipeline::MORPHING_LOCAL_SIZE;
-use crate::record::Recorder;
 
 /// Where a camera's morphing vertices are blended each frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MorphStage {
     /// The vertex stage blends each morphing corner from its slot as it draws it.
     Vertex,
-    /// A compute dispatch ([`Recorder::record_morph_blends`]) writes every slot's blended
+    /// A compute dispatch ([`Recorder::record_morph_blends`](crate::Recorder::record_morph_blends)) writes every slot's blended
     /// vertex into a small device-local buffer, which the vertex stage reads.
     Compute,
     /// The host blends on the CPU ([`caveclod_core::gpu::morph_slot_vertex`]) into mapped
@@ -59,7 +58,7 @@ struct Slot {
 /// - **Filling is a write to mapped memory**, like the index ring: the caller fills slot `s`
 ///   after its fence for the frame that last used `s`, and the submission makes the writes
 ///   visible. The compute stage's barrier is recorded by
-///   [`Recorder::record_morph_blends`].
+///   [`Recorder::record_morph_blends`](crate::Recorder::record_morph_blends).
 #[derive(Debug)]
 pub struct CameraMorphs {
     stage: MorphStage,
@@ -71,21 +70,27 @@ pub struct CameraMorphs {
     ring: Vec<Slot>,
 }
 
+/// What camera morphs take of the recorder they are made for.
+#[derive(Clone, Copy)]
+pub(crate) struct MorphLayout<'a> {
+    /// The morph set layout (`None`: made without `refine_morphs`).
+    pub set_layout: Option<vk::DescriptorSetLayout>,
+    /// The one white vertex colour, for meshes without colours.
+    pub white_colour: &'a Buffer,
+}
+
 impl CameraMorphs {
-    /// Buffers and descriptor sets for a camera with `max_morphs` morphs
-    /// ([`CameraState::max_morphs`]) over `vertices`, for `frames_in_flight` frame slots,
-    /// blended by `stage`, for `recorder`'s morphing pipelines (made with
-    /// [`RecorderDesc::refine_morphs`](crate::RecorderDesc)). `vertices` must outlive it.
-    pub fn new(
+    /// [`CameraMorphs::new`](crate::CameraMorphs::new) over the recorder's `parts`.
+    pub(crate) fn with_layout(
         ctx: &Context,
-        recorder: &Recorder,
+        parts: MorphLayout<'_>,
         name: &str,
         vertices: &VertexBuffer,
         stage: MorphStage,
         max_morphs: u32,
         frames_in_flight: usize,
     ) -> Result<Self> {
-        let layout = recorder.morph_set_layout().ok_or_else(|| {
+        let layout = parts.set_layout.ok_or_else(|| {
             Error::InvalidArgument(format!(
                 "{name}: the recorder was made without refine_morphs"
             ))
@@ -117,7 +122,7 @@ impl CameraMorphs {
             }
         }
         for slot in &morphs.ring {
-            write_set(ctx, slot, vertices, recorder.white_colour());
+            write_set(ctx, slot, vertices, parts.white_colour);
         }
         Ok(morphs)
     }

@@ -15,9 +15,7 @@ use crate::instance::OwnedInstance;
 use crate::requirements::{self, DeviceFeatures};
 use crate::validation::ValidationLog;
 
-mod headless;
-
-pub use headless::HeadlessDesc;
+pub(crate) mod headless;
 
 /// A host engine's device, handed to [`Context::from_raw`].
 pub struct HostDevice {

@@ -71,15 +71,9 @@ pub enum Error {
     /// A camera operation (refine, split, collapse) was refused.
     #[error("camera operation: {0}")]
     CameraOp(#[from] caveclod_core::OpError),
-    /// Index emission of a camera failed.
-    #[error("{}index emission: {source}", camera_prefix(*.camera))]
-    Emit {
-        /// The camera's position in the frame, when the renderer emitted.
-        camera: Option<usize>,
-        /// Why.
-        #[source]
-        source: caveclod_core::EmitError,
-    },
+    /// Index emission of a camera failed ([`CameraIndices::fill`](crate::CameraIndices::fill)).
+    #[error("index emission: {0}")]
+    Emit(#[from] caveclod_core::EmitError),
     /// An octree cut was refused ([`caveclod_core::OctreeCut`]).
     #[error("octree cut: {0}")]
     Cut(#[from] caveclod_core::CutError),
@@ -98,21 +92,6 @@ pub enum Error {
     /// Resources of this context were not destroyed before it.
     #[error("{} resource(s) leaked (not destroyed before the context): {}", .0.len(), .0.join(", "))]
     Leaked(Vec<String>),
-}
-
-/// Index emission outside the renderer names no camera.
-impl From<caveclod_core::EmitError> for Error {
-    fn from(source: caveclod_core::EmitError) -> Self {
-        Self::Emit {
-            camera: None,
-            source,
-        }
-    }
-}
-
-/// `"camera {i}: "` for a known camera, else nothing.
-fn camera_prefix(camera: Option<usize>) -> String {
-    camera.map(|c| format!("camera {c}: ")).unwrap_or_default()
 }
 
 /// Results of this crate.
@@ -188,13 +167,8 @@ mod tests {
 
         let emit = caveclod_core::EmitError::WrongHierarchy;
         let e = Error::from(emit);
-        assert!(matches!(e, Error::Emit { camera: None, .. }));
+        assert!(matches!(e, Error::Emit(_)));
         assert_eq!(e.to_string(), format!("index emission: {emit}"));
-        let e = Error::Emit {
-            camera: Some(2),
-            source: emit,
-        };
-        assert_eq!(e.to_string(), format!("camera 2: index emission: {emit}"));
 
         let e: Error = caveclod_core::CutError::WrongOctree.into();
         assert!(matches!(

@@ -73,6 +73,8 @@ pub struct CameraIndices {
     /// Per frame slot: the vertex count the slot's indices may reference (the hierarchy's
     /// vertex count, or one more than the largest listed index).
     vertex_bounds: Vec<u32>,
+    /// Per frame slot: filled by morphed emission ([`IndexSource::MorphedCamera`]).
+    morphed: Vec<bool>,
     grows: u64,
 }
 
@@ -86,6 +88,7 @@ impl CameraIndices {
                 .map(|_| (0..surfaces).map(|_| Slot::default()).collect())
                 .collect(),
             vertex_bounds: vec![0; frames_in_flight.max(1)],
+            morphed: vec![false; frames_in_flight.max(1)],
             grows: 0,
         }
     }
@@ -118,6 +121,20 @@ impl CameraIndices {
     /// vertices can draw them (0 before the slot is filled).
     pub fn vertex_bound(&self, frame: usize) -> u32 {
         self.vertex_bounds.get(frame).copied().unwrap_or(0)
+    }
+
+    /// Whether `frame` was last filled by morphed emission ([`IndexSource::MorphedCamera`]),
+    /// whose indices point at a camera's morph slots.
+    pub fn morphed(&self, frame: usize) -> bool {
+        self.morphed.get(frame).copied().unwrap_or(false)
+    }
+
+    /// Index bytes `frame`'s buffers hold as last filled, all surfaces (what a draw of the
+    /// slot reads).
+    pub fn index_bytes(&self, frame: usize) -> u64 {
+        self.slots
+            .get(frame)
+            .map_or(0, |f| f.iter().map(|s| 4 * u64::from(s.count)).sum())
     }
 
     /// The buffer and index count (32-bit indices, from offset 0) of `surface` in `frame`,
@@ -166,17 +183,6 @@ impl CameraIndices {
         &mut self,
         ctx: &Context,
         frame: usize,
-        source: IndexSource<'_, '_>,
-    ) -> Result<u64> {
-        self.fill_camera(ctx, frame, None, source)
-    }
-
-    /// [`fill`](Self::fill), naming camera `camera` of a frame in errors.
-    pub(crate) fn fill_camera(
-        &mut self,
-        ctx: &Context,
-        frame: usize,
-        camera: Option<usize>,
         source: IndexSource<'_, '_>,
     ) -> Result<u64> {
         if frame >= self.slots.len() {
@@ -236,16 +242,14 @@ impl CameraIndices {
                 hierarchy,
                 camera: cam,
             } => {
-                cam.emit_indices(hierarchy, &mut outs, &mut written)
-                    .map_err(|source| Error::Emit { camera, source })?;
+                cam.emit_indices(hierarchy, &mut outs, &mut written)?;
                 u32::try_from(hierarchy.vertices().len()).unwrap_or(u32::MAX)
             }
             IndexSource::MorphedCamera {
                 hierarchy,
                 camera: cam,
             } => {
-                cam.emit_indices_morphed(hierarchy, &mut outs, &mut written)
-                    .map_err(|source| Error::Emit { camera, source })?;
+                cam.emit_indices_morphed(hierarchy, &mut outs, &mut written)?;
                 let slots = cam.morph_vertices().len();
                 u32::try_from(hierarchy.vertices().len() + slots).unwrap_or(u32::MAX)
             }
@@ -263,6 +267,7 @@ impl CameraIndices {
         };
         drop(outs);
         self.vertex_bounds[frame] = vertex_bound;
+        self.morphed[frame] = matches!(source, IndexSource::MorphedCamera { .. });
         let mut bytes = 0u64;
         for (slot, &n) in slots.iter_mut().zip(&written) {
             slot.count = n;

@@ -24,7 +24,9 @@
 //! - [`ImageReadback`]: a host's colour image copied into host memory by commands recorded
 //!   into the host's command buffer (screenshots, checks).
 //! - [`Renderer`]: the headless convenience over the recorder (RGBA8 + D32 targets, command
-//!   pool, fences, one submission per frame, [`RgbaImage`] read-back) for tests and tools.
+//!   pool, fences, one submission per frame, [`RgbaImage`] read-back) for tests and tools;
+//!   its cameras are the record path's [`RecordCamera`]s, their rings filled by the caller
+//!   for the slot [`Renderer::begin_frame`] returns, as on the record path.
 //! - Geomorphs: [`Geomorph`] runs the compute stage (read back for comparison with the
 //!   CPU); a camera with a [`Morph`] draws through the geomorphing vertex stage.
 //!
@@ -59,18 +61,11 @@
 //! let viewport = Viewport::full(256, 256);
 //! cam.refine(&h, &look.view(viewport.width, viewport.height), &RefineParams::default())?;
 //! let colours = vec![[0.8, 0.7, 0.6, 1.0]; h.surface_count()];
-//! renderer.render(&ctx, &mut [CameraDraw {
-//!     target: 0,
-//!     viewport,
-//!     view_proj: look.view_projection(viewport.aspect()),
-//!     vertices: &vertices,
-//!     indices: &mut indices,
-//!     source: IndexSource::Camera { hierarchy: &h, camera: &cam },
-//!     colours: &colours,
-//!     materials: None,
-//!     refine_morphs: None,
-//!     morph: None,
-//! }])?;
+//! let slot = renderer.begin_frame(&ctx)?;
+//! indices.fill(&ctx, slot, IndexSource::camera(&h, &cam))?;
+//! let view_proj = look.view_projection(viewport.aspect());
+//! let camera = RecordCamera::new(viewport, view_proj, &vertices, &indices).colours(&colours);
+//! renderer.render(&ctx, &[(0, camera)])?;
 //! let image = renderer.read_target(&ctx, 0)?;
 //! assert_eq!(image.pixels.len(), 256 * 256 * 4);
 //! renderer.destroy(&ctx)?;
@@ -107,10 +102,11 @@ mod validation;
 pub use buffer::{Buffer, BufferDesc};
 pub use camera_morphs::{CameraMorphs, MorphStage};
 pub use caveclod_core::LookAt;
-pub use device::{Context, HeadlessDesc, HostDevice, SharedAllocator};
+pub use device::headless::HeadlessDesc;
+pub use device::{Context, HostDevice, SharedAllocator};
 pub use error::{Error, Result};
 pub use fault::Faults;
-pub use frame::{CameraDraw, FrameStats, Renderer, RendererDesc};
+pub use frame::{FrameStats, Renderer, RendererDesc};
 pub use geomorph::Geomorph;
 pub use indices::{CameraIndices, IndexSource};
 pub use material::{MaterialSet, SurfaceMaterial};

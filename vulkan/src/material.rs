@@ -261,13 +261,12 @@ pub struct MaterialSet {
 }
 
 impl MaterialSet {
-    /// Writes one set per surface of `surfaces`, for `recorder`'s pipelines.
-    pub fn new(
+    /// [`MaterialSet::new`](crate::MaterialSet::new) over the recorder's bindings `b`.
+    pub(crate) fn with_bindings(
         ctx: &Context,
-        recorder: &crate::Recorder,
+        b: &Bindings,
         surfaces: &[SurfaceMaterial<'_>],
     ) -> Result<Self> {
-        let b = recorder.bindings();
         let count = u32::try_from(surfaces.len().max(1))
             .map_err(|_| Error::InvalidArgument("too many surfaces for a material set".into()))?;
         let pool = pool(ctx, count)?;

@@ -30,7 +30,7 @@ use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush, MorphSlotsPush, Mor
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::mesh::VERTEX_STRIDE;
-use crate::record::{Rendering, TargetFormats};
+use crate::record::target::{Rendering, TargetFormats};
 
 /// The committed SPIR-V module.
 pub(crate) const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");
@@ -177,46 +177,7 @@ impl DrawPipeline {
             stage(vk::ShaderStageFlags::VERTEX, module, vs),
             stage(vk::ShaderStageFlags::FRAGMENT, module, entry::DRAW_FS),
         ];
-        let per_vertex = |binding| vk::VertexInputBindingDescription {
-            binding,
-            stride: VERTEX_STRIDE,
-            input_rate: vk::VertexInputRate::VERTEX,
-        };
-        // Position, normal, uv of a `Vertex` in `binding` at locations `first..first + 3`.
-        let vertex = |binding, first| {
-            [
-                attribute(first, binding, vk::Format::R32G32B32_SFLOAT, 0),
-                attribute(first + 1, binding, vk::Format::R32G32B32_SFLOAT, 12),
-                attribute(first + 2, binding, vk::Format::R32G32_SFLOAT, 24),
-            ]
-        };
-        let (bindings, attributes) = match vertex_stage {
-            VertexStage::Draw => {
-                // Binding 1: the vertex colours, RGBA8 (stride set when binding: 4, or 0
-                // for one white colour).
-                let colours = vk::VertexInputBindingDescription {
-                    binding: 1,
-                    stride: 4,
-                    input_rate: vk::VertexInputRate::VERTEX,
-                };
-                let mut attributes = vertex(0, 0).to_vec();
-                attributes.push(attribute(3, 1, vk::Format::R8G8B8A8_UNORM, 0));
-                (vec![per_vertex(0), colours], attributes)
-            }
-            VertexStage::Geomorph => {
-                let mut attributes = vertex(0, 0).to_vec();
-                attributes.extend(vertex(1, 3));
-                attributes.push(attribute(6, 2, vk::Format::R32G32B32A32_SFLOAT, 0));
-                attributes.push(attribute(7, 2, vk::Format::R32_SFLOAT, 16));
-                let instance = vk::VertexInputBindingDescription {
-                    binding: 2,
-                    stride: std::mem::size_of::<MorphInstance>() as u32,
-                    input_rate: vk::VertexInputRate::INSTANCE,
-                };
-                (vec![per_vertex(0), per_vertex(1), instance], attributes)
-            }
-            VertexStage::Morphing => (Vec::new(), Vec::new()),
-        };
+        let (bindings, attributes) = vertex_input(vertex_stage);
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&bindings)
             .vertex_attribute_descriptions(&attributes);
@@ -248,18 +209,7 @@ impl DrawPipeline {
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        // The vertex-colour stride is set per draw (Vulkan 1.3 core dynamic state), so one
-        // pipeline serves meshes with and without colours.
-        let dynamic_states = match vertex_stage {
-            VertexStage::Draw => vec![
-                vk::DynamicState::VIEWPORT,
-                vk::DynamicState::SCISSOR,
-                vk::DynamicState::VERTEX_INPUT_BINDING_STRIDE,
-            ],
-            VertexStage::Geomorph | VertexStage::Morphing => {
-                vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR]
-            }
-        };
+        let dynamic_states = dynamic_states(vertex_stage);
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let colour_formats = [target.formats.colour];
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
@@ -468,5 +418,72 @@ fn attribute(
         binding,
         format,
         offset,
+    }
+}
+
+/// The vertex bindings and attributes of `vertex_stage`: binding 0 the vertices (position,
+/// normal, uv), plus the colours (drawing) or the fine ends and the instances
+/// (geomorphing); the morphing stage reads its vertices from storage buffers instead.
+fn vertex_input(
+    vertex_stage: VertexStage,
+) -> (
+    Vec<vk::VertexInputBindingDescription>,
+    Vec<vk::VertexInputAttributeDescription>,
+) {
+    let per_vertex = |binding| vk::VertexInputBindingDescription {
+        binding,
+        stride: VERTEX_STRIDE,
+        input_rate: vk::VertexInputRate::VERTEX,
+    };
+    // Position, normal, uv of a `Vertex` in `binding` at locations `first..first + 3`.
+    let vertex = |binding, first| {
+        [
+            attribute(first, binding, vk::Format::R32G32B32_SFLOAT, 0),
+            attribute(first + 1, binding, vk::Format::R32G32B32_SFLOAT, 12),
+            attribute(first + 2, binding, vk::Format::R32G32_SFLOAT, 24),
+        ]
+    };
+    match vertex_stage {
+        VertexStage::Draw => {
+            // Binding 1: the vertex colours, RGBA8 (stride set when binding: 4, or 0
+            // for one white colour).
+            let colours = vk::VertexInputBindingDescription {
+                binding: 1,
+                stride: 4,
+                input_rate: vk::VertexInputRate::VERTEX,
+            };
+            let mut attributes = vertex(0, 0).to_vec();
+            attributes.push(attribute(3, 1, vk::Format::R8G8B8A8_UNORM, 0));
+            (vec![per_vertex(0), colours], attributes)
+        }
+        VertexStage::Geomorph => {
+            let mut attributes = vertex(0, 0).to_vec();
+            attributes.extend(vertex(1, 3));
+            attributes.push(attribute(6, 2, vk::Format::R32G32B32A32_SFLOAT, 0));
+            attributes.push(attribute(7, 2, vk::Format::R32_SFLOAT, 16));
+            let instance = vk::VertexInputBindingDescription {
+                binding: 2,
+                stride: std::mem::size_of::<MorphInstance>() as u32,
+                input_rate: vk::VertexInputRate::INSTANCE,
+            };
+            (vec![per_vertex(0), per_vertex(1), instance], attributes)
+        }
+        VertexStage::Morphing => (Vec::new(), Vec::new()),
+    }
+}
+
+/// The dynamic states of `vertex_stage`'s pipelines.
+fn dynamic_states(vertex_stage: VertexStage) -> Vec<vk::DynamicState> {
+    // The vertex-colour stride is set per draw (Vulkan 1.3 core dynamic state), so one
+    // pipeline serves meshes with and without colours.
+    match vertex_stage {
+        VertexStage::Draw => vec![
+            vk::DynamicState::VIEWPORT,
+            vk::DynamicState::SCISSOR,
+            vk::DynamicState::VERTEX_INPUT_BINDING_STRIDE,
+        ],
+        VertexStage::Geomorph | VertexStage::Morphing => {
+            vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR]
+        }
     }
 }

@@ -17,59 +17,30 @@
 //! skews their ratio; a paired measurement after them alternates one waited-for frame of
 //! each, 100 times, and prints the medians and their ratio (`paired frame latency: ...`).
 //! A second paired measurement compares four cameras through the headless `Renderer` with
-//! the same four through the record path as a host drives it (`host.rs`: its own images,
-//! command buffers, fences, barriers and dynamic rendering; `record path / renderer: ...`).
+//! the same four through the record path as a host drives it (`record_path.rs`, on
+//! caveclod-host's target and frames: the host's own images, command buffers, fences,
+//! barriers and dynamic rendering; `record path / renderer: ...`). The device and
+//! caveclod's context come from caveclod-host's `Host` too, validation off.
 //! `cargo bench -p caveclod-benches --bench render`; `CAVECLOD_BENCH_RENDER_SIZE=N` changes
 //! the terrain. Without `--bench` (as `cargo test --benches` runs it) each benchmark runs
 //! once on a small terrain.
 
 use std::time::{Duration, Instant};
 
-use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_host::{Host, HostDesc};
 use caveclod_tests::{bake, meshes};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Renderer, RendererDesc,
-    VertexBuffer, Viewport,
+    CameraIndices, Context, RecordCamera, Renderer, RendererDesc, VertexBuffer, Viewport,
 };
 use criterion::Criterion;
 
-mod host;
+mod record_path;
+mod scene;
+
+use scene::{look, or_exit, Scene, HEIGHT, WIDTH};
 
 const SEED: u64 = 7;
-const WIDTH: u32 = 960;
-const HEIGHT: u32 = 540;
-const COLOURS: [[f32; 4]; 2] = [[0.9, 0.6, 0.3, 1.0], [0.3, 0.7, 0.9, 1.0]];
-
-fn or_exit<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
-    match r {
-        Ok(x) => x,
-        Err(e) => {
-            eprintln!("render bench: {what}: {e}");
-            std::process::exit(1)
-        }
-    }
-}
-
-/// Camera `i` of four, around and above the middle of a `size` terrain.
-fn look(i: usize, size: f32) -> LookAt {
-    let c = Vec3::new(size * 0.5, 0.0, size * 0.5);
-    let angle = 0.4 + i as f32 * std::f32::consts::FRAC_PI_2;
-    let (distance, height) = [(0.45, 0.25), (0.35, 0.15), (0.6, 0.35), (0.3, 0.2)][i % 4];
-    LookAt {
-        eye: c + Vec3::new(
-            angle.sin() * distance * size,
-            height * size,
-            angle.cos() * distance * size,
-        ),
-        target: c,
-        up: Vec3::Y,
-        fov_y: 60f32.to_radians(),
-        near: 0.01 * size,
-        far: 3.0 * size,
-    }
-}
-
 /// Camera states refined for `viewports` (camera `i` in `viewports[i]`).
 fn refined<'m>(
     h: &Hierarchy<'_>,
@@ -97,12 +68,22 @@ fn refined<'m>(
         .collect()
 }
 
-/// What every benchmark draws.
-struct Scene<'a> {
-    ctx: &'a Context,
-    h: &'a Hierarchy<'a>,
-    vertices: &'a VertexBuffer,
-    size: f32,
+/// One frame of `renderer`: the rings filled, the cameras drawn into target 0.
+fn render_frame(
+    scene: &Scene<'_>,
+    renderer: &mut Renderer,
+    indices: &mut [CameraIndices],
+    cams: &[CameraState<'_>],
+    viewports: &[Viewport],
+) -> u64 {
+    let slot = or_exit(renderer.begin_frame(scene.ctx), "begin frame");
+    scene.fill(slot, indices, cams);
+    let draws: Vec<(usize, RecordCamera<'_>)> = scene
+        .cameras(indices, viewports)
+        .into_iter()
+        .map(|c| (0, c))
+        .collect();
+    or_exit(renderer.render(scene.ctx, &draws), "render").index_bytes
 }
 
 /// One camera set's renderer and index buffers, for the paired measurement.
@@ -141,27 +122,14 @@ impl<'s, 'c> Setup<'s, 'c> {
     /// One frame, waited for: its latency.
     fn frame(&mut self, scene: &Scene<'_>) -> Duration {
         let t = Instant::now();
-        let mut draws: Vec<CameraDraw<'_, '_>> = self
-            .indices
-            .iter_mut()
-            .enumerate()
-            .map(|(i, ind)| CameraDraw {
-                target: 0,
-                viewport: self.viewports[i],
-                view_proj: look(i, scene.size).view_projection(self.viewports[i].aspect()),
-                vertices: scene.vertices,
-                indices: ind,
-                source: IndexSource::Camera {
-                    hierarchy: scene.h,
-                    camera: &self.cams[i],
-                },
-                colours: &COLOURS,
-                materials: None,
-                refine_morphs: None,
-                morph: None,
-            })
-            .collect();
-        or_exit(self.renderer.render(scene.ctx, &mut draws), "render");
+        let (cams, viewports) = (self.cams, self.viewports);
+        render_frame(
+            scene,
+            &mut self.renderer,
+            &mut self.indices,
+            cams,
+            viewports,
+        );
         or_exit(self.renderer.wait(scene.ctx), "wait");
         t.elapsed()
     }
@@ -201,12 +169,7 @@ fn bench_frames(
     cams: &[CameraState<'_>],
     viewports: &[Viewport],
 ) -> u64 {
-    let Scene {
-        ctx,
-        h,
-        vertices,
-        size,
-    } = *scene;
+    let Scene { ctx, h, .. } = *scene;
     let mut renderer = or_exit(
         Renderer::new(
             ctx,
@@ -224,27 +187,7 @@ fn bench_frames(
     let mut index_bytes = 0;
     c.bench_function(name, |b| {
         b.iter(|| {
-            let mut draws: Vec<CameraDraw<'_, '_>> = indices
-                .iter_mut()
-                .enumerate()
-                .map(|(i, ind)| CameraDraw {
-                    target: 0,
-                    viewport: viewports[i],
-                    view_proj: look(i, size).view_projection(viewports[i].aspect()),
-                    vertices,
-                    indices: ind,
-                    source: IndexSource::Camera {
-                        hierarchy: h,
-                        camera: &cams[i],
-                    },
-                    colours: &COLOURS,
-                    materials: None,
-                    refine_morphs: None,
-                    morph: None,
-                })
-                .collect();
-            let stats = or_exit(renderer.render(ctx, &mut draws), "render");
-            index_bytes = stats.index_bytes;
+            index_bytes = render_frame(scene, &mut renderer, &mut indices, cams, viewports);
         })
     });
     or_exit(renderer.wait(ctx), "wait");
@@ -270,13 +213,14 @@ fn main() {
         mesh.triangles.len(),
         t.elapsed().as_secs_f64()
     );
-    let ctx = or_exit(
-        Context::headless(&HeadlessDesc {
+    let host = or_exit(
+        Host::headless(&HostDesc {
             validation: false,
-            prefer_lavapipe: true,
+            ..HostDesc::default()
         }),
         "no Vulkan device",
     );
+    let ctx = or_exit(host.context(), "context");
     eprintln!("device: {}", ctx.device_name());
     let vertices = or_exit(
         VertexBuffer::from_hierarchy(&ctx, "terrain", &h),
@@ -335,15 +279,15 @@ fn main() {
         tb / ta.max(1e-12)
     );
     // The same four cameras through the record path, driven the way a host does.
-    let mut h4 = host::HostSetup::new(&ctx, &four, &quadrants);
-    let (tr, th) = paired(rounds, || b.frame(&scene), || h4.frame(&scene));
+    let mut h4 = record_path::HostFrames::new(&host, &scene, &four, &quadrants);
+    let (tr, th) = paired(rounds, || b.frame(&scene), || h4.frame(&host, &scene));
     println!(
         "record path / renderer, 4 cameras split, {rounds} alternating rounds (median): renderer {:.2} ms, record path {:.2} ms; ratio {:.2}",
         tr * 1e3,
         th * 1e3,
         th / tr.max(1e-12)
     );
-    h4.destroy(&ctx);
+    h4.destroy(&host, &ctx);
     a.destroy(&ctx);
     b.destroy(&ctx);
     println!("vertex buffer uploads: {}", ctx.vertex_uploads());
@@ -351,4 +295,5 @@ fn main() {
     drop(four);
     or_exit(vertices.destroy(&ctx), "destroy vertices");
     or_exit(ctx.destroy(), "destroy context");
+    or_exit(host.destroy(), "destroy host");
 }

@@ -11,16 +11,16 @@ use caveclod_bake::pipeline::{
     build_file, build_file_spilled, build_out_of_core, Built, SpilledBuild, Stage,
 };
 use caveclod_bake::report::BakeInfo;
-use caveclod_cli::info as report;
-use caveclod_cli::outputs;
 use caveclod_core::format::ExtraSection;
 use caveclod_core::Hierarchy;
+use caveclod_io::{ClodBytes, ClodFile};
 use serde_json::{json, Map, Value};
+use std::path::Path;
 
 use super::progress::Progress;
 use crate::args::BakeArgs;
-use caveclod_cli::mapped::ClodBytes;
-use std::path::Path;
+use crate::info as report;
+use crate::outputs;
 
 /// What a bake made, in core or out of core, up to the arrays.
 struct Made {
@@ -141,7 +141,7 @@ pub fn bake(a: &BakeArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// [`super::with_hierarchy`] for the report on a file that `--gmesh` wrote from arrays
+/// [`super::load::with_hierarchy`] for the report on a file that `--gmesh` wrote from arrays
 /// validated in memory (the streamed writes report from their own read-back instead), as
 /// large as the bake made it: a mapped file's pages are handed back as the validation and the report read them
 /// ([`caveclod_bake::clod_file::with_pages_released`]), so the report does not hold the
@@ -150,14 +150,12 @@ fn report_released<R>(
     path: &Path,
     f: impl FnOnce(&Hierarchy<'_>) -> Result<R, String>,
 ) -> Result<R, String> {
-    let file = ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file = ClodFile::open(path).map_err(|e| e.to_string())?;
     let report = || {
-        let h = file
-            .hierarchy()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let h = file.hierarchy().map_err(|e| e.to_string())?;
         f(&h)
     };
-    match &file {
+    match file.bytes() {
         ClodBytes::Mapped(map) => caveclod_bake::clod_file::with_pages_released(map, report),
         ClodBytes::Owned(_) => report(),
     }

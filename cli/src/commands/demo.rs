@@ -1,6 +1,6 @@
 //! `caveclod demo`: the whole demo, then its ratios against the targets.
 
-use caveclod_cli::demo::{self, DemoOptions};
+use crate::demo::{self, DemoOptions};
 
 use crate::args::DemoArgs;
 

@@ -3,9 +3,9 @@
 
 use caveclod_bake::export::{obj_export, Level};
 
-use caveclod_cli::outputs;
+use crate::outputs;
 
-use super::with_hierarchy;
+use super::load::with_hierarchy;
 use crate::args::{ExportArgs, LevelArg};
 
 /// Writes the chosen level as OBJ (and its MTL and images), each file replaced only once

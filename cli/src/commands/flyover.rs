@@ -1,10 +1,10 @@
 //! `caveclod flyover`: the CAVECLOD paper's experiment over a .clod file or a heightfield.
 
+use crate::flyover::{fly, Flyover, FlyoverOptions, Mode};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::bake_file;
-use caveclod_cli::flyover::{fly, Flyover, FlyoverOptions, Mode};
 
-use super::with_hierarchy;
+use super::load::with_hierarchy;
 use crate::args::FlyoverArgs;
 
 /// Flies the cameras over the file (or the heightfield baked in memory) and prints the report.

@@ -1,15 +1,15 @@
 //! `caveclod generate`: a procedural terrain as binary PLY, streamed to disk.
 
-use caveclod_cli::outputs;
+use crate::outputs;
 
-use super::progress_bar;
+use super::progress::progress_bar;
 use crate::args::GenerateArgs;
 
 /// Writes the terrain with a progress bar and prints its size.
 pub fn generate(a: &GenerateArgs) -> Result<(), String> {
     outputs::check_file_output(&a.output, &["ply"], "binary PLY", &[])?;
     let bar = progress_bar("{spinner} writing [{bar:30}] {percent}% ({elapsed})")?;
-    let grid = caveclod_tests::generate::terrain(&a.output, a.triangles, &mut |done, total| {
+    let grid = caveclod_bake::generate::terrain(&a.output, a.triangles, &mut |done, total| {
         bar.set_length(total);
         bar.set_position(done);
     });

@@ -6,9 +6,7 @@ use std::cell::Cell;
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
-use indicatif::ProgressBar;
-
-use super::progress_bar;
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Seconds between plain progress lines unless `CAVECLOD_PROGRESS_INTERVAL` sets them.
 const LINE_INTERVAL: f64 = 2.0;
@@ -121,6 +119,17 @@ fn grouped(n: u64) -> String {
         out.push(c);
     }
     out
+}
+
+/// A progress bar drawn with `template`.
+pub fn progress_bar(template: &str) -> Result<ProgressBar, String> {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(template)
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
+    );
+    Ok(bar)
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, LookAt, RefineParams};
 
-use super::with_hierarchy;
+use super::load::with_hierarchy;
 use crate::args::RefineArgs;
 
 /// The viewport of the comparison, in pixels.

@@ -1,15 +1,14 @@
 //! `caveclod render`: one frame of orbiting cameras, read back and written as PNG.
 
-use caveclod_cli::outputs;
-use caveclod_cli::snapshot::{
-    render_octree_snapshot, render_snapshot, Layout, Snapshot, SnapshotDesc,
-};
 use caveclod_core::format::materials::TextureRef;
 use caveclod_core::{Hierarchy, Octree};
+use caveclod_host::write_png;
 use caveclod_vulkan::{Context, HeadlessDesc};
 
-use super::with_hierarchy;
+use super::load::with_hierarchy;
 use crate::args::RenderArgs;
+use crate::outputs;
+use crate::snapshot::{render_octree_snapshot, render_snapshot, Layout, Snapshot, SnapshotDesc};
 
 /// Renders the file headless, writes the PNG files and prints what each camera drew; the
 /// validation layer's messages, if any, make it fail.
@@ -129,7 +128,7 @@ fn write_images(snapshot: &Snapshot, a: &RenderArgs) -> Result<Vec<String>, Stri
     let mut written = Vec::new();
     for (image, name) in snapshot.images.iter().zip(image_names(a)) {
         let path = a.out.join(name);
-        caveclod_cli::snapshot::write_png(image, &path).map_err(|e| e.to_string())?;
+        write_png(image, &path).map_err(|e| e.to_string())?;
         written.push(path.display().to_string());
     }
     Ok(written)

@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use super::flights::refine_ms_all_cameras;
+use super::flights::{Flights, DISPLAY_FPS};
 use super::plots::{self, Series};
-use super::{Flights, DISPLAY_FPS};
 use crate::flyover::Flyover;
 
 /// Mean over cameras, per frame, of `pick(record)[frame]`.

@@ -6,12 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::snapshot::{palette, write_png};
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_host::{palette, write_png};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt,
-    MorphStage, Renderer, RendererDesc, VertexBuffer, Viewport,
+    CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt, MorphStage,
+    RecordCamera, Renderer, RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
 
 use crate::flyover::{clip, eye_at, routes, Ground, FOV_Y_DEG};
@@ -43,6 +43,7 @@ pub fn render_flight(
     Ok((files, device))
 }
 
+/// Flies the four cameras for `frames` frames and draws the frames in `shots`.
 fn draw(
     ctx: &Context,
     h: &Hierarchy<'_>,
@@ -50,12 +51,11 @@ fn draw(
     shots: &[usize],
     out: &Path,
 ) -> Result<Vec<PathBuf>, String> {
-    let err = |e: caveclod_vulkan::Error| e.to_string();
     let ground = Ground::new(h);
     let speed = ground.size / 600.0;
     let (near, far) = clip(&ground);
     let all = routes();
-    let viewports = Viewport::split_screen(SIZE.0, SIZE.1, 4).map_err(err)?;
+    let viewports = Viewport::split_screen(SIZE.0, SIZE.1, 4).map_err(|e| e.to_string())?;
     let config = CameraConfig::full(h).with_morphs(MAX_MORPHS);
     let words = CameraState::words_needed_for(h, &config);
     let mut memories: Vec<Vec<u32>> = (0..4).map(|_| vec![0u32; words]).collect();
@@ -63,52 +63,7 @@ fn draw(
     for m in memories.iter_mut() {
         cams.push(CameraState::with_config(h, m, &config).map_err(|e| e.to_string())?);
     }
-    let colours: Vec<[f32; 4]> = (0..h.surface_count()).map(palette).collect();
-    let vertices = VertexBuffer::from_hierarchy(ctx, "terrain", h).map_err(err)?;
-    let mut renderer = match Renderer::new(
-        ctx,
-        RendererDesc {
-            targets: vec![SIZE],
-            frames_in_flight: 1,
-            readback: true,
-            clear_colour: [0.55, 0.7, 0.9, 1.0],
-            geomorph: false,
-            refine_morphs: true,
-        },
-    ) {
-        Ok(r) => r,
-        Err(e) => {
-            vertices.destroy(ctx).map_err(err)?;
-            return Err(e.to_string());
-        }
-    };
-    let mut indices: Vec<CameraIndices> = (0..4)
-        .map(|i| CameraIndices::new(&format!("camera {i}"), h.surface_count(), 1))
-        .collect();
-    let mut morphs = Vec::with_capacity(4);
-    for i in 0..4 {
-        let name = format!("camera {i}");
-        let stage = MorphStage::Compute;
-        match CameraMorphs::new(
-            ctx,
-            renderer.recorder(),
-            &name,
-            &vertices,
-            stage,
-            MAX_MORPHS,
-            1,
-        ) {
-            Ok(m) => morphs.push(m),
-            Err(e) => {
-                let _ = renderer.destroy(ctx);
-                let _ = vertices.destroy(ctx);
-                morphs
-                    .into_iter()
-                    .for_each(|m: CameraMorphs| drop(m.destroy(ctx)));
-                return Err(e.to_string());
-            }
-        }
-    }
+    let mut gpu = Drawing::new(ctx, h).map_err(|e| e.to_string())?;
     let params = RefineParams::default();
     let mut written = Vec::new();
     let mut outcome = Ok(());
@@ -128,66 +83,136 @@ fn draw(
             .collect();
         // The first frame refines without morphs (`CameraState::refine`): there is no
         // picture before it to morph from.
-        let params = &params;
         for (i, cam) in cams.iter_mut().enumerate() {
-            if let Err(e) = cam.refine(
-                h,
-                &looks[i].view(viewports[i].width, viewports[i].height),
-                params,
-            ) {
+            let view = looks[i].view(viewports[i].width, viewports[i].height);
+            if let Err(e) = cam.refine(h, &view, &params) {
                 outcome = Err(format!("camera {i}, frame {f}: {e}"));
             }
         }
-        if outcome.is_err() || !shots.contains(&f) {
-            if outcome.is_err() {
-                break;
-            }
+        if outcome.is_err() {
+            break;
+        }
+        if !shots.contains(&f) {
             continue;
         }
-        let mut draws: Vec<CameraDraw<'_, '_>> = indices
-            .iter_mut()
-            .zip(morphs.iter_mut())
-            .enumerate()
-            .map(|(i, (ind, morphs))| CameraDraw {
-                target: 0,
-                viewport: viewports[i],
-                view_proj: looks[i].view_projection(viewports[i].aspect()),
-                vertices: &vertices,
-                indices: ind,
-                source: IndexSource::MorphedCamera {
-                    hierarchy: h,
-                    camera: &cams[i],
-                },
-                colours: &colours,
-                materials: None,
-                refine_morphs: Some(morphs),
-                morph: None,
-            })
-            .collect();
-        let image = renderer
-            .render(ctx, &mut draws)
-            .and_then(|_| renderer.read_target(ctx, 0));
-        match image {
-            Ok(image) => {
-                let path = out.join(format!("frame-{f:03}.png"));
-                if let Err(e) = write_png(&image, &path) {
-                    outcome = Err(e.to_string());
-                    break;
-                }
-                written.push(path);
-            }
+        let path = out.join(format!("frame-{f:03}.png"));
+        let shot = gpu
+            .shot(ctx, h, &cams, &looks, &viewports)
+            .map_err(|e| e.to_string())
+            .and_then(|image| write_png(&image, &path).map_err(|e| e.to_string()));
+        if let Err(e) = shot {
+            outcome = Err(e);
+            break;
+        }
+        written.push(path);
+    }
+    let cleanup = gpu.destroy(ctx);
+    outcome?;
+    cleanup.map_err(|e| e.to_string())?;
+    Ok(written)
+}
+
+/// What the shots draw with: the terrain's vertices, the renderer, and per camera its index
+/// ring and morph slots (blended by the compute stage).
+struct Drawing {
+    vertices: VertexBuffer,
+    renderer: Renderer,
+    indices: Vec<CameraIndices>,
+    morphs: Vec<CameraMorphs>,
+    colours: Vec<[f32; 4]>,
+}
+
+impl Drawing {
+    /// Uploads `h`'s vertices and makes the renderer (one frame in flight, read back) and
+    /// each camera's ring and morph slots; what was made is destroyed on an error.
+    fn new(ctx: &Context, h: &Hierarchy<'_>) -> caveclod_vulkan::Result<Self> {
+        let vertices = VertexBuffer::from_hierarchy(ctx, "terrain", h)?;
+        let desc = RendererDesc {
+            targets: vec![SIZE],
+            frames_in_flight: 1,
+            readback: true,
+            clear_colour: [0.55, 0.7, 0.9, 1.0],
+            geomorph: false,
+            refine_morphs: true,
+        };
+        let renderer = match Renderer::new(ctx, desc) {
+            Ok(r) => r,
             Err(e) => {
-                outcome = Err(e.to_string());
-                break;
+                let _ = vertices.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let mut gpu = Self {
+            vertices,
+            renderer,
+            indices: Vec::with_capacity(4),
+            morphs: Vec::with_capacity(4),
+            colours: (0..h.surface_count()).map(palette).collect(),
+        };
+        for i in 0..4 {
+            let name = format!("camera {i}");
+            gpu.indices
+                .push(CameraIndices::new(&name, h.surface_count(), 1));
+            let recorder = gpu.renderer.recorder();
+            let stage = MorphStage::Compute;
+            match CameraMorphs::new(ctx, recorder, &name, &gpu.vertices, stage, MAX_MORPHS, 1) {
+                Ok(m) => gpu.morphs.push(m),
+                Err(e) => {
+                    let _ = gpu.destroy(ctx);
+                    return Err(e);
+                }
             }
         }
+        Ok(gpu)
     }
-    let cleanup = renderer
-        .destroy(ctx)
-        .and_then(|()| morphs.into_iter().try_for_each(|m| m.destroy(ctx)))
-        .and_then(|()| vertices.destroy(ctx))
-        .and_then(|()| indices.into_iter().try_for_each(|i| i.destroy(ctx)));
-    outcome?;
-    cleanup.map_err(err)?;
-    Ok(written)
+
+    /// One frame of the cameras, each filling its ring and morph slots from its morphed
+    /// front, drawn into its quadrant and read back.
+    fn shot(
+        &mut self,
+        ctx: &Context,
+        h: &Hierarchy<'_>,
+        cams: &[CameraState<'_>],
+        looks: &[LookAt],
+        viewports: &[Viewport],
+    ) -> caveclod_vulkan::Result<RgbaImage> {
+        let slot = self.renderer.begin_frame(ctx)?;
+        for ((ind, morphs), cam) in self.indices.iter_mut().zip(&mut self.morphs).zip(cams) {
+            ind.fill(
+                ctx,
+                slot,
+                IndexSource::MorphedCamera {
+                    hierarchy: h,
+                    camera: cam,
+                },
+            )?;
+            morphs.fill(slot, h.vertices(), cam)?;
+        }
+        let draws: Vec<(usize, RecordCamera<'_>)> = self
+            .indices
+            .iter()
+            .zip(&self.morphs)
+            .enumerate()
+            .map(|(i, (ind, morphs))| {
+                let view_proj = looks[i].view_projection(viewports[i].aspect());
+                let camera = RecordCamera::new(viewports[i], view_proj, &self.vertices, ind)
+                    .colours(&self.colours)
+                    .refine_morphs(morphs);
+                (0, camera)
+            })
+            .collect();
+        self.renderer.render(ctx, &draws)?;
+        self.renderer.read_target(ctx, 0)
+    }
+
+    /// Destroys the morph slots and rings, the renderer (after its frames) and the
+    /// vertices.
+    fn destroy(self, ctx: &Context) -> caveclod_vulkan::Result<()> {
+        let waited = self.renderer.wait(ctx);
+        let morphs = self.morphs.into_iter().try_for_each(|m| m.destroy(ctx));
+        let indices = self.indices.into_iter().try_for_each(|i| i.destroy(ctx));
+        let renderer = self.renderer.destroy(ctx);
+        let vertices = self.vertices.destroy(ctx);
+        waited.and(morphs).and(indices).and(renderer).and(vertices)
+    }
 }

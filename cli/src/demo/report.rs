@@ -6,7 +6,8 @@ use std::path::Path;
 use caveclod_bake::baked::write_atomically;
 
 use super::flights::{emit_ms_all_cameras, refine_ms_all_cameras};
-use super::{shown, Flights, Loaded, Ratios, DISPLAY_FPS, SEGMENT, THREADS_ROUNDS};
+use super::flights::{Flights, Ratios, DISPLAY_FPS, SEGMENT, THREADS_ROUNDS};
+use super::inputs::{shown, Loaded};
 
 /// Writes the per-frame CSV.
 pub(super) fn write_csv(path: &Path, f: &Flights) -> Result<(), String> {
@@ -179,8 +180,8 @@ fn huge_pages(s: &mut String, terrain: &Loaded) {
         "The terrain's hierarchy ({} bytes) lies in memory of which the system backs {} with \
          huge pages, as are the flights' camera states where it grants them (transparent huge \
          pages, asked for with `madvise`; see `aligned.rs`).\n",
-        terrain.bytes.len(),
-        terrain.bytes.huge_page_bytes().map_or(
+        terrain.bytes().len(),
+        terrain.bytes().huge_page_bytes().map_or(
             "an unknown amount (not Linux)".to_string(),
             |b| format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64)
         )

@@ -3,21 +3,14 @@
 
 use std::fmt::Write as _;
 
-use super::Flights;
+use super::flights::{Flights, REGULATED_TARGET, SPEED_LIMIT_PX_S};
 use crate::flyover::pilot::{HELD_WITHIN, SETTLING_FRAMES};
 use crate::flyover::Flyover;
 
-/// The polygon target of the demo's regulated flight.
-pub const REGULATED_TARGET: u32 = 20_000;
 /// Acceptance: the largest on-screen move per frame of a vertex, in pixels.
 const MAX_JUMP_PX: f32 = 1.0;
 /// Acceptance: the 99th percentile of the on-screen moves per frame, in pixels.
 const P99_JUMP_PX: f32 = 0.25;
-/// The screen speed limit of the demo's speed-limited flight, in pixels per second
-/// ([`caveclod_core::RefineParams::morph_speed_px_s`]): 0.15 px a frame at 60 Hz, under the
-/// popping acceptance's 99th percentile. The defaults set none, because a long slide then
-/// takes many seconds (a 300-pixel one, 33 s) and the row shows what that costs.
-pub const SPEED_LIMIT_PX_S: f32 = 9.0;
 /// Acceptance: the share of frames after the first 30 within 5% of the target.
 const HELD_SHARE: f64 = 0.95;
 

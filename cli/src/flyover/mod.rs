@@ -484,18 +484,9 @@ pub struct Sizings(Vec<(FlyoverOptions, Prepared)>);
 
 /// Flies every one of `options` (per-camera modes only) over `h` interleaved in segments of
 /// `segment` frames ([`fly::fly_interleaved`]), so that flights compared with each other are
-/// measured under the same load. Each is sized by a sizing flight first, as [`fly()`] sizes it;
-/// options given more than once (flown again, with fresh states) share theirs.
-pub fn fly_interleaved(
-    h: &Hierarchy<'_>,
-    options: &[FlyoverOptions],
-    segment: usize,
-) -> Result<Vec<Flyover>, String> {
-    fly_interleaved_sharing(h, options, segment, &mut Sizings::default())
-}
-
-/// [`fly_interleaved`], with the sizing flights of `sizings` (those of earlier calls) reused
-/// and the new ones added to it.
+/// measured under the same load. Each is sized by a sizing flight first, as [`fly()`] sizes it,
+/// unless `sizings` (those of earlier calls) holds one for the same options; new sizings are
+/// added to it, and options given more than once (flown again, with fresh states) share theirs.
 pub fn fly_interleaved_sharing(
     h: &Hierarchy<'_>,
     options: &[FlyoverOptions],

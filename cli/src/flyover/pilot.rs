@@ -11,7 +11,7 @@ use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, Regulato
 
 use super::fly::{self, Compaction, Flight, IndexBuffers, Record};
 use super::popping::{PopMeter, PopTables, Screen};
-use crate::aligned::CameraPool;
+use caveclod_io::CameraPool;
 
 /// Frames at the start of a regulated flight that the regulation figures leave out: the
 /// first refines from the base mesh, and the regulator needs a few to find the tolerance.

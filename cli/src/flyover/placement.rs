@@ -29,11 +29,6 @@ impl Cores {
         self.0.len()
     }
 
-    /// Always false: there are at least two.
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
-
     /// Pins the calling thread to core `k` (of [`len`](Self::len)); `false` if the system
     /// refused, and the thread then runs where the system puts it.
     pub fn pin(&self, k: usize) -> bool {

@@ -18,55 +18,24 @@ use caveclod_core::{
 };
 use proptest::test_runner::Config as ProptestConfig;
 
+/// Owned bytes in 64-byte aligned memory, as engines on a std platform load a file
+/// (caveclod-io's holder; small buffers use no huge pages, so Miri runs them).
+pub use caveclod_io::AlignedBytes;
+
 /// The golden file's bytes as `include_bytes!` gives them (alignment 1).
 pub static GOLDEN: &[u8] = include_bytes!("../data/terrain6.clod");
 
-/// Bytes in 8-byte aligned storage: what a reader gets from a `Vec<u64>` or an allocator.
-#[derive(Clone)]
-pub struct Aligned {
-    words: Vec<u64>,
-    len: usize,
-}
-
-impl Aligned {
-    /// A copy of `bytes`, starting at an 8-byte aligned address.
-    pub fn new(bytes: &[u8]) -> Self {
-        Self::with_offset(bytes, 0)
-    }
-
-    /// A copy of `bytes` starting `offset` bytes after an 8-byte aligned address.
-    pub fn with_offset(bytes: &[u8], offset: usize) -> Self {
-        let mut a = Self {
-            words: vec![0; (offset + bytes.len()).div_ceil(8)],
-            len: offset + bytes.len(),
-        };
-        a.all_mut()[offset..].copy_from_slice(bytes);
-        a
-    }
-
-    fn all_mut(&mut self) -> &mut [u8] {
-        &mut bytemuck::cast_slice_mut(&mut self.words)[..self.len]
-    }
-
-    /// The bytes from `offset` on.
-    pub fn at(&self, offset: usize) -> &[u8] {
-        &bytemuck::cast_slice(&self.words)[offset..self.len]
-    }
-
-    /// All the bytes.
-    pub fn bytes(&self) -> &[u8] {
-        self.at(0)
-    }
-
-    /// All the bytes, mutably.
-    pub fn bytes_mut(&mut self) -> &mut [u8] {
-        self.all_mut()
-    }
+/// `bytes` copied to start `offset` bytes after a cache line (read them as `&a[offset..]`):
+/// the buffer of a reader that does not align what it loads.
+pub fn with_offset(bytes: &[u8], offset: usize) -> AlignedBytes {
+    let mut a = AlignedBytes::zeroed(offset + bytes.len());
+    a[offset..].copy_from_slice(bytes);
+    a
 }
 
 /// The golden file in aligned memory.
-pub fn golden() -> Aligned {
-    Aligned::new(GOLDEN)
+pub fn golden() -> AlignedBytes {
+    AlignedBytes::from_slice(GOLDEN)
 }
 
 /// A property test's configuration: `cases` cases; under miri `miri_cases`, and no
@@ -85,7 +54,7 @@ pub fn proptest_config(cases: u32, miri_cases: u32) -> ProptestConfig {
 
 /// The golden file's hierarchy, over one aligned copy of the file per test binary.
 pub fn golden_hierarchy() -> Hierarchy<'static> {
-    static FILE: OnceLock<Aligned> = OnceLock::new();
+    static FILE: OnceLock<AlignedBytes> = OnceLock::new();
     Hierarchy::from_bytes(FILE.get_or_init(golden).bytes()).expect("golden file")
 }
 
@@ -107,9 +76,9 @@ pub fn fix_checksum(bytes: &mut [u8]) {
     set_header(bytes, &h);
 }
 
-/// The tests' generator, shared with the `caveclod-tests` package by path: these tests must
-/// not depend on that package (Miri runs them, and it builds the baker).
-#[path = "../../../tests/src/rng.rs"]
+/// The generators' and tests' random numbers, shared with `caveclod-bake` by path: these
+/// tests must not depend on the baker (Miri runs them).
+#[path = "../../../bake/src/generate/rng.rs"]
 mod rng;
 
 /// SplitMix64: the tests need reproducible corruption, not statistical quality.

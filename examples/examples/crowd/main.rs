@@ -33,6 +33,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use caveclod_bake::baked::Baked;
+use caveclod_bake::generate::meshes::{self, Rng};
+use caveclod_bake::generate::to_mesh;
 use caveclod_bake::gmesh::GMeshData;
 use caveclod_bake::gmesh::{build as build_gmesh, GMeshOptions};
 use caveclod_bake::import::ImportOptions;
@@ -43,22 +45,17 @@ use caveclod_core::gmesh::{
     control, scene_polygons, t_from_distance, ControlEntry, ControlParams, LodInstance, LodModel,
     Partitions,
 };
-use caveclod_core::{Hierarchy, LookAt};
-use caveclod_tests::meshes::{self, Rng};
-use caveclod_tests::to_mesh;
+use caveclod_core::Hierarchy;
 
+mod flight;
 mod plot;
 mod render;
+
+use flight::{CameraPath, Run, CROWD_RADIUS, D_FAR, D_NEAR};
 
 const USAGE: &str = "usage: crowd [--mesh FILE] [--instances N] [--frames F] [--budget P] \
 [--epsilon E] [--path circle|volatile|both] [--levels L] [--out DIR] [--json] [--no-render]";
 
-/// The crowd stands on a disc of this radius (instances are scaled to radius 1).
-const CROWD_RADIUS: f32 = 100.0;
-/// Full detail up to here...
-const D_NEAR: f32 = 5.0;
-/// ...coarsest beyond here.
-const D_FAR: f32 = 250.0;
 /// Frames a controlled run needs to settle from the uncontrolled start.
 const WARM_UP: usize = 20;
 
@@ -74,54 +71,6 @@ struct Args {
     out: PathBuf,
     json: bool,
     render: bool,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum CameraPath {
-    Circle,
-    Volatile,
-}
-
-impl CameraPath {
-    fn name(self) -> &'static str {
-        match self {
-            Self::Circle => "circle",
-            Self::Volatile => "volatile",
-        }
-    }
-
-    /// Eye, target and up at `s ∈ [0, 1)` of the path.
-    fn at(self, s: f32) -> (Vec3, Vec3, Vec3) {
-        match self {
-            Self::Circle => {
-                let a = s * std::f32::consts::TAU;
-                let r = CROWD_RADIUS * 1.3;
-                (
-                    Vec3::new(r * a.cos(), 40.0, r * a.sin()),
-                    Vec3::ZERO,
-                    Vec3::Y,
-                )
-            }
-            Self::Volatile => {
-                let x = -2.0 * CROWD_RADIUS + 4.0 * CROWD_RADIUS * s;
-                let eye = Vec3::new(x, 0.8 * CROWD_RADIUS, 0.0);
-                (eye, eye - Vec3::Y, Vec3::Z)
-            }
-        }
-    }
-
-    /// The camera at `s ∈ [0, 1)` of the path, as the runs and the pictures see it.
-    fn look_at(self, s: f32) -> LookAt {
-        let (eye, target, up) = self.at(s);
-        LookAt {
-            eye,
-            target,
-            up,
-            fov_y: 1.0,
-            near: 0.5,
-            far: 1000.0,
-        }
-    }
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -174,15 +123,6 @@ fn parse_args() -> Result<Args, String> {
         ));
     }
     Ok(a)
-}
-
-/// One run's per-frame figures.
-struct Run {
-    label: &'static str,
-    cap: Option<f32>,
-    polygons: Vec<u64>,
-    bias: Vec<f32>,
-    visible: Vec<usize>,
 }
 
 /// Places the crowd: uniform on the disc, deterministic.

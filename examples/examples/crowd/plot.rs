@@ -6,7 +6,7 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::{CameraPath, Run};
+use crate::flight::{CameraPath, Run};
 
 /// The chart's error type.
 type PlotError = Box<dyn std::error::Error>;

@@ -8,11 +8,11 @@ use caveclod_core::gmesh::{t_from_distance, GMesh};
 use caveclod_core::gpu::MorphInstance;
 use caveclod_core::{Hierarchy, LookAt, View};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, Morph, MorphInstances, Renderer,
-    RendererDesc, VertexBuffer, Viewport,
+    CameraIndices, Context, HeadlessDesc, IndexSource, Morph, MorphInstances, RecordCamera,
+    Renderer, RendererDesc, VertexBuffer, Viewport,
 };
 
-use crate::{CameraPath, Run, D_FAR, D_NEAR};
+use crate::flight::{CameraPath, Run, D_FAR, D_NEAR};
 
 /// The pictures' size in pixels.
 const WIDTH: u32 = 1280;
@@ -99,9 +99,7 @@ fn render_with(
         },
     )
     .map_err(e)?;
-    let colours: Vec<[f32; 4]> = (0..gm.surfaces())
-        .map(caveclod_cli::snapshot::palette)
-        .collect();
+    let colours: Vec<[f32; 4]> = (0..gm.surfaces()).map(caveclod_host::palette).collect();
     let scene = Scene {
         gm,
         levels: &levels,
@@ -270,29 +268,28 @@ fn draw_levels(
         .iter()
         .map(|(i, _)| levels[*i].lists.iter().map(Vec::as_slice).collect())
         .collect();
-    let mut draws: Vec<CameraDraw<'_, '_>> = inst_buffers
+    let slot = renderer.begin_frame(ctx).map_err(|err| err.to_string())?;
+    for (ind, lists) in indices.iter_mut().zip(&refs) {
+        ind.fill(ctx, slot, IndexSource::Lists(lists))
+            .map_err(|err| err.to_string())?;
+    }
+    let view_proj = look.view_projection(viewport.aspect());
+    let draws: Vec<(usize, RecordCamera<'_>)> = inst_buffers
         .iter()
-        .zip(indices.iter_mut())
-        .zip(&refs)
-        .map(|(((i, inst), ind), lists)| CameraDraw {
-            target: 0,
-            viewport,
-            view_proj: look.view_projection(viewport.aspect()),
-            vertices: &levels[*i].a,
-            indices: ind,
-            source: IndexSource::Lists(lists),
-            colours: scene.colours,
-            materials: None,
-            refine_morphs: None,
-            morph: Some(Morph {
-                fine: &levels[*i].b,
-                instances: inst,
-            }),
+        .zip(indices.iter())
+        .map(|((i, inst), ind)| {
+            let camera = RecordCamera::new(viewport, view_proj, &levels[*i].a, ind)
+                .colours(scene.colours)
+                .morph(Morph {
+                    fine: &levels[*i].b,
+                    instances: inst,
+                });
+            (0, camera)
         })
         .collect();
     let image = renderer
-        .render(ctx, &mut draws)
+        .render(ctx, &draws)
         .and_then(|_| renderer.read_target(ctx, 0))
         .map_err(|err| err.to_string())?;
-    caveclod_cli::snapshot::write_png(&image, file).map_err(|err| err.to_string())
+    caveclod_host::write_png(&image, file).map_err(|err| err.to_string())
 }

@@ -164,7 +164,7 @@ mod tests {
         let h = baked.hierarchy();
         let mut memory = vec![0u32; CameraState::words_needed(&h)];
         let mut cam = CameraState::new(&h, &mut memory).unwrap();
-        let look = caveclod_cli::snapshot::orbit(&h, 1)[0];
+        let look = caveclod_host::orbit(&h, 1)[0];
         let params = RefineParams {
             tolerance_px: 0.5,
             ..RefineParams::default()

@@ -6,14 +6,11 @@
 use std::time::Instant;
 
 use caveclod_core::glam::Mat4;
+use caveclod_host::{rendering, Acquired, ReadbackBuffer};
 use caveclod_vulkan::ash::vk;
-use caveclod_vulkan::{
-    Buffer, BufferDesc, CameraMorphs, IndexSource, RecordCamera, RgbaImage, Viewport,
-};
+use caveclod_vulkan::{CameraMorphs, IndexSource, RecordCamera, RgbaImage, Viewport};
 
-use crate::render::{self, FrameTarget};
 use crate::scene::{ColourMode, Frozen, Scene};
-use crate::swapchain::{Acquired, FRAMES_IN_FLIGHT};
 use crate::ui::{self, PanelInfo};
 use crate::viewer::Viewer;
 
@@ -55,7 +52,7 @@ impl Viewer {
         if self.stale || self.res.swapchain.is_none() {
             self.recreate_swapchain()?;
         }
-        let Some(extent) = self.res.swapchain.as_ref().map(|s| s.extent) else {
+        let Some(extent) = self.res.swapchain.as_ref().map(|s| s.extent()) else {
             return Ok(Outcome::Skipped);
         };
         let viewports = Viewport::split_screen(extent.width, extent.height, scene.cameras.len())
@@ -63,8 +60,11 @@ impl Viewer {
         if viewports.iter().any(|v| v.width == 0 || v.height == 0) {
             return Ok(Outcome::Skipped);
         }
-        let slot = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
-        self.res.slots[slot].wait(&self.gpu)?;
+        let slot = self.res.frames.slot_of(self.frame);
+        self.res
+            .frames
+            .wait(&self.host, slot)
+            .map_err(|e| e.to_string())?;
         self.free_pending_textures()?;
         let Some(image) = self.acquire(slot)? else {
             return Ok(Outcome::Skipped);
@@ -79,8 +79,8 @@ impl Viewer {
         let egui_frame = self.run_egui(scene, info, &views)?;
         let readback = if capture {
             let size = 4 * u64::from(extent.width) * u64::from(extent.height);
-            let desc = BufferDesc::gpu_to_cpu(size, vk::BufferUsageFlags::TRANSFER_DST);
-            Some(Buffer::new(&self.ctx, "screenshot", desc).map_err(|e| e.to_string())?)
+            let buffer = ReadbackBuffer::new(&self.host, "screenshot", size);
+            Some(buffer.map_err(|e| e.to_string())?)
         } else {
             None
         };
@@ -91,10 +91,14 @@ impl Viewer {
         let Some(buffer) = readback else {
             return drawn.map(|()| Outcome::Drawn(None));
         };
-        let read = drawn
-            .and_then(|()| self.res.slots[slot].wait(&self.gpu))
-            .and_then(|()| read_image(&buffer, extent, self.desc.format.format));
-        buffer.destroy(&self.ctx).map_err(|e| e.to_string())?;
+        let read = drawn.and_then(|()| {
+            self.res
+                .frames
+                .wait(&self.host, slot)
+                .and_then(|()| buffer.image(extent, self.desc.format.format))
+                .map_err(|e| e.to_string())
+        });
+        buffer.destroy(&self.host).map_err(|e| e.to_string())?;
         Ok(Outcome::Drawn(Some(Capture {
             image: read?,
             viewports,
@@ -108,7 +112,11 @@ impl Viewer {
         let Some(chain) = &self.res.swapchain else {
             return Ok(None);
         };
-        match chain.acquire(self.res.slots[slot].image_available)? {
+        let available = self.res.frames.image_available(slot);
+        match chain
+            .acquire(available.map_err(|e| e.to_string())?)
+            .map_err(|e| e.to_string())?
+        {
             Acquired::OutOfDate => {
                 self.stale = true;
                 self.swapchain_reports += 1;
@@ -198,13 +206,13 @@ impl Viewer {
         let set = std::mem::take(&mut delta.set);
         self.pending_free.extend(std::mem::take(&mut delta.free));
         if !set.is_empty() {
-            self.gpu.wait_idle()?;
+            self.host.wait_idle().map_err(|e| e.to_string())?;
         }
         for (id, changes) in set {
             for change in changes {
                 self.res
                     .egui
-                    .set_texture(self.gpu.queue, self.res.upload_pool, id, &change)
+                    .set_texture(self.host.queue(), self.res.upload_pool, id, &change)
                     .map_err(|e| format!("egui texture: {e}"))?;
             }
         }
@@ -216,7 +224,7 @@ impl Viewer {
         if self.pending_free.is_empty() {
             return Ok(());
         }
-        self.gpu.wait_idle()?;
+        self.host.wait_idle().map_err(|e| e.to_string())?;
         for id in std::mem::take(&mut self.pending_free) {
             self.res
                 .egui
@@ -234,20 +242,15 @@ impl Viewer {
         image: u32,
         views: &[(Viewport, Mat4)],
         egui_frame: &EguiFrame,
-        readback: Option<&Buffer>,
+        readback: Option<&ReadbackBuffer>,
     ) -> Result<(), String> {
         let chain = self
             .res
             .swapchain
             .as_ref()
             .ok_or("no swapchain to record into")?;
-        let target = FrameTarget {
-            colour: chain.images[image as usize],
-            colour_view: chain.views[image as usize],
-            depth: chain.depth.image,
-            depth_view: chain.depth.view,
-            extent: chain.extent,
-        };
+        let target = chain.attachments(image).map_err(|e| e.to_string())?;
+        let render_finished = chain.render_finished(image).map_err(|e| e.to_string())?;
         let by_depth = scene.settings.colour == ColourMode::Depth;
         let wireframe = scene.settings.wireframe && self.res.recorder.desc().wireframe;
         // Depth bands regroup the plain front; the other colourings draw the morphs.
@@ -282,39 +285,42 @@ impl Viewer {
                 wireframe,
             })
             .collect();
-        let d = &self.gpu.device;
-        let s = &self.res.slots[slot];
-        render::open(d, s.cmd)?;
+        let (host, frames) = (&self.host, &mut self.res.frames);
+        let d = host.device();
+        let cmd = frames.begin(host, slot).map_err(|e| e.to_string())?;
         self.res
             .recorder
-            .record_morph_blends(&self.ctx, s.cmd, slot, &morphs)
+            .record_morph_blends(&self.ctx, cmd, slot, &morphs)
             .map_err(|e| format!("caveclod: {e}"))?;
-        render::begin(d, s.cmd, &target, clear_colour(self.desc.srgb()))?;
+        rendering::begin_dynamic(d, cmd, &target, clear_colour(self.desc.srgb()));
         self.res
             .recorder
-            .record(&self.ctx, s.cmd, slot, &cameras)
+            .record(&self.ctx, cmd, slot, &cameras)
             .map_err(|e| format!("caveclod: {e}"))?;
         self.res
             .egui
             .cmd_draw(
-                s.cmd,
+                cmd,
                 target.extent,
                 egui_frame.pixels_per_point,
                 &egui_frame.primitives,
             )
             .map_err(|e| format!("egui: {e}"))?;
-        render::end(d, s.cmd, &target, readback.map(|b| b.raw))?;
-        // SAFETY: the fence is signalled (waited for at the start of the frame) and not in
-        // use by any pending submission.
-        unsafe { d.reset_fences(&[s.fence]) }.map_err(|e| format!("vkResetFences: {e}"))?;
-        render::submit(
-            d,
-            self.gpu.queue,
-            s.cmd,
-            s.image_available,
-            chain.render_finished[image as usize],
-            s.fence,
-        )
+        rendering::end_dynamic(d, cmd);
+        let colour = target.colour.0;
+        let mut layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+        if let Some(b) = readback {
+            rendering::copy_out(d, cmd, colour, layout, target.extent, b.raw);
+            layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+        }
+        rendering::to_present(d, cmd, colour, layout);
+        let available = frames.image_available(slot).map_err(|e| e.to_string())?;
+        // The acquire's semaphore is waited for where the colour is first written; the
+        // barrier `begin_dynamic` records chains to that stage.
+        let wait = [(available, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)];
+        frames
+            .submit(host, slot, &wait, &[render_finished])
+            .map_err(|e| e.to_string())
     }
 
     /// Presents `image`; marks the swapchain stale if presentation says so.
@@ -324,7 +330,9 @@ impl Viewer {
             .swapchain
             .as_ref()
             .ok_or("no swapchain to present")?;
-        let recreate = chain.present(self.gpu.queue, image)?;
+        let recreate = chain
+            .present(&self.host, image)
+            .map_err(|e| e.to_string())?;
         self.stale |= recreate;
         self.swapchain_reports += u64::from(recreate);
         Ok(())
@@ -346,31 +354,4 @@ fn clear_colour(srgb: bool) -> [f32; 4] {
     };
     let [r, g, b] = BACKGROUND_SRGB;
     [linear(r), linear(g), linear(b), 1.0]
-}
-
-/// The read-back bytes as RGBA8 (BGRA formats swizzled).
-fn read_image(
-    buffer: &Buffer,
-    extent: vk::Extent2D,
-    format: vk::Format,
-) -> Result<RgbaImage, String> {
-    let len = 4 * extent.width as usize * extent.height as usize;
-    let bytes = buffer
-        .mapped()
-        .and_then(|b| b.get(..len))
-        .ok_or("the screenshot buffer is not mapped")?;
-    let mut pixels = bytes.to_vec();
-    if matches!(
-        format,
-        vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM
-    ) {
-        for p in pixels.chunks_exact_mut(4) {
-            p.swap(0, 2);
-        }
-    }
-    Ok(RgbaImage {
-        width: extent.width,
-        height: extent.height,
-        pixels,
-    })
 }

@@ -1,9 +1,10 @@
 //! Viewer: a window onto a caveclod hierarchy, 1 to 4 cameras in split screen, each refined
 //! every frame against its own view and drawn through caveclod-vulkan's record path into
 //! the viewer's own swapchain frame, with an egui panel on top. The viewer is the host
-//! engine: it makes the instance, device, allocator and swapchain itself and hands caveclod
-//! only `Context::from_raw` and its command buffers, using no API of caveclod-vulkan that an
-//! engine could not.
+//! engine: caveclod-host's windowed `Host` makes the instance, device, allocator and
+//! swapchain as an engine would, and caveclod gets only `Context::from_raw` and the
+//! viewer's command buffers, through no API of caveclod-vulkan that an engine could not
+//! use.
 //!
 //! ```text
 //! cargo run --release -p caveclod-examples --example viewer -- FILE [OPTIONS]
@@ -31,12 +32,9 @@
 mod controls;
 mod depth;
 mod frame;
-mod gpu;
-mod render;
 mod scene;
 mod screenshot;
 mod storm;
-mod swapchain;
 mod ui;
 mod viewer;
 
@@ -256,12 +254,12 @@ impl<'a, 'h> App<'a, 'h> {
             // next finds the swapchain out of date or suboptimal.
             let _ = viewer.window.request_inner_size(size);
         }
-        let device = viewer.gpu.device_name.clone();
+        let device = viewer.host.device_name().to_string();
         let info = PanelInfo {
             device: &device,
             fps: self.fps.fps,
             wireframe_available: viewer.res.recorder.desc().wireframe,
-            validation_messages: viewer.gpu.log.len(),
+            validation_messages: viewer.host.log().len(),
             bands: viewer.bands.band_count(),
             levels: viewer.bands.levels(),
         };
@@ -394,7 +392,7 @@ impl ApplicationHandler for App<'_, '_> {
                 eprintln!(
                     "{} on {} ({:?}, {:?})",
                     self.args.input.display(),
-                    v.gpu.device_name,
+                    v.host.device_name(),
                     v.desc.format.format,
                     v.desc.present_mode
                 );

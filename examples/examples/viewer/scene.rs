@@ -9,9 +9,8 @@ use std::time::Instant;
 
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, Stage};
-use caveclod_cli::aligned::AlignedBytes;
-use caveclod_cli::mapped::ClodBytes;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_io::{AlignedBytes, ClodBytes};
 use caveclod_vulkan::MorphStage;
 use caveclod_vulkan::Viewport;
 
@@ -24,7 +23,7 @@ pub fn load(path: &Path, spacing: Option<f32>) -> Result<ClodBytes, String> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("clod"));
     if is_clod {
-        return ClodBytes::open(path).map_err(|e| format!("{}: {e}", path.display()));
+        return ClodBytes::open(path).map_err(|e| e.to_string());
     }
     let start = Instant::now();
     let mut progress = BakeProgress::new();
@@ -249,7 +248,7 @@ impl<'h> Scene<'h> {
         );
         let centre = (lo + hi) * 0.5;
         let radius = ((hi - lo).length() * 0.5).max(1e-6);
-        let looks = caveclod_cli::snapshot::orbit(&h, memories.len());
+        let looks = caveclod_host::orbit(&h, memories.len());
         let mut cameras = Vec::with_capacity(memories.len());
         for (i, (memory, look)) in memories.iter_mut().zip(looks).enumerate() {
             let state = CameraState::with_config(&h, memory, &camera_config(&h))

@@ -13,7 +13,7 @@ const BACKGROUND_SLACK: u8 = 2;
 
 /// Writes the image through a temporary file and a rename.
 pub fn write(capture: &Capture, path: &Path) -> Result<(), String> {
-    caveclod_cli::snapshot::write_png(&capture.image, path).map_err(|e| e.to_string())
+    caveclod_host::write_png(&capture.image, path).map_err(|e| e.to_string())
 }
 
 /// Per viewport, the fraction of its pixels outside the panel that are not background.

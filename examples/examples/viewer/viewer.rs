@@ -1,11 +1,13 @@
-//! The window and everything the GPU holds for it: the host's device ([`Gpu`]), caveclod's
-//! context, recorder, vertex buffer and per-camera index rings, the swapchain and frame
-//! slots, and egui's renderer; made when the window opens, destroyed explicitly on exit.
+//! The window and everything the GPU holds for it: the host's device (caveclod-host's
+//! windowed [`Host`]), caveclod's context, recorder, vertex buffer and per-camera index
+//! rings, the swapchain and frames in flight, and egui's renderer; made when the window
+//! opens, destroyed explicitly on exit.
 
+use caveclod_host::{Frames, GpuMaterials, Host, HostDesc, Swapchain, SwapchainDesc};
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
-    CameraIndices, CameraMorphs, Context, MorphStage, Recorder, RecorderDesc, TargetFormats,
-    VertexBuffer,
+    CameraIndices, CameraMorphs, Context, DeviceFeatures, MorphStage, Recorder, RecorderDesc,
+    TargetFormats, VertexBuffer,
 };
 use egui_ash_renderer::allocator::GpuAllocator;
 use egui_ash_renderer::{DynamicRendering, Options, RenderMode};
@@ -14,12 +16,11 @@ use winit::event::WindowEvent;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
-use caveclod_cli::materials::GpuMaterials;
-
 use crate::depth::DepthBands;
-use crate::gpu::{vk_err, Gpu};
 use crate::scene::Scene;
-use crate::swapchain::{FrameSlot, Swapchain, SwapchainDesc, FRAMES_IN_FLIGHT};
+
+/// Frames the CPU records while the GPU still renders earlier ones.
+pub const FRAMES_IN_FLIGHT: usize = 2;
 
 /// egui's renderer, drawing with the host's allocator.
 pub type EguiRenderer = egui_ash_renderer::Renderer<GpuAllocator>;
@@ -67,7 +68,7 @@ pub struct Resources {
     pub materials: Option<GpuMaterials>,
     pub vertices: VertexBuffer,
     pub rings: Vec<Rings>,
-    pub slots: Vec<FrameSlot>,
+    pub frames: Frames,
     /// Where egui's texture uploads allocate their command buffers.
     pub upload_pool: vk::CommandPool,
     pub egui: EguiRenderer,
@@ -77,7 +78,7 @@ pub struct Resources {
 
 /// The window, the GPU side and the egui state.
 pub struct Viewer {
-    pub gpu: Gpu,
+    pub host: Host,
     pub ctx: Context,
     pub res: Resources,
     pub desc: SwapchainDesc,
@@ -113,12 +114,19 @@ impl Viewer {
         let window = event_loop
             .create_window(attributes)
             .map_err(|e| format!("opening the window: {e}"))?;
-        let gpu = Gpu::new(&window, w.validation)?;
-        let made = gpu.context().and_then(|ctx| {
-            let ready = SwapchainDesc::choose(&gpu, w.vsync)
+        let desc = HostDesc {
+            validation: w.validation,
+            prefer_cpu: false,
+            required: DeviceFeatures::REQUIRED,
+            optional: DeviceFeatures::ALL,
+        };
+        let host = Host::windowed(&window, &desc).map_err(|e| e.to_string())?;
+        let made = host.context().map_err(|e| e.to_string()).and_then(|ctx| {
+            let ready = SwapchainDesc::choose(&host, w.vsync)
+                .map_err(|e| e.to_string())
                 .and_then(|desc| Ok((desc, DepthBands::new(&scene.h)?)))
                 .and_then(|(desc, bands)| {
-                    let res = Resources::new(&gpu, &ctx, scene, desc, &bands, &window)?;
+                    let res = Resources::new(&host, &ctx, scene, desc, &bands, &window)?;
                     Ok((desc, bands, res))
                 });
             match ready {
@@ -132,7 +140,7 @@ impl Viewer {
         let (ctx, (desc, bands, res)) = match made {
             Ok(m) => m,
             Err(e) => {
-                let _ = gpu.destroy();
+                let _ = host.destroy();
                 return Err(e);
             }
         };
@@ -146,12 +154,12 @@ impl Viewer {
             None,
         );
         let surface_colours = (0..scene.h.surface_count())
-            .map(caveclod_cli::snapshot::palette)
+            .map(caveclod_host::palette)
             .collect();
         let band_colours = bands.colours();
         let swapchains_made = u64::from(res.swapchain.is_some());
         Ok(Self {
-            gpu,
+            host,
             ctx,
             res,
             desc,
@@ -188,19 +196,13 @@ impl Viewer {
     /// Replaces the swapchain with one for the window's current size (none while the
     /// window has no area).
     pub fn recreate_swapchain(&mut self) -> Result<(), String> {
-        self.gpu.wait_idle()?;
+        self.host.wait_idle().map_err(|e| e.to_string())?;
         let old = self.res.swapchain.take();
-        let made = Swapchain::new(
-            &self.gpu,
-            self.desc,
-            self.size(),
-            old.as_ref()
-                .map_or(vk::SwapchainKHR::null(), Swapchain::raw),
-        );
+        let made = Swapchain::new(&self.host, self.desc, self.size(), old.as_ref());
         if let Some(old) = old {
-            old.destroy(&self.gpu);
+            old.destroy(&self.host);
         }
-        self.res.swapchain = made?;
+        self.res.swapchain = made.map_err(|e| e.to_string())?;
         self.swapchains_made += u64::from(self.res.swapchain.is_some());
         self.stale = false;
         Ok(())
@@ -209,16 +211,16 @@ impl Viewer {
     /// Waits for the GPU, then destroys everything in reverse order of creation; returns
     /// the validation messages recorded (including the teardown's) and the first error.
     pub fn destroy(self) -> (Vec<String>, Result<(), String>) {
-        let log = self.gpu.log.clone();
-        let mut result = self.gpu.wait_idle();
+        let log = self.host.log().clone();
+        let mut result = self.host.wait_idle().map_err(|e| e.to_string());
         let mut keep = |r: Result<(), String>| {
             if let (Ok(()), Err(e)) = (&result, r) {
                 result = Err(e);
             }
         };
-        keep(self.res.destroy(&self.gpu, &self.ctx));
+        keep(self.res.destroy(&self.host, &self.ctx));
         keep(self.ctx.destroy().map_err(|e| format!("caveclod: {e}")));
-        keep(self.gpu.destroy());
+        keep(self.host.destroy().map_err(|e| format!("host: {e}")));
         drop(self.window);
         (log.take(), result)
     }
@@ -229,7 +231,7 @@ impl Resources {
     /// buffer, index rings, frame slots, egui's renderer and the swapchain, each step
     /// undoing the earlier ones if it fails.
     fn new(
-        gpu: &Gpu,
+        host: &Host,
         ctx: &Context,
         scene: &Scene<'_>,
         desc: SwapchainDesc,
@@ -278,7 +280,7 @@ impl Resources {
                 return Err(e);
             }
         };
-        let (slots, upload_pool) = match frame_slots(gpu) {
+        let (frames, upload_pool) = match frames_and_pool(host) {
             Ok(s) => s,
             Err(e) => {
                 let _ = destroy_rings(ctx, rings);
@@ -287,10 +289,10 @@ impl Resources {
                 return Err(e);
             }
         };
-        let egui = match egui_renderer(gpu, desc) {
+        let egui = match egui_renderer(host, desc) {
             Ok(r) => r,
             Err(e) => {
-                destroy_slots(gpu, slots, upload_pool);
+                destroy_frames(host, frames, upload_pool);
                 let _ = destroy_rings(ctx, rings);
                 let _ = vertices.destroy(ctx);
                 undo(materials, recorder);
@@ -302,7 +304,7 @@ impl Resources {
             materials,
             vertices,
             rings,
-            slots,
+            frames,
             upload_pool,
             egui,
             swapchain: None,
@@ -312,27 +314,27 @@ impl Resources {
             width: size.width,
             height: size.height,
         };
-        match Swapchain::new(gpu, desc, extent, vk::SwapchainKHR::null()) {
+        match Swapchain::new(host, desc, extent, None) {
             Ok(s) => {
                 res.swapchain = s;
                 Ok(res)
             }
             Err(e) => {
-                let _ = res.destroy(gpu, ctx);
-                Err(e)
+                let _ = res.destroy(host, ctx);
+                Err(e.to_string())
             }
         }
     }
 
     /// Destroys everything; the device must be idle.
-    fn destroy(self, gpu: &Gpu, ctx: &Context) -> Result<(), String> {
+    fn destroy(self, host: &Host, ctx: &Context) -> Result<(), String> {
         if let Some(s) = self.swapchain {
-            s.destroy(gpu);
+            s.destroy(host);
         }
         // egui's renderer frees its buffers, textures and pipeline when dropped (its only
         // way to be destroyed); before the allocator it draws from.
         drop(self.egui);
-        destroy_slots(gpu, self.slots, self.upload_pool);
+        destroy_frames(host, self.frames, self.upload_pool);
         let mut first = destroy_rings(ctx, self.rings);
         if let Err(e) = self.vertices.destroy(ctx) {
             first = first.and(Err(format!("vertex buffer: {e}")));
@@ -349,45 +351,38 @@ impl Resources {
     }
 }
 
-/// The frame slots and the pool egui's uploads use.
-fn frame_slots(gpu: &Gpu) -> Result<(Vec<FrameSlot>, vk::CommandPool), String> {
-    let mut slots = Vec::with_capacity(FRAMES_IN_FLIGHT);
-    for _ in 0..FRAMES_IN_FLIGHT {
-        match FrameSlot::new(gpu) {
-            Ok(s) => slots.push(s),
-            Err(e) => {
-                destroy_slots(gpu, slots, vk::CommandPool::null());
-                return Err(e);
-            }
-        }
-    }
+/// The frames in flight (with the swapchain's acquire semaphores) and the pool egui's
+/// uploads use.
+fn frames_and_pool(host: &Host) -> Result<(Frames, vk::CommandPool), String> {
+    let frames = Frames::new(host, FRAMES_IN_FLIGHT, true).map_err(|e| e.to_string())?;
     let info = vk::CommandPoolCreateInfo::default()
-        .queue_family_index(gpu.family)
+        .queue_family_index(host.queue_family())
         .flags(vk::CommandPoolCreateFlags::TRANSIENT);
     // SAFETY: valid create info.
-    match unsafe { gpu.device.create_command_pool(&info, None) } {
-        Ok(pool) => Ok((slots, pool)),
+    match unsafe { host.device().create_command_pool(&info, None) } {
+        Ok(pool) => Ok((frames, pool)),
         Err(e) => {
-            destroy_slots(gpu, slots, vk::CommandPool::null());
-            Err(vk_err("vkCreateCommandPool")(e))
+            let _ = frames.destroy(host);
+            Err(format!("vkCreateCommandPool: {e}"))
         }
     }
 }
 
-fn destroy_slots(gpu: &Gpu, slots: Vec<FrameSlot>, pool: vk::CommandPool) {
-    for s in slots {
-        s.destroy(gpu);
-    }
+/// Destroys the frames in flight and egui's upload pool; the device must be idle.
+fn destroy_frames(host: &Host, frames: Frames, pool: vk::CommandPool) {
+    // The device is idle: nothing is left to wait for, so only a lost device could fail here,
+    // and its objects are destroyed anyway.
+    let _ = frames.destroy(host);
     // SAFETY: the device is idle (the callers' contract); a null pool is ignored.
-    unsafe { gpu.device.destroy_command_pool(pool, None) };
+    unsafe { host.device().destroy_command_pool(pool, None) };
 }
 
 /// egui's renderer for the swapchain's formats, drawing in the same dynamic rendering as
 /// caveclod (no depth test), one vertex and index buffer per frame in flight.
-fn egui_renderer(gpu: &Gpu, desc: SwapchainDesc) -> Result<EguiRenderer, String> {
+fn egui_renderer(host: &Host, desc: SwapchainDesc) -> Result<EguiRenderer, String> {
     EguiRenderer::with_gpu_allocator(
-        gpu.allocator.clone(),
-        gpu.device.clone(),
+        host.allocator().clone(),
+        host.device().clone(),
         RenderMode::DynamicRendering(DynamicRendering {
             color_attachment_format: desc.format.format,
             depth_attachment_format: Some(desc.depth),

@@ -29,7 +29,7 @@ use caveclod_core::{CameraConfig, CameraState, Hierarchy, NodeId, OpError, Refin
 pub use invariants::{Checked, FrontChecker};
 use pilot::{draw_config, one_in, Pilot, Terrain, Tolerance, MAX_MORPHS};
 
-use crate::rng::SplitMix64;
+use caveclod_bake::generate::SplitMix64;
 
 /// Cameras over the shared hierarchy.
 pub const CAMERAS: usize = 4;

@@ -9,7 +9,7 @@ use std::f32::consts::PI;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, Hierarchy, LookAt, RefineParams, Regulator, View};
 
-use crate::rng::SplitMix64;
+use caveclod_bake::generate::SplitMix64;
 
 /// Most geomorphs a soak camera may be given; camera memory is sized for it.
 pub const MAX_MORPHS: u32 = 4096;

@@ -8,8 +8,7 @@ use std::path::{Path, PathBuf};
 use caveclod_bake::import::{import, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;
-
-use crate::aligned::AlignedBytes;
+use caveclod_io::AlignedBytes;
 
 /// The St. Helens DEM in the repository's `data/terrain`.
 pub fn st_helens() -> PathBuf {
@@ -99,6 +98,5 @@ pub fn bake_terrain(path: &Path, share: f32) -> Result<AlignedBytes, String> {
 
 /// A `.clod` file's bytes, aligned for [`caveclod_core::Hierarchy::from_bytes`].
 pub fn load_clod(path: &Path) -> Result<AlignedBytes, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(AlignedBytes::from_slice(&bytes))
+    AlignedBytes::read(path).map_err(|e| e.to_string())
 }

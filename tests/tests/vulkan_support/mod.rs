@@ -2,14 +2,15 @@
 //! generated meshes, cameras, and the "no validation messages" check.
 #![allow(dead_code)]
 
-pub mod host;
+pub mod host_frame;
 
 use caveclod_core::format::Vertex;
 use caveclod_core::gpu::MorphInstance;
 use caveclod_core::{CameraState, Hierarchy, RefineParams};
+use caveclod_host::{Host, HostDesc};
 use caveclod_tests::meshes::TestMesh;
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph, Renderer,
+    CameraIndices, Context, HeadlessDesc, IndexSource, LookAt, Morph, RecordCamera, Renderer,
     RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
 use glam::Vec3;
@@ -33,6 +34,28 @@ pub fn context() -> Context {
         "VK_LAYER_KHRONOS_validation is not installed (cargo xtask setup)"
     );
     ctx
+}
+
+/// The tests' host engine (caveclod-host): validation on (the layer must be installed),
+/// lavapipe first, exactly the required features.
+pub fn host() -> Host {
+    ok(
+        Host::headless(&HostDesc::default()),
+        "host (install lavapipe and the validation layer: cargo xtask setup)",
+    )
+}
+
+/// Tears `host` down, failing if it still held an allocation or the validation layer
+/// reported anything (the teardown's messages included).
+pub fn destroy_host(host: Host) {
+    let log = host.log().clone();
+    ok(host.destroy(), "host teardown");
+    let messages = log.take();
+    assert!(
+        messages.is_empty(),
+        "validation messages:\n{}",
+        messages.join("\n")
+    );
 }
 
 /// Panics with the messages if the validation layer reported anything.
@@ -62,14 +85,7 @@ pub fn save(image: &RgbaImage, name: &str) {
     };
     let dir = std::path::PathBuf::from(dir);
     ok(std::fs::create_dir_all(&dir), "image directory");
-    let path = dir.join(name);
-    let file = ok(std::fs::File::create(&path), "image file");
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), image.width, image.height);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut writer = ok(enc.write_header(), "png header");
-    ok(writer.write_image_data(&image.pixels), "png data");
-    ok(writer.finish(), "png end");
+    ok(caveclod_host::write_png(image, &dir.join(name)), "png");
 }
 
 /// A camera looking at the middle of a `size` × `size` terrain from `angle` (radians around
@@ -131,28 +147,16 @@ pub fn refine(
     );
 }
 
-/// A draw of `source` into `target` at `viewport`, seen from `look`, plain: in the tests'
-/// colours, without materials or morphs (a draw that needs them sets them over this one).
-pub fn plain_draw<'a, 'c>(
-    target: usize,
+/// A camera drawing `indices` into `viewport`, seen from `look`, plain: in the tests'
+/// colours, without materials or morphs (a draw that needs them adds them to this one).
+pub fn plain_camera<'a>(
     viewport: Viewport,
     look: &LookAt,
     vertices: &'a VertexBuffer,
-    indices: &'a mut CameraIndices,
-    source: IndexSource<'a, 'c>,
-) -> CameraDraw<'a, 'c> {
-    CameraDraw {
-        target,
-        viewport,
-        view_proj: look.view_projection(viewport.aspect()),
-        vertices,
-        indices,
-        source,
-        colours: &COLOURS,
-        materials: None,
-        refine_morphs: None,
-        morph: None,
-    }
+    indices: &'a CameraIndices,
+) -> RecordCamera<'a> {
+    let view_proj = look.view_projection(viewport.aspect());
+    RecordCamera::new(viewport, view_proj, vertices, indices).colours(&COLOURS)
 }
 
 /// Renders one camera's indices from `source` alone into a fresh `w` × `h` renderer and
@@ -200,16 +204,14 @@ fn render_one(
     let mut renderer = ok(Renderer::new(ctx, desc), "renderer");
     let mut indices = CameraIndices::new("alone", surfaces, renderer.desc().frames_in_flight);
     let viewport = Viewport::full(w, h);
-    ok(
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                morph,
-                ..plain_draw(0, viewport, look, vertices, &mut indices, source)
-            }],
-        ),
-        "render",
-    );
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
+    ok(indices.fill(ctx, slot, source), "fill");
+    let camera = plain_camera(viewport, look, vertices, &indices);
+    let camera = match morph {
+        Some(m) => camera.morph(m),
+        None => camera,
+    };
+    ok(renderer.render(ctx, &[(0, camera)]), "render");
     let image = ok(renderer.read_target(ctx, 0), "read back");
     ok(renderer.destroy(ctx), "destroy renderer");
     ok(indices.destroy(ctx), "destroy indices");

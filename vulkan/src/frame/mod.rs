@@ -5,18 +5,14 @@
 mod record;
 
 use ash::vk;
-use glam::Mat4;
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::camera_morphs::CameraMorphs;
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::image::{Image, ImageDesc};
-use crate::indices::{CameraIndices, IndexSource};
-use crate::material::MaterialSet;
-use crate::mesh::VertexBuffer;
 use crate::readback::RgbaImage;
-use crate::record::{Morph, RecordCamera, Recorder, RecorderDesc, TargetFormats, Viewport};
+use crate::record::{RecordCamera, Recorder, RecorderDesc, TargetFormats};
 
 /// How to make a [`Renderer`].
 #[derive(Clone, Debug, PartialEq)]
@@ -29,9 +25,9 @@ pub struct RendererDesc {
     pub readback: bool,
     /// Clear colour (linear RGBA).
     pub clear_colour: [f32; 4],
-    /// Also create the geomorphing pipeline (`geomorph_vs`), for [`CameraDraw::morph`].
+    /// Also create the geomorphing pipeline (`geomorph_vs`), for [`RecordCamera::morph`].
     pub geomorph: bool,
-    /// Also create the refinement-geomorph pipelines, for [`CameraDraw::refine_morphs`].
+    /// Also create the refinement-geomorph pipelines, for [`RecordCamera::refine_morphs`].
     pub refine_morphs: bool,
 }
 
@@ -49,66 +45,6 @@ impl RendererDesc {
     }
 }
 
-/// One camera's part of a frame.
-pub struct CameraDraw<'a, 'c> {
-    /// Which target (index into [`RendererDesc::targets`]).
-    pub target: usize,
-    /// Where in the target.
-    pub viewport: Viewport,
-    /// View-projection matrix into Vulkan clip space (y down, depth 0..1).
-    pub view_proj: Mat4,
-    /// The mesh's persistent vertex buffer.
-    pub vertices: &'a VertexBuffer,
-    /// This camera's index buffers.
-    pub indices: &'a mut CameraIndices,
-    /// Where this frame's indices come from.
-    pub source: IndexSource<'a, 'c>,
-    /// Colour per surface (linear RGBA); at least one per surface (used without
-    /// `materials`).
-    pub colours: &'a [[f32; 4]],
-    /// The surfaces' materials, made for [`Renderer::recorder`].
-    pub materials: Option<&'a MaterialSet>,
-    /// Geomorph instead of drawing `vertices` as they are (needs [`RendererDesc::geomorph`]).
-    pub morph: Option<Morph<'a>>,
-    /// The camera's refinement geomorphs (needs [`RendererDesc::refine_morphs`] and
-    /// `source` [`IndexSource::MorphedCamera`]), filled from the camera each frame.
-    pub refine_morphs: Option<&'a mut CameraMorphs>,
-}
-
-impl CameraDraw<'_, '_> {
-    /// What the recorder draws of this camera.
-    fn record_camera(&self) -> RecordCamera<'_> {
-        RecordCamera {
-            viewport: self.viewport,
-            view_proj: self.view_proj,
-            vertices: self.vertices,
-            indices: self.indices,
-            colours: self.colours,
-            materials: self.materials,
-            morph: self.morph,
-            refine_morphs: self.refine_morphs.as_deref(),
-            wireframe: false,
-        }
-    }
-}
-
-/// Fills camera `i`'s morphs, if it has any, for frame slot `slot` from the camera its
-/// indices come from.
-fn fill_morphs(i: usize, slot: usize, cam: &mut CameraDraw<'_, '_>) -> Result<()> {
-    let Some(morphs) = cam.refine_morphs.as_deref_mut() else {
-        return Ok(());
-    };
-    match cam.source {
-        IndexSource::MorphedCamera { hierarchy, camera } => {
-            morphs.fill(slot, hierarchy.vertices(), camera)?;
-            Ok(())
-        }
-        _ => Err(Error::InvalidArgument(format!(
-            "camera {i}: refinement geomorphs need IndexSource::MorphedCamera"
-        ))),
-    }
-}
-
 /// What one frame did.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
@@ -116,7 +52,8 @@ pub struct FrameStats {
     pub frame: u64,
     /// Frame slot used.
     pub slot: usize,
-    /// Index bytes written for the GPU this frame, all cameras.
+    /// Index bytes the frame's cameras draw, all cameras (what was written into their
+    /// index rings' slot for the frame).
     pub index_bytes: u64,
     /// Index bytes per camera.
     pub camera_index_bytes: Vec<u64>,
@@ -140,15 +77,19 @@ struct FrameSlot {
 
 /// A headless convenience over the record path: RGBA8 + D32 targets, a command pool,
 /// frames in flight with fences, read-back, and one queue submission per frame. Engines use
-/// [`Recorder`] in their own frame instead; this is what the tests and the CLI use.
+/// [`Recorder`] in their own frame instead; this is what the tests and the CLI use. Its
+/// cameras are the record path's [`RecordCamera`]s, each with the target it draws into.
 ///
-/// One [`Renderer::render`] call is one frame and one queue submission:
-/// 1. wait for the frame slot's fence (its command buffer and index buffers are free);
-/// 2. fill each camera's index buffers for that slot ([`CameraIndices::fill`]);
-/// 3. per target: transition colour + depth, begin dynamic rendering (clear), then
-///    [`Recorder::record`] of the target's cameras;
-/// 4. optionally copy each colour target into the slot's read-back buffer;
-/// 5. submit with synchronization2 and the slot's fence.
+/// A frame is the record path's frame with the renderer as the host:
+/// 1. [`Renderer::begin_frame`] waits for the next frame slot's fence (its command buffer,
+///    and the cameras' index rings and morph slots for that slot, are free) and returns
+///    the slot;
+/// 2. the caller fills each camera's index ring for that slot ([`CameraIndices::fill`](crate::CameraIndices::fill))
+///    and, for refinement geomorphs, its morph slots ([`CameraMorphs::fill`]);
+/// 3. [`Renderer::render`] records the compute stage of blending morphs, then per target:
+///    transitions colour + depth, begins dynamic rendering (clear) and records the
+///    target's cameras through [`Recorder`]; optionally copies each colour target into the
+///    slot's read-back buffer; and submits with synchronization2 and the slot's fence.
 ///
 /// Several cameras share a target through viewports (the paper's split screen) or use
 /// separate targets; either way all of them go into the one submission.
@@ -163,6 +104,8 @@ pub struct Renderer {
     pool: vk::CommandPool,
     slots: Vec<FrameSlot>,
     frame: u64,
+    /// The slot [`Renderer::begin_frame`] handed out for the frame not yet rendered.
+    begun: Option<usize>,
     last_slot: Option<usize>,
 }
 
@@ -202,6 +145,7 @@ impl Renderer {
             pool,
             slots: Vec::new(),
             frame: 0,
+            begun: None,
             last_slot: None,
         };
         match r.create_resources(ctx) {
@@ -264,7 +208,7 @@ impl Renderer {
         Ok(())
     }
 
-    /// The recorder it draws through (for [`MaterialSet::new`]).
+    /// The recorder it draws through (for [`MaterialSet::new`](crate::MaterialSet::new)).
     pub fn recorder(&self) -> &Recorder {
         &self.recorder
     }
@@ -279,70 +223,79 @@ impl Renderer {
         self.frame
     }
 
-    /// Records and submits one frame of every camera in `cameras` (the steps are on
-    /// [`Renderer`]).
+    /// Starts the next frame: waits until its slot's last submission completed, so that
+    /// the slot of every camera's index ring and morph slots may be filled; returns the
+    /// slot. Calling it again before [`render`](Self::render) returns the same slot.
+    pub fn begin_frame(&mut self, ctx: &Context) -> Result<usize> {
+        let slot = (self.frame % self.slots.len() as u64) as usize;
+        let s = &self.slots[slot];
+        if s.pending {
+            ctx.checkpoint("vkWaitForFences")?;
+            // SAFETY: the fence is alive; waiting makes the slot's buffers free to write.
+            unsafe { ctx.device.wait_for_fences(&[s.fence], true, u64::MAX) }
+                .vk("vkWaitForFences")?;
+            self.slots[slot].pending = false;
+        }
+        self.begun = Some(slot);
+        Ok(slot)
+    }
+
+    /// Records and submits the frame [`begin_frame`](Self::begin_frame) started: every
+    /// camera of `cameras` (with the target it draws into), whose index rings (and morph
+    /// slots) the caller filled for the frame's slot (the steps are on [`Renderer`]).
     pub fn render(
         &mut self,
         ctx: &Context,
-        cameras: &mut [CameraDraw<'_, '_>],
+        cameras: &[(usize, RecordCamera<'_>)],
     ) -> Result<FrameStats> {
-        let slot_index = (self.frame % self.slots.len() as u64) as usize;
-        self.check(cameras)?;
-        let d = &ctx.device;
-        let (cmd, fence, pending) = {
-            let s = &self.slots[slot_index];
-            (s.cmd, s.fence, s.pending)
-        };
-        if pending {
-            ctx.checkpoint("vkWaitForFences")?;
-            // SAFETY: the fence is alive; waiting makes the slot's buffers free to write.
-            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
-            self.slots[slot_index].pending = false;
-        }
-
+        let slot = self.begun.ok_or_else(|| {
+            Error::InvalidArgument("a frame is rendered after begin_frame".into())
+        })?;
+        self.check(cameras, slot)?;
         let mut stats = FrameStats {
             frame: self.frame,
-            slot: slot_index,
+            slot,
             ..FrameStats::default()
         };
-        for (i, cam) in cameras.iter_mut().enumerate() {
-            let bytes = cam
-                .indices
-                .fill_camera(ctx, slot_index, Some(i), cam.source)?;
+        for (_, c) in cameras {
+            let bytes = c.indices.index_bytes(slot);
             stats.index_bytes += bytes;
             stats.camera_index_bytes.push(bytes);
-            fill_morphs(i, slot_index, cam)?;
         }
-        let records: Vec<(usize, RecordCamera<'_>)> = cameras
-            .iter()
-            .map(|c| (c.target, c.record_camera()))
-            .collect();
-        for (i, (_, r)) in records.iter().enumerate() {
-            self.recorder.check_camera(i, slot_index, r)?;
-        }
-
-        // SAFETY: the slot's previous submission completed (fence waited).
+        let cmd = self.slots[slot].cmd;
+        let d = &ctx.device;
+        // SAFETY: the slot's previous submission completed (fence waited in `begin_frame`).
         unsafe { d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()) }
             .vk("vkResetCommandBuffer")?;
         let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: `cmd` is reset.
         unsafe { d.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
-        let morphs: Vec<&CameraMorphs> = records
+        let morphs: Vec<&CameraMorphs> = cameras
             .iter()
-            .filter_map(|(_, r)| r.refine_morphs)
+            .filter_map(|(_, c)| c.refine_morphs)
             .collect();
         if !morphs.is_empty() {
-            self.recorder
-                .record_morph_blends(ctx, cmd, slot_index, &morphs)?;
+            self.recorder.record_morph_blends(ctx, cmd, slot, &morphs)?;
         }
         for t in 0..self.targets.len() {
-            stats.draws += self.record_target(ctx, cmd, t, slot_index, &records);
+            stats.draws += self.record_target(ctx, cmd, t, slot, cameras);
         }
         // SAFETY: `cmd` is recording.
         unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+        self.submit(ctx, slot)?;
+        self.begun = None;
+        self.last_slot = Some(slot);
+        self.frame += 1;
+        Ok(stats)
+    }
 
-        // SAFETY: no pending work uses the fence (waited for above, or never submitted).
+    /// Submits `slot`'s command buffer with its fence.
+    fn submit(&mut self, ctx: &Context, slot: usize) -> Result<()> {
+        let (cmd, fence) = (self.slots[slot].cmd, self.slots[slot].fence);
+        let d = &ctx.device;
+        // SAFETY: no pending work uses the fence (waited for in `begin_frame`, or never
+        // submitted).
         unsafe { d.reset_fences(&[fence]) }.vk("vkResetFences")?;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
@@ -352,18 +305,17 @@ impl Renderer {
             // SAFETY: `cmd` is executable and references live objects; the queue is locked.
             unsafe { d.queue_submit2(*q, &submit, fence) }.vk("vkQueueSubmit2")?;
         }
-        self.slots[slot_index].pending = true;
-        self.last_slot = Some(slot_index);
-        self.frame += 1;
-        Ok(stats)
+        self.slots[slot].pending = true;
+        Ok(())
     }
 
-    fn check(&self, cameras: &[CameraDraw<'_, '_>]) -> Result<()> {
-        for (i, c) in cameras.iter().enumerate() {
-            let Some(&(w, h)) = self.desc.targets.get(c.target) else {
+    /// Refuses a camera whose target does not exist, whose viewport leaves its target,
+    /// whose index ring has another number of slots, or that the recorder refuses.
+    fn check(&self, cameras: &[(usize, RecordCamera<'_>)], slot: usize) -> Result<()> {
+        for (i, (target, c)) in cameras.iter().enumerate() {
+            let Some(&(w, h)) = self.desc.targets.get(*target) else {
                 return Err(Error::InvalidArgument(format!(
-                    "camera {i}: target {} of {}",
-                    c.target,
+                    "camera {i}: target {target} of {}",
                     self.targets.len()
                 )));
             };
@@ -384,6 +336,7 @@ impl Renderer {
                     self.slots.len()
                 )));
             }
+            self.recorder.check_camera(i, slot, c)?;
         }
         Ok(())
     }

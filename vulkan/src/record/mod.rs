@@ -2,7 +2,8 @@
 //! caller's rendering (the design decisions are on [`Recorder`]).
 
 mod draw;
-mod target;
+mod made;
+pub(crate) mod target;
 mod viewport;
 
 pub use target::{RecorderDesc, Rendering, TargetFormats};
@@ -11,8 +12,7 @@ pub use viewport::Viewport;
 use ash::vk;
 use glam::Mat4;
 
-use crate::buffer::Buffer;
-use crate::camera_morphs::{workgroups, CameraMorphs};
+use crate::camera_morphs::{workgroups, CameraMorphs, MorphLayout};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::indices::CameraIndices;
@@ -249,14 +249,13 @@ impl Recorder {
         }
     }
 
-    /// The morph set layout, when made with [`RecorderDesc::refine_morphs`].
-    pub(crate) fn morph_set_layout(&self) -> Option<vk::DescriptorSetLayout> {
-        self.morphing.as_ref().map(|m| m.set_layout)
-    }
-
-    /// The one white vertex colour, for meshes without colours.
-    pub(crate) fn white_colour(&self) -> &Buffer {
-        &self.bindings.white_colour
+    /// What camera morphs take of the recorder: the morph set layout (when made with
+    /// [`RecorderDesc::refine_morphs`]) and the one white vertex colour.
+    pub(crate) fn morph_layout(&self) -> MorphLayout<'_> {
+        MorphLayout {
+            set_layout: self.morphing.as_ref().map(|m| m.set_layout),
+            white_colour: &self.bindings.white_colour,
+        }
     }
 
     /// The set layout, sampler and white texture shared with material sets.
@@ -341,8 +340,9 @@ impl Recorder {
     }
 
     /// Refuses a camera whose draws would be invalid: an empty viewport, a slot its index
-    /// ring lacks, too few colours, indices beyond its vertex buffer, a geomorph or
-    /// wireframe draw this recorder has no pipeline for.
+    /// ring lacks, too few colours, indices beyond its vertex buffer, refinement geomorphs
+    /// over indices not filled by morphed emission, a geomorph or wireframe draw this
+    /// recorder has no pipeline for.
     pub(crate) fn check_camera(&self, i: usize, slot: usize, c: &RecordCamera<'_>) -> Result<()> {
         let refuse = |why: String| Err(Error::InvalidArgument(format!("camera {i}: {why}")));
         if c.viewport.width == 0 || c.viewport.height == 0 {
@@ -376,6 +376,13 @@ impl Recorder {
                 if self.morphing.is_none() {
                     return refuse(
                         "refinement geomorphs, but the recorder was made without refine_morphs"
+                            .into(),
+                    );
+                }
+                if !c.indices.morphed(slot) {
+                    return refuse(
+                        "refinement geomorphs need indices filled from \
+                         IndexSource::MorphedCamera"
                             .into(),
                     );
                 }

@@ -5,12 +5,12 @@ use std::time::{Duration, Instant};
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, View};
 
-use super::{
+use super::common::{
     camera_order, compact_now, frame, index_lists, pin, placement, state_bytes, Compaction, Flight,
     IndexBuffers, Record,
 };
-use crate::aligned::CameraPool;
 use crate::flyover::gate::FrameGate;
+use caveclod_io::CameraPool;
 
 /// One of the flights [`fly_interleaved`] flies: its cameras' views, their capacity, and
 /// whether each camera has a thread.

@@ -5,12 +5,12 @@ use std::time::Instant;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, View};
 
-use super::{
+use super::common::{
     camera_order, cameras, compact_now, frame, index_lists, pin, placement, state_bytes,
     Compaction, Flight, IndexBuffers, Record,
 };
-use crate::aligned::CameraPool;
 use crate::flyover::gate::FrameGate;
+use caveclod_io::CameraPool;
 
 /// One flight of every camera, each with its own state of capacity `config`, over every
 /// `stride`-th frame; `emit` also writes the index lists each frame, into one of

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, View};
 
-use super::{compact_now, frame, CompactNow, Compaction, Flight, IndexBuffers, Record};
-use crate::aligned::CameraPool;
+use super::common::{compact_now, frame, CompactNow, Compaction, Flight, IndexBuffers, Record};
+use caveclod_io::CameraPool;
 
 /// The paper's baseline: one state of capacity `config`, re-refined to each camera's view in
 /// turn every frame; it compacts as `compaction` says too (before the first camera's

@@ -11,7 +11,7 @@ use caveclod_vulkan::{
     Context, Error, MaterialSet, Recorder, Result, SurfaceMaterial, Texture, TextureDesc,
 };
 
-use crate::snapshot::palette;
+use crate::palette::palette;
 
 /// The textures and the material set of one hierarchy, for one recorder.
 pub struct GpuMaterials {

@@ -5,10 +5,8 @@
 
 use std::sync::Arc;
 
-use caveclod_cli::flyover::popping::Screen;
-use caveclod_cli::flyover::{
-    fly, FlyoverOptions, Ground, Mode, PopMeter, PopTables, HEIGHT, WIDTH,
-};
+use crate::flyover::popping::Screen;
+use crate::flyover::{fly, FlyoverOptions, Ground, Mode, PopMeter, PopTables, HEIGHT, WIDTH};
 use caveclod_core::glam::{Vec3, Vec4};
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, NodeId, RefineParams};
 use caveclod_tests::{bake, meshes};

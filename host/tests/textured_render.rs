@@ -9,11 +9,11 @@ use std::path::Path;
 use caveclod_bake::import::{import, ImportOptions};
 use caveclod_bake::mesh::{Mesh, NO_ATTRIBUTE};
 use caveclod_bake::pipeline::bake_mesh;
-use caveclod_cli::materials::GpuMaterials;
 use caveclod_core::format::Vertex;
 use caveclod_core::{CameraState, Hierarchy, LookAt, NodeId};
+use caveclod_host::{write_png, GpuMaterials};
 use caveclod_vulkan::{
-    CameraDraw, CameraIndices, Context, HeadlessDesc, IndexSource, Renderer, RendererDesc,
+    CameraIndices, Context, HeadlessDesc, IndexSource, RecordCamera, Renderer, RendererDesc,
     RgbaImage, VertexBuffer, Viewport,
 };
 use glam::Vec3;
@@ -75,28 +75,16 @@ fn draw(
     assert_eq!(materials.texture_count(), 5);
     let mut indices = CameraIndices::new("camera", h.surface_count(), 2);
     let viewport = Viewport::full(SIZE, SIZE);
-    ok(
-        renderer.render(
-            ctx,
-            &mut [CameraDraw {
-                target: 0,
-                viewport,
-                view_proj: look.view_projection(viewport.aspect()),
-                vertices,
-                indices: &mut indices,
-                source,
-                colours: &[],
-                materials: Some(&materials.set),
-                refine_morphs: None,
-                morph: None,
-            }],
-        ),
-        "render",
-    );
+    let slot = ok(renderer.begin_frame(ctx), "begin frame");
+    ok(indices.fill(ctx, slot, source), "fill");
+    let view_proj = look.view_projection(viewport.aspect());
+    let camera =
+        RecordCamera::new(viewport, view_proj, vertices, &indices).materials(&materials.set);
+    ok(renderer.render(ctx, &[(0, camera)]), "render");
     let image = ok(renderer.read_target(ctx, 0), "read back");
-    ok(renderer.destroy(ctx), "destroy renderer");
     ok(materials.destroy(ctx), "destroy materials");
     ok(indices.destroy(ctx), "destroy indices");
+    ok(renderer.destroy(ctx), "destroy renderer");
     image
 }
 
@@ -114,7 +102,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
     let (baked, _) = ok(bake_mesh(&mesh, "FlightHelmet", &mut |_| {}), "bake");
     // Texture paths relative to the source's directory, as `to_bytes` keeps them.
     let bytes = ok(baked.to_bytes(&[]), "serialise");
-    let file = caveclod_cli::aligned::AlignedBytes::from_slice(&bytes);
+    let file = caveclod_io::AlignedBytes::from_slice(&bytes);
     let h = ok(file.hierarchy(), "load");
     assert_eq!(h.materials().map(|m| m.len()), Some(6));
 
@@ -172,7 +160,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         let dir = Path::new(&dir);
         ok(std::fs::create_dir_all(dir), "image directory");
         ok(
-            caveclod_cli::snapshot::write_png(&hierarchy_image, &dir.join("helmet_full.png")),
+            write_png(&hierarchy_image, &dir.join("helmet_full.png")),
             "png",
         );
     }

@@ -1,5 +1,8 @@
-//! Generated test meshes: a heightfield terrain with two surfaces and a texture seam, the same
-//! with a hole, and a closed bumpy sphere with two surfaces.
+//! Generated test meshes in memory: a heightfield terrain with two surfaces and a texture
+//! seam, the same with a hole, and a closed bumpy sphere with two surfaces; [`to_mesh`] makes
+//! one an imported [`Mesh`], the input the bake takes.
+
+use crate::mesh::{Mesh, Surface, Triangle, NO_ATTRIBUTE};
 
 /// One triangle: three positions (counter-clockwise seen from outside), a surface and the
 /// attributes of its corners.
@@ -35,8 +38,38 @@ impl TestMesh {
     }
 }
 
-/// The tests' generator ([`crate::rng::SplitMix64`]) under the name the mesh users know.
-pub use crate::rng::SplitMix64 as Rng;
+/// The generators' random numbers ([`SplitMix64`](super::rng::SplitMix64)) under the name
+/// the mesh users know.
+pub use super::rng::SplitMix64 as Rng;
+
+/// A test mesh as an imported mesh: per-corner normal and UV streams (so seams stay seams),
+/// no colours, one surface per distinct surface id.
+pub fn to_mesh(t: &TestMesh) -> Mesh {
+    let mut m = Mesh {
+        positions: t.positions.clone(),
+        ..Mesh::default()
+    };
+    for tri in &t.triangles {
+        let mut out = Triangle {
+            position: tri.p,
+            normal: [0; 3],
+            uv: [0; 3],
+            color: [NO_ATTRIBUTE; 3],
+            surface: tri.surface,
+        };
+        for k in 0..3 {
+            out.normal[k] = m.normals.len() as u32;
+            m.normals.push(tri.normal[k]);
+            out.uv[k] = m.uvs.len() as u32;
+            m.uvs.push(tri.uv[k]);
+        }
+        m.triangles.push(out);
+    }
+    m.surfaces = (0..t.surface_count())
+        .map(|s| Surface::plain(format!("s{s}")))
+        .collect();
+    m
+}
 
 /// Fractal sum of sines: multi-scale relief, so refinement has work at every scale.
 fn height(x: f32, z: f32, size: f32, waves: &[(f32, f32, f32, f32, f32)]) -> f32 {
@@ -298,6 +331,23 @@ mod tests {
         for (&(a, b), &n) in &edges {
             assert_eq!(n, 1);
             assert_eq!(edges.get(&(b, a)), Some(&1), "every edge has its twin");
+        }
+    }
+
+    #[test]
+    fn an_imported_mesh_keeps_corners_and_surfaces() {
+        let t = terrain(4, 3, 2);
+        let m = to_mesh(&t);
+        assert_eq!(m.positions, t.positions);
+        assert_eq!(m.triangles.len(), t.triangles.len());
+        assert_eq!(m.surfaces.len(), 2);
+        for (a, b) in m.triangles.iter().zip(&t.triangles) {
+            assert_eq!(a.position, b.p);
+            assert_eq!(a.surface, b.surface);
+            for k in 0..3 {
+                assert_eq!(m.normals[a.normal[k] as usize], b.normal[k]);
+                assert_eq!(m.uvs[a.uv[k] as usize], b.uv[k]);
+            }
         }
     }
 

@@ -8,18 +8,20 @@
 //!
 //! A buffer of [`HUGE_PAGES_FROM`] bytes or more starts on a 2 MiB boundary, and on Linux it
 //! asks for transparent huge pages (`madvise(MADV_HUGEPAGE)`) before its pages are first
-//! touched; [`CameraPool`] does the same for the flights' camera states. Refinement reads the
-//! hierarchy at addresses spread over the whole file (thousands of 4 KiB pages for a terrain)
-//! and several cameras read it in different places, so with 4 KiB pages those reads also miss
-//! the TLB; a huge page covers what hundreds of small ones would. Where the system refuses
-//! (huge pages `never`, another OS), the memory is ordinary pages, and memory the allocator
-//! hands out again after the process touched it keeps the pages it already has, so how much
-//! of a buffer huge pages back varies from run to run ([`AlignedBytes::huge_page_bytes`]
-//! says; the demo's report prints it).
+//! touched; [`CameraPool`](crate::CameraPool) does the same for many cameras' states.
+//! Refinement reads the hierarchy at addresses spread over the whole file (thousands of 4 KiB
+//! pages for a terrain) and several cameras read it in different places, so with 4 KiB pages
+//! those reads also miss the TLB; a huge page covers what hundreds of small ones would. Where
+//! the system refuses (huge pages `never`, another OS), the memory is ordinary pages, and
+//! memory the allocator hands out again after the process touched it keeps the pages it
+//! already has, so how much of a buffer huge pages back varies from run to run
+//! ([`AlignedBytes::huge_page_bytes`] says; the CLI demo's report prints it).
 
 use std::path::Path;
 
 use caveclod_core::{FormatError, Hierarchy};
+
+use crate::error::LoadError;
 
 /// The size of a huge page on x86-64 and AArch64 Linux.
 const HUGE_PAGE: usize = 2 << 20;
@@ -68,7 +70,9 @@ impl AlignedBytes {
         // Reserved, not yet written: a large allocation is usually fresh pages of its own
         // mapping (see the module docs for when it is not).
         let mut buf: Vec<u8> = Vec::with_capacity(len + align);
-        let start = buf.as_ptr().align_offset(align).min(align);
+        // From the address itself: `align_offset` may answer "cannot" (`usize::MAX`) by its
+        // contract; the reserve holds any offset below `align`.
+        let start = (align - buf.as_ptr().addr() % align) % align;
         if align == HUGE_PAGE {
             advise_huge_pages(&mut buf, start, len);
         }
@@ -84,14 +88,20 @@ impl AlignedBytes {
         out
     }
 
-    /// The file at `path`.
-    pub fn read(path: &Path) -> std::io::Result<Self> {
-        Ok(Self::from_slice(&std::fs::read(path)?))
+    /// The file at `path`, read into aligned memory.
+    pub fn read(path: &Path) -> Result<Self, LoadError> {
+        let bytes = std::fs::read(path).map_err(|e| LoadError::io(path, e))?;
+        Ok(Self::from_slice(&bytes))
     }
 
     /// The bytes.
     pub fn bytes(&self) -> &[u8] {
         &self.buf[self.start..self.start + self.len]
+    }
+
+    /// The bytes, to write into (a file being serialised, a test's corruption).
+    pub fn bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.buf[self.start..self.start + self.len]
     }
 
     /// The hierarchy in the bytes (validated on each call).
@@ -133,42 +143,7 @@ impl std::ops::Deref for AlignedBytes {
 
 impl std::ops::DerefMut for AlignedBytes {
     fn deref_mut(&mut self) -> &mut [u8] {
-        &mut self.buf[self.start..self.start + self.len]
-    }
-}
-
-/// Memory for several camera states (`CameraState::with_config`) in one [`AlignedBytes`]
-/// buffer, so that many cameras' states, like a large hierarchy, get huge pages where the
-/// system grants them. Each state starts on a cache line of its own, so cameras refined on
-/// different threads share no line.
-pub struct CameraPool {
-    bytes: AlignedBytes,
-    /// Words per state as asked for.
-    words: usize,
-    /// Words from one state's start to the next's (a whole number of cache lines).
-    stride: usize,
-}
-
-impl CameraPool {
-    /// Zeroed room for `count` states of `words` words each.
-    pub fn new(words: usize, count: usize) -> Self {
-        // At least a line, so that there are `count` memories even of no words.
-        let stride = words.next_multiple_of(16).max(16);
-        Self {
-            bytes: AlignedBytes::zeroed(4 * stride * count),
-            words,
-            stride,
-        }
-    }
-
-    /// The states' memories, in order, `words` words each.
-    pub fn memories(&mut self) -> impl Iterator<Item = &mut [u32]> {
-        let words = self.words;
-        self.bytes.chunks_exact_mut(4 * self.stride).map(move |c| {
-            // Each chunk starts a whole number of cache lines into 64-byte aligned bytes and
-            // holds `stride >= words` words, so the cast is aligned and long enough.
-            &mut bytemuck::cast_slice_mut::<u8, u32>(c)[..words]
-        })
+        self.bytes_mut()
     }
 }
 
@@ -221,19 +196,6 @@ mod tests {
             assert_eq!(a, b);
             assert_eq!(b.bytes().as_ptr() as usize % 64, 0);
         }
-        let mut pool = CameraPool::new(1001, 3);
-        let mut n = 0;
-        for (k, m) in pool.memories().enumerate() {
-            assert_eq!(m.len(), 1001);
-            assert_eq!(m.as_ptr() as usize % 64, 0);
-            assert!(m.iter().all(|&w| w == 0));
-            m.fill(k as u32 + 1);
-            n += 1;
-        }
-        assert_eq!(n, 3);
-        let firsts: Vec<u32> = pool.memories().map(|m| m[0] + m[1000]).collect();
-        assert_eq!(firsts, [2, 4, 6]);
-        assert_eq!(CameraPool::new(0, 2).memories().count(), 2);
         if cfg!(target_os = "linux") {
             // The mapping of a buffer is found, whether or not the kernel granted huge pages.
             assert!(AlignedBytes::zeroed(HUGE_PAGES_FROM)
@@ -244,5 +206,15 @@ mod tests {
         assert!(z.iter().all(|&b| b == 0));
         z[99] = 1;
         assert_eq!(z.bytes()[99], 1);
+        assert_eq!(AlignedBytes::default().bytes(), &[] as &[u8]);
+    }
+
+    #[test]
+    fn a_missing_file_names_itself() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing.clod");
+        let e = AlignedBytes::read(&path).unwrap_err();
+        assert_eq!(e.path(), path);
+        assert!(e.to_string().contains("missing.clod"), "{e}");
     }
 }

@@ -1,9 +1,7 @@
 //! The fly-over experiment on a small generated terrain: every mode flies, reports the stable
 //! JSON keys, and per-camera state needs fewer operations than one shared state.
 
-use caveclod_cli::flyover::{
-    fly, fly_interleaved, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings,
-};
+use crate::flyover::{fly, fly_interleaved_sharing, Flyover, FlyoverOptions, Mode, Sizings};
 use caveclod_tests::{bake, meshes};
 
 #[test]
@@ -18,8 +16,8 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         full_capacity: false,
         first_route: 0,
         compact_every: 30,
-        compact_step: caveclod_cli::flyover::COMPACT_STEP,
-        visit_fraction: caveclod_cli::flyover::VISIT_FRACTION,
+        compact_step: crate::flyover::COMPACT_STEP,
+        visit_fraction: crate::flyover::VISIT_FRACTION,
         frames_in_flight: 2,
         index_cache: true,
         pin_threads: true,
@@ -130,7 +128,8 @@ fn interleaved_flights_do_what_each_does_alone() {
         base,
     ];
     // Segments of 10 frames: 10, 10 and 5.
-    let together = fly_interleaved(&h, &options, 10).expect("interleaved");
+    let together =
+        fly_interleaved_sharing(&h, &options, 10, &mut Sizings::default()).expect("interleaved");
     assert_eq!(together.len(), options.len());
     for (o, t) in options.iter().zip(&together) {
         let alone = fly(&h, o).expect("alone");
@@ -178,5 +177,5 @@ fn interleaved_flights_do_what_each_does_alone() {
         mode: Mode::Shared,
         ..base
     };
-    assert!(fly_interleaved(&h, &[base, shared], 10).is_err());
+    assert!(fly_interleaved_sharing(&h, &[base, shared], 10, &mut Sizings::default()).is_err());
 }

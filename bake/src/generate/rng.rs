@@ -1,10 +1,11 @@
-//! The tests' random numbers: SplitMix64 (Steele, Lea and Flood, "Fast splittable
-//! pseudorandom number generators", OOPSLA 2014), small and deterministic, so a failure
-//! reproduces from its seed. The tests need reproducible cases, not statistical quality.
+//! The generators' and the tests' random numbers: SplitMix64 (Steele, Lea and Flood, "Fast
+//! splittable pseudorandom number generators", OOPSLA 2014), small and deterministic, so a
+//! generated mesh is the same on every run and a failing test reproduces from its seed. They
+//! need reproducible cases, not statistical quality.
 //!
 //! This file uses only `core`: caveclod-core's integration tests include it by path
 //! (`#[path]`), since they must not depend on this package (Miri runs them, and this package
-//! builds the baker).
+//! is the baker).
 
 /// A SplitMix64 generator; the field is its state, the seed at first.
 #[derive(Clone, Debug)]

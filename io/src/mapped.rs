@@ -14,6 +14,7 @@ use std::path::Path;
 use caveclod_core::{FormatError, Hierarchy};
 
 use crate::aligned::AlignedBytes;
+use crate::error::LoadError;
 
 /// The bytes of a `.clod` file: mapped, or read into aligned memory.
 pub enum ClodBytes {
@@ -34,9 +35,10 @@ impl std::fmt::Debug for ClodBytes {
 
 impl ClodBytes {
     /// The file at `path`, mapped where the system allows, else read.
-    pub fn open(path: &Path) -> std::io::Result<Self> {
-        let file = File::open(path)?;
-        if file.metadata()?.len() == 0 {
+    pub fn open(path: &Path) -> Result<Self, LoadError> {
+        let io = |e| LoadError::io(path, e);
+        let file = File::open(path).map_err(io)?;
+        if file.metadata().map_err(io)?.len() == 0 {
             return Ok(Self::Owned(AlignedBytes::zeroed(0)));
         }
         // SAFETY: the map is read-only and private to this process; its bytes stay valid as
@@ -46,7 +48,7 @@ impl ClodBytes {
         // as it is for every memory-mapped reader.
         match unsafe { memmap2::Mmap::map(&file) } {
             Ok(map) => Ok(Self::Mapped(map)),
-            Err(_) => Ok(Self::Owned(AlignedBytes::read(path)?)),
+            Err(_) => AlignedBytes::read(path).map(Self::Owned),
         }
     }
 
@@ -104,6 +106,8 @@ mod tests {
         assert!(!e.is_mapped());
         assert!(e.is_empty());
         assert!(e.hierarchy().is_err());
-        assert!(ClodBytes::open(&dir.path().join("missing")).is_err());
+        let missing = dir.path().join("missing");
+        let e = ClodBytes::open(&missing).unwrap_err();
+        assert_eq!(e.path(), missing);
     }
 }

@@ -1,4 +1,4 @@
-//! Procedural test meshes of any size, streamed to binary PLY.
+//! A procedural terrain of any size, streamed to binary PLY (`caveclod generate`).
 //!
 //! [`terrain`] writes a heightfield terrain (sums of sines: smooth, with analytic normals)
 //! as a `binary_little_endian` PLY with per-vertex normals, 8-bit colours (by height) and
@@ -171,7 +171,7 @@ pub fn terrain(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<TerrainGrid, GenerateError> {
     let grid = TerrainGrid::for_triangles(triangles)?;
-    caveclod_bake::baked::write_atomically_with(path, |f| {
+    crate::base::atomic::write_atomically_with(path, |f| {
         let mut w = BufWriter::with_capacity(1 << 20, f);
         write_terrain(&mut w, grid, progress)?;
         w.flush()
@@ -199,12 +199,13 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "ply")]
     #[test]
     fn small_terrain_imports_with_all_attributes() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("t.ply");
         let grid = terrain(&path, 200, &mut |_, _| {}).unwrap();
-        let mesh = caveclod_bake::import::import(&path, &Default::default()).unwrap();
+        let mesh = crate::import::import(&path, &Default::default()).unwrap();
         assert_eq!(mesh.triangles.len() as u64, grid.triangles());
         assert_eq!(mesh.positions.len() as u64, grid.vertices());
         assert_eq!(mesh.normals.len(), mesh.positions.len());
