@@ -31,7 +31,8 @@ use caveclod_vulkan::{
     CameraIndices, Context, Geomorph, HeadlessDesc, IndexSource, LookAt, Morph, MorphInstances,
     RecordCamera, Renderer, RendererDesc, VertexBuffer, Viewport,
 };
-use criterion::{Criterion, Throughput};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput};
 
 const COLOURS: [[f32; 4]; 2] = [[0.9, 0.6, 0.3, 1.0], [0.3, 0.7, 0.9, 1.0]];
 
@@ -45,9 +46,15 @@ fn or_exit<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
     }
 }
 
-fn main() {
-    let benchmarking = std::env::args().any(|a| a == "--bench");
-    let instances_n: usize = if benchmarking { 100 } else { 4 };
+/// Level 0 of the g-mesh of a generated sphere: its coarse and fine vertex ends and its
+/// index lists, one per surface.
+struct Level {
+    a: Vec<Vertex>,
+    b: Vec<Vertex>,
+    lists: Vec<Vec<u32>>,
+}
+
+fn level_zero() -> Level {
     let baked = bake(&meshes::sphere(5));
     let h = baked.hierarchy();
     let data = or_exit(build(&h, &GMeshOptions::default()), "g-mesh levels");
@@ -56,27 +63,34 @@ fn main() {
         "g-mesh",
     );
     let level = g.level(0).unwrap_or_else(|| std::process::exit(1));
-    let a: Vec<Vertex> = level
-        .vertices
-        .iter()
-        .map(|p| h.vertices()[p[0] as usize])
-        .collect();
-    let b: Vec<Vertex> = level
-        .vertices
-        .iter()
-        .map(|p| h.vertices()[p[1] as usize])
-        .collect();
-    let lists: Vec<Vec<u32>> = (0..g.surfaces())
+    let end = |k: usize| -> Vec<Vertex> {
+        level
+            .vertices
+            .iter()
+            .map(|p| h.vertices()[p[k] as usize])
+            .collect()
+    };
+    let lists = (0..g.surfaces())
         .map(|s| level.surface_indices(s).to_vec())
         .collect();
-    let list_refs: Vec<&[u32]> = lists.iter().map(Vec::as_slice).collect();
+    Level {
+        a: end(0),
+        b: end(1),
+        lists,
+    }
+}
+
+fn main() {
+    let benchmarking = std::env::args().any(|a| a == "--bench");
+    let instances_n: usize = if benchmarking { 100 } else { 4 };
+    let level = level_zero();
     let ts: Vec<f32> = (0..instances_n)
         .map(|i| (i as f32 + 0.5) / instances_n as f32)
         .collect();
-    let per_frame = (a.len() * instances_n) as u64;
+    let per_frame = (level.a.len() * instances_n) as u64;
     eprintln!(
         "level 0: {} vertices, {} instances: {per_frame} interpolations per frame",
-        a.len(),
+        level.a.len(),
         instances_n
     );
 
@@ -93,40 +107,58 @@ fn main() {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(8))
         .configure_from_args();
-
-    // CPU, one thread.
-    let mut out = vec![a[0]; a.len() * instances_n];
     let mut group = c.benchmark_group("geomorph");
     group.throughput(Throughput::Elements(per_frame));
+    bench_cpu(&mut group, &level, &ts);
+    bench_compute(&mut group, &ctx, &level, instances_n);
+    bench_vertex_stage(&mut group, &ctx, &level, &ts);
+    group.finish();
+    c.final_summary();
+    or_exit(ctx.destroy(), "destroy context");
+}
+
+type Group<'a> = BenchmarkGroup<'a, WallTime>;
+
+/// CPU, one thread: every instance's vertices at its own `t`.
+fn bench_cpu(group: &mut Group<'_>, level: &Level, ts: &[f32]) {
+    let (a, b) = (&level.a, &level.b);
+    let mut out = vec![a[0]; a.len() * ts.len()];
     group.bench_function("cpu", |bench| {
         bench.iter(|| {
             for (k, &t) in ts.iter().enumerate() {
                 let dst = &mut out[k * a.len()..(k + 1) * a.len()];
-                for ((d, &x), &y) in dst.iter_mut().zip(&a).zip(&b) {
+                for ((d, &x), &y) in dst.iter_mut().zip(a).zip(b) {
                     *d = morph_vertex(x, y, t);
                 }
             }
             std::hint::black_box(&out);
         })
     });
+}
 
-    // Compute stage: all instances' vertices in one dispatch (one t for the dispatch; the
-    // stage's cost does not depend on t).
-    let geomorph = or_exit(Geomorph::new(&ctx), "geomorph pipeline");
-    let big_a: Vec<Vertex> = (0..instances_n).flat_map(|_| a.iter().copied()).collect();
-    let big_b: Vec<Vertex> = (0..instances_n).flat_map(|_| b.iter().copied()).collect();
+/// Compute stage: all instances' vertices in one dispatch (one t for the dispatch; the
+/// stage's cost does not depend on t).
+fn bench_compute(group: &mut Group<'_>, ctx: &Context, level: &Level, instances_n: usize) {
+    let geomorph = or_exit(Geomorph::new(ctx), "geomorph pipeline");
+    let big_a: Vec<Vertex> = (0..instances_n)
+        .flat_map(|_| level.a.iter().copied())
+        .collect();
+    let big_b: Vec<Vertex> = (0..instances_n)
+        .flat_map(|_| level.b.iter().copied())
+        .collect();
     group.bench_function("compute", |bench| {
         bench.iter(|| {
-            let r = or_exit(geomorph.morph(&ctx, &big_a, &big_b, 0.4), "morph");
+            let r = or_exit(geomorph.morph(ctx, &big_a, &big_b, 0.4), "morph");
             std::hint::black_box(r);
         })
     });
+    geomorph.destroy(ctx);
+}
 
-    // Vertex stage: one instanced draw.
-    let coarse = or_exit(VertexBuffer::from_vertices(&ctx, "a_0", &a), "a_0");
-    let fine = or_exit(VertexBuffer::from_vertices(&ctx, "a'_0", &b), "a'_0");
-    let side = (instances_n as f32).sqrt().ceil() as usize;
-    let instances: Vec<MorphInstance> = ts
+/// The instances on a square grid, one `t` each.
+fn grid_instances(ts: &[f32]) -> (Vec<MorphInstance>, usize) {
+    let side = (ts.len() as f32).sqrt().ceil() as usize;
+    let instances = ts
         .iter()
         .enumerate()
         .map(|(i, &t)| MorphInstance {
@@ -140,13 +172,21 @@ fn main() {
             _pad: [0.0; 3],
         })
         .collect();
+    (instances, side)
+}
+
+/// Vertex stage: one instanced draw of every instance, a frame at a time.
+fn bench_vertex_stage(group: &mut Group<'_>, ctx: &Context, level: &Level, ts: &[f32]) {
+    let coarse = or_exit(VertexBuffer::from_vertices(ctx, "a_0", &level.a), "a_0");
+    let fine = or_exit(VertexBuffer::from_vertices(ctx, "a'_0", &level.b), "a'_0");
+    let (instances, side) = grid_instances(ts);
     let inst_buffer = or_exit(
-        MorphInstances::new(&ctx, "instances", &instances),
+        MorphInstances::new(ctx, "instances", &instances),
         "instances",
     );
     let mut renderer = or_exit(
         Renderer::new(
-            &ctx,
+            ctx,
             RendererDesc {
                 geomorph: true,
                 ..RendererDesc::single(128, 128)
@@ -154,7 +194,9 @@ fn main() {
         ),
         "renderer",
     );
-    let mut indices = CameraIndices::new("gmesh", lists.len(), renderer.desc().frames_in_flight);
+    let frames = renderer.desc().frames_in_flight;
+    let mut indices = CameraIndices::new("gmesh", level.lists.len(), frames);
+    let list_refs: Vec<&[u32]> = level.lists.iter().map(Vec::as_slice).collect();
     let extent = side as f32 * 2.5;
     let look = LookAt {
         eye: caveclod_core::glam::Vec3::new(extent * 0.5, extent, extent * 0.6),
@@ -167,9 +209,9 @@ fn main() {
     let viewport = Viewport::full(128, 128);
     group.bench_function("vertex_stage", |bench| {
         bench.iter(|| {
-            let slot = or_exit(renderer.begin_frame(&ctx), "begin frame");
+            let slot = or_exit(renderer.begin_frame(ctx), "begin frame");
             let source = IndexSource::Lists(&list_refs);
-            or_exit(indices.fill(&ctx, slot, source), "fill");
+            or_exit(indices.fill(ctx, slot, source), "fill");
             let view_proj = look.view_projection(viewport.aspect());
             let camera = RecordCamera::new(viewport, view_proj, &coarse, &indices)
                 .colours(&COLOURS)
@@ -177,18 +219,14 @@ fn main() {
                     fine: &fine,
                     instances: &inst_buffer,
                 });
-            or_exit(renderer.render(&ctx, &[(0, camera)]), "render");
-            or_exit(renderer.wait(&ctx), "wait");
+            or_exit(renderer.render(ctx, &[(0, camera)]), "render");
+            or_exit(renderer.wait(ctx), "wait");
         })
     });
-    group.finish();
-    c.final_summary();
-    or_exit(renderer.destroy(&ctx), "destroy renderer");
-    or_exit(indices.destroy(&ctx), "destroy indices");
+    or_exit(renderer.destroy(ctx), "destroy renderer");
+    or_exit(indices.destroy(ctx), "destroy indices");
     for buffer in [coarse, fine] {
-        or_exit(buffer.destroy(&ctx), "destroy buffer");
+        or_exit(buffer.destroy(ctx), "destroy buffer");
     }
-    or_exit(inst_buffer.destroy(&ctx), "destroy instances");
-    geomorph.destroy(&ctx);
-    or_exit(ctx.destroy(), "destroy context");
+    or_exit(inst_buffer.destroy(ctx), "destroy instances");
 }

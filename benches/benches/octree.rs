@@ -15,12 +15,13 @@
 
 use std::time::{Duration, Instant};
 
+use caveclod_bake::generate;
 use caveclod_bake::ooc::OocOptions;
 use caveclod_bake::pipeline;
 use caveclod_benches::low_pass_view;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraState, Hierarchy, Octree, OctreeCut, RefineParams, View};
-use caveclod_tests::generate;
+use caveclod_io::AlignedBytes;
 use criterion::{Criterion, Throughput};
 
 const TOLERANCE_PX: f32 = 1.0;
@@ -71,12 +72,53 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// A frame of one runtime over a view: the triangles it drew.
+type Frame<'a> = dyn FnMut(&View) -> u32 + 'a;
+
 fn main() {
     let benchmarking = std::env::args().any(|a| a == "--bench");
     let triangles: u64 = std::env::var("CAVECLOD_BENCH_TRIANGLES")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(if benchmarking { 2_000_000 } else { 20_000 });
+    let file = bake_terrain(triangles);
+    let h = Hierarchy::from_bytes(file.bytes()).expect("hierarchy");
+    let t = Octree::from_hierarchy(&h)
+        .expect("octree")
+        .expect("octree sections");
+    eprintln!(
+        "{} octree levels, {} nodes",
+        t.level_count(),
+        t.node_count()
+    );
+    let size = generate::TERRAIN_SIZE;
+    let top = t.nodes()[0].max[1];
+    let n = 300;
+    let views: Vec<View> = (0..n).map(|i| view_at(i, n, size, top)).collect();
+
+    let mut cam_memory = vec![0u32; CameraState::words_needed(&h)];
+    let mut cam = CameraState::new(&h, &mut cam_memory).expect("camera");
+    let mut cut_memory = vec![0u32; OctreeCut::words_needed(&t)];
+    let mut cut = OctreeCut::new(&t, &mut cut_memory).expect("cut");
+    let (mut hi, mut oi) = (Vec::new(), Vec::new());
+    let (mut ho, mut oo) = (
+        vec![0u32; h.surface_count() + 1],
+        vec![0u32; h.surface_count() + 1],
+    );
+    let mut hierarchy = |v: &View| hierarchy_frame(&h, &mut cam, v, &mut hi, &mut ho);
+    let mut octree = |v: &View| octree_frame(&t, &mut cut, v, &mut oi, &mut oo);
+    // Settle both on the first view.
+    for _ in 0..3 {
+        hierarchy(&views[0]);
+    }
+    octree(&views[0]);
+    criterion_frames(&views, &mut hierarchy, &mut octree);
+    let laps = if benchmarking { 3 } else { 1 };
+    paired_laps(&views, laps, &mut hierarchy, &mut octree);
+}
+
+/// A generated terrain of `triangles` baked out of core with its octree, in aligned memory.
+fn bake_terrain(triangles: u64) -> AlignedBytes {
     let dir = std::env::temp_dir().join(format!("caveclod-octree-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary directory");
     let input = dir.join("terrain.ply");
@@ -94,96 +136,55 @@ fn main() {
         .baked
         .to_bytes(&octree.parts().sections())
         .expect("serialise");
-    // The format is read in place: 8-byte aligned storage.
-    let mut words = vec![0u64; bytes.len().div_ceil(8)];
-    bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
-    let file = &bytemuck::cast_slice::<u64, u8>(&words)[..bytes.len()];
-    let h = Hierarchy::from_bytes(file).expect("hierarchy");
-    let t = Octree::from_hierarchy(&h)
-        .expect("octree")
-        .expect("octree sections");
     eprintln!(
-        "terrain of {} triangles: clustered to {}, {} octree levels, {} nodes; {:.1} s",
+        "terrain of {} triangles: clustered to {}; {:.1} s",
         out.stats.input_triangles,
         out.stats.output_triangles,
-        t.level_count(),
-        t.node_count(),
         t0.elapsed().as_secs_f64()
     );
-    let size = generate::TERRAIN_SIZE;
-    let top = t.nodes()[0].max[1];
-    let n = 300;
-    let views: Vec<View> = (0..n).map(|i| view_at(i, n, size, top)).collect();
+    AlignedBytes::from_slice(&bytes)
+}
 
-    let mut cam_memory = vec![0u32; CameraState::words_needed(&h)];
-    let mut cam = CameraState::new(&h, &mut cam_memory).expect("camera");
-    let mut cut_memory = vec![0u32; OctreeCut::words_needed(&t)];
-    let mut cut = OctreeCut::new(&t, &mut cut_memory).expect("cut");
-    let mut indices = Vec::new();
-    let mut offsets = vec![0u32; h.surface_count() + 1];
-    // Settle both on the first view.
-    for _ in 0..3 {
-        hierarchy_frame(&h, &mut cam, &views[0], &mut indices, &mut offsets);
-    }
-    octree_frame(&t, &mut cut, &views[0], &mut indices, &mut offsets);
-    let mean_tris =
-        |f: &mut dyn FnMut(&View) -> u32| views.iter().map(|v| f(v) as f64).sum::<f64>() / n as f64;
-
+/// Criterion's figures: each runtime's frames over the path, throughput in triangles drawn.
+fn criterion_frames<'f>(views: &[View], hierarchy: &mut Frame<'f>, octree: &mut Frame<'f>) {
+    let n = views.len();
+    let mean_tris = |f: &mut Frame<'_>| views.iter().map(|v| f(v) as f64).sum::<f64>() / n as f64;
     let mut c = Criterion::default()
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4))
         .configure_from_args();
-    {
-        let mut g = c.benchmark_group("frame");
-        let ht = mean_tris(&mut |v| hierarchy_frame(&h, &mut cam, v, &mut indices, &mut offsets));
-        g.throughput(Throughput::Elements(ht as u64));
+    let mut g = c.benchmark_group("frame");
+    for (name, frame) in [
+        ("hierarchy_refine_emit", &mut *hierarchy),
+        ("octree_select_emit", &mut *octree),
+    ] {
+        g.throughput(Throughput::Elements(mean_tris(frame) as u64));
         let mut i = 0;
-        g.bench_function("hierarchy_refine_emit", |b| {
+        g.bench_function(name, |b| {
             b.iter(|| {
                 i = (i + 1) % n;
-                hierarchy_frame(&h, &mut cam, &views[i], &mut indices, &mut offsets)
+                frame(&views[i])
             })
         });
-        let ot = mean_tris(&mut |v| octree_frame(&t, &mut cut, v, &mut indices, &mut offsets));
-        g.throughput(Throughput::Elements(ot as u64));
-        let mut i = 0;
-        g.bench_function("octree_select_emit", |b| {
-            b.iter(|| {
-                i = (i + 1) % n;
-                octree_frame(&t, &mut cut, &views[i], &mut indices, &mut offsets)
-            })
-        });
-        g.finish();
     }
+    g.finish();
     c.final_summary();
+}
 
-    // Paired: alternating laps over the whole path, per-frame medians.
-    let laps = if benchmarking { 3 } else { 1 };
+/// Paired: alternating laps over the whole path, per-frame medians, printed as a table.
+fn paired_laps(views: &[View], laps: usize, hierarchy: &mut Frame<'_>, octree: &mut Frame<'_>) {
     let (mut hs, mut os, mut htri, mut otri) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let lap = |frame: &mut Frame<'_>, ms: &mut Vec<f64>, tris: &mut Vec<f64>| {
+        for v in views {
+            let s = Instant::now();
+            tris.push(f64::from(frame(v)));
+            ms.push(s.elapsed().as_secs_f64() * 1e3);
+        }
+    };
     for _ in 0..laps {
-        for v in &views {
-            let s = Instant::now();
-            htri.push(f64::from(hierarchy_frame(
-                &h,
-                &mut cam,
-                v,
-                &mut indices,
-                &mut offsets,
-            )));
-            hs.push(s.elapsed().as_secs_f64() * 1e3);
-        }
-        for v in &views {
-            let s = Instant::now();
-            otri.push(f64::from(octree_frame(
-                &t,
-                &mut cut,
-                v,
-                &mut indices,
-                &mut offsets,
-            )));
-            os.push(s.elapsed().as_secs_f64() * 1e3);
-        }
+        lap(hierarchy, &mut hs, &mut htri);
+        lap(octree, &mut os, &mut otri);
     }
     let (hm, om) = (median(&mut hs), median(&mut os));
     let (htm, otm) = (median(&mut htri), median(&mut otri));

@@ -6,7 +6,17 @@ use caveclod_core::{CameraState, Hierarchy, NodeId, PolyId};
 
 /// Checks every invariant of `cam` over `h`; returns a description of the first violation.
 pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), String> {
-    // The active front derived from scratch from the split state alone.
+    let (want_nodes, want_polys) = derived_front(h, cam);
+    let polys = check_active_sets(h, cam, &want_nodes, &want_polys)?;
+    for &f in &polys {
+        let corners = check_corners(h, cam, f, &want_nodes)?;
+        check_neighbours(h, cam, f, corners)?;
+    }
+    check_emission(h, cam, &polys)
+}
+
+/// The active nodes and polygons derived from scratch from the split state alone.
+fn derived_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> (HashSet<NodeId>, HashSet<PolyId>) {
     let split = |v: NodeId| cam.is_split(v);
     let mut want_nodes = HashSet::new();
     for (i, n) in h.nodes().iter().enumerate() {
@@ -25,8 +35,19 @@ pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), Strin
             }
         }
     }
+    (want_nodes, want_polys)
+}
+
+/// The camera's active nodes and polygons, their counts and `is_node_active` against the
+/// derived sets; returns the active polygons in the camera's order.
+fn check_active_sets(
+    h: &Hierarchy<'_>,
+    cam: &CameraState<'_>,
+    want_nodes: &HashSet<NodeId>,
+    want_polys: &HashSet<PolyId>,
+) -> Result<Vec<PolyId>, String> {
     let nodes: HashSet<NodeId> = cam.active_nodes().collect();
-    if nodes.len() != cam.active_node_count() as usize || nodes != want_nodes {
+    if nodes.len() != cam.active_node_count() as usize || &nodes != want_nodes {
         return Err(format!(
             "active nodes {} (count {}) differ from the derived {}",
             nodes.len(),
@@ -37,7 +58,7 @@ pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), Strin
     let polys: Vec<PolyId> = cam.active_polygons(h).collect();
     let poly_set: HashSet<PolyId> = polys.iter().copied().collect();
     if polys.len() != poly_set.len()
-        || poly_set != want_polys
+        || &poly_set != want_polys
         || polys.len() != cam.active_polygon_count() as usize
     {
         return Err(format!(
@@ -51,51 +72,78 @@ pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), Strin
             return Err(format!("is_node_active({v}) wrong"));
         }
     }
-    for &f in &polys {
-        let corners = cam
-            .polygon_corners(h, f)
-            .ok_or(format!("{f} has no corners"))?;
-        let full = h.polygons()[f.index()].nodes;
-        for k in 0..3 {
-            if !want_nodes.contains(&corners[k]) {
-                return Err(format!("{f} corner {k} = {} is not active", corners[k]));
-            }
-            // The current corner is the active ancestor of the full-resolution corner.
-            let mut a = full[k];
-            while a != corners[k] {
-                a = h.nodes()[a.index()].parent;
-                if a.is_none() {
-                    return Err(format!(
-                        "{f} corner {k} = {} is not above its leaf {}",
-                        corners[k], full[k]
-                    ));
-                }
-            }
+    Ok(polys)
+}
+
+/// Each corner of `f` is active and the active ancestor of its full-resolution corner;
+/// returns the corners.
+fn check_corners(
+    h: &Hierarchy<'_>,
+    cam: &CameraState<'_>,
+    f: PolyId,
+    want_nodes: &HashSet<NodeId>,
+) -> Result<[NodeId; 3], String> {
+    let corners = cam
+        .polygon_corners(h, f)
+        .ok_or(format!("{f} has no corners"))?;
+    let full = h.polygons()[f.index()].nodes;
+    for k in 0..3 {
+        if !want_nodes.contains(&corners[k]) {
+            return Err(format!("{f} corner {k} = {} is not active", corners[k]));
         }
-        let nbrs = cam
-            .polygon_neighbours(h, f)
-            .ok_or(format!("{f} has no neighbours"))?;
-        for j in 0..3 {
-            let g = nbrs[j];
-            if g.is_none() {
-                continue;
-            }
-            let (a, b) = (corners[(j + 1) % 3], corners[(j + 2) % 3]);
-            let gc = cam
-                .polygon_corners(h, g)
-                .ok_or(format!("{f} neighbour {g} inactive"))?;
-            let gn = cam
-                .polygon_neighbours(h, g)
-                .ok_or(format!("{g} has no neighbours"))?;
-            let back = (0..3).find(|&m| gc[m] != a && gc[m] != b);
-            if !gc.contains(&a) || !gc.contains(&b) || back.map(|m| gn[m]) != Some(f) {
+        let mut a = full[k];
+        while a != corners[k] {
+            a = h.nodes()[a.index()].parent;
+            if a.is_none() {
                 return Err(format!(
-                    "neighbour link {f} -> {g} across ({a}, {b}) not symmetric"
+                    "{f} corner {k} = {} is not above its leaf {}",
+                    corners[k], full[k]
                 ));
             }
         }
     }
-    // Emission: every index is the vertex of the polygon's group at the corner's position.
+    Ok(corners)
+}
+
+/// Every neighbour link of `f` is symmetric, across the edge the two share.
+fn check_neighbours(
+    h: &Hierarchy<'_>,
+    cam: &CameraState<'_>,
+    f: PolyId,
+    corners: [NodeId; 3],
+) -> Result<(), String> {
+    let nbrs = cam
+        .polygon_neighbours(h, f)
+        .ok_or(format!("{f} has no neighbours"))?;
+    for j in 0..3 {
+        let g = nbrs[j];
+        if g.is_none() {
+            continue;
+        }
+        let (a, b) = (corners[(j + 1) % 3], corners[(j + 2) % 3]);
+        let gc = cam
+            .polygon_corners(h, g)
+            .ok_or(format!("{f} neighbour {g} inactive"))?;
+        let gn = cam
+            .polygon_neighbours(h, g)
+            .ok_or(format!("{g} has no neighbours"))?;
+        let back = (0..3).find(|&m| gc[m] != a && gc[m] != b);
+        if !gc.contains(&a) || !gc.contains(&b) || back.map(|m| gn[m]) != Some(f) {
+            return Err(format!(
+                "neighbour link {f} -> {g} across ({a}, {b}) not symmetric"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Emission: every index is the vertex of the polygon's group at the corner's position, and
+/// each surface's list holds exactly its polygons.
+fn check_emission(
+    h: &Hierarchy<'_>,
+    cam: &CameraState<'_>,
+    polys: &[PolyId],
+) -> Result<(), String> {
     let ns = h.surface_count();
     let total: usize = (0..ns).map(|s| cam.index_count(s)).sum();
     let mut out = vec![0u32; total];
@@ -103,7 +151,7 @@ pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), Strin
     cam.emit_indices_packed(h, &mut out, &mut offsets)
         .map_err(|e| e.to_string())?;
     let mut cursor = offsets.clone();
-    for &f in &polys {
+    for &f in polys {
         let poly = h.polygons()[f.index()];
         let s = poly.surface.index();
         let corners = cam.polygon_corners(h, f).ok_or("corners")?;

@@ -6,7 +6,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
-use crate::record::TargetFormats;
+use crate::target::TargetFormats;
 
 /// What an image is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -30,7 +30,7 @@ use caveclod_core::gpu::{DrawPush, MorphInstance, MorphPush, MorphSlotsPush, Mor
 use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::mesh::VERTEX_STRIDE;
-use crate::record::target::{Rendering, TargetFormats};
+use crate::target::{Rendering, TargetFormats};
 
 /// The committed SPIR-V module.
 pub(crate) const SPIRV: &[u8] = include_bytes!("../spirv/caveclod_shaders.spv");

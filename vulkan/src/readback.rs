@@ -7,7 +7,7 @@ use ash::vk;
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
-use crate::record::Viewport;
+use crate::viewport::Viewport;
 
 /// Pixels of a colour target, RGBA8, rows top to bottom.
 #[derive(Clone, Debug, PartialEq, Eq)]

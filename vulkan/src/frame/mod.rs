@@ -12,7 +12,8 @@ use crate::device::Context;
 use crate::error::{Error, Result, VkResultExt};
 use crate::image::{Image, ImageDesc};
 use crate::readback::RgbaImage;
-use crate::record::{RecordCamera, Recorder, RecorderDesc, TargetFormats};
+use crate::record::{RecordCamera, Recorder};
+use crate::target::{RecorderDesc, TargetFormats};
 
 /// How to make a [`Renderer`].
 #[derive(Clone, Debug, PartialEq)]

@@ -6,9 +6,10 @@ use ash::vk;
 use caveclod_core::gpu::{DrawPush, MORPH_BLENDED, MORPH_IN_VERTEX_STAGE};
 use glam::Vec4;
 
-use super::{RecordCamera, Recorder, Viewport};
+use super::{RecordCamera, Recorder};
 use crate::camera_morphs::{CameraMorphs, MorphStage};
 use crate::pipeline::{DrawPipeline, VertexStage};
+use crate::viewport::Viewport;
 
 /// Bytes per vertex colour (RGBA8).
 const COLOUR_STRIDE: u64 = 4;

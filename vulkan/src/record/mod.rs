@@ -3,11 +3,6 @@
 
 mod draw;
 mod made;
-pub(crate) mod target;
-mod viewport;
-
-pub use target::{RecorderDesc, Rendering, TargetFormats};
-pub use viewport::Viewport;
 
 use ash::vk;
 use glam::Mat4;
@@ -19,6 +14,8 @@ use crate::indices::CameraIndices;
 use crate::material::{Bindings, MaterialSet};
 use crate::mesh::{MorphInstances, VertexBuffer};
 use crate::pipeline::{ComputePipeline, DrawPipeline, PipelineTarget, VertexStage};
+use crate::target::RecorderDesc;
+use crate::viewport::Viewport;
 
 /// One camera's draws in a recorded frame.
 #[derive(Clone, Copy, Debug)]
