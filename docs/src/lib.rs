@@ -3,6 +3,10 @@
 //! compiled against the header by `cargo xtask test`.
 #![deny(missing_docs)]
 
+/// `README.md`.
+#[doc = include_str!("../../README.md")]
+pub mod readme {}
+
 /// `docs/baking.md`.
 #[doc = include_str!("../baking.md")]
 pub mod baking {}
@@ -14,6 +18,10 @@ pub mod out_of_core {}
 /// `docs/frame-loop.md`.
 #[doc = include_str!("../frame-loop.md")]
 pub mod frame_loop {}
+
+/// `docs/vulkan.md`.
+#[doc = include_str!("../vulkan.md")]
+pub mod vulkan {}
 
 /// `docs/gmesh-crowds.md`.
 #[doc = include_str!("../gmesh-crowds.md")]

@@ -20,7 +20,8 @@
 //!   buffers.
 //! - [`GpuMaterials`] ([`materials`]): a hierarchy's material textures decoded and uploaded
 //!   once, and the material set a recorder draws with; [`palette()`]: colours for surfaces
-//!   without materials; [`orbit`](orbit::orbit): cameras around a hierarchy; [`write_png`]
+//!   without materials; [`terrain_colours`]: a terrain tinted by height and slope;
+//!   [`orbit`](orbit::orbit): cameras around a hierarchy; [`write_png`]
 //!   ([`png`]): a read-back image written as a PNG file.
 //!
 //! Every object is destroyed explicitly (`destroy(self, &Host)`), in reverse order of
@@ -68,6 +69,7 @@ mod surface;
 #[cfg(feature = "window")]
 pub mod swapchain;
 pub mod target;
+pub mod terrain;
 
 pub use error::{Error, Result};
 pub use frames::Frames;
@@ -81,3 +83,4 @@ pub use rendering::Attachments;
 #[cfg(feature = "window")]
 pub use swapchain::{Acquired, Swapchain, SwapchainDesc};
 pub use target::{Target, TargetDesc, TargetRendering};
+pub use terrain::terrain_colours;

@@ -30,6 +30,17 @@ pub struct SurfaceMaterial<'a> {
 }
 
 impl<'a> SurfaceMaterial<'a> {
+    /// A plain colour (linear RGBA), untextured and opaque: with white, what the vertex
+    /// colours say, lit.
+    pub fn plain(factor: [f32; 4]) -> Self {
+        Self {
+            texture: None,
+            factor,
+            alpha_cutoff: 0.0,
+            blend: false,
+        }
+    }
+
     /// `texture` as it is: white factor, no alpha cutoff, opaque.
     pub fn textured(texture: &'a Texture) -> Self {
         Self {

@@ -35,8 +35,21 @@ pub struct VertexBuffer {
 impl VertexBuffer {
     /// Uploads a hierarchy's vertex buffer and, if it has them, its vertex colours.
     pub fn from_hierarchy(ctx: &Context, name: &str, h: &Hierarchy<'_>) -> Result<Self> {
-        let mut v = Self::from_vertices(ctx, name, h.vertices())?;
-        if let Some(colours) = h.vertex_colours() {
+        Self::coloured(ctx, name, h.vertices(), h.vertex_colours())
+    }
+
+    /// Uploads `vertices` and, with `colours` (one RGBA8 per vertex: sRGB-encoded colour,
+    /// linear alpha), their colours: a hierarchy's own ([`from_hierarchy`](Self::from_hierarchy))
+    /// or colours the application computes, a terrain tinted by height for instance. The
+    /// colours are drawn multiplied with the material, and morphing vertices blend them.
+    pub fn coloured(
+        ctx: &Context,
+        name: &str,
+        vertices: &[Vertex],
+        colours: Option<&[[u8; 4]]>,
+    ) -> Result<Self> {
+        let mut v = Self::from_vertices(ctx, name, vertices)?;
+        if let Some(colours) = colours {
             match Self::colour_count(name, colours, v.count).and_then(|()| {
                 upload(
                     ctx,

@@ -67,8 +67,8 @@ use crate::mesh::{Mesh, NO_ATTRIBUTE};
 pub use soup::Cube;
 use soup::{encode_normal, Corner, SoupTriangle, KEY_LEVELS};
 
-/// Output triangles whose in-core hierarchy build fits `budget` (about 1.6 KB each, with room
-/// for the clustering).
+/// Output triangles whose in-core hierarchy build fits `budget`: 1,600 bytes a triangle,
+/// the in-core build's peak per triangle with room for the clustering beside it.
 pub fn target_triangles_for_budget(budget: u64) -> u64 {
     (budget / 1600).max(16)
 }

@@ -260,8 +260,8 @@ fn rayon_threads() -> usize {
 /// Buffers of a megabyte or more straight from the system and back to it when freed. An
 /// out-of-core bake allocates and frees buffers of many megabytes (sort chunks, clusters
 /// growing on several threads); glibc raises its threshold for that to the largest buffer
-/// freed so far, after which freed buffers stay resident in its arenas: about 100 MB more
-/// peak memory for the 20M-triangle terrain at a 256 MiB budget. A blocked bake frees its
+/// freed so far, after which freed buffers stay resident in its arenas and count in the
+/// peak as if still in use, outside the memory budget. A blocked bake frees its
 /// blocks' builds level after level and the welded mesh before the written file is mapped
 /// for validation, which then finds them still resident.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]

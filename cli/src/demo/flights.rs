@@ -42,7 +42,8 @@ pub const REGULATED_TARGET: u32 = 20_000;
 /// The screen speed limit of the demo's speed-limited flight, in pixels per second
 /// ([`caveclod_core::RefineParams::morph_speed_px_s`]): 0.15 px a frame at 60 Hz, under the
 /// popping acceptance's 99th percentile. The defaults set none, because a long slide then
-/// takes many seconds (a 300-pixel one, 33 s) and the row shows what that costs.
+/// takes many seconds (a slide of a few hundred pixels, half a minute) and the row shows what
+/// that costs.
 pub const SPEED_LIMIT_PX_S: f32 = 9.0;
 
 /// The display rate the report converts per-frame figures at, for comparison with the CAVECLOD

@@ -8,10 +8,11 @@ use std::path::{Path, PathBuf};
 
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
-use caveclod_host::{palette, write_png};
+use caveclod_host::{terrain_colours, write_png};
 use caveclod_vulkan::{
-    CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt, MorphStage,
-    RecordCamera, Renderer, RendererDesc, RgbaImage, VertexBuffer, Viewport,
+    CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt, MaterialSet,
+    MorphStage, RecordCamera, Renderer, RendererDesc, RgbaImage, SurfaceMaterial, VertexBuffer,
+    Viewport,
 };
 
 use crate::flyover::{clip, eye_at, routes, Ground, FOV_Y_DEG};
@@ -112,21 +113,23 @@ fn draw(
     Ok(written)
 }
 
-/// What the shots draw with: the terrain's vertices, the renderer, and per camera its index
-/// ring and morph slots (blended by the compute stage).
+/// What the shots draw with: the terrain's vertices tinted by height and slope, a white
+/// material per surface (lit vertex colours, no texture pattern), the renderer, and per
+/// camera its index ring and morph slots (blended by the compute stage).
 struct Drawing {
     vertices: VertexBuffer,
     renderer: Renderer,
+    materials: MaterialSet,
     indices: Vec<CameraIndices>,
     morphs: Vec<CameraMorphs>,
-    colours: Vec<[f32; 4]>,
 }
 
 impl Drawing {
     /// Uploads `h`'s vertices and makes the renderer (one frame in flight, read back) and
     /// each camera's ring and morph slots; what was made is destroyed on an error.
     fn new(ctx: &Context, h: &Hierarchy<'_>) -> caveclod_vulkan::Result<Self> {
-        let vertices = VertexBuffer::from_hierarchy(ctx, "terrain", h)?;
+        let tint = terrain_colours(h.vertices());
+        let vertices = VertexBuffer::coloured(ctx, "terrain", h.vertices(), Some(&tint))?;
         let desc = RendererDesc {
             targets: vec![SIZE],
             frames_in_flight: 1,
@@ -142,12 +145,21 @@ impl Drawing {
                 return Err(e);
             }
         };
+        let white = vec![SurfaceMaterial::plain([1.0; 4]); h.surface_count()];
+        let materials = match MaterialSet::new(ctx, renderer.recorder(), &white) {
+            Ok(m) => m,
+            Err(e) => {
+                let _ = renderer.destroy(ctx);
+                let _ = vertices.destroy(ctx);
+                return Err(e);
+            }
+        };
         let mut gpu = Self {
             vertices,
             renderer,
+            materials,
             indices: Vec::with_capacity(4),
             morphs: Vec::with_capacity(4),
-            colours: (0..h.surface_count()).map(palette).collect(),
         };
         for i in 0..4 {
             let name = format!("camera {i}");
@@ -196,7 +208,7 @@ impl Drawing {
             .map(|(i, (ind, morphs))| {
                 let view_proj = looks[i].view_projection(viewports[i].aspect());
                 let camera = RecordCamera::new(viewports[i], view_proj, &self.vertices, ind)
-                    .colours(&self.colours)
+                    .materials(&self.materials)
                     .refine_morphs(morphs);
                 (0, camera)
             })
@@ -211,6 +223,7 @@ impl Drawing {
         let waited = self.renderer.wait(ctx);
         let morphs = self.morphs.into_iter().try_for_each(|m| m.destroy(ctx));
         let indices = self.indices.into_iter().try_for_each(|i| i.destroy(ctx));
+        self.materials.destroy(ctx);
         let renderer = self.renderer.destroy(ctx);
         let vertices = self.vertices.destroy(ctx);
         waited.and(morphs).and(indices).and(renderer).and(vertices)

@@ -53,9 +53,9 @@ const MORPH_HEADROOM: f64 = 0.75;
 
 /// Morph memory for a camera of `budget` polygons: half its budget. Morphs slowed by a
 /// screen speed limit ([`RefineParams::morph_speed_px_s`]) near the eye outlast their
-/// durations, so the operations of one duration underestimate them; over St. Helens at
-/// 1 px with `--morph-speed 9` the cameras held up to about a third of their active
-/// polygons in morphs at once.
+/// durations, so the operations of one duration underestimate them; a morph belongs to a live
+/// split, and a camera's splits are at most half its polygons, so half the budget is room
+/// for every morph a flight can hold.
 pub fn morphs_for_budget(budget: u32) -> u32 {
     (budget / 2).max(256)
 }
