@@ -4,18 +4,19 @@
 
 use caveclod_core::format::Vertex;
 
-/// The height ramp: (share of the height range, sRGB colour).
+/// The height ramp: (share of the height range, linear colour). The colours are light, as
+/// the surface palette's are, because lighting takes up to three quarters of them away.
 const RAMP: [(f32, [f32; 3]); 6] = [
-    (0.00, [0.36, 0.46, 0.27]),
-    (0.25, [0.52, 0.56, 0.33]),
-    (0.50, [0.60, 0.52, 0.38]),
-    (0.72, [0.55, 0.50, 0.46]),
-    (0.88, [0.72, 0.71, 0.70]),
-    (1.00, [0.96, 0.96, 0.97]),
+    (0.00, [0.42, 0.56, 0.30]),
+    (0.25, [0.62, 0.66, 0.38]),
+    (0.50, [0.74, 0.63, 0.46]),
+    (0.72, [0.70, 0.65, 0.60]),
+    (0.88, [0.84, 0.83, 0.81]),
+    (1.00, [1.00, 1.00, 1.00]),
 ];
 
-/// Bare rock, which steep faces turn to.
-const ROCK: [f32; 3] = [0.47, 0.44, 0.41];
+/// Bare rock, which steep faces turn to (linear).
+const ROCK: [f32; 3] = [0.60, 0.56, 0.52];
 
 /// Shares of the vertices below the ramp's ends: a few outliers (a spike, a pit) must not
 /// squeeze the ramp for the rest.
@@ -26,9 +27,10 @@ const HIGH_SHARE: f32 = 0.995;
 const ROCK_FROM: f32 = 0.25;
 const ROCK_TO: f32 = 0.6;
 
-/// One RGBA8 colour per vertex (sRGB colour, opaque) for a terrain whose `y` is up: the
-/// height ramp between the low and high shares of the heights, mixed towards rock on steep
-/// faces. Draw them with a white material (`caveclod_vulkan::VertexBuffer::coloured`).
+/// One RGBA8 colour per vertex for a terrain whose `y` is up: the height ramp between the
+/// low and high shares of the heights, mixed towards rock on steep faces; linear colours
+/// stored sRGB-encoded, as vertex colours are (the shaders decode them). Draw them with a
+/// white material (`caveclod_vulkan::VertexBuffer::coloured`).
 pub fn terrain_colours(vertices: &[Vertex]) -> Vec<[u8; 4]> {
     let (low, high) = height_range(vertices);
     let span = (high - low).max(f32::MIN_POSITIVE);
@@ -39,7 +41,7 @@ pub fn terrain_colours(vertices: &[Vertex]) -> Vec<[u8; 4]> {
             let steep = 1.0 - v.normal[1].abs();
             let rock = smoothstep(ROCK_FROM, ROCK_TO, steep);
             let c = mix(ramp(height), ROCK, rock * (1.0 - height * height));
-            [byte(c[0]), byte(c[1]), byte(c[2]), 255]
+            [byte(encode(c[0])), byte(encode(c[1])), byte(encode(c[2])), 255]
         })
         .collect()
 }
@@ -80,6 +82,15 @@ fn smoothstep(from: f32, to: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// A linear channel in `0..=1` in the sRGB encoding (the inverse of the shaders' decoding).
+fn encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        x * 12.92
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 fn byte(x: f32) -> u8 {
     (x.clamp(0.0, 1.0) * 255.0).round() as u8
 }
@@ -105,7 +116,7 @@ mod tests {
         let (valley, peak, cliff) = (c[0], c[100], c[101]);
         assert!(valley[1] > valley[0] && valley[1] > valley[2], "{valley:?}");
         assert!(peak.iter().all(|&x| x > 230), "{peak:?}");
-        let rock = ROCK.map(byte);
+        let rock = ROCK.map(|x| byte(encode(x)));
         assert!((0..3).all(|k| cliff[k].abs_diff(rock[k]) < 12), "{cliff:?}");
         assert!(c.iter().all(|x| x[3] == 255));
     }
