@@ -26,7 +26,7 @@
 //!   size"; divided by the input triangles. Without `/usr/bin/time` the row says so.
 //!
 //! The inputs are lucy and the St. Helens terrain from `../shared/data`, and a generated
-//! 1200 × 1200 grid (`caveclod_tests::generate::terrain`, 2,875,202 triangles with normals,
+//! 1200 × 1200 grid (`caveclod_bake::generate::terrain`, 2,875,202 triangles with normals,
 //! colours and UVs, written to the temporary directory and removed after the run).
 //!
 //! Prints the figures with ratios (ours / meshopt) and writes them to `bake-quality.csv` in
@@ -468,7 +468,7 @@ fn main() {
                     "caveclod-bake-bench-{}-{name}.ply",
                     std::process::id()
                 ));
-                caveclod_tests::generate::terrain(&path, triangles, &mut |_, _| {})
+                caveclod_bake::generate::terrain(&path, triangles, &mut |_, _| {})
                     .expect("generate the grid");
                 run(name, &path, &settings, &mut csv);
                 std::fs::remove_file(&path).expect("remove the generated grid");

@@ -36,7 +36,7 @@ fn data(relative: &str) -> Option<PathBuf> {
 fn main() {
     let tmp = tempfile_dir();
     let terrain = tmp.join("terrain.ply");
-    caveclod_tests::generate::terrain(&terrain, 2_000_000, &mut |_, _| {}).expect("generate");
+    caveclod_bake::generate::terrain(&terrain, 2_000_000, &mut |_, _| {}).expect("generate");
     let mut inputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(p) = data("scans/lucy.ply") {
         inputs.push(("lucy", p));
