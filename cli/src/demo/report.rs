@@ -179,7 +179,7 @@ fn huge_pages(s: &mut String, terrain: &Loaded) {
         s,
         "The terrain's hierarchy ({} bytes) lies in memory of which the system backs {} with \
          huge pages, as are the flights' camera states where it grants them (transparent huge \
-         pages, asked for with `madvise`; see `aligned.rs`).\n",
+         pages, asked for with `madvise`; see `caveclod_io::aligned`).\n",
         terrain.bytes().len(),
         terrain.bytes().huge_page_bytes().map_or(
             "an unknown amount (not Linux)".to_string(),
