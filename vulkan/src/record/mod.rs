@@ -153,10 +153,12 @@ impl Default for Pipelines {
 /// Design decisions:
 /// - **The caller owns the frame.** [`record`](Self::record) only binds pipelines and
 ///   buffers and issues indexed draws into `cmd`, which must be recording inside the
-///   caller's rendering: `vkCmdBeginRendering` ([`Rendering::Dynamic`]) or the subpass of
-///   the caller's render pass named in [`RecorderDesc`], with attachments of
-///   [`TargetFormats`]. It does not begin or end rendering, record barriers, submit, wait,
-///   or lock the queue, so it fits a render graph, a swapchain frame or a test harness
+///   caller's rendering: `vkCmdBeginRendering`
+///   ([`Rendering::Dynamic`](crate::Rendering::Dynamic)) or the subpass of the caller's
+///   render pass named in [`RecorderDesc`], with attachments of
+///   [`TargetFormats`](crate::TargetFormats). It does not begin or end rendering, record
+///   barriers, submit, wait, or lock the queue, so it fits a render graph, a swapchain frame
+///   or a test harness
 ///   alike; dynamic state it sets is viewport and scissor (per camera).
 /// - **The caller says which frame slot.** Each camera's [`CameraIndices`] is a ring over
 ///   the caller's frames in flight: the caller fills slot `s` after its fence for the
