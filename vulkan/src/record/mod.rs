@@ -158,8 +158,7 @@ impl Default for Pipelines {
 ///   render pass named in [`RecorderDesc`], with attachments of
 ///   [`TargetFormats`](crate::TargetFormats). It does not begin or end rendering, record
 ///   barriers, submit, wait, or lock the queue, so it fits a render graph, a swapchain frame
-///   or a test harness
-///   alike; dynamic state it sets is viewport and scissor (per camera).
+///   or a test harness alike; dynamic state it sets is viewport and scissor (per camera).
 /// - **The caller says which frame slot.** Each camera's [`CameraIndices`] is a ring over
 ///   the caller's frames in flight: the caller fills slot `s` after its fence for the
 ///   frame that last used slot `s` signalled, then records with `s`. Filling writes mapped
