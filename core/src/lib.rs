@@ -81,13 +81,13 @@ mod regulator;
 mod screen;
 mod view;
 
+/// The records are `bytemuck::Pod`: `bytemuck::cast_slice(h.vertices())` gives the vertex
+/// buffer's bytes to upload, with the crate's own version.
+pub use bytemuck;
 pub use camera::{
     CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, OpError,
     RefineStats,
 };
-/// The records are `bytemuck::Pod`: `bytemuck::cast_slice(h.vertices())` gives the vertex
-/// buffer's bytes to upload, with the crate's own version.
-pub use bytemuck;
 pub use format::error::FormatError;
 pub use glam;
 pub use gpu::MorphVertex;

@@ -77,7 +77,7 @@ pub use host::{Host, HostDesc};
 pub use image::{Image, ImageDesc, ReadbackBuffer};
 pub use materials::GpuMaterials;
 pub use orbit::{orbit, orbit_box};
-pub use palette::palette;
+pub use palette::{hue, palette};
 pub use png::{write_png, PngWriteError};
 pub use rendering::Attachments;
 #[cfg(feature = "window")]

@@ -41,7 +41,12 @@ pub fn terrain_colours(vertices: &[Vertex]) -> Vec<[u8; 4]> {
             let steep = 1.0 - v.normal[1].abs();
             let rock = smoothstep(ROCK_FROM, ROCK_TO, steep);
             let c = mix(ramp(height), ROCK, rock * (1.0 - height * height));
-            [byte(encode(c[0])), byte(encode(c[1])), byte(encode(c[2])), 255]
+            [
+                byte(encode(c[0])),
+                byte(encode(c[1])),
+                byte(encode(c[2])),
+                255,
+            ]
         })
         .collect()
 }

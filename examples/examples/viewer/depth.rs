@@ -120,7 +120,7 @@ impl DepthBands {
                 } else {
                     0.0
                 };
-                hue(240.0 * (1.0 - t))
+                caveclod_host::hue(240.0 * (1.0 - t), 0.15)
             })
             .collect()
     }
@@ -129,22 +129,6 @@ impl DepthBands {
 /// The vertex-buffer index of `node`'s position in surface group `group`.
 fn vertex_of(h: &Hierarchy<'_>, group: caveclod_core::SurfaceGroupId, node: NodeId) -> Option<u32> {
     h.vertex_index(group, h.node(node)?.position)
-}
-
-/// A saturated colour of hue `degrees` (0 red, 120 green, 240 blue), softened towards
-/// white so the shading stays readable.
-fn hue(degrees: f32) -> [f32; 4] {
-    let h = (degrees / 60.0).rem_euclid(6.0);
-    let x = 1.0 - ((h % 2.0) - 1.0).abs();
-    let (r, g, b) = match h as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        4 => (x, 0.0, 1.0),
-        _ => (1.0, 0.0, x),
-    };
-    [0.15 + 0.85 * r, 0.15 + 0.85 * g, 0.15 + 0.85 * b, 1.0]
 }
 
 #[cfg(test)]
