@@ -62,20 +62,19 @@ impl Eq for AlignedBytes {}
 impl AlignedBytes {
     /// `len` zero bytes.
     pub fn zeroed(len: usize) -> Self {
-        let align = if len >= HUGE_PAGES_FROM {
-            HUGE_PAGE
-        } else {
-            64
-        };
-        // Reserved, not yet written: a large allocation is usually fresh pages of its own
-        // mapping (see the module docs for when it is not).
-        let mut buf: Vec<u8> = Vec::with_capacity(len + align);
-        // From the address itself: `align_offset` may answer "cannot" (`usize::MAX`) by its
-        // contract; the reserve holds any offset below `align`.
-        let start = (align - buf.as_ptr().addr() % align) % align;
-        if align == HUGE_PAGE {
-            advise_huge_pages(&mut buf, start, len);
+        if len < HUGE_PAGES_FROM {
+            // Zeroed by the allocator in one step.
+            let buf = vec![0u8; len + 64];
+            let start = (64 - buf.as_ptr().addr() % 64) % 64;
+            return Self { buf, start, len };
         }
+        // Reserved, not yet written: a large allocation is usually fresh pages of its own
+        // mapping (see the module docs for when it is not), advised before the first touch.
+        let mut buf: Vec<u8> = Vec::with_capacity(len + HUGE_PAGE);
+        // From the address itself: `align_offset` may answer "cannot" (`usize::MAX`) by its
+        // contract; the reserve holds any offset below the alignment.
+        let start = (HUGE_PAGE - buf.as_ptr().addr() % HUGE_PAGE) % HUGE_PAGE;
+        advise_huge_pages(&mut buf, start, len);
         // The first touch: the kernel backs the advised range with huge pages where it can.
         buf.resize(start + len, 0);
         Self { buf, start, len }
