@@ -79,6 +79,7 @@ mod params;
 mod prefetch;
 mod regulator;
 mod screen;
+pub mod stream;
 mod view;
 
 /// The records are `bytemuck::Pod`: `bytemuck::cast_slice(h.vertices())` gives the vertex

@@ -9,7 +9,8 @@
 //!   (truncations and byte flips of the shared real inputs through the in-memory bake, in
 //!   release), the no_std build for a microcontroller target, the interactive viewer under
 //!   Xvfb (a resize storm, its screenshot's coverage and no validation message), clippy on the core crate without its
-//!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri, and
+//!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri (two
+//!   groups side by side: miri interprets on one core), and
 //!   the C interface (`capi`): the C examples and the C++ test built with the system's
 //!   compilers, run, and compared with the Rust API's numbers.
 //!   Every step prints a header and its wall time; the run ends with `N passed, M failed`.
@@ -22,6 +23,7 @@
 //! - `capi-header`: writes the C interface's header `capi/include/caveclod.h` from the
 //!   `caveclod-capi` sources (cbindgen; a test fails while the committed one differs).
 //! - `capi-check`: the C interface's step of `test` alone (see [`capi`]).
+//! - `miri`: the miri step of `test` alone (see [`miri`]).
 //!
 //! Only std: the tool must build before anything else is installed.
 
@@ -29,6 +31,7 @@ mod capi;
 mod demo;
 mod graph;
 mod limits;
+mod miri;
 mod process;
 mod setup;
 mod shader_manifest;
@@ -57,6 +60,7 @@ commands:
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   capi-header           write capi/include/caveclod.h from the caveclod-capi sources
   capi-check            test's C interface step alone
+  miri                  test's miri step alone
   limits                README < 200 lines, ARCHITECTURE < 150, src files < 800, functions
                         <= 120 lines, no figures or history in src comments, no import
                         circle in any crate (test runs it)
@@ -79,6 +83,7 @@ fn main() -> ExitCode {
         "check-shaders" => parse_flags(rest, &[]).and_then(|_| check_shaders()),
         "capi-header" => parse_flags(rest, &[]).and_then(|_| capi::write_header()),
         "capi-check" => parse_flags(rest, &[]).and_then(|_| capi::check()),
+        "miri" => parse_flags(rest, &[]).and_then(|_| miri::step()),
         "limits" => parse_flags(rest, &[]).and_then(|_| limits::check(&workspace_root())),
         "graph" => parse_flags(rest, &[]).and_then(|_| print_graph()),
         "demo" => demo(rest),

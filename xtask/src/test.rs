@@ -6,19 +6,15 @@ use std::time::{Duration, Instant};
 
 use crate::capi;
 use crate::limits;
+use crate::miri;
 use crate::process::{cmd, run, workspace_root, NIGHTLY, NO_STD_TARGET};
-use crate::setup::{install_miri, miri_installed, setup};
+use crate::setup::setup;
 use crate::shaders::check_shaders;
 
 /// The mesh the viewer check opens (baked on the fly; its material names its texture) and
 /// the image it writes.
 const VIEWER_INPUT: &str = "data/spot/spot_triangulated.obj";
 const VIEWER_SCREENSHOT: &str = "caveclod-viewer-check.png";
-
-/// Features for the miri run. libm (through glam) computes `sqrtf` with inline `sqrtss` on
-/// x86, which miri cannot interpret; its `force-soft-floats` feature selects the portable
-/// implementation. Only the miri build uses it.
-const MIRI_FEATURES: &str = "libm/force-soft-floats";
 
 type Step = Box<dyn Fn() -> Result<(), String>>;
 
@@ -108,26 +104,10 @@ fn test_steps() -> Vec<(String, Step)> {
             ],
         ),
         (
-            format!("cargo +{NIGHTLY} miri test -p caveclod-core"),
-            Box::new(|| {
-                if !miri_installed() {
-                    install_miri()?;
-                }
-                let nightly = format!("+{NIGHTLY}");
-                run(cmd(
-                    "cargo",
-                    &[
-                        &nightly,
-                        "miri",
-                        "test",
-                        "-p",
-                        "caveclod-core",
-                        "--no-fail-fast",
-                        "--features",
-                        MIRI_FEATURES,
-                    ],
-                ))
-            }),
+            format!(
+                "cargo +{NIGHTLY} miri test -p caveclod-core (two groups side by side, then the doc-tests)"
+            ),
+            Box::new(miri::step),
         ),
     ]
 }
