@@ -1,7 +1,7 @@
 //! What goes wrong while streaming: a page whose bytes fail (reported once, never a panic),
 //! and calls that do not fit the pool's state.
 
-use super::residency::PageKey;
+use super::key::PageKey;
 use crate::format::FormatError;
 
 /// Why a page could not be installed.

@@ -26,6 +26,7 @@
 
 mod config;
 mod fault;
+mod key;
 mod lists;
 mod requests;
 mod residency;
@@ -33,5 +34,6 @@ mod table;
 
 pub use config::{FileTables, PoolConfig, PoolError};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
-pub use residency::{LoadRequest, PageKey, PageState, PoolStats, Residency, ScheduleStats, Wanted};
+pub use key::PageKey;
+pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};
 pub use table::{page_tags, PageEntry, PageField, PageTable, PageTableError};

@@ -3,20 +3,11 @@
 
 use super::config::{FileTables, PoolConfig, PoolError, Words};
 use super::fault::{FaultKind, InstallError, PageFault, StreamError};
+use super::key::PageKey;
 use super::lists::{Lists, NONE};
 use super::table::PageTable;
 use crate::checksum::checksum64;
 use crate::format::FormatError;
-
-/// A page of one of a pool's files: the file's index (from
-/// [`Residency::add_file`]) and the page's index in its table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct PageKey {
-    /// The file.
-    pub file: u32,
-    /// The page.
-    pub page: u32,
-}
 
 /// Where a page is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
