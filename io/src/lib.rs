@@ -13,6 +13,9 @@
 //!   ([`LoadError`]) name it.
 //! - [`CameraPool`] ([`camera_pool`]): many cameras' state memories in one aligned buffer,
 //!   one cache line apart, in huge pages where granted.
+//! - [`PageReader`] ([`pages`]): the page reader, serving the core's page loads for
+//!   streaming: byte-range reads of files on worker threads into a bounded set of reused
+//!   buffers, optionally paced by a simulated disk ([`DiskModel`]).
 //!
 //! caveclod-core's `HierarchyBuf` (its `alloc` feature) is the owned form for engines with
 //! an allocator but without std; this crate is for platforms with files and memory maps.
@@ -37,9 +40,14 @@ pub mod camera_pool;
 pub mod error;
 pub mod file;
 pub mod mapped;
+pub mod pages;
 
 pub use aligned::{AlignedBytes, HUGE_PAGES_FROM};
 pub use camera_pool::CameraPool;
 pub use error::LoadError;
 pub use file::ClodFile;
 pub use mapped::ClodBytes;
+pub use pages::{
+    DiskModel, FileSource, PageBuffer, PageReader, PageSource, ReadDone, ReadError, ReadRequest,
+    ReaderConfig, ReaderStats, SubmitError,
+};
