@@ -6,6 +6,7 @@
 mod counting;
 
 use caveclod_core::format::checksum64;
+use caveclod_core::format::paged::PageLayout;
 use caveclod_core::stream::{
     FaultKind, InstallError, LoadRequest, PageEntry, PageField, PageKey, PageState, PageTable,
     PoolConfig, Residency, StreamError, Wanted,
@@ -38,7 +39,8 @@ fn world(pages: u32, seed: u64) -> World {
     let mut rng = Rng(seed | 1);
     let (mut bytes, mut entries, mut parents) = (vec![0u8; 64], Vec::new(), Vec::new());
     for page in 0..pages {
-        let size = 64 + rng.below(1984) as u32;
+        let counts = [1 + rng.below(200) as u32, 0, 0, 0, 0, 0];
+        let size = PageLayout::new(counts, false).expect("layout").len as u32;
         let offset = bytes.len() as u64;
         let data: Vec<u8> = (0..size).map(|_| rng.next() as u8).collect();
         bytes.extend_from_slice(&data);
@@ -62,7 +64,9 @@ fn world(pages: u32, seed: u64) -> World {
             max_error: rng.below(10) as f32,
             bounds_min: lo,
             bounds_max: [lo[0] + 1.0, 1.0, 1.0],
-            reserved: [0; 2],
+            counts,
+            flags: 0,
+            reserved: [0; 3],
         });
     }
     World {
@@ -125,7 +129,7 @@ fn serve(
 }
 
 /// Every resident or loading page has its parents resident, and the counts agree.
-fn check_closure(r: &Residency<'_, '_>, worlds: &[&World]) {
+fn check_closure(r: &Residency<'_, '_>, worlds: &[&World], pinned: &[u32]) {
     let (mut resident, mut held) = (0, 0);
     for (file, w) in worlds.iter().enumerate() {
         let t = w.table();
@@ -136,7 +140,7 @@ fn check_closure(r: &Residency<'_, '_>, worlds: &[&World]) {
             };
             let state = r.state(key).expect("known page");
             if matches!(state, PageState::Resident | PageState::Loading) {
-                held += 1;
+                held += u32::from(page >= pinned[file]);
                 for &p in t.parents(page) {
                     let parent = PageKey {
                         file: key.file,
@@ -149,7 +153,12 @@ fn check_closure(r: &Residency<'_, '_>, worlds: &[&World]) {
                     );
                 }
             }
-            resident += u32::from(state == PageState::Resident);
+            let in_pool = page >= pinned[file];
+            resident += u32::from(state == PageState::Resident && in_pool);
+            if !in_pool {
+                assert_eq!(state, PageState::Resident, "{key:?} is pinned");
+                continue;
+            }
             if r.uses(key).expect("uses") > 0 {
                 assert_eq!(state, PageState::Resident, "{key:?} is used");
             }
@@ -176,6 +185,12 @@ fn page_tables_are_refused_field_by_field() {
     };
     refuse(&|e, _| e[3].offset += 8, PageField::Offset);
     refuse(&|e, _| e[3].size = 0, PageField::Size);
+    refuse(
+        &|e, _| e[3].counts[1] = e[3].counts[0] + 1,
+        PageField::Counts,
+    );
+    refuse(&|e, _| e[3].counts[0] += 100, PageField::Counts);
+    refuse(&|e, _| e[3].flags = 2, PageField::Counts);
     refuse(&|e, _| e[3].offset = len - 64, PageField::Size);
     refuse(&|e, _| e[3].parents_start = 1000, PageField::Parents);
     refuse(
@@ -215,7 +230,7 @@ fn parents_load_first() {
     let mut m = memory(4, 1, 3);
     let mut tables = vec![None; 1];
     let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table()).expect("file");
+    r.add_file(w.table(), 0).expect("file");
     let mut loads = [LoadRequest {
         key: key(0),
         slot: 0,
@@ -255,7 +270,7 @@ fn the_largest_excess_loads_first() {
     let mut m = memory(8, 1, 8);
     let mut tables = vec![None; 1];
     let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table()).expect("file");
+    r.add_file(w.table(), 0).expect("file");
     r.begin_frame();
     for (page, excess) in [(1, 0.5), (5, 3.0), (2, 1.0), (5, 0.1), (7, 2.0)] {
         r.want(key(page), excess).expect("want");
@@ -277,7 +292,7 @@ fn eviction_takes_the_least_recently_wanted_page_nothing_holds() {
     let mut m = memory(3, 1, 6);
     let mut tables = vec![None; 1];
     let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table()).expect("file");
+    r.add_file(w.table(), 0).expect("file");
     let mut loads = [LoadRequest {
         key: key(0),
         slot: 0,
@@ -321,7 +336,7 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     let mut m = memory(4, 1, 4);
     let mut tables = vec![None; 1];
     let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table()).expect("file");
+    r.add_file(w.table(), 0).expect("file");
     let mut loads = [LoadRequest {
         key: key(0),
         slot: 0,
@@ -377,8 +392,8 @@ fn many_files_share_one_pool() {
     let mut m = memory(10, 2, 50);
     let mut tables = vec![None; 2];
     let mut r = pool(&mut m, &mut tables);
-    assert_eq!(r.add_file(a.table()), Ok(0));
-    assert_eq!(r.add_file(b.table()), Ok(1));
+    assert_eq!(r.add_file(a.table(), 0), Ok(0));
+    assert_eq!(r.add_file(b.table(), 2), Ok(1));
     let mut loads = [LoadRequest {
         key: key(0),
         slot: 0,
@@ -401,7 +416,7 @@ fn many_files_share_one_pool() {
             let bytes = r.page_bytes(l.key).expect("resident");
             assert_eq!(checksum64(bytes), w.entries[l.key.page as usize].checksum);
         }
-        check_closure(&r, &[&a, &b]);
+        check_closure(&r, &[&a, &b], &[0, 2]);
     }
     assert!(r.stats().evictions > 0);
 }
@@ -415,7 +430,7 @@ fn a_random_soak_keeps_closure_without_allocating() {
     let mut m = memory(60, 1, 300);
     let mut tables = vec![None; 1];
     let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table()).expect("file");
+    r.add_file(w.table(), 0).expect("file");
     let mut loads = [LoadRequest {
         key: key(0),
         slot: 0,
@@ -472,7 +487,7 @@ fn a_random_soak_keeps_closure_without_allocating() {
                 Err(e) => panic!("{e}"),
             }
         }
-        check_closure(&r, &[&w]);
+        check_closure(&r, &[&w], &[0]);
     }
     assert_eq!(allocations(), before, "the frames allocated");
     assert_eq!(r.stats().failed, faults);

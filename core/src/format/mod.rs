@@ -37,6 +37,7 @@
 
 pub(crate) mod error;
 pub mod materials;
+pub mod paged;
 mod parts;
 mod plan;
 pub(crate) mod records;

@@ -1,7 +1,7 @@
 //! What a pool is sized by, where its bookkeeping lies in the caller's words, and why a
 //! configuration or its memory was refused.
 
-use super::table::PageTable;
+use crate::format::paged::PageTable;
 
 /// The sizes of a [`Residency`](super::Residency): fixed when it is made, so its memory is
 /// the caller's and never grows.

@@ -30,10 +30,9 @@ mod key;
 mod lists;
 mod requests;
 mod residency;
-mod table;
 
+pub use crate::format::paged::{PageEntry, PageField, PageTable, PageTableError};
 pub use config::{FileTables, PoolConfig, PoolError};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
 pub use key::PageKey;
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};
-pub use table::{page_tags, PageEntry, PageField, PageTable, PageTableError};

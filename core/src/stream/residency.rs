@@ -5,8 +5,8 @@ use super::config::{FileTables, PoolConfig, PoolError, Words};
 use super::fault::{FaultKind, InstallError, PageFault, StreamError};
 use super::key::PageKey;
 use super::lists::{Lists, NONE};
-use super::table::PageTable;
 use crate::checksum::checksum64;
+use crate::format::paged::PageTable;
 use crate::format::FormatError;
 
 /// Where a page is.
@@ -30,6 +30,8 @@ const FAILED: u32 = 3;
 /// Set in a page's state word while its slot is on the eviction list.
 const EVICTABLE: u32 = 4;
 pub(super) const STATE_MASK: u32 = 3;
+/// Set in a pinned page's state word: resident outside the pool, never evicted.
+const PINNED: u32 = 8;
 
 /// What [`Residency::want`] found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,8 +159,10 @@ impl<'a, 'm> Residency<'a, 'm> {
         })
     }
 
-    /// Adds a file's pages to the pool; its index names its pages in [`PageKey::file`].
-    pub fn add_file(&mut self, table: PageTable<'a>) -> Result<u32, PoolError> {
+    /// Adds a file's pages to the pool; its index names its pages in [`PageKey::file`]. Its
+    /// first `pinned` pages (a paged file's root pages) are resident from now on, outside the
+    /// pool: their bytes are the caller's, and they are never evicted.
+    pub fn add_file(&mut self, table: PageTable<'a>, pinned: u32) -> Result<u32, PoolError> {
         if self.files >= self.config.files {
             return Err(PoolError::TooManyFiles {
                 files: self.config.files,
@@ -171,14 +175,23 @@ impl<'a, 'm> Residency<'a, 'm> {
                 pages: self.config.pages,
             });
         }
-        if table.largest_page() > self.config.slot_bytes {
+        let streamed = table
+            .entries()
+            .get(pinned as usize..)
+            .ok_or(PoolError::BadConfig {
+                what: "more pinned pages than the file has",
+            })?;
+        let largest = streamed.iter().map(|e| e.size).max().unwrap_or(0);
+        if largest > self.config.slot_bytes {
             return Err(PoolError::PageTooLarge {
-                page_bytes: table.largest_page(),
+                page_bytes: largest,
                 slot_bytes: self.config.slot_bytes,
             });
         }
         let file = self.files;
         self.w.file_base[file as usize] = self.pages;
+        let base = self.pages as usize;
+        self.w.pages.state[base..base + pinned as usize].fill(RESIDENT | PINNED);
         self.tables[file as usize] = Some(table);
         self.files += 1;
         self.pages = needed as u32;
@@ -206,7 +219,8 @@ impl<'a, 'm> Residency<'a, 'm> {
         })
     }
 
-    /// The bytes of resident page `key`.
+    /// The bytes of resident page `key` (`None` for a pinned page: those bytes are the
+    /// caller's).
     pub fn page_bytes(&self, key: PageKey) -> Option<&[u8]> {
         let g = self.global(key)?;
         if self.w.pages.state[g] & STATE_MASK != RESIDENT {
@@ -459,7 +473,7 @@ impl<'a, 'm> Residency<'a, 'm> {
     pub(super) fn refresh(&mut self, g: usize) {
         let state = self.w.pages.state[g];
         let listed = state & EVICTABLE != 0;
-        let evictable = state & STATE_MASK == RESIDENT
+        let evictable = state & (STATE_MASK | PINNED) == RESIDENT
             && self.w.pages.uses[g] == 0
             && self.w.pages.children[g] == 0;
         let slot = self.w.pages.slot[g];

@@ -3,18 +3,12 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::{PageLayout, PAGE_HAS_COLOURS};
 use crate::format::SECTION_ALIGN;
 
-/// Tags of a paged file's root sections.
-pub mod page_tags {
-    use crate::format::Tag;
-    /// [`PageEntry`](super::PageEntry) per page, parents before children.
-    pub const PAGE_TABLE: Tag = Tag(*b"PGTB");
-    /// `u32` page indices: each page's parents, a range of this list per page.
-    pub const PAGE_PARENTS: Tag = Tag(*b"PGPR");
-}
-
-/// One page of a paged file (64 bytes).
+/// One page of a paged file (96 bytes): where it lies, how to check it, what must be
+/// resident before it, what loading it is worth, and how many records of each kind it holds
+/// (so references into it are checked while it is absent).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct PageEntry {
@@ -25,7 +19,7 @@ pub struct PageEntry {
     pub checksum: u64,
     /// The page's length in bytes.
     pub size: u32,
-    /// Where this page's parents start in [`page_tags::PAGE_PARENTS`].
+    /// Where this page's parents start in [`PAGE_PARENTS`](super::paged_tags::PAGE_PARENTS).
     pub parents_start: u32,
     /// How many parents the page has: pages that must be resident before it (none when its
     /// nodes hang from the root only).
@@ -37,11 +31,16 @@ pub struct PageEntry {
     pub bounds_min: [f32; 3],
     /// Upper corner of that box.
     pub bounds_max: [f32; 3],
+    /// How many records of each kind the page holds, in [`RecordKind`](super::RecordKind)
+    /// order: nodes, splits, polygons, positions, vertex-table entries, vertices.
+    pub counts: [u32; 6],
+    /// Bit 0: the page holds a colour per vertex.
+    pub flags: u32,
     /// Zero.
-    pub reserved: [u32; 2],
+    pub reserved: [u32; 3],
 }
 
-const _: () = assert!(core::mem::size_of::<PageEntry>() == 64);
+const _: () = assert!(core::mem::size_of::<PageEntry>() == 96);
 
 /// The field of a [`PageEntry`] a [`PageTableError`] names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,6 +55,8 @@ pub enum PageField {
     MaxError,
     /// [`PageEntry::bounds_min`] and [`PageEntry::bounds_max`].
     Bounds,
+    /// [`PageEntry::counts`] and [`PageEntry::flags`].
+    Counts,
 }
 
 impl PageField {
@@ -67,6 +68,7 @@ impl PageField {
             Self::Parents => "parents",
             Self::MaxError => "max_error",
             Self::Bounds => "bounds",
+            Self::Counts => "counts",
         }
     }
 }
@@ -87,7 +89,7 @@ impl core::fmt::Display for PageTableError {
         write!(
             f,
             "section {}: page {}: {}: {}",
-            page_tags::PAGE_TABLE,
+            super::paged_tags::PAGE_TABLE,
             self.page,
             self.field.name(),
             self.problem
@@ -126,6 +128,7 @@ impl<'a> PageTable<'a> {
             check_place(page, e, file_len)?;
             check_parents(page, e, parents)?;
             check_figures(page, e)?;
+            check_counts(page, e)?;
             largest = largest.max(e.size);
         }
         Ok(Self {
@@ -151,6 +154,13 @@ impl<'a> PageTable<'a> {
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
+    }
+
+    /// The layout of page `page`'s arrays (checked against its size in
+    /// [`new`](Self::new)).
+    pub fn layout(&self, page: u32) -> Option<PageLayout> {
+        let e = self.entries.get(page as usize)?;
+        PageLayout::new(e.counts, e.flags & PAGE_HAS_COLOURS != 0)
     }
 
     /// Page `page`'s entry (`page` below [`len`](Self::len)).
@@ -231,6 +241,29 @@ fn check_parents(page: u32, e: &PageEntry, parents: &[u32]) -> Result<(), PageTa
         previous = Some(p);
     }
     Ok(())
+}
+
+fn check_counts(page: u32, e: &PageEntry) -> Result<(), PageTableError> {
+    if e.flags & !PAGE_HAS_COLOURS != 0 || e.reserved != [0; 3] {
+        return Err(error(
+            page,
+            PageField::Counts,
+            "unknown flags or reserved words set",
+        ));
+    }
+    match PageLayout::new(e.counts, e.flags & PAGE_HAS_COLOURS != 0) {
+        Some(layout) if layout.len == e.size as usize => Ok(()),
+        Some(_) => Err(error(
+            page,
+            PageField::Counts,
+            "the arrays' length is not the page's size",
+        )),
+        None => Err(error(
+            page,
+            PageField::Counts,
+            "more splits than nodes, or too large",
+        )),
+    }
 }
 
 fn check_figures(page: u32, e: &PageEntry) -> Result<(), PageTableError> {
