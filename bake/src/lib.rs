@@ -51,6 +51,7 @@ pub mod import;
 pub mod materials;
 pub mod mesh;
 pub mod ooc;
+pub mod paged;
 pub mod pipeline;
 pub mod quadric;
 pub mod report;

@@ -87,6 +87,8 @@ typedef enum CaveclodStatus {
     // The bytes run on past the length the file's header records: extra bytes after the
     // file's end (pass the file's own length, not a larger buffer's).
     CAVECLOD_STATUS_TRAILING_BYTES = 17,
+    // The file is paged (its pages stream into a pool): this call reads whole files only.
+    CAVECLOD_STATUS_PAGED = 18,
 } CaveclodStatus;
 
 // A bump arena: `used` of `size` bytes at `base` are taken. Plain data: the caller may
@@ -566,7 +568,8 @@ enum CaveclodStatus caveclod_camera_morph_vertices(struct CaveclodCamera *cam,
 // `CAVECLOD_STATUS_MISALIGNED` when `bytes` is not aligned to `CAVECLOD_BYTES_ALIGN`,
 // `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_TRAILING_BYTES` (more bytes than the file
 // records), `CAVECLOD_STATUS_NOT_A_CLOD_FILE`, `CAVECLOD_STATUS_CORRUPT` or
-// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file. On failure `out` is
+// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file, and
+// `CAVECLOD_STATUS_PAGED` for a paged file's bytes. On failure `out` is
 // left a handle every other call refuses.
 //
 // Thread-safety: any thread; `out` must not be used by another thread during the call.

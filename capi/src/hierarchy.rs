@@ -49,7 +49,8 @@ pub(crate) unsafe fn hierarchy<'a>(h: *const CaveclodHierarchy) -> Result<&'a Hi
 /// `CAVECLOD_STATUS_MISALIGNED` when `bytes` is not aligned to `CAVECLOD_BYTES_ALIGN`,
 /// `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_TRAILING_BYTES` (more bytes than the file
 /// records), `CAVECLOD_STATUS_NOT_A_CLOD_FILE`, `CAVECLOD_STATUS_CORRUPT` or
-/// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file. On failure `out` is
+/// `CAVECLOD_STATUS_INVALID_FILE` for bytes that are not a valid file, and
+/// `CAVECLOD_STATUS_PAGED` for a paged file's bytes. On failure `out` is
 /// left a handle every other call refuses.
 ///
 /// Thread-safety: any thread; `out` must not be used by another thread during the call.

@@ -58,6 +58,8 @@ pub enum CaveclodStatus {
     /// The bytes run on past the length the file's header records: extra bytes after the
     /// file's end (pass the file's own length, not a larger buffer's).
     TrailingBytes = 17,
+    /// The file is paged (its pages stream into a pool): this call reads whole files only.
+    Paged = 18,
 }
 
 impl CaveclodStatus {
@@ -82,6 +84,7 @@ impl CaveclodStatus {
             Self::ArenaFull => c"the arena is full",
             Self::Internal => c"internal error (a bug): a panic was caught at the C boundary",
             Self::TrailingBytes => c"the file has bytes after the end its header records",
+            Self::Paged => c"the file is paged: its pages stream, and this call reads whole files",
         }
     }
 
@@ -93,6 +96,7 @@ impl CaveclodStatus {
             FormatError::BadMagic | FormatError::UnsupportedVersion { .. } => Self::NotAClodFile,
             FormatError::ChecksumMismatch { .. } => Self::Corrupt,
             FormatError::Misaligned { .. } => Self::Misaligned,
+            FormatError::Paged => Self::Paged,
             _ => Self::InvalidFile,
         }
     }
@@ -162,7 +166,7 @@ impl From<OctreeFormatError> for CaveclodStatus {
 /// Thread-safe: any thread, any time.
 #[no_mangle]
 pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
-    const ALL: [CaveclodStatus; 18] = [
+    const ALL: [CaveclodStatus; 19] = [
         CaveclodStatus::Ok,
         CaveclodStatus::NullPointer,
         CaveclodStatus::Misaligned,
@@ -181,6 +185,7 @@ pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
         CaveclodStatus::ArenaFull,
         CaveclodStatus::Internal,
         CaveclodStatus::TrailingBytes,
+        CaveclodStatus::Paged,
     ];
     let status = ALL
         .iter()

@@ -62,6 +62,7 @@ fn kind(e: &FormatError) -> &'static str {
         FormatError::BlobRange { .. } => "BlobRange",
         FormatError::NotUtf8 { .. } => "NotUtf8",
         FormatError::BadPath { .. } => "BadPath",
+        FormatError::Paged => "Paged",
     }
 }
 

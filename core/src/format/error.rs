@@ -44,6 +44,9 @@ pub enum FormatError {
         /// Bytes given.
         len: u64,
     },
+    /// The file is paged: its root is read on its own, and its pages as they are wanted
+    /// ([`format::paged`](crate::format::paged)).
+    Paged,
     /// The checksum does not match: the file is corrupt.
     ChecksumMismatch {
         /// Checksum the header records.
@@ -173,6 +176,11 @@ impl core::fmt::Display for FormatError {
                     len - expected
                 )
             }
+            Self::Paged => write!(
+                f,
+                "a paged file: read its root with PagedRoot (caveclod_io::PagedFile) and stream \
+                 its pages"
+            ),
             Self::ChecksumMismatch { stored, computed } => {
                 write!(f, "checksum mismatch: stored {stored:#018x}, computed {computed:#018x} (corrupt file)")
             }

@@ -110,6 +110,9 @@ pub struct SegmentedId {
 }
 
 impl SegmentedId {
+    /// Ids with 31 bits of index: one page.
+    pub const MAX: Self = Self { bits: 31 };
+
     /// Ids with `page_bits` bits of index (at most 31).
     pub const fn new(page_bits: u32) -> Option<Self> {
         if page_bits == 0 || page_bits > 31 {

@@ -20,11 +20,17 @@
 //! from its counts in the page table. A page is checked when it is installed: its checksum,
 //! then every reference in it (within the page in full, into other pages by their counts).
 
+mod check;
 mod layout;
+mod root;
 mod table;
+mod view;
 
+pub use check::{check_page, PageContext};
 pub use layout::{PageLayout, RecordKind, SegmentedId};
+pub use root::PagedRoot;
 pub use table::{PageEntry, PageField, PageTable, PageTableError};
+pub use view::PageView;
 
 use bytemuck::{Pod, Zeroable};
 

@@ -35,7 +35,10 @@ pub use checks::{OnePiece, Pieces};
 pub(crate) use materials::{appearance, Appearance};
 #[cfg(feature = "alloc")]
 pub(crate) use table::parse_checked;
-pub(crate) use table::{appearance_extras, parse, section_table_checked};
+pub(crate) use table::{
+    appearance_extras, find, optional_section, parse, section, section_table_checked,
+    section_table_flagged,
+};
 
 use crate::format::{tags, FormatError, HierarchyParts, Meta};
 use checks::invalid;

@@ -5,6 +5,7 @@ use bytemuck::Pod;
 use super::materials::AppearanceSections;
 use crate::checksum::checksum64;
 use crate::format::materials::material_tags;
+use crate::format::paged::FLAG_PAGED;
 use crate::format::{
     tags, ExtraSection, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag, MAGIC,
     MAX_SECTIONS, SECTION_ALIGN, VERSION_MAJOR,
@@ -26,7 +27,17 @@ pub(crate) fn section_table_checked(
     bytes: &[u8],
     verify_checksum: bool,
 ) -> Result<(SectionTable<'_>, u64), FormatError> {
-    let header = header(bytes)?;
+    section_table_flagged(bytes, verify_checksum, 0)
+}
+
+/// [`section_table_checked`] for a file whose header may carry `allowed_flags` (a paged
+/// file's root: [`FLAG_PAGED`]).
+pub(crate) fn section_table_flagged(
+    bytes: &[u8],
+    verify_checksum: bool,
+    allowed_flags: u32,
+) -> Result<(SectionTable<'_>, u64), FormatError> {
+    let header = header(bytes, allowed_flags)?;
     let header_len = core::mem::size_of::<FileHeader>();
     let table_len = header.section_count as usize * core::mem::size_of::<SectionEntry>();
     if bytes.len() < header_len + table_len {
@@ -55,7 +66,7 @@ pub(crate) fn section_table_checked(
 
 /// The header's fields: magic, version, lengths, zero flags and reserved words, and a
 /// section count within [`MAX_SECTIONS`].
-fn header(bytes: &[u8]) -> Result<FileHeader, FormatError> {
+fn header(bytes: &[u8], allowed_flags: u32) -> Result<FileHeader, FormatError> {
     let header_len = core::mem::size_of::<FileHeader>();
     if bytes.len() < header_len {
         return Err(FormatError::Truncated {
@@ -79,6 +90,9 @@ fn header(bytes: &[u8]) -> Result<FileHeader, FormatError> {
             value: header.header_len.into(),
         });
     }
+    if header.flags == FLAG_PAGED && allowed_flags & FLAG_PAGED == 0 {
+        return Err(FormatError::Paged);
+    }
     let len = bytes.len() as u64;
     if header.file_len > len {
         return Err(FormatError::LengthMismatch {
@@ -92,7 +106,7 @@ fn header(bytes: &[u8]) -> Result<FileHeader, FormatError> {
             len,
         });
     }
-    if header.flags != 0 {
+    if header.flags & !allowed_flags != 0 {
         return Err(FormatError::BadHeader {
             field: "flags",
             value: header.flags.into(),
@@ -164,7 +178,7 @@ impl SectionTable<'_> {
 }
 
 /// The entry of `tag`, if the table has one; an error if it has two.
-fn find(table: SectionTable<'_>, tag: Tag) -> Result<Option<SectionEntry>, FormatError> {
+pub(crate) fn find(table: SectionTable<'_>, tag: Tag) -> Result<Option<SectionEntry>, FormatError> {
     let mut found: Option<SectionEntry> = None;
     for e in table.iter() {
         if e.tag == tag {
@@ -178,7 +192,7 @@ fn find(table: SectionTable<'_>, tag: Tag) -> Result<Option<SectionEntry>, Forma
 }
 
 /// The records of `tag`, if present: of this version's record size and castable in place.
-fn optional_section<'a, T: Pod>(
+pub(crate) fn optional_section<'a, T: Pod>(
     bytes: &'a [u8],
     table: SectionTable<'_>,
     tag: Tag,
@@ -202,7 +216,7 @@ fn optional_section<'a, T: Pod>(
         .map_err(|_| FormatError::Misaligned { tag })
 }
 
-fn section<'a, T: Pod>(
+pub(crate) fn section<'a, T: Pod>(
     bytes: &'a [u8],
     table: SectionTable<'_>,
     tag: Tag,

@@ -1,0 +1,146 @@
+//! Which page each node's records go to: the top of the hierarchy to the root page, the rest
+//! in runs of the depth-first split order, each run as many nodes as fit a page.
+//!
+//! A node's records are its node record, its split record and bounds, the polygons its split
+//! creates, and the position (with its vertex-table entries and vertices) it brings when it
+//! is a root or a floating child. A leaf goes to its parent's page. Split ids are a
+//! depth-first preorder, so a run is a few subtrees: a camera's front over a region touches
+//! few pages, and a parent always lies in the same or an earlier page.
+
+use caveclod_core::format::{Node, Split};
+use caveclod_core::Hierarchy;
+
+use super::PagedError;
+
+const NONE: u32 = u32::MAX;
+/// Bytes a page's nine arrays may lose to alignment.
+const PADDING: u64 = 9 * 64;
+
+/// The pages of a hierarchy's records.
+pub(crate) struct Partition {
+    /// Page of each node, by old id.
+    pub home: Vec<u32>,
+    /// Node bringing each position, by old position id.
+    pub introducer: Vec<u32>,
+    /// Pages in all; page 0 is the root page.
+    pub pages: u32,
+}
+
+/// Bytes of the records that go with node `v` (leaf children not included).
+fn own_bytes(h: &Hierarchy<'_>, v: usize, introduces: bool, colours: bool) -> u64 {
+    let mut b = 8;
+    if let Some(s) = h.splits().get(v) {
+        b += 64 + 20 + if s.f_r.is_some() { 20 } else { 0 };
+    }
+    if introduces {
+        let keys = h.vertex_keys(h.nodes()[v].position).len() as u64;
+        b += 16 + 4 + keys * (8 + 32 + if colours { 4 } else { 0 });
+    }
+    b
+}
+
+/// The nodes that bring each position: roots, and each split's floating child.
+fn introducers(h: &Hierarchy<'_>) -> Result<Vec<u32>, PagedError> {
+    let nodes: &[Node] = h.nodes();
+    let mut introducer = vec![NONE; h.positions().len()];
+    let mut bring = |v: u32| -> Result<(), PagedError> {
+        let p = nodes[v as usize].position.0 as usize;
+        if introducer[p] != NONE {
+            return Err(PagedError::Shape("a position is brought by two nodes"));
+        }
+        introducer[p] = v;
+        Ok(())
+    };
+    for &r in h.roots() {
+        bring(r.0)?;
+    }
+    for s in h.splits() {
+        bring(s.floating.0)?;
+    }
+    if introducer.contains(&NONE) {
+        return Err(PagedError::Shape("a position is brought by no node"));
+    }
+    Ok(introducer)
+}
+
+/// Cuts `h` into pages of at most `page_bytes` (the root page may be larger when the base
+/// mesh alone is).
+pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition, PagedError> {
+    let n = h.nodes().len();
+    let splits: &[Split] = h.splits();
+    let colours = h.vertex_colours().is_some();
+    let introducer = introducers(h)?;
+    let introduces = |v: usize| introducer[h.nodes()[v].position.0 as usize] == v as u32;
+    // Each node's bytes with its leaf children's, and its depth.
+    let mut with_leaves: Vec<u64> = (0..n)
+        .map(|v| own_bytes(h, v, introduces(v), colours))
+        .collect();
+    let mut depth = vec![0u32; n];
+    for v in 0..n {
+        if let Some(p) = h.nodes()[v].parent.get() {
+            depth[v] = depth[p.index()] + 1;
+            if v >= splits.len() {
+                with_leaves[p.index()] += with_leaves[v];
+            }
+        }
+    }
+    let budget = u64::from(page_bytes).saturating_sub(PADDING);
+    let root_depth = root_depth(h, &with_leaves, &depth, budget);
+    let mut home = vec![NONE; n];
+    let mut page = 0u32;
+    let mut filled = budget;
+    for v in 0..splits.len() {
+        if depth[v] <= root_depth {
+            home[v] = 0;
+            continue;
+        }
+        if filled + with_leaves[v] > budget {
+            if with_leaves[v] > budget {
+                return Err(PagedError::Shape("one node's records exceed a page"));
+            }
+            page += 1;
+            filled = 0;
+        }
+        filled += with_leaves[v];
+        home[v] = page;
+    }
+    for v in splits.len()..n {
+        home[v] = h.nodes()[v].parent.get().map_or(0, |p| home[p.index()]);
+    }
+    Ok(Partition {
+        home,
+        introducer,
+        pages: page + 1,
+    })
+}
+
+/// The deepest level whose nodes (with every level above) fit the root page beside the base
+/// mesh; the roots are in it whatever their size.
+fn root_depth(h: &Hierarchy<'_>, with_leaves: &[u64], depth: &[u32], budget: u64) -> u32 {
+    let splits = h.splits().len();
+    let mut per_level: Vec<u64> = Vec::new();
+    for v in 0..splits {
+        let d = depth[v] as usize;
+        if per_level.len() <= d {
+            per_level.resize(d + 1, 0);
+        }
+        per_level[d] += with_leaves[v];
+    }
+    let leaf_roots: u64 = h
+        .roots()
+        .iter()
+        .filter(|r| r.index() >= splits)
+        .map(|r| with_leaves[r.index()])
+        .sum();
+    let mut used =
+        20 * h.base_polygon_count() as u64 + leaf_roots + per_level.first().copied().unwrap_or(0);
+    let mut d = 0;
+    while let Some(&next) = per_level.get(d as usize + 1) {
+        if used + next > budget {
+            break;
+        }
+        used += next;
+        d += 1;
+    }
+    d
+}
