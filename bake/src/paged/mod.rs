@@ -9,6 +9,7 @@
 //! before it replaces the target. The materials and the bake's report travel in the root;
 //! g-mesh levels and octrees, which name whole-file ids, are not carried.
 
+mod error;
 mod pages;
 mod partition;
 mod renumber;
@@ -22,6 +23,8 @@ use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::Hierarchy;
 
 use crate::base::atomic::{temporary_sibling, write_atomically_with};
+
+pub use error::PagedError;
 
 /// How a paged file is cut.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,33 +54,6 @@ pub struct PagedSummary {
     pub largest_page: u32,
     /// Bits of an id's index within its page.
     pub page_bits: u32,
-}
-
-/// Why a paged file could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum PagedError {
-    /// Reading or writing failed.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// What failed.
-        source: std::io::Error,
-    },
-    /// The hierarchy is not one the paged form can hold.
-    #[error("the hierarchy cannot be paged: {0}")]
-    Shape(&'static str),
-    /// Page-major ids would not fit 32 bits (or polygon keys would not): larger pages.
-    #[error("too many pages for 32-bit ids: choose larger pages")]
-    TooLarge,
-    /// The written file did not read back (a bug in this writer).
-    #[error("{path}: the written file does not read back: {what}")]
-    ReadBack {
-        /// The file.
-        path: String,
-        /// What the reader said.
-        what: String,
-    },
 }
 
 /// Writes the paged form of `h` to `path` (through a temporary sibling and a rename).

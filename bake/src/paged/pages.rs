@@ -6,8 +6,8 @@ use caveclod_core::format::paged::{PageEntry, PageLayout, PAGE_HAS_COLOURS};
 use caveclod_core::format::{checksum64, Creator, Node, Polygon, Split, VertexKey};
 use caveclod_core::{Hierarchy, NodeId, PolyId, PositionId};
 
+use super::error::PagedError;
 use super::renumber::{Members, Renumbered};
-use super::PagedError;
 
 const NONE: u32 = u32::MAX;
 

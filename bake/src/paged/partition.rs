@@ -10,7 +10,7 @@
 use caveclod_core::format::{Node, Split};
 use caveclod_core::Hierarchy;
 
-use super::PagedError;
+use super::error::PagedError;
 
 const NONE: u32 = u32::MAX;
 /// Bytes a page's nine arrays may lose to alignment.

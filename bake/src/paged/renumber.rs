@@ -4,8 +4,8 @@
 use caveclod_core::format::paged::SegmentedId;
 use caveclod_core::{Hierarchy, PolyKey};
 
+use super::error::PagedError;
 use super::partition::Partition;
-use super::PagedError;
 
 const NONE: u32 = u32::MAX;
 

@@ -6,10 +6,10 @@ use caveclod_core::format::paged::{paged_tags, PageEntry, PagedMeta, FLAG_PAGED}
 use caveclod_core::format::{tags, BaseFace, FilePlan, SectionSpec, SectionWriter, Sink, Tag};
 use caveclod_core::{Hierarchy, NodeId};
 
+use super::error::PagedError;
 use super::pages::BuiltPage;
 use super::partition::Partition;
 use super::renumber::Renumbered;
-use super::PagedError;
 use crate::report::INFO;
 
 /// The pages holding each page's nodes' parents, ascending, itself left out.

@@ -121,6 +121,9 @@ pub mod tags {
     pub const VERTICES: Tag = Tag(*b"VERT");
 }
 
+/// [`FileHeader::flags`]: the file is paged ([`paged`]), and its header is its root's.
+pub const FLAG_PAGED: u32 = 1;
+
 /// The fixed header at offset 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
@@ -137,7 +140,7 @@ pub struct FileHeader {
     pub file_len: u64,
     /// Entries in the section table.
     pub section_count: u32,
-    /// Zero.
+    /// Zero, or [`FLAG_PAGED`].
     pub flags: u32,
     /// [`checksum64`] of bytes `header_len..file_len`.
     pub checksum: u64,

@@ -2,7 +2,9 @@
 //! reference into another page by that page's counts, and each node against its parent's
 //! split record (the parent's page is resident: it is this page or one of its parents).
 
-use super::{PageTable, PageView, RecordKind, SegmentedId};
+use super::layout::{RecordKind, SegmentedId};
+use super::table::PageTable;
+use super::view::PageView;
 use crate::format::records::{Creator, PositionClass};
 use crate::format::{tags, FormatError, Tag};
 use crate::ids::NodeId;

@@ -1,9 +1,13 @@
 //! A paged file's root: read and checked on its own, without any streamed page.
 
 use super::check::{check_page, PageContext};
-use super::{paged_tags, PageEntry, PageTable, PageView, PagedMeta, SegmentedId, FLAG_PAGED};
+use super::layout::SegmentedId;
+use super::meta::{paged_tags, PagedMeta};
+use super::table::{PageEntry, PageTable};
+use super::view::PageView;
 use crate::format::records::{BaseFace, Meta};
 use crate::format::validate::{find, optional_section, section, section_table_flagged};
+use crate::format::FLAG_PAGED;
 use crate::format::{tags, FileHeader, FormatError, Tag};
 use crate::ids::NodeId;
 

@@ -3,7 +3,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{PageLayout, PAGE_HAS_COLOURS};
+use super::layout::PageLayout;
+use super::meta::PAGE_HAS_COLOURS;
 use crate::format::SECTION_ALIGN;
 
 /// One page of a paged file (96 bytes): where it lies, how to check it, what must be
@@ -19,7 +20,7 @@ pub struct PageEntry {
     pub checksum: u64,
     /// The page's length in bytes.
     pub size: u32,
-    /// Where this page's parents start in [`PAGE_PARENTS`](super::paged_tags::PAGE_PARENTS).
+    /// Where this page's parents start in [`PAGE_PARENTS`](super::meta::paged_tags::PAGE_PARENTS).
     pub parents_start: u32,
     /// How many parents the page has: pages that must be resident before it (none when its
     /// nodes hang from the root only).
@@ -89,7 +90,7 @@ impl core::fmt::Display for PageTableError {
         write!(
             f,
             "section {}: page {}: {}: {}",
-            super::paged_tags::PAGE_TABLE,
+            super::meta::paged_tags::PAGE_TABLE,
             self.page,
             self.field.name(),
             self.problem

@@ -2,7 +2,7 @@
 
 use bytemuck::Pod;
 
-use super::PageLayout;
+use super::layout::PageLayout;
 use crate::format::records::{Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey};
 use crate::format::{tags, FormatError, Tag};
 

@@ -5,10 +5,9 @@ use bytemuck::Pod;
 use super::materials::AppearanceSections;
 use crate::checksum::checksum64;
 use crate::format::materials::material_tags;
-use crate::format::paged::FLAG_PAGED;
 use crate::format::{
-    tags, ExtraSection, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag, MAGIC,
-    MAX_SECTIONS, SECTION_ALIGN, VERSION_MAJOR,
+    tags, ExtraSection, FileHeader, FormatError, HierarchyParts, Meta, SectionEntry, Tag,
+    FLAG_PAGED, MAGIC, MAX_SECTIONS, SECTION_ALIGN, VERSION_MAJOR,
 };
 
 /// The sections of a parsed file, before validation.
