@@ -41,7 +41,7 @@ pub enum Command {
 }
 
 /// Options of `caveclod bake`.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct BakeArgs {
     /// The input mesh.
     pub input: PathBuf,
@@ -82,6 +82,10 @@ pub struct BakeArgs {
     /// With --gmesh: stop adding levels below this many polygons (default |c0| / 64).
     #[arg(long)]
     pub gmesh_min_polygons: Option<u32>,
+    /// Write the paged form, in pages of at most this size (e.g. 128K): opening it reads its
+    /// root only, and its pages stream into a pool (`flyover --pool`).
+    #[arg(long, value_parser = caveclod_bake::ooc::parse_size, conflicts_with_all = ["out_of_core", "gmesh"])]
+    pub page_size: Option<u64>,
 }
 
 /// Options of `caveclod demo`.
@@ -196,6 +200,9 @@ pub struct InfoArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// For a paged file, also read and check every page (opening reads the root only).
+    #[arg(long)]
+    pub validate_all: bool,
 }
 
 /// Options of `caveclod refine`.

@@ -11,6 +11,8 @@
 //!   mapped.
 //! - [`ClodFile`] ([`file`](mod@file)): a file opened by path, whose errors
 //!   ([`LoadError`]) name it.
+//! - [`PagedFile`] ([`paged_file`]): a paged file, its root read and checked on opening,
+//!   its pages left on disk for the page reader.
 //! - [`CameraPool`] ([`camera_pool`]): many cameras' state memories in one aligned buffer,
 //!   one cache line apart, in huge pages where granted.
 //! - [`PageReader`] ([`pages`]): the page reader, serving the core's page loads for
@@ -40,6 +42,7 @@ pub mod camera_pool;
 pub mod error;
 pub mod file;
 pub mod mapped;
+pub mod paged_file;
 pub mod pages;
 
 pub use aligned::{AlignedBytes, HUGE_PAGES_FROM};
@@ -47,6 +50,7 @@ pub use camera_pool::CameraPool;
 pub use error::LoadError;
 pub use file::ClodFile;
 pub use mapped::ClodBytes;
+pub use paged_file::PagedFile;
 pub use pages::{
     DiskModel, FileSource, PageBuffer, PageReader, PageSource, ReadDone, ReadError, ReadRequest,
     ReaderConfig, ReaderStats, SubmitError,

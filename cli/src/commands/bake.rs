@@ -90,6 +90,9 @@ struct Extras {
 /// few seconds.
 pub fn bake(a: &BakeArgs) -> Result<(), String> {
     check_paths(a)?;
+    if let Some(page_size) = a.page_size {
+        return bake_paged(a, page_size);
+    }
     let bar = Progress::new(
         "{spinner} {msg} [{bar:30}] {pos}/{len} collapses ({elapsed})",
         "collapses",
@@ -159,6 +162,56 @@ fn report_released<R>(
         ClodBytes::Mapped(map) => caveclod_bake::clod_file::with_pages_released(map, report),
         ClodBytes::Owned(_) => report(),
     }
+}
+
+/// Bakes the whole-file form beside the output, writes the paged form over the output from
+/// it, and removes it.
+fn bake_paged(a: &BakeArgs, page_size: u64) -> Result<(), String> {
+    let page_bytes = u32::try_from(page_size)
+        .ok()
+        .filter(|&b| b >= 4096)
+        .ok_or_else(|| format!("--page-size {page_size}: expected 4K to 4G"))?;
+    let name = a
+        .output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let whole = a
+        .output
+        .with_file_name(format!(".{name}.{}.whole.clod", std::process::id()));
+    let inner = BakeArgs {
+        output: whole.clone(),
+        page_size: None,
+        ..a.clone()
+    };
+    let result = bake(&inner).and_then(|()| {
+        let file = ClodFile::open(&whole).map_err(|e| e.to_string())?;
+        let h = file.hierarchy().map_err(|e| e.to_string())?;
+        let options = caveclod_bake::paged::PageOptions { page_bytes };
+        caveclod_bake::paged::write_paged(&h, &a.output, &options).map_err(|e| e.to_string())
+    });
+    let _ = std::fs::remove_file(&whole);
+    let s = result?;
+    if a.json {
+        let paged = serde_json::json!({
+            "pages": s.pages,
+            "largest_page_bytes": s.largest_page,
+            "root_bytes": s.root_bytes,
+            "file_bytes": s.file_bytes,
+            "page_bits": s.page_bits,
+        });
+        println!("{}", serde_json::json!({ "paged": paged }));
+    } else {
+        println!(
+            "paged {}: {} pages of at most {} bytes, root {} bytes, file {} bytes",
+            a.output.display(),
+            s.pages,
+            s.largest_page,
+            s.root_bytes,
+            s.file_bytes
+        );
+    }
+    Ok(())
 }
 
 /// The output and the out-of-core temporary directory checked before the bake starts.

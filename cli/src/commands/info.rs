@@ -11,6 +11,9 @@ use crate::info as report;
 /// Validates the file and prints its report; with `--json`, a file that does not load prints
 /// `{"valid": false, "error": …}` (and the command still fails).
 pub fn info(a: &InfoArgs) -> Result<(), String> {
+    if super::info_paged::is_paged(&a.file) {
+        return super::info_paged::info(a);
+    }
     let result = with_hierarchy(&a.file, |h| {
         let r = valid_report(h);
         if a.json {

@@ -6,6 +6,7 @@ mod export;
 mod flyover;
 mod generate;
 mod info;
+mod info_paged;
 mod load;
 mod progress;
 mod refine;
