@@ -123,7 +123,7 @@ fn serve(
             if bad.contains(&l.key) {
                 slot[0] ^= 0x40;
             }
-            r.complete(l.slot, |_, _| Ok(()))
+            r.complete(l.slot, |_, _, _| Ok(()))
         })
         .collect()
 }
@@ -354,7 +354,7 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     let slot = r.loading_slot_mut(l[1].slot).expect("slot");
     slot.copy_from_slice(&w.bytes[l[1].offset as usize..][..l[1].size as usize]);
     slot[7] ^= 1;
-    let fault = r.complete(l[1].slot, |_, _| Ok(()));
+    let fault = r.complete(l[1].slot, |_, _, _| Ok(()));
     assert!(
         matches!(fault, Err(InstallError::Fault(f)) if matches!(f.kind, FaultKind::Checksum { .. }))
     );
@@ -363,7 +363,7 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     let refused = FormatError::MissingSection {
         tag: caveclod_core::format::tags::NODES,
     };
-    let fault = r.complete(l[2].slot, |_, _| Err(refused));
+    let fault = r.complete(l[2].slot, |_, _, _| Err(refused));
     let Err(InstallError::Fault(f)) = fault else {
         panic!("refused")
     };
@@ -371,7 +371,7 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     assert!(f.to_string().starts_with("file 0: page 2: "), "{f}");
     assert_eq!(r.fail(l[3].slot).map(|f| f.kind), Ok(FaultKind::Io));
     assert_eq!(
-        r.complete(l[3].slot, |_, _| Ok(())),
+        r.complete(l[3].slot, |_, _, _| Ok(())),
         Err(InstallError::Misuse(StreamError::NotLoading {
             slot: l[3].slot
         }))
@@ -478,7 +478,7 @@ fn a_random_soak_keeps_closure_without_allocating() {
             if roll == 1 {
                 slot[0] ^= 1;
             }
-            match r.complete(l.slot, |_, _| Ok(())) {
+            match r.complete(l.slot, |_, _, _| Ok(())) {
                 Ok(k) => assert_eq!(k, l.key),
                 Err(InstallError::Fault(f)) => {
                     assert!(matches!(f.kind, FaultKind::Checksum { .. }));

@@ -26,6 +26,7 @@
 
 mod config;
 mod fault;
+mod install;
 mod key;
 mod lists;
 mod requests;

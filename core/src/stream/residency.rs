@@ -340,11 +340,13 @@ impl<'a, 'm> Residency<'a, 'm> {
     }
 
     /// The host filled slot `slot`: the page's checksum is checked, then its contents by
-    /// `validate`; it becomes resident, or fails (reported here, once) and stays absent.
+    /// `validate` (given the page, its bytes, and this pool to look at its resident parents);
+    /// it becomes resident, or fails (reported here, once) and stays absent.
+    /// [`install`](Self::install) validates a paged file's page by its root.
     pub fn complete(
         &mut self,
         slot: u32,
-        validate: impl FnOnce(PageKey, &[u8]) -> Result<(), FormatError>,
+        validate: impl FnOnce(PageKey, &[u8], &Self) -> Result<(), FormatError>,
     ) -> Result<PageKey, InstallError> {
         let (g, key) = self.loading(slot).map_err(InstallError::Misuse)?;
         if let Err(kind) = self.check(key, slot, validate) {
@@ -375,7 +377,7 @@ impl<'a, 'm> Residency<'a, 'm> {
         &self,
         key: PageKey,
         slot: u32,
-        validate: impl FnOnce(PageKey, &[u8]) -> Result<(), FormatError>,
+        validate: impl FnOnce(PageKey, &[u8], &Self) -> Result<(), FormatError>,
     ) -> Result<(), FaultKind> {
         let entry = self.table(key.file).and_then(|t| t.entry(key.page));
         let Some(entry) = entry else {
@@ -392,7 +394,7 @@ impl<'a, 'm> Residency<'a, 'm> {
                 computed,
             });
         }
-        validate(key, bytes).map_err(FaultKind::Content)
+        validate(key, bytes, self).map_err(FaultKind::Content)
     }
 
     /// A loading page failed: its slot is freed, its parents lose a child, it stays failed.
