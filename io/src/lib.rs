@@ -13,6 +13,8 @@
 //!   ([`LoadError`]) name it.
 //! - [`PagedFile`] ([`paged_file`]): a paged file, its root read and checked on opening,
 //!   its pages left on disk for the page reader.
+//! - [`Streamer`] ([`streamer`]): a page pool's loads served by the page reader, one call
+//!   a frame: arrived pages installed (checked by their file's root), new loads submitted.
 //! - [`CameraPool`] ([`camera_pool`]): many cameras' state memories in one aligned buffer,
 //!   one cache line apart, in huge pages where granted.
 //! - [`PageReader`] ([`pages`]): the page reader, serving the core's page loads for
@@ -44,6 +46,7 @@ pub mod file;
 pub mod mapped;
 pub mod paged_file;
 pub mod pages;
+pub mod streamer;
 
 pub use aligned::{AlignedBytes, HUGE_PAGES_FROM};
 pub use camera_pool::CameraPool;
@@ -55,3 +58,4 @@ pub use pages::{
     DiskModel, FileSource, PageBuffer, PageReader, PageSource, ReadDone, ReadError, ReadRequest,
     ReaderConfig, ReaderStats, SubmitError,
 };
+pub use streamer::{FrameStreaming, Streamer};

@@ -49,7 +49,7 @@ pub enum Wanted {
 /// "Load page `key` into slot `slot`": bytes `offset..offset + size` of its file go to
 /// [`Residency::loading_slot_mut`]`(slot)`, then [`Residency::complete`] or
 /// [`Residency::fail`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LoadRequest {
     /// The page.
     pub key: PageKey,
