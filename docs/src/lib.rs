@@ -38,3 +38,7 @@ pub mod viewer {}
 /// `docs/measuring.md`.
 #[doc = include_str!("../measuring.md")]
 pub mod measuring {}
+
+/// `docs/streaming.md`.
+#[doc = include_str!("../streaming.md")]
+pub mod streaming {}
