@@ -15,7 +15,7 @@
 // A program built against a header checks `caveclod_abi_version() >> 16` against
 // `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 // a higher minor version only adds calls or status values.
-#define CAVECLOD_ABI_VERSION ((1 << 16) | 1)
+#define CAVECLOD_ABI_VERSION ((1 << 16) | 2)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -36,6 +36,15 @@
 
 // Words (of 8 bytes) of a `CaveclodOctreeCut`.
 #define CAVECLOD_OCTREE_CUT_WORDS 16
+
+// Words (of 8 bytes) of a `CaveclodPagedRoot`.
+#define CAVECLOD_PAGED_ROOT_WORDS 64
+
+// The most loads one `caveclod_pool_schedule` starts.
+#define CAVECLOD_MAX_LOADS 128
+
+// Words (of 8 bytes) of a `CaveclodPool`.
+#define CAVECLOD_POOL_WORDS 64
 
 // What a call did. `CAVECLOD_STATUS_OK` is zero; every other value names one reason a call
 // did nothing (or, for emission, left its outputs unusable), and
@@ -89,7 +98,22 @@ typedef enum CaveclodStatus {
     CAVECLOD_STATUS_TRAILING_BYTES = 17,
     // The file is paged (its pages stream into a pool): this call reads whole files only.
     CAVECLOD_STATUS_PAGED = 18,
+    // A streamed page failed its checks (or could not be read): it stays absent, it is
+    // reported once, and the frame goes on at the coarser level.
+    CAVECLOD_STATUS_BAD_PAGE = 19,
 } CaveclodStatus;
+
+// What `caveclod_pool_want` found.
+typedef enum CaveclodWanted {
+    // Resident: use it.
+    CAVECLOD_WANTED_RESIDENT = 0,
+    // Loading or now requested: defer what needs it.
+    CAVECLOD_WANTED_REQUESTED = 1,
+    // It failed: stay at the coarser level.
+    CAVECLOD_WANTED_FAILED = 2,
+    // This frame's requests are full: ask again next frame.
+    CAVECLOD_WANTED_DROPPED = 3,
+} CaveclodWanted;
 
 // A bump arena: `used` of `size` bytes at `base` are taken. Plain data: the caller may
 // read it (and rewind `used` to a value it read before to free what came after).
@@ -340,6 +364,117 @@ typedef struct CaveclodSelectStats {
     // Nodes looked at.
     uint32_t visited;
 } CaveclodSelectStats;
+
+// A validated paged-file root over the caller's root bytes (the file's first
+// `header.file_len` bytes): an opaque value the caller places anywhere and
+// `caveclod_paged_root_open` fills. Like `CaveclodHierarchy`, it holds no memory and needs
+// no closing; the root bytes must outlive it and every pool it was added to.
+typedef struct CaveclodPagedRoot {
+    uint64_t opaque[CAVECLOD_PAGED_ROOT_WORDS];
+} CaveclodPagedRoot;
+
+// The counts of a paged file.
+typedef struct CaveclodPagedCounts {
+    // Pages, the root's included.
+    uint32_t pages;
+    // Pages `0..root_pages` lie in the root and are always resident.
+    uint32_t root_pages;
+    // The largest streamed page, in bytes: a pool's slots must hold it.
+    uint32_t largest_page;
+    // Surfaces (index lists).
+    uint32_t surfaces;
+    // The root's bytes.
+    uint64_t root_bytes;
+    // The whole file's bytes.
+    uint64_t file_bytes;
+} CaveclodPagedCounts;
+
+// Where a page lies and what loading it is worth.
+typedef struct CaveclodPageInfo {
+    // Where its bytes start in the file.
+    uint64_t offset;
+    // Its length in bytes.
+    uint32_t size;
+    // Pages that must be resident before it.
+    uint32_t parent_count;
+    // The largest error bound of its splits (world units).
+    float max_error;
+    // Lower corner of the box around what its splits touch.
+    float bounds_min[3];
+    // Upper corner of that box.
+    float bounds_max[3];
+} CaveclodPageInfo;
+
+// A pool's sizes (see the core's `PoolConfig`).
+typedef struct CaveclodPoolConfig {
+    // Bytes a slot holds: a multiple of 64, at least every streamed page's size.
+    uint32_t slot_bytes;
+    // Slots: the pool's bytes are `slots * slot_bytes`, 64-byte aligned.
+    uint32_t slots;
+    // Files the pool may serve.
+    uint32_t files;
+    // Pages over those files.
+    uint32_t pages;
+    // Pages that may be wanted in one frame.
+    uint32_t max_requests;
+} CaveclodPoolConfig;
+
+// A page pool: an opaque value the caller places anywhere and `caveclod_pool_init` fills,
+// over memory the caller sizes with `caveclod_pool_memory_size` and the pool's bytes.
+typedef struct CaveclodPool {
+    uint64_t opaque[CAVECLOD_POOL_WORDS];
+} CaveclodPool;
+
+// "Load page (file, page) into slot `slot`": `size` bytes from `offset` of its file go to
+// `caveclod_pool_loading_slot(slot)`.
+typedef struct CaveclodLoadRequest {
+    // The file.
+    uint32_t file;
+    // The page.
+    uint32_t page;
+    // The slot reserved for it.
+    uint32_t slot;
+    // Its length in bytes.
+    uint32_t size;
+    // Where its bytes start in its file.
+    uint64_t offset;
+} CaveclodLoadRequest;
+
+// A page of one of a pool's files.
+typedef struct CaveclodPageKey {
+    // The file, as `caveclod_pool_add_file` numbered it.
+    uint32_t file;
+    // The page.
+    uint32_t page;
+} CaveclodPageKey;
+
+// What one `caveclod_pool_schedule` did.
+typedef struct CaveclodScheduleStats {
+    // Pages requested this frame, with the absent parents they need.
+    uint32_t requested;
+    // Loads written.
+    uint32_t loads;
+    // Pages evicted (written to `evicted`).
+    uint32_t evictions;
+    // Loadable pages left for a later frame.
+    uint32_t waiting;
+    // Requested pages waiting for a parent.
+    uint32_t blocked;
+    // Requests past `max_requests`, dropped.
+    uint32_t dropped;
+} CaveclodScheduleStats;
+
+// A page that failed: it stays absent (`kind`: 1 unreadable, 2 checksum, 3 contents).
+typedef struct CaveclodPageFault {
+    // The file.
+    uint32_t file;
+    // The page.
+    uint32_t page;
+    // What failed.
+    uint32_t kind;
+    // Zero.
+    uint32_t reserved;
+} CaveclodPageFault;
 
 #ifdef __cplusplus
 extern "C" {
@@ -717,6 +852,149 @@ enum CaveclodStatus caveclod_octree_cut_emit_packed(struct CaveclodOctreeCut *cu
                                                     uint32_t *offsets,
                                                     size_t offset_count,
                                                     size_t *total);
+
+// Validates the root of a paged file in `bytes[0..len]` (exactly the root: the header's
+// `file_len` bytes, read from the file's start) and makes `out` view it in place.
+//
+// Returns `CAVECLOD_STATUS_NULL_POINTER`, `CAVECLOD_STATUS_MISALIGNED` (`bytes` not aligned
+// to `CAVECLOD_BYTES_ALIGN`), `CAVECLOD_STATUS_TRUNCATED`, `CAVECLOD_STATUS_NOT_A_CLOD_FILE`,
+// `CAVECLOD_STATUS_CORRUPT` or `CAVECLOD_STATUS_INVALID_FILE`. On failure `out` is left a
+// handle every other call refuses.
+//
+// Thread-safety: any thread; `out` must not be used by another thread during the call.
+//
+// # Safety
+// `bytes` is null or valid for reads of `len` bytes that are neither written nor freed
+// while the root, or a pool it was added to, is in use; `out` is null or writable.
+enum CaveclodStatus caveclod_paged_root_open(const uint8_t *bytes,
+                                             size_t len,
+                                             struct CaveclodPagedRoot *out);
+
+// Writes the counts of the paged file whose root is `r` to `out`.
+//
+// Thread-safety: any thread, concurrently with any call that reads `r`.
+//
+// # Safety
+// `r` is null or an opened root; `out` is null or writable.
+enum CaveclodStatus caveclod_paged_root_counts(const struct CaveclodPagedRoot *r,
+                                               struct CaveclodPagedCounts *out);
+
+// Writes where page `page` lies, and what loading it is worth, to `out`;
+// `CAVECLOD_STATUS_INVALID_ARGUMENT` for a page the file does not have.
+//
+// Thread-safety: any thread, concurrently with any call that reads `r`.
+//
+// # Safety
+// `r` is null or an opened root; `out` is null or writable.
+enum CaveclodStatus caveclod_paged_root_page(const struct CaveclodPagedRoot *r,
+                                             uint32_t page,
+                                             struct CaveclodPageInfo *out);
+
+// Writes to `bytes` how much memory (aligned to `CAVECLOD_MEMORY_ALIGN`) a pool of
+// `config` keeps its bookkeeping in; the pool's bytes are apart (`slots * slot_bytes`).
+//
+// Thread-safety: any thread, any time.
+//
+// # Safety
+// `config` is null or readable; `bytes` is null or writable.
+enum CaveclodStatus caveclod_pool_memory_size(const struct CaveclodPoolConfig *config,
+                                              size_t *bytes);
+
+// Makes `out` an empty pool of `config` over `memory[0..memory_bytes]` (at least
+// `caveclod_pool_memory_size`, aligned to `CAVECLOD_MEMORY_ALIGN`, may be uninitialised)
+// and `pool_bytes[0..pool_len]` (`slots * slot_bytes`, aligned to 64). Allocates nothing.
+//
+// Returns `CAVECLOD_STATUS_NULL_POINTER`, `CAVECLOD_STATUS_MISALIGNED`,
+// `CAVECLOD_STATUS_MEMORY_TOO_SMALL` or `CAVECLOD_STATUS_INVALID_CONFIG`.
+//
+// Thread-safety: any thread; the pool then belongs to one thread at a time.
+//
+// # Safety
+// `memory` and `pool_bytes` are null or valid for reads and writes of their lengths, used
+// by nothing else while the pool is in use; `out` is null or writable.
+enum CaveclodStatus caveclod_pool_init(const struct CaveclodPoolConfig *config,
+                                       void *memory,
+                                       size_t memory_bytes,
+                                       uint8_t *pool_bytes,
+                                       size_t pool_len,
+                                       struct CaveclodPool *out);
+
+// Adds the paged file whose root is `r` to the pool; writes its file number to `file`.
+// `CAVECLOD_STATUS_INVALID_CONFIG` when the pool is configured for fewer files or pages, or
+// its slots are smaller than the file's largest page.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `r` is null or an opened root
+// that outlives the pool; `file` is null or writable.
+enum CaveclodStatus caveclod_pool_add_file(struct CaveclodPool *p,
+                                           const struct CaveclodPagedRoot *r,
+                                           uint32_t *file);
+
+// Starts a frame: the last frame's requests are forgotten (loads in flight go on).
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call.
+enum CaveclodStatus caveclod_pool_begin_frame(struct CaveclodPool *p);
+
+// A camera wants page (`file`, `page`) for a split whose screen-space error exceeds the
+// tolerance by `excess` pixels; what the pool found goes to `out`.
+// `CAVECLOD_STATUS_INVALID_ARGUMENT` for a page the pool does not serve.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `out` is null or writable.
+enum CaveclodStatus caveclod_pool_want(struct CaveclodPool *p,
+                                       uint32_t file,
+                                       uint32_t page,
+                                       float excess,
+                                       enum CaveclodWanted *out);
+
+// Chooses this frame's loads: writes up to `loads_len` (at most `CAVECLOD_MAX_LOADS`)
+// "load page P into slot S" requests to `loads`, the pages evicted for them (as many at
+// most) to `evicted`, and the counts to `stats`.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `loads` and `evicted` are null
+// (with a zero length) or writable for their lengths; `stats` is null or writable.
+enum CaveclodStatus caveclod_pool_schedule(struct CaveclodPool *p,
+                                           struct CaveclodLoadRequest *loads,
+                                           size_t loads_len,
+                                           struct CaveclodPageKey *evicted,
+                                           size_t evicted_len,
+                                           struct CaveclodScheduleStats *stats);
+
+// Writes the address and length of slot `slot`'s bytes, reserved by a load request, for
+// the host to fill with the page's `size` bytes. `CAVECLOD_STATUS_INVALID_ARGUMENT` when no
+// page is loading into `slot`.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `bytes` and `len` are null or
+// writable. The bytes may be written until `caveclod_pool_install` or `caveclod_pool_fail`.
+enum CaveclodStatus caveclod_pool_loading_slot(struct CaveclodPool *p,
+                                               uint32_t slot,
+                                               uint8_t **bytes,
+                                               size_t *len);
+
+// The host filled slot `slot` with the page of the file whose root is `r`: checks it
+// (checksum, then every record against its resident parents) and installs it. A page
+// that fails is written to `fault` (reported once: it stays absent) and the call returns
+// `CAVECLOD_STATUS_BAD_PAGE`; the frame goes on at the coarser level.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `r` is null or an opened root;
+// `fault` is null or writable.
+enum CaveclodStatus caveclod_pool_install(struct CaveclodPool *p,
+                                          uint32_t slot,
+                                          const struct CaveclodPagedRoot *r,
+                                          struct CaveclodPageFault *fault);
+
+// The host could not read the page loading into slot `slot`: it fails (written to
+// `fault`, once) and its slot is free again.
+//
+// # Safety
+// `p` is null or a pool nothing else uses during the call; `fault` is null or writable.
+enum CaveclodStatus caveclod_pool_fail(struct CaveclodPool *p,
+                                       uint32_t slot,
+                                       struct CaveclodPageFault *fault);
 
 // The static message of `status`: a NUL-terminated string that lives as long as the
 // program. A value that is no status gets the message of `CAVECLOD_STATUS_INVALID_ARGUMENT`.

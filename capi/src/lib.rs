@@ -8,7 +8,11 @@
 //! the caller's file bytes and viewed in place; a camera lives in caller memory sized by
 //! `caveclod_camera_memory_size`; indices are emitted into caller buffers. No call
 //! allocates, and the handles (`CaveclodHierarchy`, `CaveclodCamera`, `CaveclodOctree`,
-//! `CaveclodOctreeCut`) are opaque values of a documented size the caller places anywhere.
+//! `CaveclodOctreeCut`, `CaveclodPagedRoot`, `CaveclodPool`) are opaque values of a
+//! documented size the caller places anywhere. A paged file streams through a pool: the
+//! pool says "load page P into slot S" (`caveclod_pool_schedule`), the host does the I/O and
+//! says "slot S holds these bytes" (`caveclod_pool_install`) or "failed"
+//! (`caveclod_pool_fail`).
 //!
 //! - Every entry point returns a [`CaveclodStatus`] (or a plain value that cannot fail) and
 //!   checks its pointers: null, alignment, and a handle's tag (an unopened handle is
@@ -37,6 +41,8 @@ mod emit;
 mod ffi;
 mod hierarchy;
 mod octree;
+mod paged_root;
+mod pool;
 mod status;
 mod types;
 
@@ -45,6 +51,8 @@ pub use camera::*;
 pub use emit::*;
 pub use hierarchy::*;
 pub use octree::*;
+pub use paged_root::*;
+pub use pool::*;
 pub use status::{caveclod_status_message, CaveclodStatus};
 pub use types::*;
 
@@ -52,7 +60,7 @@ pub use types::*;
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
 /// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 /// a higher minor version only adds calls or status values.
-pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 1;
+pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 2;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

@@ -60,6 +60,9 @@ pub enum CaveclodStatus {
     TrailingBytes = 17,
     /// The file is paged (its pages stream into a pool): this call reads whole files only.
     Paged = 18,
+    /// A streamed page failed its checks (or could not be read): it stays absent, it is
+    /// reported once, and the frame goes on at the coarser level.
+    BadPage = 19,
 }
 
 impl CaveclodStatus {
@@ -85,6 +88,7 @@ impl CaveclodStatus {
             Self::Internal => c"internal error (a bug): a panic was caught at the C boundary",
             Self::TrailingBytes => c"the file has bytes after the end its header records",
             Self::Paged => c"the file is paged: its pages stream, and this call reads whole files",
+            Self::BadPage => c"a page failed its checks: it stays absent and the frame goes on",
         }
     }
 
@@ -166,7 +170,7 @@ impl From<OctreeFormatError> for CaveclodStatus {
 /// Thread-safe: any thread, any time.
 #[no_mangle]
 pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
-    const ALL: [CaveclodStatus; 19] = [
+    const ALL: [CaveclodStatus; 20] = [
         CaveclodStatus::Ok,
         CaveclodStatus::NullPointer,
         CaveclodStatus::Misaligned,
@@ -186,6 +190,7 @@ pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
         CaveclodStatus::Internal,
         CaveclodStatus::TrailingBytes,
         CaveclodStatus::Paged,
+        CaveclodStatus::BadPage,
     ];
     let status = ALL
         .iter()

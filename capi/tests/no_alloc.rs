@@ -207,7 +207,7 @@ fn the_c_entry_points_do_not_allocate() {
 
 #[test]
 fn every_status_has_its_message() {
-    for s in 0..=18 {
+    for s in 0..=19 {
         // SAFETY: `caveclod_status_message` returns a static NUL-terminated string.
         let m = unsafe { std::ffi::CStr::from_ptr(caveclod_status_message(s)) };
         assert!(!m.to_bytes().is_empty(), "status {s}");
@@ -216,8 +216,8 @@ fn every_status_has_its_message() {
     let unknown = unsafe { std::ffi::CStr::from_ptr(caveclod_status_message(-3)) };
     assert_eq!(unknown, CaveclodStatus::InvalidArgument.message());
     // SAFETY: as above.
-    let last = unsafe { std::ffi::CStr::from_ptr(caveclod_status_message(18)) };
-    assert_eq!(last, CaveclodStatus::Paged.message());
+    let last = unsafe { std::ffi::CStr::from_ptr(caveclod_status_message(19)) };
+    assert_eq!(last, CaveclodStatus::BadPage.message());
     assert_eq!(caveclod_abi_version() >> 16, CAVECLOD_ABI_VERSION >> 16);
 }
 

@@ -9,7 +9,9 @@
 //!   the CLI's numbers for its views), a budgeted camera, a morphing one, and two cuts of
 //!   the octree of an out-of-core bake;
 //! - `arena.c` must give the Rust twin's counts (`examples/fixed_arena.rs`), and report a
-//!   full arena as its status (exit code 3) when given too small a one.
+//!   full arena as its status (exit code 3) when given too small a one;
+//! - `stream.c` must stream a paged Spot through a four-slot pool (installs, evictions, no
+//!   fault), and report a damaged page once while the rest stream.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -150,8 +152,10 @@ struct Built {
     cli: PathBuf,
     clod: PathBuf,
     octree_clod: PathBuf,
+    paged_clod: PathBuf,
     refine_c: PathBuf,
     arena_c: PathBuf,
+    stream_c: PathBuf,
     test_cpp: PathBuf,
 }
 
@@ -163,7 +167,8 @@ pub fn check() -> Result<(), String> {
     compile_doc_snippets(&b)?;
     let counts = refine_c_against_the_cli(&b)?;
     run_cpp_test(&b, &counts)?;
-    arena_c_against_its_twin(&b)
+    arena_c_against_its_twin(&b)?;
+    stream_c_through_a_small_pool(&b)
 }
 
 /// Builds the static library and the `caveclod` binary (debug).
@@ -182,16 +187,25 @@ fn build_library_and_cli() -> Result<Built, String> {
         cli: debug.join("caveclod"),
         clod: dir.join("spot.clod"),
         octree_clod: dir.join("spot-ooc.clod"),
+        paged_clod: dir.join("spot-paged.clod"),
         refine_c: dir.join("refine"),
         arena_c: dir.join("arena"),
+        stream_c: dir.join("stream"),
         test_cpp: dir.join("capi_test"),
         root,
         dir,
     })
 }
 
-/// Bakes Spot in core and out of core (the octree's file).
+/// Bakes Spot in core, out of core (the octree's file) and paged.
 fn bake_spot(b: &Built) -> Result<(), String> {
+    let mut bake = Command::new(&b.cli);
+    bake.arg("bake")
+        .arg(b.root.join(INPUT))
+        .arg("-o")
+        .arg(&b.paged_clod)
+        .args(["--page-size", "8K"]);
+    run(bake)?;
     let mut bake = Command::new(&b.cli);
     bake.arg("bake")
         .arg(b.root.join(INPUT))
@@ -226,6 +240,13 @@ fn compile_programs(b: &Built) -> Result<(), String> {
         &examples.join("arena.c"),
         &b.library,
         &b.arena_c,
+    )?;
+    compile(
+        "cc",
+        &C99,
+        &examples.join("stream.c"),
+        &b.library,
+        &b.stream_c,
     )?;
     let mut cpp = vec!["-std=c++17", "-Wall", "-Wextra", "-Werror", "-O1", "-g"];
     if sanitizers_work(&b.dir) {
@@ -391,6 +412,45 @@ fn arena_c_against_its_twin(b: &Built) -> Result<(), String> {
             "arena.c with a 4096-byte arena: expected CAVECLOD_STATUS_ARENA_FULL and exit code 3, got {}",
             out.status
         ));
+    }
+    Ok(())
+}
+
+/// `stream.c` streams the paged Spot through a pool of a few slots: pages are installed
+/// and evicted, none fails; with the first streamed page's bytes flipped, that page fails
+/// once and the pages outside its subtree stream on.
+fn stream_c_through_a_small_pool(b: &Built) -> Result<(), String> {
+    let mut run_c = Command::new(&b.stream_c);
+    run_c.arg(&b.paged_clod).args(["200", "4"]);
+    let text = output(run_c)?;
+    print!("stream.c:        {text}");
+    let (installs, evictions) = (field(&text, "installs"), field(&text, "evictions"));
+    if installs.is_none_or(|n| n == 0)
+        || evictions.is_none_or(|n| n == 0)
+        || field(&text, "faults") != Some(0)
+    {
+        return Err("stream.c: expected installs and evictions and no fault".into());
+    }
+    let mut bytes =
+        std::fs::read(&b.paged_clod).map_err(|e| format!("{}: {e}", b.paged_clod.display()))?;
+    // The first streamed page: it starts where the root ends (the header's `file_len`).
+    let root_len = bytes
+        .get(16..24)
+        .and_then(|b| <[u8; 8]>::try_from(b).ok())
+        .map_or(0, u64::from_le_bytes) as usize;
+    let at = root_len + 100;
+    if at >= bytes.len() {
+        return Err("the paged Spot has no streamed page".into());
+    }
+    bytes[at] ^= 0x40;
+    let damaged = b.dir.join("spot-paged-damaged.clod");
+    std::fs::write(&damaged, &bytes).map_err(|e| format!("{}: {e}", damaged.display()))?;
+    let mut run_c = Command::new(&b.stream_c);
+    run_c.arg(&damaged).args(["200", "4"]);
+    let text = output(run_c)?;
+    print!("stream.c, a damaged page: {text}");
+    if field(&text, "faults") != Some(1) || field(&text, "installs").is_none_or(|n| n == 0) {
+        return Err("stream.c with a damaged page: expected one fault and installs".into());
     }
     Ok(())
 }
