@@ -28,6 +28,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Generate a procedural terrain (normals, colours, UVs) as binary PLY, streamed to disk.
     Generate(GenerateArgs),
+    /// Write the paged form of a baked .clod file: a root read on opening, pages that stream.
+    Page(PageArgs),
     /// Write one level of a .clod file as Wavefront OBJ, with an MTL file and the embedded
     /// textures beside it when the file has materials.
     Export(ExportArgs),
@@ -228,6 +230,22 @@ fn parse_point(s: &str) -> Result<[f32; 3], String> {
         .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
         .collect::<Result<_, _>>()?;
     <[f32; 3]>::try_from(parts).map_err(|p| format!("{} numbers given, 3 needed (X,Y,Z)", p.len()))
+}
+
+/// Options of `caveclod page`.
+#[derive(Args)]
+pub struct PageArgs {
+    /// A baked (whole-file) .clod.
+    pub input: PathBuf,
+    /// The paged .clod to write (replaced only once complete and read back).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Most bytes in a streamed page (e.g. 128K).
+    #[arg(long, default_value = "128K", value_parser = caveclod_bake::ooc::parse_size)]
+    pub page_size: u64,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options of `caveclod generate`.

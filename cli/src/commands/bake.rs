@@ -167,10 +167,6 @@ fn report_released<R>(
 /// Bakes the whole-file form beside the output, writes the paged form over the output from
 /// it, and removes it.
 fn bake_paged(a: &BakeArgs, page_size: u64) -> Result<(), String> {
-    let page_bytes = u32::try_from(page_size)
-        .ok()
-        .filter(|&b| b >= 4096)
-        .ok_or_else(|| format!("--page-size {page_size}: expected 4K to 4G"))?;
     let name = a
         .output
         .file_name()
@@ -184,34 +180,10 @@ fn bake_paged(a: &BakeArgs, page_size: u64) -> Result<(), String> {
         page_size: None,
         ..a.clone()
     };
-    let result = bake(&inner).and_then(|()| {
-        let file = ClodFile::open(&whole).map_err(|e| e.to_string())?;
-        let h = file.hierarchy().map_err(|e| e.to_string())?;
-        let options = caveclod_bake::paged::PageOptions { page_bytes };
-        caveclod_bake::paged::write_paged(&h, &a.output, &options).map_err(|e| e.to_string())
-    });
+    let result =
+        bake(&inner).and_then(|()| super::page::write(&whole, &a.output, page_size, a.json));
     let _ = std::fs::remove_file(&whole);
-    let s = result?;
-    if a.json {
-        let paged = serde_json::json!({
-            "pages": s.pages,
-            "largest_page_bytes": s.largest_page,
-            "root_bytes": s.root_bytes,
-            "file_bytes": s.file_bytes,
-            "page_bits": s.page_bits,
-        });
-        println!("{}", serde_json::json!({ "paged": paged }));
-    } else {
-        println!(
-            "paged {}: {} pages of at most {} bytes, root {} bytes, file {} bytes",
-            a.output.display(),
-            s.pages,
-            s.largest_page,
-            s.root_bytes,
-            s.file_bytes
-        );
-    }
-    Ok(())
+    result
 }
 
 /// The output and the out-of-core temporary directory checked before the bake starts.

@@ -8,6 +8,7 @@ mod generate;
 mod info;
 mod info_paged;
 mod load;
+mod page;
 mod progress;
 mod refine;
 mod render;
@@ -22,6 +23,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Flyover(a) => flyover::flyover(a),
         Command::Info(a) => info::info(&a),
         Command::Generate(a) => generate::generate(&a),
+        Command::Page(a) => page::page(&a),
         Command::Export(a) => export::export(&a),
         Command::Render(a) => render::render(&a),
         Command::Refine(a) => refine::refine(&a),
