@@ -254,6 +254,18 @@ pub struct GenerateArgs {
     /// At least this many triangles.
     #[arg(long)]
     pub triangles: u64,
+    /// Fractal detail on the hills (a sum of sines): octaves of gradient noise from a quarter
+    /// of the terrain's side down to two grid cells, the one at 1/64 of the side (15.6 units)
+    /// ROUGHNESS times its scale high, the others scaled as scale^0.7 (coarse ones gentler,
+    /// fine ones rougher). The default keeps four cameras at a pixel's tolerance refining
+    /// tens of thousands of polygons each over a few million triangles; 0 is the smooth
+    /// sines alone (a few thousand); larger values give steeper, craggier ground.
+    #[arg(long, default_value_t = caveclod_bake::generate::TerrainStyle::DEFAULT_ROUGHNESS,
+          value_parser = non_negative)]
+    pub roughness: f32,
+    /// Seed of the fractal detail: the same seed, roughness and size give the same file.
+    #[arg(long, default_value_t = caveclod_bake::generate::TerrainStyle::DEFAULT_SEED)]
+    pub seed: u64,
     /// The .ply file to write (replaced only once complete).
     #[arg(short, long)]
     pub output: PathBuf,

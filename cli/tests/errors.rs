@@ -317,6 +317,20 @@ fn generate_and_render_check_their_outputs_first() {
         ],
     );
     assert!(!out.exists());
+    let ply = d.path("terrain.ply");
+    let e = fails(
+        &[
+            "generate",
+            "--triangles",
+            "100",
+            "--roughness=-1",
+            "-o",
+            s(&ply),
+        ],
+        &[],
+    );
+    says(&e, &["`-1`: expected a finite number of zero or more"]);
+    assert!(!ply.exists());
     // The split-screen image would be written over the file rendered: refused before any
     // device is asked for.
     let clod = d.clod("split1.png");
