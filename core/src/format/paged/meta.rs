@@ -2,7 +2,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// `PageEntry::flags`: the page holds a colour per vertex.
+/// [`PageEntry::flags`](crate::format::paged::PageEntry::flags): the page holds a colour per
+/// vertex.
 pub const PAGE_HAS_COLOURS: u32 = 1;
 
 /// Tags of a paged file's root sections.
@@ -10,7 +11,7 @@ pub mod paged_tags {
     use crate::format::Tag;
     /// [`PagedMeta`](super::PagedMeta).
     pub const PAGED_META: Tag = Tag(*b"PGMT");
-    /// [`PageEntry`](super::PageEntry) per page, parents before children.
+    /// [`PageEntry`](crate::format::paged::PageEntry) per page, parents before children.
     pub const PAGE_TABLE: Tag = Tag(*b"PGTB");
     /// `u32` page indices: each page's parents, a range of this list per page, ascending.
     pub const PAGE_PARENTS: Tag = Tag(*b"PGPR");
