@@ -106,6 +106,17 @@ fn pool<'a, 'm>(m: &'m mut Memory, tables: &'m mut [Option<PageTable<'a>>]) -> R
     Residency::new(m.config, &mut m.words, bytes, tables).expect("pool")
 }
 
+/// A pool serving `w` alone.
+fn one_file<'a, 'm>(
+    m: &'m mut Memory,
+    tables: &'m mut [Option<PageTable<'a>>],
+    w: &'a World,
+) -> Residency<'a, 'm> {
+    let mut r = pool(m, tables);
+    r.add_file(w.table(), 0).expect("file");
+    r
+}
+
 /// Serves `loads` from the files, flipping a byte of the pages in `bad`.
 fn serve(
     r: &mut Residency<'_, '_>,
@@ -229,14 +240,8 @@ fn parents_load_first() {
     w.parents = vec![0, 1];
     let mut m = memory(4, 1, 3);
     let mut tables = vec![None; 1];
-    let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table(), 0).expect("file");
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 4];
+    let mut r = one_file(&mut m, &mut tables, &w);
+    let mut loads = [LoadRequest::default(); 4];
     for expected in 0..3 {
         r.begin_frame();
         assert_eq!(r.want(key(2), 1.0), Ok(Wanted::Requested));
@@ -269,18 +274,12 @@ fn the_largest_excess_loads_first() {
     let w = flat_world(8);
     let mut m = memory(8, 1, 8);
     let mut tables = vec![None; 1];
-    let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table(), 0).expect("file");
+    let mut r = one_file(&mut m, &mut tables, &w);
     r.begin_frame();
     for (page, excess) in [(1, 0.5), (5, 3.0), (2, 1.0), (5, 0.1), (7, 2.0)] {
         r.want(key(page), excess).expect("want");
     }
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 2];
+    let mut loads = [LoadRequest::default(); 2];
     let stats = r.schedule(&mut loads, &mut []);
     assert_eq!((stats.loads, stats.waiting, stats.requested), (2, 2, 4));
     assert_eq!([loads[0].key, loads[1].key], [key(5), key(7)]);
@@ -291,14 +290,8 @@ fn eviction_takes_the_least_recently_wanted_page_nothing_holds() {
     let w = flat_world(6);
     let mut m = memory(3, 1, 6);
     let mut tables = vec![None; 1];
-    let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table(), 0).expect("file");
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 3];
+    let mut r = one_file(&mut m, &mut tables, &w);
+    let mut loads = [LoadRequest::default(); 3];
     r.begin_frame();
     for page in 0..3 {
         r.want(key(page), 1.0).expect("want");
@@ -310,7 +303,7 @@ fn eviction_takes_the_least_recently_wanted_page_nothing_holds() {
     assert_eq!(r.want(key(1), 1.0), Ok(Wanted::Resident));
     assert_eq!(r.want(key(3), 1.0), Ok(Wanted::Requested));
     assert_eq!(r.want(key(4), 1.0), Ok(Wanted::Requested));
-    let mut evicted = [key(0); 4];
+    let mut evicted = [PageKey::default(); 4];
     let stats = r.schedule(&mut loads, &mut evicted);
     // Page 0 is used; page 2 was wanted longest ago, then page 1.
     assert_eq!(stats.evictions, 2);
@@ -335,14 +328,8 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     let w = flat_world(4);
     let mut m = memory(4, 1, 4);
     let mut tables = vec![None; 1];
-    let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table(), 0).expect("file");
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 4];
+    let mut r = one_file(&mut m, &mut tables, &w);
+    let mut loads = [LoadRequest::default(); 4];
     r.begin_frame();
     for page in 0..4 {
         r.want(key(page), 1.0).expect("want");
@@ -394,12 +381,7 @@ fn many_files_share_one_pool() {
     let mut r = pool(&mut m, &mut tables);
     assert_eq!(r.add_file(a.table(), 0), Ok(0));
     assert_eq!(r.add_file(b.table(), 2), Ok(1));
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 10];
+    let mut loads = [LoadRequest::default(); 10];
     let mut evicted = [key(0); 10];
     for frame in 0..40u32 {
         r.begin_frame();
@@ -429,14 +411,8 @@ fn a_random_soak_keeps_closure_without_allocating() {
     let w = world(300, 5);
     let mut m = memory(60, 1, 300);
     let mut tables = vec![None; 1];
-    let mut r = pool(&mut m, &mut tables);
-    r.add_file(w.table(), 0).expect("file");
-    let mut loads = [LoadRequest {
-        key: key(0),
-        slot: 0,
-        offset: 0,
-        size: 0,
-    }; 16];
+    let mut r = one_file(&mut m, &mut tables, &w);
+    let mut loads = [LoadRequest::default(); 16];
     let mut evicted = [key(0); 16];
     let mut used = vec![0u32; 300];
     let mut rng = Rng(99);

@@ -6,7 +6,8 @@ use super::layout::{RecordKind, SegmentedId};
 use super::table::PageTable;
 use super::view::PageView;
 use crate::format::records::{Creator, PositionClass};
-use crate::format::{tags, FormatError, Tag};
+use crate::format::validate::invalid;
+use crate::format::{tags, FormatError};
 use crate::ids::NodeId;
 
 /// What a page's references are checked against: its file's page table and counts.
@@ -33,22 +34,6 @@ impl PageContext<'_> {
         self.table
             .entry(page)
             .is_some_and(|e| self.ids.index(id) < e.counts[kind as usize])
-    }
-}
-
-fn invalid(
-    tag: Tag,
-    record: usize,
-    field: &'static str,
-    problem: &'static str,
-    value: u64,
-) -> FormatError {
-    FormatError::Invalid {
-        tag,
-        record: record as u64,
-        field,
-        problem,
-        value,
     }
 }
 

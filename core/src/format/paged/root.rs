@@ -6,7 +6,7 @@ use super::meta::{paged_tags, PagedMeta};
 use super::table::{PageEntry, PageTable};
 use super::view::PageView;
 use crate::format::records::{BaseFace, Meta};
-use crate::format::validate::{find, optional_section, section, section_table_flagged};
+use crate::format::validate::{find, invalid, optional_section, section, section_table_flagged};
 use crate::format::FLAG_PAGED;
 use crate::format::{tags, FileHeader, FormatError, Tag};
 use crate::ids::NodeId;
@@ -25,16 +25,6 @@ pub struct PagedRoot<'a> {
     root_pages_at: u64,
     checksum: u64,
     bytes: &'a [u8],
-}
-
-fn invalid(tag: Tag, field: &'static str, problem: &'static str, value: u64) -> FormatError {
-    FormatError::Invalid {
-        tag,
-        record: 0,
-        field,
-        problem,
-        value,
-    }
 }
 
 fn one<T: Copy>(records: &[T], tag: Tag) -> Result<T, FormatError> {
@@ -179,6 +169,7 @@ impl<'a> PagedRoot<'a> {
     {
         let layout = self.table.layout(page).ok_or(invalid(
             paged_tags::PAGE_TABLE,
+            0,
             "page",
             "no such page",
             page.into(),
@@ -248,6 +239,7 @@ impl<'a> PagedRoot<'a> {
         if nb == 0 || nb > first || nb > (1usize << ids.bits()) {
             return Err(invalid(
                 tags::BASE,
+                0,
                 "base",
                 "not the first polygons of root page 0",
                 nb as u64,
@@ -278,6 +270,7 @@ fn check_paged_meta(p: &PagedMeta, pages: usize, root_len: u64) -> Result<(), Fo
     if SegmentedId::new(p.page_bits).is_none() {
         return Err(invalid(
             tag,
+            0,
             "page_bits",
             "not within 1..=31",
             p.page_bits.into(),
@@ -286,6 +279,7 @@ fn check_paged_meta(p: &PagedMeta, pages: usize, root_len: u64) -> Result<(), Fo
     if p.page_count as usize != pages || p.root_pages > p.page_count || p.root_pages == 0 {
         return Err(invalid(
             tag,
+            0,
             "page_count",
             "disagrees with PGTB, or no root page",
             p.page_count.into(),
@@ -294,6 +288,7 @@ fn check_paged_meta(p: &PagedMeta, pages: usize, root_len: u64) -> Result<(), Fo
     if p.file_len < root_len || p.flags != 0 || p.reserved != [0; 9] {
         return Err(invalid(
             tag,
+            0,
             "file_len",
             "shorter than the root, or flags set",
             p.file_len,

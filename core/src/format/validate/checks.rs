@@ -44,7 +44,7 @@ pub(super) fn in_pieces(
 }
 
 /// The error of a record's field breaking a rule.
-pub(super) fn invalid(
+pub(crate) fn invalid(
     tag: Tag,
     record: usize,
     field: &'static str,

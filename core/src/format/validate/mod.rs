@@ -41,7 +41,7 @@ pub(crate) use table::{
 };
 
 use crate::format::{tags, FormatError, HierarchyParts, Meta};
-use checks::invalid;
+pub(crate) use checks::invalid;
 
 /// Validates every invariant of `parts`; returns the counts and bounds. With `file_meta`,
 /// the file's `META` must agree with them.
