@@ -154,3 +154,45 @@ fn a_damaged_page_fails_its_checks() {
         root.table().entry(page).unwrap().checksum
     );
 }
+
+/// A blocked bake numbers its splits in reverse creation order, not depth first; its pages
+/// are still runs of subtrees: a page has a few parent pages, not one per block it touches.
+#[test]
+fn a_blocked_bake_pages_into_subtrees() {
+    use caveclod_bake::blocked::BlockedOptions;
+    use caveclod_bake::import::ImportOptions;
+    use caveclod_bake::pipeline::build_file_spilled;
+    let dir = tempfile::tempdir().expect("dir");
+    let input = dir.path().join("terrain.ply");
+    caveclod_tests::generate::terrain(&input, 20_000, &mut |_, _| {}).expect("generate");
+    let options = BlockedOptions {
+        block_triangles: 2048,
+    };
+    // As `caveclod bake --blocked` writes it: splits in reverse creation order.
+    let (built, levels) =
+        build_file_spilled(&input, &ImportOptions::default(), &options, &mut |_| {})
+            .expect("blocked bake");
+    assert!(levels[0].blocks > 4, "{levels:?}");
+    let whole = dir.path().join("whole.clod");
+    built.write(&whole, &[]).expect("write");
+    let bytes = AlignedBytes::from_slice(&std::fs::read(&whole).expect("read"));
+    let h = Hierarchy::from_bytes(bytes.bytes()).expect("valid");
+    let path = dir.path().join("paged.clod");
+    let summary = write_paged(
+        &h,
+        &path,
+        &PageOptions {
+            page_bytes: 8 * 1024,
+        },
+    )
+    .expect("paged");
+    let file = AlignedBytes::from_slice(&std::fs::read(&path).expect("read"));
+    let root = PagedRoot::from_bytes(&file.bytes()[..summary.root_bytes as usize]).expect("root");
+    let table = root.table();
+    assert!(table.len() > 20, "{} pages", table.len());
+    let most = (0..table.len() as u32)
+        .map(|p| table.parents(p).len())
+        .max()
+        .unwrap_or(0);
+    assert!(most <= 4, "a page with {most} parent pages");
+}

@@ -1,11 +1,11 @@
 //! Which page each node's records go to: the top of the hierarchy to the root page, the rest
-//! in runs of the depth-first split order, each run as many nodes as fit a page.
+//! in runs of the depth-first order of the splits, each run as many nodes as fit a page.
 //!
 //! A node's records are its node record, its split record and bounds, the polygons its split
 //! creates, and the position (with its vertex-table entries and vertices) it brings when it
-//! is a root or a floating child. A leaf goes to its parent's page. Split ids are a
-//! depth-first preorder, so a run is a few subtrees: a camera's front over a region touches
-//! few pages, and a parent always lies in the same or an earlier page.
+//! is a root or a floating child. A leaf goes to its parent's page. A run of the preorder is
+//! a few subtrees: a camera's front over a region touches few pages, a page has few parent
+//! pages, and a parent always lies in the same or an earlier page.
 
 use caveclod_core::format::{Node, Split};
 use caveclod_core::Hierarchy;
@@ -89,7 +89,8 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
     let mut home = vec![NONE; n];
     let mut page = 0u32;
     let mut filled = budget;
-    for v in 0..splits.len() {
+    for v in preorder(h) {
+        let v = v as usize;
         if depth[v] <= root_depth {
             home[v] = 0;
             continue;
@@ -104,6 +105,9 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
         filled += with_leaves[v];
         home[v] = page;
     }
+    if home[..splits.len()].contains(&NONE) {
+        return Err(PagedError::Shape("a split is not reachable from the roots"));
+    }
     for v in splits.len()..n {
         home[v] = h.nodes()[v].parent.get().map_or(0, |p| home[p.index()]);
     }
@@ -112,6 +116,24 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
         introducer,
         pages: page + 1,
     })
+}
+
+/// The splittable nodes in depth-first preorder from the roots, stationary child first: a
+/// run of it is a few subtrees, whatever order the bake numbered them in (the blocked bake
+/// numbers block by block), and a parent comes before its children.
+fn preorder(h: &Hierarchy<'_>) -> Vec<u32> {
+    let splits = h.splits();
+    let mut order = Vec::with_capacity(splits.len());
+    let mut stack: Vec<u32> = h.roots().iter().rev().map(|r| r.0).collect();
+    while let Some(v) = stack.pop() {
+        let Some(s) = splits.get(v as usize) else {
+            continue;
+        };
+        order.push(v);
+        stack.push(s.floating.0);
+        stack.push(s.stationary.0);
+    }
+    order
 }
 
 /// The deepest level whose nodes (with every level above) fit the root page beside the base
