@@ -77,7 +77,7 @@ fn test_steps() -> Vec<(String, Step)> {
             ],
         ),
         (
-            "C interface: refine.c and arena.c (C99), the C++17 test (sanitizers), against the Rust API"
+            "C interface: refine.c, arena.c and stream.c (C99), the C++17 test (sanitizers), against the Rust API"
                 .to_string(),
             Box::new(capi::check),
         ),
