@@ -77,15 +77,38 @@ impl Workers {
             shared: Arc::new(shared),
             threads: Vec::with_capacity(count.max(1)),
         };
+        // Every thread is running before `start` returns: a thread's start-up allocates,
+        // and must not do so during a later frame.
+        let running = Arc::new((Mutex::new(0usize), Condvar::new()));
+        let mut failed = None;
         for i in 0..count.max(1) {
             let shared = Arc::clone(&workers.shared);
-            // On failure `workers` drops, stopping the threads already started.
+            let up = Arc::clone(&running);
             let thread = std::thread::Builder::new()
                 .name(format!("caveclod-pages-{i}"))
-                .spawn(move || work(&shared))?;
-            workers.threads.push(thread);
+                .spawn(move || {
+                    *lock(&up.0) += 1;
+                    up.1.notify_all();
+                    work(&shared)
+                });
+            match thread {
+                Ok(t) => workers.threads.push(t),
+                Err(e) => {
+                    failed = Some(e);
+                    break;
+                }
+            }
         }
-        Ok(workers)
+        let mut n = lock(&running.0);
+        while *n < workers.threads.len() {
+            n = running.1.wait(n).unwrap_or_else(PoisonError::into_inner);
+        }
+        drop(n);
+        // On failure `workers` drops, stopping the threads already started.
+        match failed {
+            Some(e) => Err(e),
+            None => Ok(workers),
+        }
     }
 
     /// Queues a read for the next free thread.
