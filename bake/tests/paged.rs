@@ -196,3 +196,23 @@ fn a_blocked_bake_pages_into_subtrees() {
         .unwrap_or(0);
     assert!(most <= 4, "a page with {most} parent pages");
 }
+
+/// The root's record of the largest streamed page (what a pool's slots must hold) is the
+/// page table's, or the root is refused.
+#[test]
+fn a_root_that_misstates_its_largest_page_is_refused() {
+    use caveclod_core::format::FileHeader;
+    let (_baked, paged, _dir) = paged_terrain(4 * 1024);
+    let mut root = paged.bytes.bytes()[..paged.root_len].to_vec();
+    // The section table's second entry is PGMT; `largest_page` is its 24th byte on.
+    let entry = &root[64 + 24..64 + 48];
+    assert_eq!(&entry[..4], b"PGMT");
+    let at = u64::from_le_bytes(entry[8..16].try_into().expect("offset")) as usize + 24;
+    root[at] ^= 1;
+    let mut header: FileHeader = bytemuck::pod_read_unaligned(&root[..64]);
+    header.checksum = checksum64(&root[64..]);
+    root[..64].copy_from_slice(bytemuck::bytes_of(&header));
+    let root = AlignedBytes::from_slice(&root);
+    let err = PagedRoot::from_bytes(root.bytes()).expect_err("refused");
+    assert!(err.to_string().contains("largest_page"), "{err}");
+}

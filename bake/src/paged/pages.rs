@@ -160,17 +160,12 @@ fn entry(
     for &v in &m.nodes[..m.splits as usize] {
         let b = h.bounds()[v as usize];
         max_error = max_error.max(b.uni_error);
-        for k in 0..3 {
-            lo[k] = lo[k].min(b.point[k] - b.radius);
-            hi[k] = hi[k].max(b.point[k] + b.radius);
-        }
+        grow(&mut lo, &mut hi, b.point.map(|x| x - b.radius));
+        grow(&mut lo, &mut hi, b.point.map(|x| x + b.radius));
     }
     for &q in &m.positions {
         let p = h.positions()[q as usize].xyz;
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
+        grow(&mut lo, &mut hi, p);
     }
     if lo[0] > hi[0] {
         (lo, hi) = ([0.0; 3], [0.0; 3]);
@@ -187,5 +182,13 @@ fn entry(
         counts,
         flags: if colours { PAGE_HAS_COLOURS } else { 0 },
         reserved: [0; 3],
+    }
+}
+
+/// Grows the box `lo..hi` to hold `p`.
+fn grow(lo: &mut [f32; 3], hi: &mut [f32; 3], p: [f32; 3]) {
+    for k in 0..3 {
+        lo[k] = lo[k].min(p[k]);
+        hi[k] = hi[k].max(p[k]);
     }
 }

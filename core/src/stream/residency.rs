@@ -175,13 +175,12 @@ impl<'a, 'm> Residency<'a, 'm> {
                 pages: self.config.pages,
             });
         }
-        let streamed = table
-            .entries()
-            .get(pinned as usize..)
-            .ok_or(PoolError::BadConfig {
+        if pinned as usize > table.len() {
+            return Err(PoolError::BadConfig {
                 what: "more pinned pages than the file has",
-            })?;
-        let largest = streamed.iter().map(|e| e.size).max().unwrap_or(0);
+            });
+        }
+        let largest = table.largest_page_from(pinned);
         if largest > self.config.slot_bytes {
             return Err(PoolError::PageTooLarge {
                 page_bytes: largest,

@@ -76,6 +76,15 @@ impl<'a> PagedRoot<'a> {
             checksum,
             bytes,
         };
+        if paged.largest_page != page_table.largest_page_from(paged.root_pages) {
+            return Err(invalid(
+                pm,
+                0,
+                "largest_page",
+                "is not the largest streamed page's size",
+                paged.largest_page.into(),
+            ));
+        }
         root.check_page_places()?;
         root.check_root_pages()?;
         root.check_base()?;

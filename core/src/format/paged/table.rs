@@ -183,10 +183,17 @@ impl<'a> PageTable<'a> {
             .unwrap_or(&[])
     }
 
-    /// The largest page, in bytes: a pool's slots must hold it.
+    /// The largest page, in bytes.
     #[inline]
     pub fn largest_page(&self) -> u32 {
         self.largest
+    }
+
+    /// The largest of the pages from `first` on, in bytes (0 if there are none): with
+    /// `first` the root pages' count, what a pool's slots must hold.
+    pub fn largest_page_from(&self, first: u32) -> u32 {
+        let streamed = self.entries.get(first as usize..).unwrap_or(&[]);
+        streamed.iter().map(|e| e.size).max().unwrap_or(0)
     }
 }
 
