@@ -92,7 +92,7 @@ pub use camera::{
 pub use format::error::FormatError;
 pub use glam;
 pub use gpu::MorphVertex;
-pub use hierarchy::Hierarchy;
+pub use hierarchy::{Absent, Hierarchy, HierarchyRecords};
 pub use ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId, SurfaceId};
 pub use memory::MemoryReport;
 pub use octree::error::OctreeFormatError;

@@ -57,7 +57,7 @@ use glam::{BVec4A, Vec3, Vec4};
 
 use super::records::{ActiveVertex, UNKNOWN};
 use crate::format::SplitBounds;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::screen::ScreenTest;
 
 /// Relative margin kept between a distance and the distance at which a test's answer
@@ -133,7 +133,7 @@ pub(crate) fn parent_says(cert: f32, at: Readings) -> Option<bool> {
 }
 
 /// The hierarchy's bounding box in `f64` (exact): centre and half extents.
-fn box_of(h: &Hierarchy<'_>) -> ([f64; 3], [f64; 3]) {
+fn box_of(h: &impl HierarchyRecords) -> ([f64; 3], [f64; 3]) {
     let m = h.meta();
     let mut centre = [0.0; 3];
     let mut half = [0.0; 3];
@@ -170,7 +170,7 @@ impl Odometer {
     /// certificate in `records` when they no longer apply.
     pub fn advance(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         test: &ScreenTest,
         records: &mut [ActiveVertex],
     ) -> Readings {
@@ -402,7 +402,7 @@ impl Slack {
 /// How far any of `planes` moved, anywhere in the hierarchy's box, from `last`, plus the
 /// pass's rounding allowance for the frustum test (rounded up). Over a box, the largest
 /// `|Δn · x + Δw|` is `|Δn · centre + Δw| + Σ |Δn_i| half_i`.
-fn sweep_of_planes(h: &Hierarchy<'_>, last: &[Vec4], planes: &[Vec4]) -> f64 {
+fn sweep_of_planes(h: &impl HierarchyRecords, last: &[Vec4], planes: &[Vec4]) -> f64 {
     let (centre, half) = box_of(h);
     // The largest `|x| + |y| + |z|` of a point in the box.
     let l1: f64 = (0..3).map(|k| centre[k].abs() + half[k]).sum();

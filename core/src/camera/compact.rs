@@ -34,20 +34,21 @@ use super::compact_progress::Progress;
 use super::index_cache::EMPTY;
 use super::records::{ActiveVertex, PolySlot, SlotTriangle, FREE, NONE};
 use super::state::{CameraState, Front};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 
 /// Marks an entry of the permutation that the in-place inversion has written.
 const DONE: u32 = 1 << 31;
 
 impl Front<'_> {
-    pub(crate) fn compact(&mut self, h: &Hierarchy<'_>) {
+    pub(crate) fn compact(&mut self, h: &impl HierarchyRecords) {
         let live = self.base as usize + 2 * self.pairs as usize;
         let len = self.active_len as usize;
         // Encoded links (`base + 2 * owner + side`) must stay below `NONE`, and record
         // indices below `DONE`; no hierarchy that fits in memory comes near either, and a
         // camera that could is left as it is (compaction changes no result, only speed).
-        let encodable = u64::from(self.base) + 2 * h.splits().len() as u64 + 2 < u64::from(NONE);
+        let encodable =
+            u64::from(self.base) + 2 * u64::from(h.meta().split_count) + 2 < u64::from(NONE);
         if !encodable
             || live > self.slots.len()
             || (self.caches_indices() && live > self.triangles.len())
@@ -87,7 +88,7 @@ impl Front<'_> {
     /// Sorts the active records by node (free records, tagged with the top bit, sort last
     /// and are dropped), moves every corner to its record's new place and restores the
     /// records' coarsening parents.
-    fn sort_records(&mut self, h: &Hierarchy<'_>, live: usize, len: usize) {
+    fn sort_records(&mut self, h: &impl HierarchyRecords, live: usize, len: usize) {
         let records = &mut self.active[..len];
         for (i, r) in records.iter_mut().enumerate() {
             r.coarsen = i as u32;
@@ -219,7 +220,7 @@ impl CameraState<'_> {
     /// p_a) at once, a spike on a large front (see [`compact_step`](Self::compact_step) for
     /// bounded steps), and ends any incremental cycle
     /// under way; never called by [`refine`](Self::refine).
-    pub fn compact(&mut self, h: &Hierarchy<'_>) {
+    pub fn compact(&mut self, h: &impl HierarchyRecords) {
         if self.is_for(h) {
             self.front.compact(h);
         }

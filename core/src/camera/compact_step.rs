@@ -30,7 +30,7 @@
 use super::compact_progress::{Progress, GAPS, IDLE, PAIRS, RECORDS, SQUEEZE};
 use super::records::{next, prev, PolySlot, FREE, NONE};
 use super::state::{CameraState, Front};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 
 /// A corner or link value no record or slot has: the middle of a three-way rename.
@@ -55,7 +55,11 @@ enum FanStart {
 
 impl Front<'_> {
     /// At most about `budget` work of the compaction under way, or of a new one.
-    pub(crate) fn compact_step(&mut self, h: &Hierarchy<'_>, budget: u32) -> CompactProgress {
+    pub(crate) fn compact_step(
+        &mut self,
+        h: &impl HierarchyRecords,
+        budget: u32,
+    ) -> CompactProgress {
         let mut done = CompactProgress::default();
         if self.compaction.phase == IDLE {
             self.compaction.phase = SQUEEZE;
@@ -90,7 +94,7 @@ impl Front<'_> {
     /// One squeeze step: drop a free record at the list's end, or fill the free list's first
     /// record with the list's last; `None` when the free list is empty (or the last record
     /// cannot move: then the holes stay, and the sort skips them).
-    fn squeeze_one(&mut self, h: &Hierarchy<'_>) -> Option<u32> {
+    fn squeeze_one(&mut self, h: &impl HierarchyRecords) -> Option<u32> {
         let len = self.active_len as usize;
         if len > 0 && self.active.get(len - 1)?.node & FREE != 0 {
             self.active_len -= 1;
@@ -117,7 +121,7 @@ impl Front<'_> {
     }
 
     /// One step of the records' Shell sort by node; `None` when it is done.
-    fn sort_records_step(&mut self, h: &Hierarchy<'_>) -> Option<u32> {
+    fn sort_records_step(&mut self, h: &impl HierarchyRecords) -> Option<u32> {
         let n = self.active_len;
         let key = |f: &Self, k: u32| {
             let node = f.active.get(k as usize)?.node;
@@ -173,7 +177,7 @@ impl Front<'_> {
 
     /// Swaps records `a` and `b` (both live) and renames them in every corner; its work, or
     /// `None` (nothing changed) if a fan contradicts the front.
-    fn swap_records(&mut self, h: &Hierarchy<'_>, a: u32, b: u32) -> Option<u32> {
+    fn swap_records(&mut self, h: &impl HierarchyRecords, a: u32, b: u32) -> Option<u32> {
         let ((fa, looked_a), (fb, looked_b)) = (self.fan_start(h, a)?, self.fan_start(h, b)?);
         let work = self.check_fan(fa, a)? + self.check_fan(fb, b)?;
         self.rename_fan(fa, a, PARKED);
@@ -186,7 +190,7 @@ impl Front<'_> {
     /// A slot naming live record `r`, or `Empty` for a root no base polygon names (a vertex
     /// without polygons), with the slots looked at to find it; `None` if the front
     /// contradicts the hierarchy.
-    fn fan_start(&self, h: &Hierarchy<'_>, r: u32) -> Option<(FanStart, u32)> {
+    fn fan_start(&self, h: &impl HierarchyRecords, r: u32) -> Option<(FanStart, u32)> {
         let node = self.active.get(r as usize)?.node;
         if node & FREE != 0 {
             return None;
@@ -425,7 +429,7 @@ impl CameraState<'_> {
     /// churn: a front half replaced since the last cycle costs tens of times
     /// [`compact`](Self::compact)'s work in all, spread over the steps. Never called by
     /// [`refine`](Self::refine); [`churn`](Self::churn) counts from a cycle's start.
-    pub fn compact_step(&mut self, h: &Hierarchy<'_>, budget: u32) -> CompactProgress {
+    pub fn compact_step(&mut self, h: &impl HierarchyRecords, budget: u32) -> CompactProgress {
         if !self.is_for(h) {
             return CompactProgress::default();
         }

@@ -1,7 +1,7 @@
 //! How much a camera holds ([`CameraConfig`]) and why one could not be made
 //! ([`CameraError`]).
 
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 
 /// How much a camera can hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,9 +36,9 @@ pub struct CameraConfig {
 
 impl CameraConfig {
     /// Room for every split of `h`: the camera can reach full resolution anywhere.
-    pub fn full(h: &Hierarchy<'_>) -> Self {
+    pub fn full(h: &impl HierarchyRecords) -> Self {
         Self {
-            max_pairs: h.splits().len() as u32,
+            max_pairs: h.meta().split_count,
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
@@ -47,11 +47,11 @@ impl CameraConfig {
     }
 
     /// Room for at most `max_active_polygons` active polygons (at least the base mesh).
-    pub fn with_polygon_budget(h: &Hierarchy<'_>, max_active_polygons: u32) -> Self {
+    pub fn with_polygon_budget(h: &impl HierarchyRecords, max_active_polygons: u32) -> Self {
         // Each split adds at most two polygons.
         let extra = max_active_polygons.saturating_sub(h.base_polygon_count() as u32) / 2;
         Self {
-            max_pairs: extra.min(h.splits().len() as u32),
+            max_pairs: extra.min(h.meta().split_count),
             stack_len: Self::default_stack(h),
             index_cache: true,
             hashed_pair_map: false,
@@ -89,7 +89,7 @@ impl CameraConfig {
     /// with the depth of the chain of splits it forces; an overflow abandons that one wanted
     /// split ([`RefineStats::stack_overflows`](crate::RefineStats::stack_overflows)), it
     /// is not an error.
-    pub fn default_stack(h: &Hierarchy<'_>) -> u32 {
+    pub fn default_stack(h: &impl HierarchyRecords) -> u32 {
         (h.meta().max_depth + 1).saturating_mul(32).max(256)
     }
 }

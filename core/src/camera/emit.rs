@@ -17,7 +17,7 @@ use super::index_cache::BATCH;
 use super::morph::MorphRemap;
 use super::records::{SlotTriangle, NONE, NO_POLYGON};
 use super::state::CameraState;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{PolyId, SurfaceId};
 use crate::outputs::{check_lists, start_packed};
 
@@ -124,7 +124,7 @@ impl CameraState<'_> {
     #[inline]
     fn for_each_triangle(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         mut sink: impl FnMut(usize, [u32; 3]),
     ) -> Result<(), EmitError> {
         let f = &self.front;
@@ -166,7 +166,7 @@ impl CameraState<'_> {
     /// `written[surface]`. Returns the total number of indices.
     pub fn emit_indices(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [&mut [u32]],
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
@@ -174,16 +174,16 @@ impl CameraState<'_> {
     }
 
     /// [`emit_indices`](Self::emit_indices) with every corner whose vertex morphs pointing
-    /// at its morph slot: `h.vertices().len() + slot`, where the GPU writes the blended
+    /// at its morph slot: `h.vertex_id_bound() + slot`, where the GPU writes the blended
     /// vertex of [`morph_vertices`](Self::morph_vertices)`()[slot]`. With nothing morphing
     /// it writes what `emit_indices` writes.
     pub fn emit_indices_morphed(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [&mut [u32]],
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
-        match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
+        match MorphRemap::of(&self.front.morphs, h.vertex_id_bound() as u32) {
             Some(m) => self.emit_lists(h, out, written, |tri| m.triangle(tri)),
             None => self.emit_lists(h, out, written, |tri| tri),
         }
@@ -193,7 +193,7 @@ impl CameraState<'_> {
     #[inline]
     fn emit_lists(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [&mut [u32]],
         written: &mut [u32],
         remap: impl Fn([u32; 3]) -> [u32; 3],
@@ -231,7 +231,7 @@ impl CameraState<'_> {
     /// Returns the total number of indices.
     pub fn emit_indices_packed(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [u32],
         offsets: &mut [u32],
     ) -> Result<usize, EmitError> {
@@ -242,11 +242,11 @@ impl CameraState<'_> {
     /// their morph slots, as [`emit_indices_morphed`](Self::emit_indices_morphed) writes them.
     pub fn emit_indices_packed_morphed(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [u32],
         offsets: &mut [u32],
     ) -> Result<usize, EmitError> {
-        match MorphRemap::of(&self.front.morphs, h.vertices().len() as u32) {
+        match MorphRemap::of(&self.front.morphs, h.vertex_id_bound() as u32) {
             Some(m) => self.emit_packed(h, out, offsets, |tri| m.triangle(tri)),
             None => self.emit_packed(h, out, offsets, |tri| tri),
         }
@@ -257,7 +257,7 @@ impl CameraState<'_> {
     #[inline]
     fn emit_packed(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         out: &mut [u32],
         offsets: &mut [u32],
         remap: impl Fn([u32; 3]) -> [u32; 3],

@@ -28,7 +28,7 @@
 use super::records::{SlotTriangle, NONE, NO_POLYGON};
 use super::state::Front;
 use crate::format::Polygon;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{NodeId, PolyId, PositionId, SurfaceGroupId};
 
 /// Slots per batch of [`Front::gather`]: enough independent reads per link to keep the
@@ -85,7 +85,7 @@ impl Known {
 impl SlotTriangle {
     /// The entry of `poly` with its corners at `positions`.
     #[inline]
-    fn of(h: &Hierarchy<'_>, poly: Option<&Polygon>, positions: [PositionId; 3]) -> Self {
+    fn of(h: &impl HierarchyRecords, poly: Option<&Polygon>, positions: [PositionId; 3]) -> Self {
         match poly {
             Some(p) => Self {
                 indices: positions.map(|pos| h.vertex_index(p.group, pos).unwrap_or(NONE)),
@@ -106,13 +106,13 @@ impl Front<'_> {
 
     /// The position of `node` (`NONE` for an absent node, which no group has a vertex at).
     #[inline]
-    pub fn position_of(h: &Hierarchy<'_>, node: NodeId) -> PositionId {
+    pub fn position_of(h: &impl HierarchyRecords, node: NodeId) -> PositionId {
         h.node(node).map_or(PositionId(NONE), |n| n.position)
     }
 
     /// The position of the node active-vertex record `record` holds.
     #[inline]
-    pub fn record_position(&self, h: &Hierarchy<'_>, record: u32) -> PositionId {
+    pub fn record_position(&self, h: &impl HierarchyRecords, record: u32) -> PositionId {
         self.node_of(record)
             .map_or(PositionId(NONE), |n| Self::position_of(h, n))
     }
@@ -123,7 +123,7 @@ impl Front<'_> {
     #[inline]
     pub fn cache_corner(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         slot: u32,
         corner: usize,
         position: PositionId,
@@ -152,7 +152,7 @@ impl Front<'_> {
     #[inline]
     pub fn new_entry(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         poly: Option<&Polygon>,
         known: Option<(u16, [u32; 3])>,
         positions: impl FnOnce(&Self) -> [PositionId; 3],
@@ -177,7 +177,7 @@ impl Front<'_> {
 
     /// Asks for the vertex-table row of `position` ahead of an operation's first lookup.
     #[inline]
-    pub fn prefetch_row(h: &Hierarchy<'_>, position: PositionId) {
+    pub fn prefetch_row(h: &impl HierarchyRecords, position: PositionId) {
         h.prefetch_vertex_keys(position);
     }
 
@@ -202,7 +202,7 @@ impl Front<'_> {
 
     /// Fills the entries of slots `from..to` through the hierarchy (the base slots, at a
     /// reset).
-    pub fn cache_slots(&mut self, h: &Hierarchy<'_>, from: usize, to: usize) {
+    pub fn cache_slots(&mut self, h: &impl HierarchyRecords, from: usize, to: usize) {
         let to = to.min(self.triangles.len());
         let mut start = from;
         while start < to {
@@ -219,7 +219,7 @@ impl Front<'_> {
     /// one link for every slot before the next (see the module docs); the vertex table is
     /// left to [`Gathered::entry`], so a caller can look it up while it hands out each
     /// triangle.
-    pub fn gather<'h>(&self, h: &Hierarchy<'h>, start: u32, n: usize) -> Gathered<'h> {
+    pub fn gather<'h>(&self, h: &'h impl HierarchyRecords, start: u32, n: usize) -> Gathered<'h> {
         let n = n.min(BATCH);
         let mut g = Gathered {
             records: [None; BATCH],
@@ -240,11 +240,10 @@ impl Front<'_> {
             }
         }
         // Link 2: the polygon records, and each corner's position.
-        let (polys, nodes) = (h.polygons(), h.nodes());
         for k in 0..n {
-            g.records[k] = polys.get(ids[k].index());
+            g.records[k] = h.polygon(ids[k]);
             for c in &mut g.positions[k] {
-                *c = nodes.get(*c as usize).map_or(NONE, |n| n.position.0);
+                *c = h.node(NodeId(*c)).map_or(NONE, |n| n.position.0);
             }
         }
         g
@@ -261,7 +260,7 @@ impl Gathered<'_> {
     /// Slot `k`'s entry: links 3 and 4 of the chain, the vertex table's row of each
     /// position and the group's entry in it.
     #[inline]
-    pub fn entry(&self, h: &Hierarchy<'_>, k: usize) -> SlotTriangle {
+    pub fn entry(&self, h: &impl HierarchyRecords, k: usize) -> SlotTriangle {
         match (self.records.get(k), self.positions.get(k)) {
             (Some(&poly), Some(p)) => SlotTriangle::of(h, poly, p.map(PositionId)),
             _ => EMPTY,

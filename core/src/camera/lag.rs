@@ -7,7 +7,7 @@ use super::criterion::Criterion;
 use super::ops::OpError;
 use super::records::FREE;
 use super::state::CameraState;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 use crate::params::RefineParams;
 use crate::screen::ScreenTest;
@@ -48,7 +48,7 @@ impl CameraState<'_> {
     /// ([`RefineParams::validate`]).
     pub fn lag(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         view: &View,
         params: &RefineParams,
     ) -> Result<FrontLag, OpError> {

@@ -10,7 +10,7 @@ use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
 use super::records::{ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
 use super::state::{CameraState, Front};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 
 /// Where a camera's arrays lie in its words: the hierarchy's counts the arrays are sized by,
 /// and the configuration.
@@ -25,14 +25,19 @@ pub(crate) struct Layout {
 }
 
 impl Layout {
-    pub(crate) fn of(h: &Hierarchy<'_>, config: &CameraConfig) -> Self {
+    /// Over sparse ids (a paged file's), a camera keeps no per-id arrays: the pair map is
+    /// hashed and the morph map keeps no bit per vertex, so its memory follows its capacity.
+    pub(crate) fn of(h: &impl HierarchyRecords, config: &CameraConfig) -> Self {
+        let dense = h.dense_ids();
+        let mut config = *config;
+        config.hashed_pair_map |= !dense;
         Self {
-            splits: h.splits().len(),
-            vertices: h.vertices().len(),
+            splits: h.split_id_bound(),
+            vertices: if dense { h.vertex_id_bound() } else { 0 },
             roots: h.roots().len(),
             base: h.base_polygon_count(),
             surfaces: h.surface_count(),
-            config: *config,
+            config,
         }
     }
 
@@ -98,7 +103,7 @@ pub(crate) struct Scalars {
 
 impl Scalars {
     /// Before the first [`reset`](CameraState::reset).
-    pub(crate) fn initial(h: &Hierarchy<'_>) -> Self {
+    pub(crate) fn initial(h: &impl HierarchyRecords) -> Self {
         Self {
             hierarchy: h.checksum(),
             base: h.base_polygon_count() as u32,

@@ -6,28 +6,28 @@ use super::config::{CameraConfig, CameraError};
 use super::layout::{Layout, Scalars};
 use super::records::{ActiveVertex, PolySlot, NONE, UNKNOWN};
 use super::state::CameraState;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 
 impl<'m> CameraState<'m> {
     /// Words of memory a camera needs for full resolution anywhere ([`CameraConfig::full`]).
-    pub fn words_needed(h: &Hierarchy<'_>) -> usize {
+    pub fn words_needed(h: &impl HierarchyRecords) -> usize {
         Layout::of(h, &CameraConfig::full(h)).words()
     }
 
     /// Words of memory a camera with `config` needs.
-    pub fn words_needed_for(h: &Hierarchy<'_>, config: &CameraConfig) -> usize {
+    pub fn words_needed_for(h: &impl HierarchyRecords, config: &CameraConfig) -> usize {
         Layout::of(h, config).words()
     }
 
     /// A camera at the base mesh, able to reach full resolution, in `memory`
     /// (at least [`words_needed`](Self::words_needed) words; extra words are left unused).
-    pub fn new(h: &Hierarchy<'_>, memory: &'m mut [u32]) -> Result<Self, CameraError> {
+    pub fn new(h: &impl HierarchyRecords, memory: &'m mut [u32]) -> Result<Self, CameraError> {
         Self::with_config(h, memory, &CameraConfig::full(h))
     }
 
     /// A camera at the base mesh with the given capacity.
     pub fn with_config(
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         memory: &'m mut [u32],
         config: &CameraConfig,
     ) -> Result<Self, CameraError> {
@@ -46,10 +46,10 @@ impl<'m> CameraState<'m> {
 
     /// The layout of a camera with `config` over `h`, if the hierarchy has the splits.
     pub(crate) fn checked_layout(
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         config: &CameraConfig,
     ) -> Result<Layout, CameraError> {
-        let ns = h.splits().len();
+        let ns = h.meta().split_count as usize;
         if config.max_pairs as usize > ns {
             return Err(CameraError::TooManyPairs {
                 max_pairs: config.max_pairs,
@@ -57,17 +57,17 @@ impl<'m> CameraState<'m> {
             });
         }
         let slots = 2 * u64::from(config.max_morphs);
-        if h.vertices().len() as u64 + slots >= u64::from(NONE) {
+        if h.vertex_id_bound() as u64 + slots >= u64::from(NONE) {
             return Err(CameraError::TooManyMorphs {
                 max_morphs: config.max_morphs,
-                vertex_count: h.vertices().len() as u32,
+                vertex_count: h.vertex_id_bound() as u32,
             });
         }
         Ok(Layout::of(h, config))
     }
 
     /// Back to the base mesh.
-    pub fn reset(&mut self, h: &Hierarchy<'_>) {
+    pub fn reset(&mut self, h: &impl HierarchyRecords) {
         let f = &mut self.front;
         f.pair_of.clear();
         f.pairs = 0;
@@ -95,7 +95,9 @@ impl<'m> CameraState<'m> {
                 corners,
                 neighbours: b.neighbours.map(|n| n.0),
             };
-            let s = h.polygons()[i].surface.index();
+            let s = h
+                .polygon(crate::ids::PolyId(i as u32))
+                .map_or(0, |p| p.surface.index());
             f.surface_polygons[s] += 1;
         }
         f.active_polygons = f.base;

@@ -60,7 +60,7 @@ use super::records::NONE;
 use super::state::{CameraState, Front};
 use super::stats::RefineStats;
 use crate::gpu::{MorphVertex, MAX_MORPH_CHAIN};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 use crate::params::RefineParams;
 use glam::Vec3;
@@ -127,14 +127,20 @@ impl Front<'_> {
     }
 
     /// The morph of the vertices at `floating`'s position, if any.
-    fn morph_of(&self, h: &Hierarchy<'_>, floating: NodeId) -> Option<u32> {
+    fn morph_of(&self, h: &impl HierarchyRecords, floating: NodeId) -> Option<u32> {
         let first = h.vertex_keys(Self::position_of(h, floating)).first()?;
         self.morphs.of_slot(self.morphs.map.get(first.vertex)?)
     }
 
     /// Starts (or restarts) the morph of `parent`'s floating child at `t`, in `phase`;
     /// `false` if there is no room or the positions' vertices cannot morph.
-    fn start_morph(&mut self, h: &Hierarchy<'_>, parent: NodeId, t: f32, phase: u32) -> bool {
+    fn start_morph(
+        &mut self,
+        h: &impl HierarchyRecords,
+        parent: NodeId,
+        t: f32,
+        phase: u32,
+    ) -> bool {
         let Some(s) = h.split(parent) else {
             return false;
         };
@@ -196,7 +202,7 @@ impl Front<'_> {
 
     /// Whether `node`'s position is drawn elsewhere than at its point: its vertex morphs.
     #[inline]
-    fn position_morphs(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    fn position_morphs(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         h.vertex_keys(Self::position_of(h, node))
             .first()
             .is_some_and(|k| self.morphs.map.bit(k.vertex) != 0)
@@ -207,12 +213,12 @@ impl Front<'_> {
     /// the bounds (of the hierarchy's geometry) do not hold and which may be in view (a
     /// chain of slow morphs near the eye can stand far from the node's sphere), so its
     /// operations morph too.
-    fn drawn_visible(&self, h: &Hierarchy<'_>, c: &Criterion, node: NodeId) -> bool {
+    fn drawn_visible(&self, h: &impl HierarchyRecords, c: &Criterion, node: NodeId) -> bool {
         h.split_bounds(node).is_some_and(|b| c.visible(b)) || self.position_morphs(h, node)
     }
 
     /// Ends the morph of the vertices at `floating`'s position, if any (its pair collapsed).
-    pub fn end_morph_of(&mut self, h: &Hierarchy<'_>, floating: NodeId) {
+    pub fn end_morph_of(&mut self, h: &impl HierarchyRecords, floating: NodeId) {
         if let Some(m) = self.morph_of(h, floating) {
             self.free_morph(m);
         }
@@ -222,7 +228,7 @@ impl Front<'_> {
     /// if the node is visible and refine morphs are on.
     pub(super) fn morph_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         c: &Criterion,
         p: &RefineParams,
         node: NodeId,
@@ -246,7 +252,7 @@ impl Front<'_> {
     /// for a parent outside the view, coarsen morphs off, or no room.
     pub(super) fn defers_collapse(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         c: &Criterion,
         p: &RefineParams,
         parent: NodeId,
@@ -279,7 +285,7 @@ impl Front<'_> {
     /// Whether the collapse into `parent`, whose pair coarsen-morphs, is still legal: its
     /// children unsplit, and its slots as they were when it was found legal (the pair's
     /// remembered bit, see the module docs) or found legal now.
-    fn coarsening_legal(&mut self, h: &Hierarchy<'_>, parent: NodeId) -> bool {
+    fn coarsening_legal(&mut self, h: &impl HierarchyRecords, parent: NodeId) -> bool {
         let (Some(s), Some(pair)) = (h.split(parent), self.pair_of.get(parent.index())) else {
             return false;
         };
@@ -303,9 +309,8 @@ impl Front<'_> {
     /// then sum to less than twice the first link's), and the path it may cover is the sum
     /// of the chain's paths, each at the larger magnification of its two ends. 1 (no limit)
     /// for paths of no length, wholly behind the eye, or a morph without vertices.
-    fn screen_limit(&self, h: &Hierarchy<'_>, c: &Criterion, m: u32, max_px: f32) -> f32 {
-        let vertices = h.vertices();
-        let base = vertices.len() as u32;
+    fn screen_limit(&self, h: &impl HierarchyRecords, c: &Criterion, m: u32, max_px: f32) -> f32 {
+        let base = h.vertex_id_bound() as u32;
         let mut slot = self
             .morphs
             .vertices
@@ -314,9 +319,7 @@ impl Front<'_> {
         let (mut px, mut share) = (0.0f32, max_px);
         let mut links = 0;
         while let Some(v) = slot.filter(|v| !v.is_idle()) {
-            if let (Some(a), Some(b)) =
-                (vertices.get(v.coarse as usize), vertices.get(v.to as usize))
-            {
+            if let (Some(a), Some(b)) = (h.vertex(v.coarse), h.vertex(v.to)) {
                 let (pa, pb) = (Vec3::from_array(a.position), Vec3::from_array(b.position));
                 px += (pb - pa).length() * c.magnification(pa).max(c.magnification(pb));
             }
@@ -339,8 +342,8 @@ impl Front<'_> {
     /// Points every morphing vertex's `from` at the slot of its `coarse` vertex while that
     /// vertex morphs too, and at `coarse` itself otherwise (see [`MorphVertex::from`]):
     /// run after every pass that started or ended morphs, before the GPU reads the slots.
-    pub(super) fn link_morph_chains(&mut self, h: &Hierarchy<'_>) {
-        let base = h.vertices().len() as u32;
+    pub(super) fn link_morph_chains(&mut self, h: &impl HierarchyRecords) {
+        let base = h.vertex_id_bound() as u32;
         let n = self.morphs.live_vertices().len();
         for s in 0..n {
             let Some(v) = self
@@ -368,7 +371,7 @@ impl Front<'_> {
     /// morph that reached 1 ends.
     pub(super) fn sweep_morphs(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         c: &Criterion,
         p: &RefineParams,
         st: &mut RefineStats,

@@ -81,9 +81,13 @@ impl<'m> MorphMap<'m> {
         }
     }
 
-    /// Whether `vertex` morphs (non-zero) or not (zero): one read of its bit, no branch.
+    /// Whether `vertex` morphs (non-zero) or not (zero): one read of its bit, or a probe of
+    /// the table where the camera keeps no bits (a hierarchy with sparse vertex ids).
     #[inline(always)]
     pub fn bit(&self, vertex: u32) -> u32 {
+        if self.bits.is_empty() {
+            return u32::from(self.get(vertex).is_some());
+        }
         self.bits
             .get(vertex as usize / 32)
             .map_or(0, |w| w & (1 << (vertex % 32)))
@@ -241,6 +245,15 @@ mod tests {
         assert_eq!(map.bit(NONE), 0);
         assert_eq!(map.bytes(), 33 * 8 + 40);
         assert_eq!(MorphMap::words(0, VERTICES), 0);
+        // Without bits (sparse vertex ids), the table answers alone.
+        let mut memory = [0u32; 2 * 33];
+        let mut sparse = MorphMap::new(&mut memory, MORPHS, 0);
+        sparse.clear();
+        assert_eq!(sparse.insert(1 << 30, 5), Some(()));
+        assert_ne!(sparse.bit(1 << 30), 0);
+        assert_eq!(sparse.bit(7), 0);
+        sparse.remove(1 << 30, 5);
+        assert_eq!(sparse.bit(1 << 30), 0);
         assert_eq!(MorphMap::new(&mut [], 0, VERTICES).get(3), None);
     }
 }

@@ -20,7 +20,7 @@ mod split;
 use super::certificate::Odometer;
 use super::records::{PolySlot, NONE};
 use super::state::{CameraState, Front};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{NodeId, PolyKey};
 use crate::params::ParamsError;
 
@@ -158,7 +158,7 @@ impl Front<'_> {
 
     /// The slots of `v`'s present neighbours (`NONE` for absent ones) if its split is legal.
     #[inline]
-    pub fn split_slots(&self, h: &Hierarchy<'_>, v: NodeId) -> Option<[u32; 4]> {
+    pub fn split_slots(&self, h: &impl HierarchyRecords, v: NodeId) -> Option<[u32; 4]> {
         let s = h.split(v)?;
         if !self.is_node_active(h, v) {
             return None;
@@ -172,14 +172,14 @@ impl Front<'_> {
         ])
     }
 
-    pub fn can_split(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
+    pub fn can_split(&self, h: &impl HierarchyRecords, v: NodeId) -> bool {
         self.split_slots(h, v).is_some()
     }
 
     /// The slots of `v`'s neighbours (`NONE` for absent ones) if the collapse into `v` is
     /// legal: both children active and `f_l`, `f_r` linked exactly as the split left them.
     #[inline]
-    pub fn collapse_slots(&self, h: &Hierarchy<'_>, v: NodeId) -> Option<[u32; 4]> {
+    pub fn collapse_slots(&self, h: &impl HierarchyRecords, v: NodeId) -> Option<[u32; 4]> {
         let s = h.split(v)?;
         let pair = self.pair_of.get(v.index())?;
         if pair == NONE || self.is_split(s.stationary) || self.is_split(s.floating) {
@@ -212,7 +212,7 @@ impl Front<'_> {
         Some(slots)
     }
 
-    pub fn can_collapse(&self, h: &Hierarchy<'_>, v: NodeId) -> bool {
+    pub fn can_collapse(&self, h: &impl HierarchyRecords, v: NodeId) -> bool {
         self.collapse_slots(h, v).is_some()
     }
 
@@ -242,7 +242,7 @@ impl Front<'_> {
 }
 
 impl CameraState<'_> {
-    fn check(&self, h: &Hierarchy<'_>) -> Result<(), OpError> {
+    fn check(&self, h: &impl HierarchyRecords) -> Result<(), OpError> {
         if self.is_for(h) {
             Ok(())
         } else {
@@ -251,7 +251,7 @@ impl CameraState<'_> {
     }
 
     /// `true` if `node` is active, can be split, and every present `fn0..fn3` is active.
-    pub fn can_split(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    pub fn can_split(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         self.is_for(h) && self.front.can_split(h, node)
     }
 
@@ -275,12 +275,12 @@ impl CameraState<'_> {
 
     /// `true` if `node` is split, both children are active, and `f_l`, `f_r` have exactly
     /// the neighbours the split gave them.
-    pub fn can_collapse(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    pub fn can_collapse(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         self.is_for(h) && self.front.can_collapse(h, node)
     }
 
     /// Splits active `node` if [`can_split`](Self::can_split).
-    pub fn split(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Result<(), OpError> {
+    pub fn split(&mut self, h: &impl HierarchyRecords, node: NodeId) -> Result<(), OpError> {
         self.check(h)?;
         if h.split(node).is_none() {
             return Err(if h.node(node).is_some() {
@@ -300,7 +300,7 @@ impl CameraState<'_> {
     }
 
     /// Collapses the children of `node` back into it if [`can_collapse`](Self::can_collapse).
-    pub fn collapse(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Result<(), OpError> {
+    pub fn collapse(&mut self, h: &impl HierarchyRecords, node: NodeId) -> Result<(), OpError> {
         self.check(h)?;
         if h.split(node).is_none() {
             return Err(OpError::Leaf { node });
@@ -322,7 +322,7 @@ impl CameraState<'_> {
     /// stay (the front is valid, just not yet refined at `node`).
     pub fn force_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         node: NodeId,
         stack: &mut [NodeId],
     ) -> Result<u32, OpError> {
@@ -333,7 +333,7 @@ impl CameraState<'_> {
     /// [`force_split`](Self::force_split) with the camera's own stack.
     pub fn force_split_own_stack(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         node: NodeId,
     ) -> Result<u32, OpError> {
         self.check(h)?;

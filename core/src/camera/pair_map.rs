@@ -19,7 +19,11 @@
 //!   numbered depth-first, so the array keeps the entries a pass and its operations read
 //!   together in a few lines, and the hash scatters them (hashing blocks of consecutive nodes
 //!   together does not win that locality back). So the array is the default, and the table
-//!   is for a runtime that counts bytes.
+//!   is for a runtime that counts bytes. A camera with 65,535 pairs or more hashes into
+//!   8-byte entries (the pair in 32 bits).
+//!
+//! A hierarchy with sparse ids (a paged file's page-major ids) always hashes: an array by
+//! node would be sized by the id space, not by what the camera holds.
 
 use super::records::NONE;
 use bytemuck::{Pod, Zeroable};
@@ -37,7 +41,24 @@ pub(crate) struct Entry {
     pair: u16,
 }
 
-impl Entry {
+/// One entry of the hashed map with 32-bit pairs, for cameras of 65,535 pairs or more.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub(crate) struct WideEntry {
+    node: u32,
+    pair: u32,
+}
+
+/// What the hashed table's probes need of an entry.
+trait HashEntry: Copy {
+    const EMPTY: Self;
+    fn node(&self) -> u32;
+    fn pair(&self) -> u32;
+    /// The entry of `node` and `pair`; `None` for a pair the entry cannot hold.
+    fn of(node: u32, pair: u32) -> Option<Self>;
+}
+
+impl HashEntry for Entry {
     const EMPTY: Self = Self {
         node_lo: u16::MAX,
         node_hi: u16::MAX,
@@ -50,12 +71,39 @@ impl Entry {
     }
 
     #[inline(always)]
-    fn of(node: u32, pair: u16) -> Self {
-        Self {
+    fn pair(&self) -> u32 {
+        u32::from(self.pair)
+    }
+
+    #[inline(always)]
+    fn of(node: u32, pair: u32) -> Option<Self> {
+        Some(Self {
             node_lo: node as u16,
             node_hi: (node >> 16) as u16,
-            pair,
-        }
+            pair: PairMap::narrow(pair)?,
+        })
+    }
+}
+
+impl HashEntry for WideEntry {
+    const EMPTY: Self = Self {
+        node: NONE,
+        pair: NONE,
+    };
+
+    #[inline(always)]
+    fn node(&self) -> u32 {
+        self.node
+    }
+
+    #[inline(always)]
+    fn pair(&self) -> u32 {
+        self.pair
+    }
+
+    #[inline(always)]
+    fn of(node: u32, pair: u32) -> Option<Self> {
+        (pair != NONE).then_some(Self { node, pair })
     }
 }
 
@@ -65,6 +113,11 @@ pub(crate) enum PairMap<'m> {
     /// The split nodes only, hashed (see the module docs); `nodes` bounds the node indices.
     Hashed {
         table: &'m mut [Entry],
+        nodes: usize,
+    },
+    /// The same with 32-bit pairs.
+    HashedWide {
+        table: &'m mut [WideEntry],
         nodes: usize,
     },
     /// 16-bit entries by node, for cameras with fewer than `u16::MAX` pairs.
@@ -77,6 +130,7 @@ pub(crate) enum PairMap<'m> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Layout {
     Hashed,
+    HashedWide,
     Narrow,
     Wide,
 }
@@ -84,7 +138,12 @@ enum Layout {
 impl Layout {
     fn of(nodes: usize, max_pairs: usize, hashed: bool) -> Self {
         if max_pairs >= usize::from(NARROW_NONE) {
-            Self::Wide
+            let wide_hashed = capacity(max_pairs).saturating_mul(size_of::<WideEntry>());
+            if hashed && wide_hashed < nodes.saturating_mul(4) {
+                Self::HashedWide
+            } else {
+                Self::Wide
+            }
         } else if hashed && hashed_bytes(max_pairs) < nodes.saturating_mul(2) {
             Self::Hashed
         } else {
@@ -100,8 +159,10 @@ fn capacity(max_pairs: usize) -> usize {
 }
 
 fn hashed_bytes(max_pairs: usize) -> usize {
-    capacity(max_pairs).saturating_mul(core::mem::size_of::<Entry>())
+    capacity(max_pairs).saturating_mul(size_of::<Entry>())
 }
+
+use core::mem::size_of;
 
 /// The entry a node's probe starts at: a multiplicative hash, mapped onto `len` entries by
 /// its high bits (multiply and shift, no division).
@@ -117,6 +178,7 @@ impl<'m> PairMap<'m> {
     pub fn words(nodes: usize, max_pairs: usize, hashed: bool) -> usize {
         match Layout::of(nodes, max_pairs, hashed) {
             Layout::Hashed => hashed_bytes(max_pairs).div_ceil(4),
+            Layout::HashedWide => capacity(max_pairs).saturating_mul(2),
             Layout::Narrow => nodes.div_ceil(2),
             Layout::Wide => nodes,
         }
@@ -130,6 +192,13 @@ impl<'m> PairMap<'m> {
                 let len = capacity(max_pairs).min(halves.len() / 3);
                 Self::Hashed {
                     table: bytemuck::cast_slice_mut(&mut halves[..3 * len]),
+                    nodes,
+                }
+            }
+            Layout::HashedWide => {
+                let len = capacity(max_pairs).min(memory.len() / 2);
+                Self::HashedWide {
+                    table: bytemuck::cast_slice_mut(&mut memory[..2 * len]),
                     nodes,
                 }
             }
@@ -147,11 +216,11 @@ impl<'m> PairMap<'m> {
 
     /// Where node `i` is in the hashed table, or the empty entry its probe ends at.
     #[inline]
-    fn find(table: &[Entry], i: u32) -> Result<usize, usize> {
+    fn find<E: HashEntry>(table: &[E], i: u32) -> Result<usize, usize> {
         let len = table.len();
         let mut at = home(i, len);
         for _ in 0..len {
-            let e = table.get(at).copied().unwrap_or(Entry::EMPTY);
+            let e = table.get(at).copied().unwrap_or(E::EMPTY);
             if e.node() == i {
                 return Ok(at);
             }
@@ -167,15 +236,8 @@ impl<'m> PairMap<'m> {
     #[inline]
     pub fn get(&self, i: usize) -> Option<u32> {
         match self {
-            Self::Hashed { table, nodes } => {
-                if i >= *nodes {
-                    return None;
-                }
-                Some(match Self::find(table, i as u32) {
-                    Ok(at) => table.get(at).map_or(NONE, |e| u32::from(e.pair)),
-                    Err(_) => NONE,
-                })
-            }
+            Self::Hashed { table, nodes } => Self::hashed_get(table, *nodes, i),
+            Self::HashedWide { table, nodes } => Self::hashed_get(table, *nodes, i),
             Self::Narrow(m) => m
                 .get(i)
                 .map(|&p| if p == NARROW_NONE { NONE } else { u32::from(p) }),
@@ -188,6 +250,13 @@ impl<'m> PairMap<'m> {
     pub fn prefetch(&self, i: usize) {
         match self {
             Self::Hashed { table, nodes } => {
+                if i < *nodes {
+                    table
+                        .get(home(i as u32, table.len()))
+                        .map(crate::prefetch::line);
+                }
+            }
+            Self::HashedWide { table, nodes } => {
                 if i < *nodes {
                     table
                         .get(home(i as u32, table.len()))
@@ -209,21 +278,8 @@ impl<'m> PairMap<'m> {
     #[inline]
     pub fn set(&mut self, i: usize, pair: u32) -> Option<()> {
         match self {
-            Self::Hashed { table, nodes } => {
-                if i >= *nodes {
-                    return None;
-                }
-                let node = u32::try_from(i).ok().filter(|&n| n != NONE)?;
-                match (Self::find(table, node), pair == NONE) {
-                    (Ok(at), true) => Self::remove_at(table, at),
-                    (Ok(at), false) => table.get_mut(at)?.pair = Self::narrow(pair)?,
-                    (Err(_), true) => {}
-                    // `at` is `len` (no entry) only if the table were full, which the
-                    // capacity rules out: at most `max_pairs` nodes are split at once.
-                    (Err(at), false) => *table.get_mut(at)? = Entry::of(node, Self::narrow(pair)?),
-                }
-                Some(())
-            }
+            Self::Hashed { table, nodes } => Self::hashed_set(table, *nodes, i, pair),
+            Self::HashedWide { table, nodes } => Self::hashed_set(table, *nodes, i, pair),
             Self::Narrow(m) => {
                 let p = if pair == NONE {
                     NARROW_NONE
@@ -240,6 +296,34 @@ impl<'m> PairMap<'m> {
         }
     }
 
+    #[inline]
+    fn hashed_get<E: HashEntry>(table: &[E], nodes: usize, i: usize) -> Option<u32> {
+        if i >= nodes {
+            return None;
+        }
+        Some(match Self::find(table, i as u32) {
+            Ok(at) => table.get(at).map_or(NONE, HashEntry::pair),
+            Err(_) => NONE,
+        })
+    }
+
+    #[inline]
+    fn hashed_set<E: HashEntry>(table: &mut [E], nodes: usize, i: usize, pair: u32) -> Option<()> {
+        if i >= nodes {
+            return None;
+        }
+        let node = u32::try_from(i).ok().filter(|&n| n != NONE)?;
+        match (Self::find(table, node), pair == NONE) {
+            (Ok(at), true) => Self::remove_at(table, at),
+            (Ok(at), false) => *table.get_mut(at)? = E::of(node, pair)?,
+            (Err(_), true) => {}
+            // `at` is `len` (no entry) only if the table were full, which the capacity rules
+            // out: at most `max_pairs` nodes are split at once.
+            (Err(at), false) => *table.get_mut(at)? = E::of(node, pair)?,
+        }
+        Some(())
+    }
+
     /// A pair index in 16 bits, if it fits (and is not the empty value).
     #[inline]
     fn narrow(pair: u32) -> Option<u16> {
@@ -249,7 +333,7 @@ impl<'m> PairMap<'m> {
     /// Empties entry `at` and shifts back the entries after it in its run that may stand
     /// closer to their home, so every probe still finds its node (deletion without
     /// tombstones for linear probing).
-    fn remove_at(table: &mut [Entry], mut at: usize) {
+    fn remove_at<E: HashEntry>(table: &mut [E], mut at: usize) {
         let len = table.len();
         let mut next = at;
         for _ in 0..len {
@@ -276,7 +360,7 @@ impl<'m> PairMap<'m> {
             }
         }
         if let Some(slot) = table.get_mut(at) {
-            *slot = Entry::EMPTY;
+            *slot = E::EMPTY;
         }
     }
 
@@ -284,6 +368,7 @@ impl<'m> PairMap<'m> {
     pub fn clear(&mut self) {
         match self {
             Self::Hashed { table, .. } => table.fill(Entry::EMPTY),
+            Self::HashedWide { table, .. } => table.fill(WideEntry::EMPTY),
             Self::Narrow(m) => m.fill(NARROW_NONE),
             Self::Wide(m) => m.fill(NONE),
         }
@@ -293,6 +378,7 @@ impl<'m> PairMap<'m> {
     pub fn bytes(&self) -> usize {
         match self {
             Self::Hashed { table, .. } => core::mem::size_of_val(&**table),
+            Self::HashedWide { table, .. } => core::mem::size_of_val(&**table),
             Self::Narrow(m) => core::mem::size_of_val(&**m),
             Self::Wide(m) => core::mem::size_of_val(&**m),
         }
@@ -311,6 +397,8 @@ mod tests {
         assert_eq!(Layout::of(40, 4, false), Layout::Narrow);
         assert_eq!(Layout::of(40, 20, true), Layout::Narrow);
         assert_eq!(Layout::of(40, 70_000, true), Layout::Wide);
+        assert_eq!(Layout::of(1 << 30, 70_000, true), Layout::HashedWide);
+        assert_eq!(Layout::of(1 << 30, 70_000, false), Layout::Wide);
         assert_eq!(
             (
                 PairMap::words(40, 4, true),
@@ -360,11 +448,22 @@ mod tests {
     fn hashed_deletion_keeps_every_run_findable() {
         const NODES: usize = 256;
         const PAIRS: usize = 16;
-        let steps = if cfg!(miri) { 300 } else { 20_000 };
         let mut mem = [0u32; 50];
-        let mut direct = [NONE; NODES];
-        let mut map = PairMap::new(&mut mem, NODES, PAIRS, true);
+        let map = PairMap::new(&mut mem, NODES, PAIRS, true);
         assert!(matches!(map, PairMap::Hashed { .. }));
+        answers_as_an_array(map, NODES, PAIRS);
+        // The 8-byte entries of a camera with 65,535 pairs or more, in a small table.
+        let mut wide = [WideEntry::EMPTY; 2 * PAIRS + 1];
+        let map = PairMap::HashedWide {
+            table: &mut wide,
+            nodes: NODES,
+        };
+        answers_as_an_array(map, NODES, PAIRS);
+    }
+
+    fn answers_as_an_array(mut map: PairMap<'_>, nodes: usize, pairs: usize) {
+        let steps = if cfg!(miri) { 300 } else { 20_000 };
+        let mut direct = [NONE; 256];
         map.clear();
         let mut state = 0x2545_F491u32;
         let mut split = 0usize;
@@ -372,19 +471,22 @@ mod tests {
             state ^= state << 13;
             state ^= state >> 17;
             state ^= state << 5;
-            let node = state as usize % NODES;
+            let node = state as usize % nodes;
             let p = if direct[node] != NONE {
                 split -= 1;
                 NONE
-            } else if split < PAIRS {
+            } else if split < pairs {
                 split += 1;
-                (state >> 8) % PAIRS as u32
+                (state >> 8) % pairs as u32 + 70_000
             } else {
                 continue;
             };
             direct[node] = p;
+            let fits = p == NONE || matches!(map, PairMap::HashedWide { .. });
+            let p = if fits { p } else { p - 70_000 };
+            direct[node] = p;
             assert_eq!(map.set(node, p), Some(()));
-            for (i, &d) in direct.iter().enumerate() {
+            for (i, &d) in direct.iter().enumerate().take(nodes) {
                 assert_eq!(map.get(i), Some(d), "node {i}");
             }
         }

@@ -3,12 +3,12 @@
 
 use super::records::{FREE, NONE};
 use super::state::{CameraState, Front};
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{NodeId, PolyId, PolyKey};
 
 impl CameraState<'_> {
     /// `true` if this camera was made for `h`.
-    pub fn is_for(&self, h: &Hierarchy<'_>) -> bool {
+    pub fn is_for(&self, h: &impl HierarchyRecords) -> bool {
         self.front.hierarchy == h.checksum()
     }
 
@@ -65,7 +65,7 @@ impl CameraState<'_> {
     }
 
     /// `true` if `node` is on this camera's active front (O(1)).
-    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    pub fn is_node_active(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         self.front.is_node_active(h, node)
     }
 
@@ -75,7 +75,7 @@ impl CameraState<'_> {
     }
 
     /// `true` if `poly` is active in this camera (O(1)).
-    pub fn is_polygon_active(&self, h: &Hierarchy<'_>, poly: PolyId) -> bool {
+    pub fn is_polygon_active(&self, h: &impl HierarchyRecords, poly: PolyId) -> bool {
         self.front.slot_of(h, poly).is_some()
     }
 
@@ -90,14 +90,14 @@ impl CameraState<'_> {
     /// The active polygons, in slot (emission) order.
     pub fn active_polygons<'s>(
         &'s self,
-        h: &'s Hierarchy<'_>,
+        h: &'s impl HierarchyRecords,
     ) -> impl Iterator<Item = PolyId> + 's {
         let f = &self.front;
         (0..f.base + 2 * f.pairs).filter_map(move |s| f.poly_at(h, s))
     }
 
     /// The current corners of an active polygon, in the polygon's order; `None` if inactive.
-    pub fn polygon_corners(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[NodeId; 3]> {
+    pub fn polygon_corners(&self, h: &impl HierarchyRecords, poly: PolyId) -> Option<[NodeId; 3]> {
         let f = &self.front;
         let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
         let mut out = [NodeId::NONE; 3];
@@ -109,7 +109,11 @@ impl CameraState<'_> {
 
     /// The current neighbours of an active polygon (`neighbours[j]` across the edge opposite
     /// corner `j`, `NONE` on a border); `None` if inactive.
-    pub fn polygon_neighbours(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<[PolyId; 3]> {
+    pub fn polygon_neighbours(
+        &self,
+        h: &impl HierarchyRecords,
+        poly: PolyId,
+    ) -> Option<[PolyId; 3]> {
         let f = &self.front;
         let s = f.slots.get(f.slot_of(h, poly)? as usize)?;
         let mut out = [PolyId::NONE; 3];
@@ -129,7 +133,7 @@ impl Front<'_> {
     }
 
     #[inline]
-    pub fn is_created(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    pub fn is_created(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         match h.node(node) {
             Some(n) => n.parent.is_none() || self.is_split(n.parent),
             None => false,
@@ -137,14 +141,14 @@ impl Front<'_> {
     }
 
     #[inline]
-    pub fn is_node_active(&self, h: &Hierarchy<'_>, node: NodeId) -> bool {
+    pub fn is_node_active(&self, h: &impl HierarchyRecords, node: NodeId) -> bool {
         self.is_created(h, node) && !self.is_split(node)
     }
 
     /// The slot of an active polygon: base polygons sit in the first slots, others in their
     /// creator's pair (two reads: the polygon's creator and the camera's `pair_of`).
     #[inline]
-    pub fn slot_of(&self, h: &Hierarchy<'_>, poly: PolyId) -> Option<u32> {
+    pub fn slot_of(&self, h: &impl HierarchyRecords, poly: PolyId) -> Option<u32> {
         self.slot_of_key(h.key_of(poly)?)
     }
 
@@ -166,7 +170,7 @@ impl Front<'_> {
 
     /// The polygon in a slot, if the slot is live.
     #[inline]
-    pub fn poly_at(&self, h: &Hierarchy<'_>, slot: u32) -> Option<PolyId> {
+    pub fn poly_at(&self, h: &impl HierarchyRecords, slot: u32) -> Option<PolyId> {
         if slot < self.base {
             return Some(PolyId(slot));
         }

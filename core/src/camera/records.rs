@@ -4,7 +4,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 
 /// Absent link / empty entry.
@@ -69,7 +69,7 @@ impl ActiveVertex {
     /// The record of `node`, with its coarsening parent read from the node records: its
     /// parent if that has a split and the two share a position.
     #[inline]
-    pub fn of(h: &Hierarchy<'_>, node: NodeId) -> Self {
+    pub fn of(h: &impl HierarchyRecords, node: NodeId) -> Self {
         let coarsen = h
             .node(node)
             .and_then(|n| {

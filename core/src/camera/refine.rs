@@ -32,7 +32,7 @@ use super::ops::OpError;
 use super::records::{ActiveVertex, FREE, NONE};
 use super::state::{CameraState, Front};
 use super::stats::RefineStats;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 use crate::params::RefineParams;
 use crate::prefetch;
@@ -118,12 +118,10 @@ impl Walk {
 
 /// A hard bound on a pass's work, whatever the data: no pass applies more operations than
 /// four per split record (within `params.max_ops`).
-fn ops_bound(h: &Hierarchy<'_>, params: &RefineParams) -> u32 {
-    params.max_ops.min(
-        (h.splits().len() as u32)
-            .saturating_mul(4)
-            .saturating_add(1024),
-    )
+fn ops_bound(h: &impl HierarchyRecords, params: &RefineParams) -> u32 {
+    params
+        .max_ops
+        .min(h.meta().split_count.saturating_mul(4).saturating_add(1024))
 }
 
 impl CameraState<'_> {
@@ -134,7 +132,7 @@ impl CameraState<'_> {
     /// before anything changes.
     pub fn refine(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         view: &View,
         params: &RefineParams,
     ) -> Result<RefineStats, OpError> {
@@ -158,7 +156,7 @@ impl Front<'_> {
     /// moved to the view.
     fn start_pass(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         view: &View,
         params: &RefineParams,
     ) -> Result<Pass, OpError> {
@@ -200,7 +198,7 @@ impl Front<'_> {
     /// until the walk or the pass's operations run out.
     fn walk(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         stack: &mut [NodeId],
         pass: &mut Pass,
     ) -> Result<(), OpError> {
@@ -222,7 +220,7 @@ impl Front<'_> {
     #[inline(always)]
     fn visit(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         stack: &mut [NodeId],
         pass: &mut Pass,
         i: usize,
@@ -245,7 +243,7 @@ impl Front<'_> {
     /// on it (see `crate::prefetch`). Certified questions read no bounds, so they ask for
     /// none.
     #[inline(always)]
-    fn prefetch_ahead(&self, h: &Hierarchy<'_>, at: usize, reading: Readings) {
+    fn prefetch_ahead(&self, h: &impl HierarchyRecords, at: usize, reading: Readings) {
         let Some(ahead) = self.active.get(at) else {
             return;
         };
@@ -272,7 +270,7 @@ impl Front<'_> {
     #[inline(always)]
     fn wants_own_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         pass: &mut Pass,
         i: usize,
         a: ActiveVertex,
@@ -295,7 +293,7 @@ impl Front<'_> {
     /// pass's operations; a full camera or forced-split stack is counted, not an error.
     fn try_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         stack: &mut [NodeId],
         pass: &mut Pass,
         v: NodeId,
@@ -344,7 +342,7 @@ impl Front<'_> {
     #[inline]
     fn try_coarsen(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         pass: &mut Pass,
         i: usize,
         a: ActiveVertex,
@@ -383,7 +381,7 @@ impl Front<'_> {
     #[inline(always)]
     fn parent_unwanted(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         pass: &mut Pass,
         i: usize,
         a: ActiveVertex,
@@ -407,7 +405,7 @@ impl Front<'_> {
 
     /// The pass's report, after relinking the morph chains where morphs changed; the camera
     /// counts as refined from now on.
-    fn finish_pass(&mut self, h: &Hierarchy<'_>, mut st: RefineStats) -> RefineStats {
+    fn finish_pass(&mut self, h: &impl HierarchyRecords, mut st: RefineStats) -> RefineStats {
         // Slots change only where a morph started, ended or a collapse ended one.
         let changed = st.morphs_started + st.morphs_finished + st.collapses > 0;
         if changed && self.morphs.scalars.live > 0 {

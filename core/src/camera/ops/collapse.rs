@@ -6,7 +6,7 @@ use crate::camera::index_cache::Known;
 use crate::camera::records::{next, prev};
 use crate::camera::records::{ActiveVertex, FREE, NONE, UNKNOWN};
 use crate::camera::state::Front;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{NodeId, PositionId};
 
 impl Front<'_> {
@@ -14,7 +14,7 @@ impl Front<'_> {
     /// [`collapse_slots`](Self::collapse_slots).
     pub fn apply_collapse(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         v: NodeId,
         slots: [u32; 4],
     ) -> Result<(), OpError> {
@@ -93,7 +93,7 @@ impl Front<'_> {
         self.active_nodes = self.active_nodes.saturating_sub(1);
         self.churn = self.churn.saturating_add(1);
         for f in [s.f_l, s.f_r] {
-            if let Some(p) = h.polygons().get(f.index()) {
+            if let Some(p) = h.polygon(f) {
                 self.active_polygons = self.active_polygons.saturating_sub(1);
                 if let Some(c) = self.surface_polygons.get_mut(p.surface.index()) {
                     *c = c.saturating_sub(1);

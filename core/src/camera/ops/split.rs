@@ -7,7 +7,7 @@ use crate::camera::index_cache::Known;
 use crate::camera::records::{next, prev, ActiveVertex, PolySlot, SlotTriangle, FREE, NONE};
 use crate::camera::state::Front;
 use crate::format::Split;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::HierarchyRecords;
 use crate::ids::{NodeId, PositionId};
 
 /// The new pair's two slots and the records of the split's children: what the walk
@@ -42,7 +42,7 @@ impl Front<'_> {
     /// in, cached and counted.
     pub fn apply_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         v: NodeId,
         slots: [u32; 4],
     ) -> Result<(), OpError> {
@@ -87,7 +87,7 @@ impl Front<'_> {
     #[inline]
     fn split_positions(
         &self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         s: &Split,
         clw: u32,
         rccw: u32,
@@ -114,7 +114,7 @@ impl Front<'_> {
     #[inline]
     fn move_corners(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         v: NodeId,
         [_, clw, _, rccw]: [u32; 4],
         pair: &NewPair,
@@ -206,7 +206,7 @@ impl Front<'_> {
     #[allow(clippy::too_many_arguments)]
     fn cache_pair(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         s: &Split,
         [_, clw, _, rccw]: [u32; 4],
         pair: &NewPair,
@@ -214,14 +214,13 @@ impl Front<'_> {
         j0: usize,
         [at_stationary, at_floating]: [PositionId; 2],
     ) {
-        let polys = h.polygons();
         let (vl, vr, j) = (walked.vl, walked.vr, walked.j);
         // f_l = (vs, vt, vl): fl_clw's corner j0 before and after it moved, and its vl.
         let known = walked
             .first_before
             .zip(self.triangles.get(clw as usize))
             .map(|(b, a)| (b.group, [b.indices[j0], a.indices[j0], b.indices[prev(j0)]]));
-        let entry = self.new_entry(h, polys.get(s.f_l.index()), known, |f| {
+        let entry = self.new_entry(h, h.polygon(s.f_l), known, |f| {
             [at_stationary, at_floating, f.record_position(h, vl)]
         });
         self.set_cached(pair.fl, entry);
@@ -231,7 +230,7 @@ impl Front<'_> {
             .filter(|_| walked.fa == rccw)
             .zip(self.triangles.get(walked.fa as usize))
             .map(|(b, a)| (b.group, [b.indices[j], b.indices[next(j)], a.indices[j]]));
-        let fr_poly = s.f_r.get().and_then(|f| polys.get(f.index()));
+        let fr_poly = s.f_r.get().and_then(|f| h.polygon(f));
         let entry = self.new_entry(h, fr_poly, known, |f| {
             [at_stationary, f.record_position(h, vr), at_floating]
         });
@@ -240,7 +239,12 @@ impl Front<'_> {
 
     /// Records the split of `v` as pair `pairs` and counts its node and polygons.
     #[inline]
-    fn count_split(&mut self, h: &Hierarchy<'_>, v: NodeId, s: &Split) -> Result<(), OpError> {
+    fn count_split(
+        &mut self,
+        h: &impl HierarchyRecords,
+        v: NodeId,
+        s: &Split,
+    ) -> Result<(), OpError> {
         let k = self.pairs;
         self.owner[k as usize] = v;
         self.pair_of
@@ -250,7 +254,7 @@ impl Front<'_> {
         self.active_nodes += 1;
         self.churn = self.churn.saturating_add(1);
         for f in [s.f_l, s.f_r] {
-            if let Some(p) = h.polygons().get(f.index()) {
+            if let Some(p) = h.polygon(f) {
                 self.active_polygons += 1;
                 if let Some(c) = self.surface_polygons.get_mut(p.surface.index()) {
                     *c += 1;
@@ -260,7 +264,7 @@ impl Front<'_> {
         Ok(())
     }
 
-    fn alloc_record(&mut self, h: &Hierarchy<'_>, node: NodeId) -> Option<u32> {
+    fn alloc_record(&mut self, h: &impl HierarchyRecords, node: NodeId) -> Option<u32> {
         // A free record at or past the high-water mark was dropped by an incremental
         // compaction (see `compact_step`): it is taken off the list and not used.
         let mut reused = NONE;
@@ -291,7 +295,7 @@ impl Front<'_> {
     /// splits. Returns the number applied (if `v` is split, the last one was `v`'s).
     pub fn force_split(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         v: NodeId,
         stack: &mut [NodeId],
         budget: u32,
@@ -306,7 +310,7 @@ impl Front<'_> {
     /// calls `after_split` with each node it split (refinement starts morphs there).
     pub fn force_split_counted(
         &mut self,
-        h: &Hierarchy<'_>,
+        h: &impl HierarchyRecords,
         v: NodeId,
         stack: &mut [NodeId],
         budget: u32,

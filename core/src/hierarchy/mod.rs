@@ -12,6 +12,9 @@ use crate::format::{
 };
 use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId};
 
+mod records;
+pub use records::{Absent, HierarchyRecords};
+
 /// A validated view-dependent hierarchy of vertex splits over a full-resolution mesh.
 #[derive(Clone, Copy, Debug)]
 pub struct Hierarchy<'a> {
@@ -275,13 +278,7 @@ impl<'a> Hierarchy<'a> {
     /// O(log k) in the k groups meeting at the position (k = 1 inside a group).
     #[inline]
     pub fn vertex_index(&self, group: SurfaceGroupId, position: PositionId) -> Option<u32> {
-        let keys = self.vertex_keys(position);
-        if let [only] = keys {
-            return (only.group == group).then_some(only.vertex);
-        }
-        keys.binary_search_by_key(&group, |k| k.group)
-            .ok()
-            .map(|i| keys[i].vertex)
+        HierarchyRecords::vertex_index(self, group, position)
     }
 
     /// The number of (group, position) pairs the table could hold and how many it holds:
@@ -296,21 +293,13 @@ impl<'a> Hierarchy<'a> {
     /// The polygon a [`PolyKey`] names; `None` for `NONE` or a key no polygon has.
     #[inline]
     pub fn polygon_of(&self, key: PolyKey) -> Option<PolyId> {
-        let base = self.parts.base.len() as u32;
-        match key.creator(base) {
-            Some((node, right)) => {
-                let s = self.split(node)?;
-                (if right { s.f_r } else { s.f_l }).get()
-            }
-            None => (key.is_some() && key.0 < base).then_some(PolyId(key.0)),
-        }
+        HierarchyRecords::polygon_of(self, key)
     }
 
     /// The [`PolyKey`] of `poly`; `None` for an id out of range.
     #[inline]
     pub fn key_of(&self, poly: PolyId) -> Option<PolyKey> {
-        let p = self.parts.polygons.get(poly.index())?;
-        Some(p.creator.key(self.parts.base.len() as u32, poly))
+        HierarchyRecords::key_of(self, poly)
     }
 
     /// Bytes of static data: every section's records.
