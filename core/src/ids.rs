@@ -139,6 +139,16 @@ impl PolyKey {
     }
 }
 
+/// A page of one of a pool's files: the file's index (from
+/// [`Residency::add_file`](crate::stream::Residency::add_file)) and the page's index in its table.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PageKey {
+    /// The file.
+    pub file: u32,
+    /// The page.
+    pub page: u32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -65,6 +65,14 @@ pub enum OpError {
         /// The node being split or collapsed.
         node: NodeId,
     },
+    /// A split needs records of a page that is not resident (a streamed hierarchy): the
+    /// split waits, and the page is wanted. Splits forced before it stay: each was legal.
+    Absent {
+        /// The node whose split waits.
+        node: NodeId,
+        /// The page its records lie in.
+        page: crate::stream::PageKey,
+    },
     /// Refinement parameters out of range ([`RefineParams::validate`](crate::RefineParams::validate)):
     /// the pass did nothing.
     InvalidParams(ParamsError),
@@ -95,6 +103,11 @@ impl core::fmt::Display for OpError {
                     node.0
                 )
             }
+            Self::Absent { node, page } => write!(
+                f,
+                "the split of node {} waits for page {} of file {}",
+                node.0, page.page, page.file
+            ),
             Self::InvalidParams(e) => write!(f, "refinement parameters refused: {e}"),
         }
     }

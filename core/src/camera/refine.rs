@@ -32,7 +32,7 @@ use super::ops::OpError;
 use super::records::{ActiveVertex, FREE, NONE};
 use super::state::{CameraState, Front};
 use super::stats::RefineStats;
-use crate::hierarchy::HierarchyRecords;
+use crate::hierarchy::{Absent, HierarchyRecords};
 use crate::ids::NodeId;
 use crate::params::RefineParams;
 use crate::prefetch;
@@ -44,7 +44,9 @@ const PREFETCH_AHEAD: usize = 16;
 
 /// One pass's inputs, fixed when it starts, and its running tally.
 struct Pass {
-    /// The criterion of the call's screen-space test.
+    /// The call's screen-space test.
+    test: ScreenTest,
+    /// The criterion of `test`.
     c: Criterion,
     /// The parameters the pass runs with ([`Front::pass_params`]).
     params: RefineParams,
@@ -167,6 +169,7 @@ impl Front<'_> {
         let reading = self.odometer.advance(h, &test, &mut self.active[..live]);
         Ok(Pass {
             c: Criterion::new(&test),
+            test,
             max_ops: ops_bound(h, &params),
             params,
             reading,
@@ -326,6 +329,13 @@ impl Front<'_> {
             Err(e) => {
                 st.forced_splits += applied;
                 match e {
+                    OpError::Absent { page, .. } => {
+                        st.deferred_splits += 1;
+                        let excess = h.split_bounds(v).map_or(0.0, |b| {
+                            (pass.test.projected_px(b) - pass.test.tolerance_px()).max(0.0)
+                        });
+                        h.want(Absent { page }, excess);
+                    }
                     OpError::StackFull { .. } => st.stack_overflows += 1,
                     OpError::CapacityFull { .. } => st.capacity_refusals += 1,
                     e => return Err(e),

@@ -5,6 +5,9 @@
 pub struct RefineStats {
     /// Splits applied, forced ones included.
     pub splits: u32,
+    /// Wanted splits deferred because they (or a split they force) need a page that is not
+    /// resident; the page is wanted from the hierarchy (a streamed one).
+    pub deferred_splits: u32,
     /// Splits applied only to make a wanted split legal.
     pub forced_splits: u32,
     /// Collapses applied.

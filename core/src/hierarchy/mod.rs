@@ -318,3 +318,90 @@ impl<'a> Hierarchy<'a> {
             + core::mem::size_of_val(p.vertices)
     }
 }
+
+impl HierarchyRecords for Hierarchy<'_> {
+    #[inline]
+    fn checksum(&self) -> u64 {
+        Hierarchy::checksum(self)
+    }
+
+    #[inline]
+    fn meta(&self) -> &Meta {
+        Hierarchy::meta(self)
+    }
+
+    #[inline]
+    fn roots(&self) -> &[NodeId] {
+        Hierarchy::roots(self)
+    }
+
+    #[inline]
+    fn base(&self) -> &[BaseFace] {
+        Hierarchy::base(self)
+    }
+
+    #[inline]
+    fn surface_count(&self) -> usize {
+        Hierarchy::surface_count(self)
+    }
+
+    #[inline]
+    fn split_id_bound(&self) -> usize {
+        self.splits().len()
+    }
+
+    #[inline]
+    fn vertex_id_bound(&self) -> usize {
+        self.vertices().len()
+    }
+
+    #[inline]
+    fn dense_ids(&self) -> bool {
+        true
+    }
+
+    #[inline(always)]
+    fn node(&self, node: NodeId) -> Option<&Node> {
+        Hierarchy::node(self, node)
+    }
+
+    #[inline(always)]
+    fn split(&self, node: NodeId) -> Option<&Split> {
+        Hierarchy::split(self, node)
+    }
+
+    #[inline(always)]
+    fn split_bounds(&self, node: NodeId) -> Option<&SplitBounds> {
+        Hierarchy::split_bounds(self, node)
+    }
+
+    #[inline(always)]
+    fn polygon(&self, poly: PolyId) -> Option<&Polygon> {
+        self.polygons().get(poly.index())
+    }
+
+    #[inline(always)]
+    fn position(&self, position: PositionId) -> Option<&Position> {
+        self.positions().get(position.index())
+    }
+
+    #[inline(always)]
+    fn vertex_keys(&self, position: PositionId) -> &[VertexKey] {
+        Hierarchy::vertex_keys(self, position)
+    }
+
+    #[inline(always)]
+    fn vertex(&self, vertex: u32) -> Option<&Vertex> {
+        self.vertices().get(vertex as usize)
+    }
+
+    #[inline(always)]
+    fn prefetch_vertex_keys(&self, position: PositionId) {
+        Hierarchy::prefetch_vertex_keys(self, position);
+    }
+
+    #[inline]
+    fn base_polygon_count(&self) -> usize {
+        Hierarchy::base_polygon_count(self)
+    }
+}

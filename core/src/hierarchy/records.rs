@@ -1,7 +1,7 @@
 //! [`HierarchyRecords`]: the records a camera reads, wherever they lie.
 //!
 //! A camera reads a hierarchy through this trait alone, so the same refinement runs over a
-//! whole file ([`Hierarchy`], whose records are arrays indexed by id) and over a paged file
+//! whole file ([`Hierarchy`](crate::Hierarchy), whose records are arrays indexed by id) and over a paged file
 //! streamed into a pool ([`StreamedHierarchy`](crate::stream::StreamedHierarchy), whose
 //! records are found by their page). The camera's code is generic over it: the whole-file
 //! form compiles to the same array reads it always did.
@@ -14,9 +14,7 @@
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
-use crate::hierarchy::Hierarchy;
-use crate::ids::{NodeId, PolyId, PolyKey, PositionId, SurfaceGroupId};
-use crate::stream::PageKey;
+use crate::ids::{NodeId, PageKey, PolyId, PolyKey, PositionId, SurfaceGroupId};
 
 /// What a split needs that is not at hand: the page to want, whose absence defers it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,6 +81,13 @@ pub trait HierarchyRecords {
         Ok(())
     }
 
+    /// A split waits for `absent` (see [`split_ready`](Self::split_ready)); its projected
+    /// error exceeds the tolerance by `excess_px` pixels, which orders the loads.
+    #[inline(always)]
+    fn want(&self, absent: Absent, excess_px: f32) {
+        let _ = (absent, excess_px);
+    }
+
     /// Asks for the cache line of `position`'s vertex-table row, ahead of a lookup.
     #[inline(always)]
     fn prefetch_vertex_keys(&self, position: PositionId) {
@@ -132,92 +137,5 @@ pub trait HierarchyRecords {
     fn key_of(&self, poly: PolyId) -> Option<PolyKey> {
         let p = self.polygon(poly)?;
         Some(p.creator.key(self.base_polygon_count() as u32, poly))
-    }
-}
-
-impl HierarchyRecords for Hierarchy<'_> {
-    #[inline]
-    fn checksum(&self) -> u64 {
-        Hierarchy::checksum(self)
-    }
-
-    #[inline]
-    fn meta(&self) -> &Meta {
-        Hierarchy::meta(self)
-    }
-
-    #[inline]
-    fn roots(&self) -> &[NodeId] {
-        Hierarchy::roots(self)
-    }
-
-    #[inline]
-    fn base(&self) -> &[BaseFace] {
-        Hierarchy::base(self)
-    }
-
-    #[inline]
-    fn surface_count(&self) -> usize {
-        Hierarchy::surface_count(self)
-    }
-
-    #[inline]
-    fn split_id_bound(&self) -> usize {
-        self.splits().len()
-    }
-
-    #[inline]
-    fn vertex_id_bound(&self) -> usize {
-        self.vertices().len()
-    }
-
-    #[inline]
-    fn dense_ids(&self) -> bool {
-        true
-    }
-
-    #[inline(always)]
-    fn node(&self, node: NodeId) -> Option<&Node> {
-        Hierarchy::node(self, node)
-    }
-
-    #[inline(always)]
-    fn split(&self, node: NodeId) -> Option<&Split> {
-        Hierarchy::split(self, node)
-    }
-
-    #[inline(always)]
-    fn split_bounds(&self, node: NodeId) -> Option<&SplitBounds> {
-        Hierarchy::split_bounds(self, node)
-    }
-
-    #[inline(always)]
-    fn polygon(&self, poly: PolyId) -> Option<&Polygon> {
-        self.polygons().get(poly.index())
-    }
-
-    #[inline(always)]
-    fn position(&self, position: PositionId) -> Option<&Position> {
-        self.positions().get(position.index())
-    }
-
-    #[inline(always)]
-    fn vertex_keys(&self, position: PositionId) -> &[VertexKey] {
-        Hierarchy::vertex_keys(self, position)
-    }
-
-    #[inline(always)]
-    fn vertex(&self, vertex: u32) -> Option<&Vertex> {
-        self.vertices().get(vertex as usize)
-    }
-
-    #[inline(always)]
-    fn prefetch_vertex_keys(&self, position: PositionId) {
-        Hierarchy::prefetch_vertex_keys(self, position);
-    }
-
-    #[inline]
-    fn base_polygon_count(&self) -> usize {
-        Hierarchy::base_polygon_count(self)
     }
 }

@@ -1,8 +1,8 @@
 //! What goes wrong while streaming: a page whose bytes fail (reported once, never a panic),
 //! and calls that do not fit the pool's state.
 
-use super::key::PageKey;
 use crate::format::FormatError;
+use crate::ids::PageKey;
 
 /// Why a page could not be installed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

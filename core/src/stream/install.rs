@@ -1,9 +1,9 @@
 //! Installing a paged file's page: the pool's checks, then the file's own.
 
 use super::fault::InstallError;
-use super::key::PageKey;
 use super::residency::Residency;
 use crate::format::paged::{PageView, PagedRoot};
+use crate::ids::PageKey;
 
 impl<'a, 'm> Residency<'a, 'm> {
     /// [`complete`](Self::complete) for a page of the paged file whose root is `root`: its

@@ -7,9 +7,10 @@
 //! [`PageKey`]: file and page), which pages are in the pool, and turns what the cameras
 //! want into loads for the host:
 //!
-//! 1. [`Residency::begin_frame`]; while refining, a camera that needs an absent page calls
-//!    [`Residency::want`] with its split's screen-space error excess, defers the split, and
-//!    shows the coarser surface.
+//! 1. [`Residency::begin_frame`]; cameras refine over a [`StreamedHierarchy`] (the root and
+//!    the resident pages). A split that needs an absent page is deferred, the camera shows
+//!    the coarser surface, and the page is listed with the split's screen-space error
+//!    excess; the host hands the list to [`Residency::want`].
 //! 2. [`Residency::schedule`] adds the absent parents those pages need, picks the loadable
 //!    ones (every parent resident) in order of the largest excess, and gives each a free
 //!    slot or the slot of the least recently wanted page that no camera's front uses and no
@@ -26,14 +27,15 @@
 
 mod config;
 mod fault;
+mod hierarchy;
 mod install;
-mod key;
 mod lists;
 mod requests;
 mod residency;
 
 pub use crate::format::paged::{PageEntry, PageField, PageTable, PageTableError};
+pub use crate::ids::PageKey;
 pub use config::{FileTables, PoolConfig, PoolError};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
-pub use key::PageKey;
+pub use hierarchy::{StreamedHierarchy, StreamedReads, Want};
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};

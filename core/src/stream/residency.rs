@@ -3,11 +3,11 @@
 
 use super::config::{FileTables, PoolConfig, PoolError, Words};
 use super::fault::{FaultKind, InstallError, PageFault, StreamError};
-use super::key::PageKey;
 use super::lists::{Lists, NONE};
 use crate::checksum::checksum64;
 use crate::format::paged::PageTable;
 use crate::format::FormatError;
+use crate::ids::PageKey;
 
 /// Where a page is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -332,6 +332,14 @@ impl Front<'_> {
                 top -= 1;
                 continue;
             }
+            // Every node on the stack is split before `v` is: one whose records (or its
+            // children's) are absent defers the chain here, before it reads them.
+            if let Err(a) = h.split_ready(u) {
+                return Err(OpError::Absent {
+                    node: u,
+                    page: a.page,
+                });
+            }
             if !self.is_created(h, u) {
                 let p = h
                     .node(u)

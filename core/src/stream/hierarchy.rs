@@ -1,0 +1,299 @@
+//! [`StreamedHierarchy`]: a paged file's records as a camera reads them, from its root and
+//! the pages resident in a pool.
+//!
+//! A camera refines over it exactly as over a whole file (see
+//! [`HierarchyRecords`]). A record is found from its page-major id: the page is a shift, its
+//! arrays come from the root (a root page) or from its pool slot, and a few recently used
+//! pages' arrays are kept at hand so the layout is not worked out again on every read. A
+//! split whose records lie in a page that is not resident is deferred by the camera, and the
+//! page goes into the caller's list of wants with the split's error excess; after the
+//! frame's refinement the host passes them to [`Residency::want`].
+//!
+//! Nothing here changes the pool: a pool borrowed by streamed hierarchies is not installing
+//! or evicting, so every page seen resident stays resident while they exist.
+
+use core::cell::Cell;
+
+use super::residency::Residency;
+use crate::format::paged::{PageView, PagedRoot, RecordKind, SegmentedId};
+use crate::format::{
+    BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
+};
+use crate::hierarchy::{Absent, HierarchyRecords};
+use crate::ids::PageKey;
+use crate::ids::{NodeId, PolyId, PositionId};
+
+/// A page wanted by a deferred split, and by how much (pixels) its error exceeds the
+/// tolerance: the largest over the splits that wanted it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Want {
+    /// The page.
+    pub page: PageKey,
+    /// The largest screen-space error excess of the splits waiting for it, in pixels.
+    pub excess_px: f32,
+}
+
+/// Pages whose arrays are kept at hand (a power of two: a page's place is its low bits).
+const RECENT: usize = 8;
+
+/// What one [`StreamedHierarchy`] saw while cameras refined over it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamedReads {
+    /// Distinct pages put in the wants list.
+    pub wanted: u32,
+    /// Wants that did not fit the list (asked again by a later frame).
+    pub wants_dropped: u32,
+    /// Reads of a record in a page that is not resident: refinement defers before it reads,
+    /// so this stays 0 (it is counted to prove it).
+    pub absent_reads: u64,
+}
+
+/// A paged file's records over its root and a pool (see the module docs).
+pub struct StreamedHierarchy<'s, 'a, 'm> {
+    root: &'s PagedRoot<'s>,
+    pool: &'s Residency<'a, 'm>,
+    file: u32,
+    ids: SegmentedId,
+    root_pages: u32,
+    id_bound: usize,
+    pages: usize,
+    recent: [Cell<Option<(u32, PageView<'s>)>>; RECENT],
+    wants: &'s [Cell<Want>],
+    want_len: Cell<u32>,
+    reads: Cell<StreamedReads>,
+}
+
+impl<'s, 'a, 'm> StreamedHierarchy<'s, 'a, 'm> {
+    /// The records of file `file` of `pool`, whose root is `root`; deferred splits' pages go
+    /// to `wants` (the caller's memory; a few hundred entries hold a frame's).
+    pub fn new(
+        root: &'s PagedRoot<'s>,
+        pool: &'s Residency<'a, 'm>,
+        file: u32,
+        wants: &'s mut [Want],
+    ) -> Self {
+        let ids = root.ids();
+        let pages = root.table().len() as u64;
+        let id_bound = (pages << ids.bits()).min(u64::from(u32::MAX)) as usize;
+        Self {
+            root,
+            pool,
+            file,
+            ids,
+            root_pages: root.paged().root_pages,
+            id_bound,
+            pages: pages as usize,
+            recent: Default::default(),
+            wants: Cell::from_mut(wants).as_slice_of_cells(),
+            want_len: Cell::new(0),
+            reads: Cell::new(StreamedReads::default()),
+        }
+    }
+
+    /// The pages deferred splits wanted, with their excess (a page may come more than once;
+    /// [`Residency::want`] keeps the largest).
+    pub fn wants(&self) -> impl Iterator<Item = Want> + '_ {
+        self.wants[..self.want_len.get() as usize]
+            .iter()
+            .map(Cell::get)
+    }
+
+    /// What was read and wanted so far.
+    pub fn reads(&self) -> StreamedReads {
+        self.reads.get()
+    }
+
+    /// The arrays of page `page`, if it is resident.
+    #[inline]
+    fn view(&self, page: u32) -> Option<PageView<'s>> {
+        let place = &self.recent[page as usize % RECENT];
+        if let Some((p, v)) = place.get() {
+            if p == page {
+                return Some(v);
+            }
+        }
+        let key = PageKey {
+            file: self.file,
+            page,
+        };
+        let v = if page < self.root_pages {
+            self.root.root_page(page)
+        } else {
+            self.pool.page_view(key, self.root)
+        };
+        if let Some(v) = v {
+            place.set(Some((page, v)));
+        }
+        v
+    }
+
+    /// The view holding record `id`, counting a read of an absent page.
+    #[inline]
+    fn holding(&self, id: u32) -> Option<(PageView<'s>, usize)> {
+        let page = self.ids.page(id);
+        match self.view(page) {
+            Some(v) => Some((v, self.ids.index(id) as usize)),
+            None => {
+                // An id of no page (`NONE`, out of range) is no read of an absent page.
+                if (page as usize) < self.pages {
+                    let mut r = self.reads.get();
+                    r.absent_reads += 1;
+                    self.reads.set(r);
+                }
+                None
+            }
+        }
+    }
+
+    /// `Err` with the page of `id` unless it holds a record of `kind` at hand.
+    fn present(&self, id: u32, kind: RecordKind) -> Result<(), Absent> {
+        let page = self.ids.page(id);
+        let absent = Absent {
+            page: PageKey {
+                file: self.file,
+                page,
+            },
+        };
+        let held = self.view(page).is_some_and(|v| {
+            let i = self.ids.index(id) as usize;
+            match kind {
+                RecordKind::Nodes => i < v.nodes.len(),
+                RecordKind::Polygons => i < v.polygons.len(),
+                RecordKind::Positions => i < v.positions.len(),
+                RecordKind::Vertices => i < v.vertices.len(),
+                RecordKind::Splits => i < v.splits.len(),
+                RecordKind::VertexKeys => i < v.vertex_table.len(),
+            }
+        });
+        if held {
+            Ok(())
+        } else {
+            Err(absent)
+        }
+    }
+}
+
+impl HierarchyRecords for StreamedHierarchy<'_, '_, '_> {
+    fn checksum(&self) -> u64 {
+        self.root.checksum()
+    }
+
+    fn meta(&self) -> &Meta {
+        self.root.meta()
+    }
+
+    fn roots(&self) -> &[NodeId] {
+        self.root.roots()
+    }
+
+    fn base(&self) -> &[BaseFace] {
+        self.root.base()
+    }
+
+    fn surface_count(&self) -> usize {
+        self.root.meta().surface_count as usize
+    }
+
+    fn split_id_bound(&self) -> usize {
+        self.id_bound
+    }
+
+    fn vertex_id_bound(&self) -> usize {
+        self.id_bound
+    }
+
+    fn dense_ids(&self) -> bool {
+        false
+    }
+
+    #[inline]
+    fn node(&self, node: NodeId) -> Option<&Node> {
+        let (v, i) = self.holding(node.0)?;
+        v.nodes.get(i)
+    }
+
+    #[inline]
+    fn split(&self, node: NodeId) -> Option<&Split> {
+        let (v, i) = self.holding(node.0)?;
+        v.splits.get(i)
+    }
+
+    #[inline]
+    fn split_bounds(&self, node: NodeId) -> Option<&SplitBounds> {
+        let (v, i) = self.holding(node.0)?;
+        v.bounds.get(i)
+    }
+
+    #[inline]
+    fn polygon(&self, poly: PolyId) -> Option<&Polygon> {
+        let (v, i) = self.holding(poly.0)?;
+        v.polygons.get(i)
+    }
+
+    #[inline]
+    fn position(&self, position: PositionId) -> Option<&Position> {
+        let (v, i) = self.holding(position.0)?;
+        v.positions.get(i)
+    }
+
+    #[inline]
+    fn vertex_keys(&self, position: PositionId) -> &[VertexKey] {
+        self.holding(position.0)
+            .map_or(&[], |(v, i)| v.vertex_keys(i))
+    }
+
+    #[inline]
+    fn vertex(&self, vertex: u32) -> Option<&Vertex> {
+        let (v, i) = self.holding(vertex)?;
+        v.vertices.get(i)
+    }
+
+    /// The node's page (its split record), its children's pages, the floating child's
+    /// position and vertices, and the polygons the split creates.
+    fn split_ready(&self, node: NodeId) -> Result<(), Absent> {
+        self.present(node.0, RecordKind::Splits)?;
+        let Some(s) = self.split(node) else {
+            return Ok(()); // a leaf: the camera refuses its split itself
+        };
+        self.present(s.stationary.0, RecordKind::Nodes)?;
+        self.present(s.floating.0, RecordKind::Nodes)?;
+        for f in [s.f_l, s.f_r] {
+            if f.is_some() {
+                self.present(f.0, RecordKind::Polygons)?;
+            }
+        }
+        let Some(n) = self.node(s.floating) else {
+            return Ok(());
+        };
+        self.present(n.position.0, RecordKind::Positions)?;
+        for k in self.vertex_keys(n.position) {
+            self.present(k.vertex, RecordKind::Vertices)?;
+        }
+        Ok(())
+    }
+
+    fn want(&self, absent: Absent, excess_px: f32) {
+        let len = self.want_len.get() as usize;
+        let mut r = self.reads.get();
+        // A pass defers many splits into the same few pages, near one another.
+        let recent = &self.wants[len.saturating_sub(RECENT)..len];
+        if let Some(w) = recent.iter().find(|w| w.get().page == absent.page) {
+            let mut got = w.get();
+            got.excess_px = got.excess_px.max(excess_px);
+            w.set(got);
+            return;
+        }
+        match self.wants.get(len) {
+            Some(w) => {
+                w.set(Want {
+                    page: absent.page,
+                    excess_px,
+                });
+                self.want_len.set(len as u32 + 1);
+                r.wanted += 1;
+            }
+            None => r.wants_dropped += 1,
+        }
+        self.reads.set(r);
+    }
+}

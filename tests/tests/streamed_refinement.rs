@@ -1,0 +1,244 @@
+//! Refinement over a paged file: a camera reads a [`StreamedHierarchy`] (the root and the
+//! pages resident in a pool) as it reads a whole file.
+//!
+//! - With every page resident, the same flight gives the same front, slot by slot, as over
+//!   the whole file it was paged from.
+//! - With pages absent, the splits that need them are deferred and their pages wanted;
+//!   nothing reads an absent page, and once the wanted pages arrive the front is the whole
+//!   file's.
+
+use caveclod_bake::paged::{write_paged, PageOptions};
+use caveclod_core::format::paged::PagedRoot;
+use caveclod_core::glam::Vec3;
+use caveclod_core::stream::{
+    LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, Want,
+};
+use caveclod_core::{
+    CameraConfig, CameraState, HierarchyRecords, LookAt, RefineParams, RefineStats, View,
+};
+use caveclod_io::{AlignedBytes, PagedFile};
+use caveclod_tests::check::check_front;
+use caveclod_tests::{bake, meshes, BakedMesh};
+
+/// A terrain, baked, its paged form opened (the root read), and that file's bytes.
+fn terrain() -> (BakedMesh, PagedFile, Vec<u8>) {
+    let baked = bake(&meshes::terrain(48, 48, 11));
+    let dir = tempfile::tempdir().expect("dir");
+    let path = dir.path().join("terrain.clod");
+    write_paged(&baked.hierarchy(), &path, &PageOptions { page_bytes: 4096 }).expect("paged");
+    let bytes = std::fs::read(&path).expect("read");
+    (baked, PagedFile::open(&path).expect("open"), bytes)
+}
+
+/// Frame `f` of a flight low over the terrain, turning.
+fn view(f: u32) -> View {
+    let a = f as f32 * 0.04;
+    LookAt {
+        eye: Vec3::new(24.0 + 20.0 * a.cos(), 4.0, 24.0 + 20.0 * a.sin()),
+        target: Vec3::new(24.0 + 6.0 * (a * 1.3).sin(), 0.0, 24.0),
+        up: Vec3::Y,
+        fov_y: 1.0,
+        near: 0.1,
+        far: 500.0,
+    }
+    .view(640, 400)
+}
+
+/// A pool over every page of `root`'s file, with the root pages pinned.
+struct Pool<'a> {
+    words: Vec<u32>,
+    bytes: AlignedBytes,
+    tables: Vec<Option<caveclod_core::stream::PageTable<'a>>>,
+    config: PoolConfig,
+}
+
+impl Pool<'_> {
+    fn new(root: &PagedRoot<'_>, slots: u32) -> Self {
+        let slot_bytes = root.paged().largest_page.next_multiple_of(64);
+        let config = PoolConfig::new(
+            u64::from(slots) * u64::from(slot_bytes),
+            slot_bytes,
+            1,
+            root.table().len() as u32,
+        );
+        Self {
+            words: vec![0; Residency::words_needed(&config)],
+            bytes: AlignedBytes::zeroed(config.pool_bytes()),
+            tables: vec![None; 1],
+            config,
+        }
+    }
+}
+
+/// Loads what `pool` schedules from the file's `bytes`, synchronously.
+fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> u32 {
+    let mut loads = [LoadRequest::default(); 64];
+    let mut evicted = [PageKey::default(); 64];
+    let st = pool.schedule(&mut loads, &mut evicted);
+    for l in &loads[..st.loads as usize] {
+        let from = &bytes[l.offset as usize..l.offset as usize + l.size as usize];
+        pool.loading_slot_mut(l.slot)
+            .expect("slot")
+            .copy_from_slice(from);
+        pool.install(l.slot, root).expect("install");
+    }
+    st.loads
+}
+
+/// The front slot by slot: each active polygon's corner points.
+fn front(cam: &CameraState<'_>, h: &impl HierarchyRecords) -> Vec<[[f32; 3]; 3]> {
+    cam.active_polygons(h)
+        .map(|p| {
+            let corners = cam.polygon_corners(h, p).expect("active");
+            corners.map(|n| h.node_point(n).expect("resident"))
+        })
+        .collect()
+}
+
+/// The front as a surface: its triangles' corner points, each triangle from its least
+/// corner, sorted.
+fn surface(cam: &CameraState<'_>, h: &impl HierarchyRecords) -> Vec<[[u32; 3]; 3]> {
+    let mut tris: Vec<[[u32; 3]; 3]> = front(cam, h)
+        .into_iter()
+        .map(|t| {
+            let t = t.map(|p| p.map(f32::to_bits));
+            let least = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+            [t[least], t[(least + 1) % 3], t[(least + 2) % 3]]
+        })
+        .collect();
+    tris.sort_unstable();
+    tris
+}
+
+/// What must agree between the two forms' passes (the counts of pages and certificates may
+/// differ: the two forms number nodes differently).
+fn ops(st: &RefineStats) -> [u32; 5] {
+    [
+        st.splits,
+        st.collapses,
+        st.active_nodes,
+        st.active_polygons,
+        st.morphs_started,
+    ]
+}
+
+#[test]
+fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
+    let (baked, file, bytes) = terrain();
+    let whole = baked.hierarchy();
+    let root = file.root().expect("root");
+    let mut p = Pool::new(&root, root.table().len() as u32);
+    let mut pool =
+        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
+    pool.add_file(root.table(), root.paged().root_pages)
+        .expect("file");
+    // Every page, parents before children.
+    for page in 0..root.table().len() as u32 {
+        pool.begin_frame();
+        pool.want(PageKey { file: 0, page }, 1.0).expect("want");
+        load(&mut pool, &root, &bytes);
+    }
+    let resident = (0..root.table().len() as u32)
+        .filter(|&page| pool.state(PageKey { file: 0, page }) == Some(PageState::Resident))
+        .count();
+    assert_eq!(resident, root.table().len());
+
+    let mut wants = [Want::default(); 256];
+    let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
+    let mut whole_mem = vec![0u32; CameraState::words_needed(&whole)];
+    let config = CameraConfig::full(&streamed);
+    let mut paged_mem = vec![0u32; CameraState::words_needed_for(&streamed, &config)];
+    assert!(
+        paged_mem.len() < whole_mem.len() * 2,
+        "a camera over sparse ids keeps no per-id arrays: {} words against {}",
+        paged_mem.len(),
+        whole_mem.len()
+    );
+    let mut whole_cam = CameraState::new(&whole, &mut whole_mem).expect("camera");
+    let mut paged_cam =
+        CameraState::with_config(&streamed, &mut paged_mem, &config).expect("camera");
+    let params = RefineParams::default();
+    let mut operations = 0;
+    for f in 0..240 {
+        let v = view(f);
+        let a = whole_cam.refine(&whole, &v, &params).expect("whole");
+        let b = paged_cam.refine(&streamed, &v, &params).expect("paged");
+        assert_eq!(ops(&a), ops(&b), "frame {f}");
+        assert_eq!(b.deferred_splits, 0);
+        assert_eq!(
+            front(&whole_cam, &whole),
+            front(&paged_cam, &streamed),
+            "frame {f}"
+        );
+        operations += a.operations();
+        if f % 60 == 0 {
+            check_front(&whole, &whole_cam).expect("whole front");
+        }
+    }
+    assert!(
+        operations > 1000,
+        "the flight changes the front: {operations}"
+    );
+    assert_eq!(streamed.reads().absent_reads, 0);
+}
+
+#[test]
+fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
+    let (baked, file, bytes) = terrain();
+    let whole = baked.hierarchy();
+    let root = file.root().expect("root");
+    let mut p = Pool::new(&root, root.table().len() as u32);
+    let mut pool =
+        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
+    pool.add_file(root.table(), root.paged().root_pages)
+        .expect("file");
+    let mut paged_mem = Vec::new();
+    let mut cam = {
+        let mut wants = [Want::default(); 1];
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
+        let config = CameraConfig::full(&streamed);
+        paged_mem.resize(CameraState::words_needed_for(&streamed, &config), 0);
+        CameraState::with_config(&streamed, &mut paged_mem, &config).expect("camera")
+    };
+    let mut whole_mem = vec![0u32; CameraState::words_needed(&whole)];
+    let mut whole_cam = CameraState::new(&whole, &mut whole_mem).expect("camera");
+    let v = view(10);
+    let params = RefineParams::default().without_morphs();
+    while whole_cam
+        .refine(&whole, &v, &params)
+        .expect("whole")
+        .operations()
+        > 0
+    {}
+
+    let (mut deferred, mut frames, mut installs) = (0u32, 0u32, 0u32);
+    loop {
+        pool.begin_frame();
+        let mut wants = [Want::default(); 256];
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
+        let st = cam.refine(&streamed, &v, &params).expect("paged");
+        assert_eq!(streamed.reads().absent_reads, 0, "frame {frames}");
+        deferred += st.deferred_splits;
+        if st.deferred_splits == 0 && st.operations() == 0 {
+            // The same surface, in another slot order: the two got there by other paths.
+            let (a, b) = (surface(&whole_cam, &whole), surface(&cam, &streamed));
+            assert!(a == b, "{} triangles against {}", a.len(), b.len());
+            break;
+        }
+        let listed: Vec<Want> = streamed.wants().collect();
+        for w in &listed {
+            pool.want(w.page, w.excess_px).expect("want");
+        }
+        installs += load(&mut pool, &root, &bytes);
+        frames += 1;
+        assert!(frames < 500, "the front settles");
+    }
+    assert!(
+        deferred > 0,
+        "the root pages alone do not hold the wanted front"
+    );
+    assert!(
+        installs > 0 && installs < root.table().len() as u32,
+        "{installs} installs"
+    );
+}
