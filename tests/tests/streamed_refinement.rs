@@ -6,12 +6,14 @@
 //! - With pages absent, the splits that need them are deferred and their pages wanted;
 //!   nothing reads an absent page, and once the wanted pages arrive the front is the whole
 //!   file's.
+//! - The pool counts, per page, the front nodes standing on it, and never evicts such a page:
+//!   a flight through a pool a third of the file evicts what the front left.
 
 use caveclod_bake::paged::{write_paged, PageOptions};
 use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{
-    LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, Want,
+    FrameLists, LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, Want,
 };
 use caveclod_core::{
     CameraConfig, CameraState, HierarchyRecords, LookAt, RefineParams, RefineStats, View,
@@ -70,8 +72,9 @@ impl Pool<'_> {
     }
 }
 
-/// Loads what `pool` schedules from the file's `bytes`, synchronously.
-fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> u32 {
+/// Loads what `pool` schedules from the file's `bytes`, synchronously; the loads and the
+/// evictions.
+fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> (u32, u32) {
     let mut loads = [LoadRequest::default(); 64];
     let mut evicted = [PageKey::default(); 64];
     let st = pool.schedule(&mut loads, &mut evicted);
@@ -82,7 +85,36 @@ fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> u32
             .copy_from_slice(from);
         pool.install(l.slot, root).expect("install");
     }
-    st.loads
+    (st.loads, st.evictions)
+}
+
+/// Every streamed page's uses are the front nodes standing on it, over all `cameras`, and
+/// each such page is resident.
+fn assert_uses(pool: &Residency<'_, '_>, root: &PagedRoot<'_>, cameras: &[&CameraState<'_>]) {
+    let ids = root.ids();
+    let mut on = vec![0u32; root.table().len()];
+    for cam in cameras {
+        for n in cam.active_nodes() {
+            on[ids.page(n.0) as usize] += 1;
+        }
+    }
+    for page in root.paged().root_pages..root.table().len() as u32 {
+        let key = PageKey { file: 0, page };
+        assert_eq!(pool.uses(key), Some(on[page as usize]), "page {page}");
+        if on[page as usize] > 0 {
+            assert_eq!(pool.state(key), Some(PageState::Resident), "page {page}");
+        }
+    }
+}
+
+/// Lists for a frame over `pool`.
+fn lists<'w>(
+    config: &PoolConfig,
+    wants: &'w mut [Want],
+    words: &'w mut Vec<u32>,
+) -> FrameLists<'w> {
+    words.resize(FrameLists::words_needed(config), 0);
+    FrameLists::new(config, wants, words).expect("lists")
 }
 
 /// The front slot by slot: each active polygon's corner points.
@@ -128,6 +160,7 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
     let whole = baked.hierarchy();
     let root = file.root().expect("root");
     let mut p = Pool::new(&root, root.table().len() as u32);
+    let config = p.config;
     let mut pool =
         Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
     pool.add_file(root.table(), root.paged().root_pages)
@@ -143,11 +176,14 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
         .count();
     assert_eq!(resident, root.table().len());
 
-    let mut wants = [Want::default(); 256];
-    let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
+    let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
+    let mut lists = lists(&config, &mut wants, &mut words);
     let mut whole_mem = vec![0u32; CameraState::words_needed(&whole)];
-    let config = CameraConfig::full(&streamed);
-    let mut paged_mem = vec![0u32; CameraState::words_needed_for(&streamed, &config)];
+    let (camera_config, mut paged_mem) = {
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        let c = CameraConfig::full(&streamed);
+        (c, vec![0u32; CameraState::words_needed_for(&streamed, &c)])
+    };
     assert!(
         paged_mem.len() < whole_mem.len() * 2,
         "a camera over sparse ids keeps no per-id arrays: {} words against {}",
@@ -155,13 +191,16 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
         whole_mem.len()
     );
     let mut whole_cam = CameraState::new(&whole, &mut whole_mem).expect("camera");
-    let mut paged_cam =
-        CameraState::with_config(&streamed, &mut paged_mem, &config).expect("camera");
+    let mut paged_cam = {
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        CameraState::with_config(&streamed, &mut paged_mem, &camera_config).expect("camera")
+    };
     let params = RefineParams::default();
     let mut operations = 0;
     for f in 0..240 {
         let v = view(f);
         let a = whole_cam.refine(&whole, &v, &params).expect("whole");
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
         let b = paged_cam.refine(&streamed, &v, &params).expect("paged");
         assert_eq!(ops(&a), ops(&b), "frame {f}");
         assert_eq!(b.deferred_splits, 0);
@@ -174,12 +213,22 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
         if f % 60 == 0 {
             check_front(&whole, &whole_cam).expect("whole front");
         }
+        pool.apply(&mut lists).expect("apply");
+        if f % 20 == 0 {
+            assert_uses(&pool, &root, &[&paged_cam]);
+        }
     }
     assert!(
         operations > 1000,
         "the flight changes the front: {operations}"
     );
-    assert_eq!(streamed.reads().absent_reads, 0);
+    let reads = lists.reads();
+    assert_eq!((reads.absent_reads, reads.untracked_uses), (0, 0));
+    // A reset leaves every streamed page.
+    let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+    paged_cam.reset(&streamed);
+    pool.apply(&mut lists).expect("apply");
+    assert_uses(&pool, &root, &[&paged_cam]);
 }
 
 #[test]
@@ -188,17 +237,19 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
     let whole = baked.hierarchy();
     let root = file.root().expect("root");
     let mut p = Pool::new(&root, root.table().len() as u32);
+    let config = p.config;
     let mut pool =
         Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
     pool.add_file(root.table(), root.paged().root_pages)
         .expect("file");
+    let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
+    let mut lists = lists(&config, &mut wants, &mut words);
     let mut paged_mem = Vec::new();
     let mut cam = {
-        let mut wants = [Want::default(); 1];
-        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
-        let config = CameraConfig::full(&streamed);
-        paged_mem.resize(CameraState::words_needed_for(&streamed, &config), 0);
-        CameraState::with_config(&streamed, &mut paged_mem, &config).expect("camera")
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        let c = CameraConfig::full(&streamed);
+        paged_mem.resize(CameraState::words_needed_for(&streamed, &c), 0);
+        CameraState::with_config(&streamed, &mut paged_mem, &c).expect("camera")
     };
     let mut whole_mem = vec![0u32; CameraState::words_needed(&whole)];
     let mut whole_cam = CameraState::new(&whole, &mut whole_mem).expect("camera");
@@ -214,8 +265,7 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
     let (mut deferred, mut frames, mut installs) = (0u32, 0u32, 0u32);
     loop {
         pool.begin_frame();
-        let mut wants = [Want::default(); 256];
-        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut wants);
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
         let st = cam.refine(&streamed, &v, &params).expect("paged");
         assert_eq!(streamed.reads().absent_reads, 0, "frame {frames}");
         deferred += st.deferred_splits;
@@ -225,11 +275,8 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
             assert!(a == b, "{} triangles against {}", a.len(), b.len());
             break;
         }
-        let listed: Vec<Want> = streamed.wants().collect();
-        for w in &listed {
-            pool.want(w.page, w.excess_px).expect("want");
-        }
-        installs += load(&mut pool, &root, &bytes);
+        pool.apply(&mut lists).expect("apply");
+        installs += load(&mut pool, &root, &bytes).0;
         frames += 1;
         assert!(frames < 500, "the front settles");
     }
@@ -241,4 +288,59 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
         installs > 0 && installs < root.table().len() as u32,
         "{installs} installs"
     );
+    pool.apply(&mut lists).expect("apply");
+    assert_uses(&pool, &root, &[&cam]);
+}
+
+#[test]
+fn a_pool_a_third_of_the_file_evicts_only_what_the_fronts_left() {
+    let (_, file, bytes) = terrain();
+    let root = file.root().expect("root");
+    let streamed_pages = root.table().len() as u32 - root.paged().root_pages;
+    let mut p = Pool::new(&root, streamed_pages / 3);
+    let config = p.config;
+    let mut pool =
+        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
+    pool.add_file(root.table(), root.paged().root_pages)
+        .expect("file");
+    let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
+    let mut lists = lists(&config, &mut wants, &mut words);
+    let (camera_config, words_needed) = {
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        let c = CameraConfig::with_polygon_budget(&streamed, 1500);
+        (c, CameraState::words_needed_for(&streamed, &c))
+    };
+    let mut memories = vec![vec![0u32; words_needed]; 2];
+    let mut cams: Vec<CameraState<'_>> = {
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        memories
+            .iter_mut()
+            .map(|m| CameraState::with_config(&streamed, m, &camera_config).expect("camera"))
+            .collect()
+    };
+    let params = RefineParams::default();
+    let (mut evictions, mut installs, mut deferred) = (0, 0, 0);
+    for f in 0..600 {
+        pool.begin_frame();
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        for (k, cam) in cams.iter_mut().enumerate() {
+            let st = cam.refine(&streamed, &view(f * 2 + k as u32 * 80), &params);
+            deferred += st.expect("refine").deferred_splits;
+        }
+        pool.apply(&mut lists).expect("apply");
+        let (l, e) = load(&mut pool, &root, &bytes);
+        installs += l;
+        evictions += e;
+        if f % 25 == 0 {
+            let views: Vec<&CameraState<'_>> = cams.iter().collect();
+            assert_uses(&pool, &root, &views);
+        }
+    }
+    let reads = lists.reads();
+    assert_eq!((reads.absent_reads, reads.untracked_uses), (0, 0));
+    assert!(
+        deferred > 0 && installs > streamed_pages / 3,
+        "{installs} installs"
+    );
+    assert!(evictions > 0, "the fronts moved off pages, which made room");
 }

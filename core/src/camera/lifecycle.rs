@@ -4,9 +4,10 @@
 use super::compact_progress::Progress;
 use super::config::{CameraConfig, CameraError};
 use super::layout::{Layout, Scalars};
-use super::records::{ActiveVertex, PolySlot, NONE, UNKNOWN};
+use super::records::{ActiveVertex, PolySlot, FREE, NONE, UNKNOWN};
 use super::state::CameraState;
 use crate::hierarchy::HierarchyRecords;
+use crate::ids::NodeId;
 
 impl<'m> CameraState<'m> {
     /// Words of memory a camera needs for full resolution anywhere ([`CameraConfig::full`]).
@@ -69,6 +70,13 @@ impl<'m> CameraState<'m> {
     /// Back to the base mesh.
     pub fn reset(&mut self, h: &impl HierarchyRecords) {
         let f = &mut self.front;
+        // The front leaves every node it stood on (a camera just made stands on none).
+        let live = (f.active_len as usize).min(f.active.len());
+        for a in &f.active[..live] {
+            if a.node & FREE == 0 {
+                h.node_left_front(NodeId(a.node));
+            }
+        }
         f.pair_of.clear();
         f.pairs = 0;
         f.free_head = NONE;
@@ -76,6 +84,7 @@ impl<'m> CameraState<'m> {
         f.refused.fill(0);
         // Active-vertex record `i` of the base mesh is root `i`.
         for (i, r) in h.roots().iter().enumerate() {
+            h.node_entered_front(*r);
             f.active[i] = ActiveVertex {
                 node: r.0,
                 coarsen: NONE,

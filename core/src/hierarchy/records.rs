@@ -88,6 +88,20 @@ pub trait HierarchyRecords {
         let _ = (absent, excess_px);
     }
 
+    /// `node` joined a camera's front (a split made it, or a reset): its records are in
+    /// use. With [`node_left_front`](Self::node_left_front), what keeps a streamed page
+    /// from eviction while a front stands on it.
+    #[inline(always)]
+    fn node_entered_front(&self, node: NodeId) {
+        let _ = node;
+    }
+
+    /// `node` left a camera's front (split, collapsed into its parent, or reset away).
+    #[inline(always)]
+    fn node_left_front(&self, node: NodeId) {
+        let _ = node;
+    }
+
     /// Asks for the cache line of `position`'s vertex-table row, ahead of a lookup.
     #[inline(always)]
     fn prefetch_vertex_keys(&self, position: PositionId) {

@@ -60,6 +60,11 @@ pub enum StreamError {
         /// The slot.
         slot: u32,
     },
+    /// The pool has no such slot (lists made for another pool).
+    NoSuchSlot {
+        /// The slot.
+        slot: u32,
+    },
 }
 
 impl core::fmt::Display for StreamError {
@@ -73,6 +78,7 @@ impl core::fmt::Display for StreamError {
                 k.file, k.page
             ),
             Self::NotLoading { slot } => write!(f, "slot {slot}: no page is loading into it"),
+            Self::NoSuchSlot { slot } => write!(f, "slot {slot}: the pool has no such slot"),
         }
     }
 }

@@ -6,50 +6,29 @@
 //! arrays come from the root (a root page) or from its pool slot, and a few recently used
 //! pages' arrays are kept at hand so the layout is not worked out again on every read. A
 //! split whose records lie in a page that is not resident is deferred by the camera, and the
-//! page goes into the caller's list of wants with the split's error excess; after the
-//! frame's refinement the host passes them to [`Residency::want`].
+//! page goes into the caller's [`FrameLists`] with the split's error excess; so do the
+//! changes of which pages the fronts stand on. After the frame's refinement the host hands
+//! the lists to [`Residency::apply`].
 //!
 //! Nothing here changes the pool: a pool borrowed by streamed hierarchies is not installing
 //! or evicting, so every page seen resident stays resident while they exist.
 
 use core::cell::Cell;
 
+use super::frame_lists::{FrameLists, StreamedReads, Want};
 use super::residency::Residency;
 use crate::format::paged::{PageView, PagedRoot, RecordKind, SegmentedId};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
 use crate::hierarchy::{Absent, HierarchyRecords};
-use crate::ids::PageKey;
-use crate::ids::{NodeId, PolyId, PositionId};
-
-/// A page wanted by a deferred split, and by how much (pixels) its error exceeds the
-/// tolerance: the largest over the splits that wanted it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Want {
-    /// The page.
-    pub page: PageKey,
-    /// The largest screen-space error excess of the splits waiting for it, in pixels.
-    pub excess_px: f32,
-}
+use crate::ids::{NodeId, PageKey, PolyId, PositionId};
 
 /// Pages whose arrays are kept at hand (a power of two: a page's place is its low bits).
 const RECENT: usize = 8;
 
-/// What one [`StreamedHierarchy`] saw while cameras refined over it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct StreamedReads {
-    /// Distinct pages put in the wants list.
-    pub wanted: u32,
-    /// Wants that did not fit the list (asked again by a later frame).
-    pub wants_dropped: u32,
-    /// Reads of a record in a page that is not resident: refinement defers before it reads,
-    /// so this stays 0 (it is counted to prove it).
-    pub absent_reads: u64,
-}
-
 /// A paged file's records over its root and a pool (see the module docs).
-pub struct StreamedHierarchy<'s, 'a, 'm> {
+pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
     root: &'s PagedRoot<'s>,
     pool: &'s Residency<'a, 'm>,
     file: u32,
@@ -58,19 +37,23 @@ pub struct StreamedHierarchy<'s, 'a, 'm> {
     id_bound: usize,
     pages: usize,
     recent: [Cell<Option<(u32, PageView<'s>)>>; RECENT],
-    wants: &'s [Cell<Want>],
-    want_len: Cell<u32>,
-    reads: Cell<StreamedReads>,
+    wants: &'w [Cell<Want>],
+    want_len: &'w Cell<u32>,
+    deltas: &'w [Cell<u32>],
+    listed: &'w [Cell<u32>],
+    touched: &'w [Cell<u32>],
+    touched_len: &'w Cell<u32>,
+    reads: &'w Cell<StreamedReads>,
 }
 
-impl<'s, 'a, 'm> StreamedHierarchy<'s, 'a, 'm> {
-    /// The records of file `file` of `pool`, whose root is `root`; deferred splits' pages go
-    /// to `wants` (the caller's memory; a few hundred entries hold a frame's).
+impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
+    /// The records of file `file` of `pool`, whose root is `root`; what the cameras want and
+    /// change goes to `lists`, for [`Residency::apply`] once they are done.
     pub fn new(
         root: &'s PagedRoot<'s>,
         pool: &'s Residency<'a, 'm>,
         file: u32,
-        wants: &'s mut [Want],
+        lists: &'w mut FrameLists<'_>,
     ) -> Self {
         let ids = root.ids();
         let pages = root.table().len() as u64;
@@ -84,23 +67,52 @@ impl<'s, 'a, 'm> StreamedHierarchy<'s, 'a, 'm> {
             id_bound,
             pages: pages as usize,
             recent: Default::default(),
-            wants: Cell::from_mut(wants).as_slice_of_cells(),
-            want_len: Cell::new(0),
-            reads: Cell::new(StreamedReads::default()),
+            wants: Cell::from_mut(&mut *lists.wants).as_slice_of_cells(),
+            want_len: Cell::from_mut(&mut lists.want_len),
+            deltas: Cell::from_mut(&mut *lists.deltas).as_slice_of_cells(),
+            listed: Cell::from_mut(&mut *lists.listed).as_slice_of_cells(),
+            touched: Cell::from_mut(&mut *lists.touched).as_slice_of_cells(),
+            touched_len: Cell::from_mut(&mut lists.touched_len),
+            reads: Cell::from_mut(&mut lists.reads),
         }
     }
 
-    /// The pages deferred splits wanted, with their excess (a page may come more than once;
-    /// [`Residency::want`] keeps the largest).
-    pub fn wants(&self) -> impl Iterator<Item = Want> + '_ {
-        self.wants[..self.want_len.get() as usize]
-            .iter()
-            .map(Cell::get)
-    }
-
-    /// What was read and wanted so far.
+    /// What was read and wanted so far (the lists' totals).
     pub fn reads(&self) -> StreamedReads {
         self.reads.get()
+    }
+
+    /// One more (`delta` 1) or one fewer (-1) front node stands on `node`'s page; root
+    /// pages are pinned and not counted.
+    fn count_use(&self, node: NodeId, delta: i32) {
+        let page = self.ids.page(node.0);
+        if page < self.root_pages {
+            return;
+        }
+        let key = PageKey {
+            file: self.file,
+            page,
+        };
+        let slot = self.pool.resident_slot(key).map(|s| s as usize);
+        let (Some(d), Some(listed)) = (
+            slot.and_then(|s| self.deltas.get(s)),
+            slot.and_then(|s| self.listed.get(s)),
+        ) else {
+            let mut r = self.reads.get();
+            r.untracked_uses += 1;
+            self.reads.set(r);
+            return;
+        };
+        d.set((d.get() as i32).wrapping_add(delta) as u32);
+        if listed.get() == 0 {
+            listed.set(1);
+            let n = self.touched_len.get();
+            // `touched` has a place per slot, and a slot is listed once.
+            if let Some(t) = self.touched.get(n as usize) {
+                t.set(slot.unwrap_or(0) as u32);
+                self.touched_len.set(n + 1);
+            }
+        }
     }
 
     /// The arrays of page `page`, if it is resident.
@@ -173,7 +185,7 @@ impl<'s, 'a, 'm> StreamedHierarchy<'s, 'a, 'm> {
     }
 }
 
-impl HierarchyRecords for StreamedHierarchy<'_, '_, '_> {
+impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
     fn checksum(&self) -> u64 {
         self.root.checksum()
     }
@@ -270,6 +282,14 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_> {
             self.present(k.vertex, RecordKind::Vertices)?;
         }
         Ok(())
+    }
+
+    fn node_entered_front(&self, node: NodeId) {
+        self.count_use(node, 1);
+    }
+
+    fn node_left_front(&self, node: NodeId) {
+        self.count_use(node, -1);
     }
 
     fn want(&self, absent: Absent, excess_px: f32) {

@@ -27,6 +27,7 @@
 
 mod config;
 mod fault;
+mod frame_lists;
 mod hierarchy;
 mod install;
 mod lists;
@@ -37,5 +38,6 @@ pub use crate::format::paged::{PageEntry, PageField, PageTable, PageTableError};
 pub use crate::ids::PageKey;
 pub use config::{FileTables, PoolConfig, PoolError};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
-pub use hierarchy::{StreamedHierarchy, StreamedReads, Want};
+pub use frame_lists::{FrameLists, StreamedReads, Want};
+pub use hierarchy::StreamedHierarchy;
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};

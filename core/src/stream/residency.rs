@@ -283,6 +283,36 @@ impl<'a, 'm> Residency<'a, 'm> {
         Ok(())
     }
 
+    /// The slot of resident, streamed page `key` (`None` for a page not in the pool, or
+    /// pinned: those are never evicted).
+    #[inline]
+    pub(crate) fn resident_slot(&self, key: PageKey) -> Option<u32> {
+        let g = self.global(key)?;
+        let state = self.w.pages.state[g];
+        (state & (STATE_MASK | PINNED) == RESIDENT).then(|| self.w.pages.slot[g])
+    }
+
+    /// Moves the uses of the page in `slot` by `delta` (see [`apply`](Self::apply)).
+    pub(super) fn move_uses(&mut self, slot: u32, delta: i32) -> Result<(), StreamError> {
+        let g = *self
+            .w
+            .slots
+            .page
+            .get(slot as usize)
+            .ok_or(StreamError::NoSuchSlot { slot })?;
+        if g == NONE || delta == 0 {
+            return Ok(());
+        }
+        let g = g as usize;
+        let uses = i64::from(self.w.pages.uses[g]) + i64::from(delta);
+        self.w.pages.uses[g] = uses.clamp(0, i64::from(u32::MAX)) as u32;
+        self.refresh(g);
+        if uses < 0 {
+            return Err(StreamError::NotInUse(self.key_of(g)));
+        }
+        Ok(())
+    }
+
     /// Uses of page `key` ([`use_page`](Self::use_page) less releases).
     pub fn uses(&self, key: PageKey) -> Option<u32> {
         self.global(key).map(|g| self.w.pages.uses[g])

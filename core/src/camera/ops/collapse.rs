@@ -86,6 +86,9 @@ impl Front<'_> {
             self.end_morph_of(h, s.floating);
         }
         self.pair_of.set(v.index(), NONE).ok_or(bad)?;
+        h.node_left_front(s.stationary);
+        h.node_left_front(s.floating);
+        h.node_entered_front(v);
         // v is active again: its parent's collapse may have become legal.
         if let Some(pp) = h.node(v).and_then(|n| self.pair_of.get(n.parent.index())) {
             self.forget_refusal(pp);

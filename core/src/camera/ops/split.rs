@@ -78,6 +78,9 @@ impl Front<'_> {
         if self.caches_indices() {
             self.cache_pair(h, s, slots, &pair, &walked, j0, at);
         }
+        h.node_left_front(v);
+        h.node_entered_front(s.stationary);
+        h.node_entered_front(s.floating);
         self.count_split(h, v, s)
     }
 
