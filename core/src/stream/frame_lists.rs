@@ -135,3 +135,104 @@ impl Residency<'_, '_> {
         result
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::expect_used)]
+mod tests {
+    use super::*;
+    use crate::checksum::checksum64;
+    use crate::format::paged::{PageEntry, PageLayout, PageTable};
+    use crate::stream::{LoadRequest, PageState};
+
+    const PAGES: usize = 4;
+    const SIZE: usize = 128;
+
+    fn entries() -> [PageEntry; PAGES] {
+        let size = PageLayout::new([1, 0, 0, 0, 0, 0], false).map_or(0, |l| l.len);
+        assert_eq!(size, SIZE);
+        core::array::from_fn(|p| PageEntry {
+            offset: (SIZE * (p + 1)) as u64,
+            checksum: checksum64(&[0u8; SIZE]),
+            size: SIZE as u32,
+            parents_start: 0,
+            parent_count: 0,
+            max_error: 1.0,
+            bounds_min: [0.0; 3],
+            bounds_max: [1.0; 3],
+            counts: [1, 0, 0, 0, 0, 0],
+            flags: 0,
+            reserved: [0; 3],
+        })
+    }
+
+    /// A frame's lists move the uses of their slots' pages: a page a front stands on stays,
+    /// one it left is evicted for a wanted page; a count below zero is refused.
+    #[test]
+    fn the_lists_keep_what_the_fronts_stand_on() {
+        let entries = entries();
+        let table = PageTable::new(&entries, &[], (SIZE * (PAGES + 1)) as u64).expect("table");
+        let config = PoolConfig {
+            max_requests: 4,
+            ..PoolConfig::new(2 * SIZE as u64, SIZE as u32, 1, PAGES as u32)
+        };
+        let mut words = [0u32; 64];
+        let mut bytes = [0u64; 2 * SIZE / 8 + 8];
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut bytes);
+        let skip = bytes.as_ptr().align_offset(64);
+        let mut tables = [None; 1];
+        let mut pool = Residency::new(
+            config,
+            &mut words[..Residency::words_needed(&config)],
+            &mut bytes[skip..skip + 2 * SIZE],
+            &mut tables,
+        )
+        .expect("pool");
+        pool.add_file(table, 0).expect("file");
+        let key = |page| PageKey { file: 0, page };
+        let mut loads = [LoadRequest::default(); 2];
+        pool.begin_frame();
+        pool.want(key(0), 1.0).expect("want");
+        pool.want(key(1), 1.0).expect("want");
+        assert_eq!(pool.schedule(&mut loads, &mut []).loads, 2);
+        for l in loads {
+            pool.complete(l.slot, |_, _, _| Ok(())).expect("install");
+        }
+
+        let mut wants = [Want::default(); 4];
+        let mut list_words = [0u32; 6];
+        let mut lists = FrameLists::new(&config, &mut wants, &mut list_words).expect("lists");
+        // A front stands twice on page 0 and once on page 1, then leaves page 1; page 2 is
+        // wanted.
+        let slot = |page| pool.resident_slot(key(page)).expect("resident");
+        let (s0, s1) = (slot(0), slot(1));
+        for (s, d) in [(s0, 2i32), (s1, 1), (s1, -1)] {
+            lists.deltas[s as usize] = (lists.deltas[s as usize] as i32 + d) as u32;
+            if lists.listed[s as usize] == 0 {
+                lists.listed[s as usize] = 1;
+                lists.touched[lists.touched_len as usize] = s;
+                lists.touched_len += 1;
+            }
+        }
+        lists.wants[0] = Want {
+            page: key(2),
+            excess_px: 3.0,
+        };
+        lists.want_len = 1;
+        pool.begin_frame();
+        pool.apply(&mut lists).expect("apply");
+        assert_eq!((pool.uses(key(0)), pool.uses(key(1))), (Some(2), Some(0)));
+        assert!(lists.wants().is_empty());
+        let mut evicted = [PageKey::default(); 2];
+        let st = pool.schedule(&mut loads, &mut evicted);
+        assert_eq!((st.loads, st.evictions, evicted[0]), (1, 1, key(1)));
+        assert_eq!(pool.state(key(0)), Some(PageState::Resident));
+
+        // Leaving a page more often than it was stood on is refused, and the count stays 0.
+        lists.deltas[s0 as usize] = (-3i32) as u32;
+        lists.listed[s0 as usize] = 1;
+        lists.touched[0] = s0;
+        lists.touched_len = 1;
+        assert_eq!(pool.apply(&mut lists), Err(StreamError::NotInUse(key(0))));
+        assert_eq!(pool.uses(key(0)), Some(0));
+    }
+}
