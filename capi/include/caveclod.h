@@ -15,7 +15,7 @@
 // A program built against a header checks `caveclod_abi_version() >> 16` against
 // `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 // a higher minor version only adds calls or status values.
-#define CAVECLOD_ABI_VERSION ((1 << 16) | 2)
+#define CAVECLOD_ABI_VERSION ((1 << 16) | 3)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -101,6 +101,12 @@ typedef enum CaveclodStatus {
     // A streamed page failed its checks (or could not be read): it stays absent, it is
     // reported once, and the frame goes on at the coarser level.
     CAVECLOD_STATUS_BAD_PAGE = 19,
+    // A streamed page's parent is still loading: the slot keeps its bytes; install it
+    // again once the parent is installed (install a frame's pages parents first).
+    CAVECLOD_STATUS_PAGE_WAITS = 20,
+    // A streamed page's parent failed while it loaded: its slot is free again, the page
+    // absent; nothing is wrong with its bytes, so nothing is reported.
+    CAVECLOD_STATUS_PAGE_ABANDONED = 21,
 } CaveclodStatus;
 
 // What `caveclod_pool_want` found.
@@ -977,7 +983,9 @@ enum CaveclodStatus caveclod_pool_loading_slot(struct CaveclodPool *p,
 // The host filled slot `slot` with the page of the file whose root is `r`: checks it
 // (checksum, then every record against its resident parents) and installs it. A page
 // that fails is written to `fault` (reported once: it stays absent) and the call returns
-// `CAVECLOD_STATUS_BAD_PAGE`; the frame goes on at the coarser level.
+// `CAVECLOD_STATUS_BAD_PAGE`; the frame goes on at the coarser level. A page whose parent
+// is still loading returns `CAVECLOD_STATUS_PAGE_WAITS` and keeps its bytes (a frame's
+// loads come parents first, so installing them in that order never waits).
 //
 // # Safety
 // `p` is null or a pool nothing else uses during the call; `r` is null or an opened root;

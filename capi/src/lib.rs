@@ -60,7 +60,7 @@ pub use types::*;
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
 /// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 /// a higher minor version only adds calls or status values.
-pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 2;
+pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 3;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

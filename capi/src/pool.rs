@@ -436,7 +436,9 @@ pub unsafe extern "C" fn caveclod_pool_loading_slot(
 /// The host filled slot `slot` with the page of the file whose root is `r`: checks it
 /// (checksum, then every record against its resident parents) and installs it. A page
 /// that fails is written to `fault` (reported once: it stays absent) and the call returns
-/// `CAVECLOD_STATUS_BAD_PAGE`; the frame goes on at the coarser level.
+/// `CAVECLOD_STATUS_BAD_PAGE`; the frame goes on at the coarser level. A page whose parent
+/// is still loading returns `CAVECLOD_STATUS_PAGE_WAITS` and keeps its bytes (a frame's
+/// loads come parents first, so installing them in that order never waits).
 ///
 /// # Safety
 /// `p` is null or a pool nothing else uses during the call; `r` is null or an opened root;
@@ -454,6 +456,8 @@ pub unsafe extern "C" fn caveclod_pool_install(
         match p.install(slot, r) {
             Ok(_) => Ok(()),
             Err(InstallError::Misuse(_)) => Err(CaveclodStatus::InvalidArgument),
+            Err(InstallError::Wait) => Err(CaveclodStatus::PageWaits),
+            Err(InstallError::Abandoned(_)) => Err(CaveclodStatus::PageAbandoned),
             Err(InstallError::Fault(f)) => {
                 // SAFETY: the caller's contract.
                 unsafe { ffi::optional_output(fault, f.into()) }?;

@@ -63,6 +63,12 @@ pub enum CaveclodStatus {
     /// A streamed page failed its checks (or could not be read): it stays absent, it is
     /// reported once, and the frame goes on at the coarser level.
     BadPage = 19,
+    /// A streamed page's parent is still loading: the slot keeps its bytes; install it
+    /// again once the parent is installed (install a frame's pages parents first).
+    PageWaits = 20,
+    /// A streamed page's parent failed while it loaded: its slot is free again, the page
+    /// absent; nothing is wrong with its bytes, so nothing is reported.
+    PageAbandoned = 21,
 }
 
 impl CaveclodStatus {
@@ -89,6 +95,8 @@ impl CaveclodStatus {
             Self::TrailingBytes => c"the file has bytes after the end its header records",
             Self::Paged => c"the file is paged: its pages stream, and this call reads whole files",
             Self::BadPage => c"a page failed its checks: it stays absent and the frame goes on",
+            Self::PageWaits => c"a parent page is still loading: install this page after it",
+            Self::PageAbandoned => c"a parent page failed: this page was not installed",
         }
     }
 
@@ -170,7 +178,7 @@ impl From<OctreeFormatError> for CaveclodStatus {
 /// Thread-safe: any thread, any time.
 #[no_mangle]
 pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
-    const ALL: [CaveclodStatus; 20] = [
+    const ALL: [CaveclodStatus; 22] = [
         CaveclodStatus::Ok,
         CaveclodStatus::NullPointer,
         CaveclodStatus::Misaligned,
@@ -191,6 +199,8 @@ pub extern "C" fn caveclod_status_message(status: i32) -> *const c_char {
         CaveclodStatus::TrailingBytes,
         CaveclodStatus::Paged,
         CaveclodStatus::BadPage,
+        CaveclodStatus::PageWaits,
+        CaveclodStatus::PageAbandoned,
     ];
     let status = ALL
         .iter()

@@ -113,10 +113,10 @@ pub struct DemoArgs {
 /// Options of `caveclod flyover`.
 #[derive(Args)]
 pub struct FlyoverArgs {
-    /// A .clod file (or use --dem).
-    pub file: Option<PathBuf>,
+    /// A .clod file (or use --dem); with --pool, one or more paged files.
+    pub files: Vec<PathBuf>,
     /// Bake this heightfield (.dem, .npy) in memory and fly over it.
-    #[arg(long, conflicts_with = "file")]
+    #[arg(long, conflicts_with = "files")]
     pub dem: Option<PathBuf>,
     /// Grid spacing in metres for --dem.
     #[arg(long)]
@@ -189,6 +189,20 @@ pub struct FlyoverArgs {
     /// --tolerance; a state per camera on one thread).
     #[arg(long, conflicts_with_all = ["shared_state", "threads"])]
     pub target_polygons: Option<u32>,
+    /// Stream the paged files' pages into a pool of this size (e.g. 256M): each camera
+    /// refines over each file, and splits that need absent pages wait for them.
+    #[arg(long, value_parser = caveclod_bake::ooc::parse_size, conflicts_with_all = ["dem", "shared_state", "threads", "target_polygons"])]
+    pub pool: Option<u64>,
+    /// With --pool: simulated latency of each page read, in milliseconds (on the flight's
+    /// 60 Hz clock).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative, requires = "pool")]
+    pub io_latency: f32,
+    /// With --pool: simulated bandwidth in MB/s (0: no simulated disk).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative, requires = "pool")]
+    pub io_bandwidth: f32,
+    /// With --pool: each camera's polygon budget, which its memory follows.
+    #[arg(long, default_value_t = 262_144, requires = "pool")]
+    pub camera_polygons: u32,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,

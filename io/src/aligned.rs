@@ -68,15 +68,15 @@ impl AlignedBytes {
             let start = (64 - buf.as_ptr().addr() % 64) % 64;
             return Self { buf, start, len };
         }
-        // Reserved, not yet written: a large allocation is usually fresh pages of its own
-        // mapping (see the module docs for when it is not), advised before the first touch.
-        let mut buf: Vec<u8> = Vec::with_capacity(len + HUGE_PAGE);
+        // Zeroed by the allocator: a large allocation is usually fresh pages of its own
+        // mapping, which the system zeroes when each is first touched (see the module docs
+        // for when it is not), so a large buffer costs its time as it is used (a page pool's
+        // slots as pages arrive), not all at once here. Advised before the first touch.
+        let mut buf = vec![0u8; len + HUGE_PAGE];
         // From the address itself: `align_offset` may answer "cannot" (`usize::MAX`) by its
         // contract; the reserve holds any offset below the alignment.
         let start = (HUGE_PAGE - buf.as_ptr().addr() % HUGE_PAGE) % HUGE_PAGE;
         advise_huge_pages(&mut buf, start, len);
-        // The first touch: the kernel backs the advised range with huge pages where it can.
-        buf.resize(start + len, 0);
         Self { buf, start, len }
     }
 

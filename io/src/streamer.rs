@@ -34,6 +34,8 @@ pub struct Streamer {
     loads: Vec<LoadRequest>,
     evicted: Vec<PageKey>,
     done: Vec<ReadDone>,
+    /// Reads that arrived and wait for a parent page to install.
+    pending: Vec<ReadDone>,
     max_in_flight: usize,
 }
 
@@ -51,6 +53,7 @@ impl Streamer {
             loads: vec![LoadRequest::default(); loads_per_frame.min(max_in_flight)],
             evicted: vec![PageKey::default(); loads_per_frame.min(max_in_flight)],
             done: Vec::with_capacity(max_in_flight),
+            pending: Vec::with_capacity(max_in_flight),
             max_in_flight,
         })
     }
@@ -67,7 +70,8 @@ impl Streamer {
     ) -> FrameStreaming {
         let mut f = FrameStreaming::default();
         self.install_arrived(pool, roots, now, faults, &mut f);
-        let room = self.max_in_flight - self.reader.in_flight();
+        let held = self.reader.in_flight() + self.pending.len();
+        let room = self.max_in_flight.saturating_sub(held);
         let room = room.min(self.loads.len());
         f.schedule = pool.schedule(&mut self.loads[..room], &mut self.evicted);
         for l in &self.loads[..f.schedule.loads as usize] {
@@ -75,7 +79,8 @@ impl Streamer {
                 file: l.key.file,
                 offset: l.offset,
                 len: l.size,
-                tag: u64::from(l.slot),
+                // The page orders installs (parents first); the slot names the load.
+                tag: (u64::from(l.key.page) << 32) | u64::from(l.slot),
             };
             if self.reader.submit(read, now).is_err() {
                 // The reader refused (its sources or limits changed under it): the page fails
@@ -86,7 +91,7 @@ impl Streamer {
                 }
             }
         }
-        f.in_flight = self.reader.in_flight() as u32;
+        f.in_flight = (self.reader.in_flight() + self.pending.len()) as u32;
         f
     }
 
@@ -100,6 +105,8 @@ impl Streamer {
         &self.reader
     }
 
+    /// Installs the reads that arrived by `now` and those that waited for a parent, in
+    /// page order (parents first); a page whose parent is still loading waits again.
     fn install_arrived(
         &mut self,
         pool: &mut Residency<'_, '_>,
@@ -108,41 +115,35 @@ impl Streamer {
         faults: &mut Vec<PageFault>,
         f: &mut FrameStreaming,
     ) {
-        self.done.clear();
         self.reader.poll(now, &mut self.done);
-        for d in self.done.drain(..) {
+        self.pending.append(&mut self.done);
+        self.pending.sort_unstable_by_key(|d| (d.file, d.tag >> 32));
+        self.pending.retain(|d| {
             let slot = d.tag as u32;
-            let arrived = match (&d.result, roots.get(d.file as usize)) {
-                (Ok(bytes), Some(root)) => Some((bytes, root)),
-                _ => None,
-            };
-            let installed = match arrived {
-                Some((bytes, root)) => {
-                    let filled = match pool.loading_slot_mut(slot) {
-                        Ok(dst) if dst.len() == bytes.len() => {
-                            dst.copy_from_slice(bytes);
-                            true
-                        }
-                        _ => false,
-                    };
-                    if filled {
-                        f.bytes_read += bytes.len() as u64;
+            let installed = match (&d.result, roots.get(d.file as usize)) {
+                (Ok(bytes), Some(root)) => match pool.loading_slot_mut(slot) {
+                    Ok(dst) if dst.len() == bytes.len() => {
+                        dst.copy_from_slice(bytes);
                         pool.install(slot, root)
-                    } else {
-                        failed(pool, slot)
                     }
-                }
-                None => failed(pool, slot),
+                    _ => failed(pool, slot),
+                },
+                _ => failed(pool, slot),
             };
             match installed {
-                Ok(_) => f.installs += 1,
+                Ok(_) => {
+                    f.installs += 1;
+                    f.bytes_read += d.result.as_ref().map_or(0, |b| b.len() as u64);
+                }
+                Err(InstallError::Wait) => return true,
                 Err(InstallError::Fault(fault)) => {
                     faults.push(fault);
                     f.faults += 1;
                 }
-                Err(InstallError::Misuse(_)) => {}
+                Err(InstallError::Abandoned(_) | InstallError::Misuse(_)) => {}
             }
-        }
+            false
+        });
     }
 }
 

@@ -1,11 +1,21 @@
 //! Which page each node's records go to: the top of the hierarchy to the root page, the rest
-//! in runs of the depth-first order of the splits, each run as many nodes as fit a page.
+//! in treelets: the top levels of a subtree, breadth first, as many nodes as fit a page.
 //!
 //! A node's records are its node record, its split record and bounds, the polygons its split
 //! creates, and the position (with its vertex-table entries and vertices) it brings when it
-//! is a root or a floating child. A leaf goes to its parent's page. A run of the preorder is
-//! a few subtrees: a camera's front over a region touches few pages, a page has few parent
-//! pages, and a parent always lies in the same or an earlier page.
+//! is a root or a floating child. A leaf goes to its parent's page.
+//!
+//! A camera's front cuts across the hierarchy at some depth, so a page should hold a region's
+//! nodes over a band of depths, not a path to the leaves: a treelet page holds the levels
+//! below its root until the page is full, and the nodes below it start treelets of their own.
+//! A front then touches about one page per treelet it crosses, and a page's ancestors are a
+//! few treelets up, not one page per level: runs of the depth-first order, tried first, put
+//! a path from a node to its leaves in each page, so a front at a middle depth touched nearly
+//! every page, and the chain of parent pages grew with the depth. A treelet that leaves room
+//! takes the next treelets of the same parent pages, so pages stay full and have few parents;
+//! a parent always lies in the same or an earlier page.
+
+use std::collections::VecDeque;
 
 use caveclod_core::format::{Node, Split};
 use caveclod_core::Hierarchy;
@@ -87,24 +97,25 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
     let budget = u64::from(page_bytes).saturating_sub(PADDING);
     let root_depth = root_depth(h, &with_leaves, &depth, budget);
     let mut home = vec![NONE; n];
-    let mut page = 0u32;
-    let mut filled = budget;
+    let mut frontier = VecDeque::new();
     for v in preorder(h) {
         let v = v as usize;
         if depth[v] <= root_depth {
             home[v] = 0;
-            continue;
+        } else if h.nodes()[v]
+            .parent
+            .get()
+            .is_none_or(|p| home[p.index()] == 0)
+        {
+            frontier.push_back(v as u32);
         }
-        if filled + with_leaves[v] > budget {
-            if with_leaves[v] > budget {
-                return Err(PagedError::Shape("one node's records exceed a page"));
-            }
-            page += 1;
-            filled = 0;
-        }
-        filled += with_leaves[v];
-        home[v] = page;
     }
+    let pages = Treelets {
+        h,
+        with_leaves: &with_leaves,
+        budget,
+    }
+    .fill(&mut home, frontier)?;
     if home[..splits.len()].contains(&NONE) {
         return Err(PagedError::Shape("a split is not reachable from the roots"));
     }
@@ -114,8 +125,69 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
     Ok(Partition {
         home,
         introducer,
-        pages: page + 1,
+        pages,
     })
+}
+
+/// Most parent pages a page takes treelets from.
+const MAX_PARENT_PAGES: usize = 2;
+
+/// The treelet pages below the root page.
+struct Treelets<'a, 'h> {
+    h: &'a Hierarchy<'h>,
+    with_leaves: &'a [u64],
+    budget: u64,
+}
+
+impl Treelets<'_, '_> {
+    /// Assigns every node of the subtrees below `frontier` (treelet roots in order) a page
+    /// after the root page; the number of pages.
+    fn fill(&self, home: &mut [u32], mut frontier: VecDeque<u32>) -> Result<u32, PagedError> {
+        let splits = self.h.splits();
+        let mut page = 0u32;
+        let mut filled = self.budget;
+        let mut parents: Vec<u32> = Vec::new();
+        let mut level = VecDeque::new();
+        while let Some(r) = frontier.pop_front() {
+            let parent = self.h.nodes()[r as usize]
+                .parent
+                .get()
+                .map_or(0, |p| home[p.index()]);
+            let room = filled + self.with_leaves[r as usize] <= self.budget;
+            let related = parents.contains(&parent) || parents.len() < MAX_PARENT_PAGES;
+            if !(room && related) {
+                if self.with_leaves[r as usize] > self.budget {
+                    return Err(PagedError::Shape("one node's records exceed a page"));
+                }
+                page += 1;
+                filled = 0;
+                parents.clear();
+            }
+            if !parents.contains(&parent) {
+                parents.push(parent);
+            }
+            // The treelet: breadth first from `r` while the page has room; what does not fit
+            // roots treelets of its own.
+            level.push_back(r);
+            while let Some(v) = level.pop_front() {
+                let bytes = self.with_leaves[v as usize];
+                if filled + bytes > self.budget {
+                    frontier.push_back(v);
+                    frontier.extend(level.drain(..));
+                    break;
+                }
+                filled += bytes;
+                home[v as usize] = page;
+                let s = &splits[v as usize];
+                for c in [s.stationary, s.floating] {
+                    if c.index() < splits.len() {
+                        level.push_back(c.0);
+                    }
+                }
+            }
+        }
+        Ok(page + 1)
+    }
 }
 
 /// The splittable nodes in depth-first preorder from the roots, stationary child first: a

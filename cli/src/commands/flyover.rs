@@ -1,5 +1,8 @@
 //! `caveclod flyover`: the CAVECLOD paper's experiment over a .clod file or a heightfield.
 
+use std::time::Duration;
+
+use crate::flyover::streamed::{fly_streamed, StreamOptions};
 use crate::flyover::{fly, Flyover, FlyoverOptions, Mode};
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::bake_file;
@@ -17,20 +20,43 @@ pub fn flyover(a: FlyoverArgs) -> Result<(), String> {
             print!("{}", f.human());
         }
     };
-    match (a.file, a.dem) {
-        (Some(file), None) => with_hierarchy(&file, |h| {
+    if let Some(pool_bytes) = a.pool {
+        return streamed(&a, &options, pool_bytes);
+    }
+    match (a.files.as_slice(), a.dem.clone()) {
+        ([file], None) => with_hierarchy(file, |h| {
             print(&fly(h, &options)?);
             Ok(())
         }),
-        (None, Some(dem)) => {
+        ([], Some(dem)) => {
             let (baked, _) = bake_file(&dem, &ImportOptions { spacing: a.spacing }, &mut |_| {})
                 .map_err(|e| e.to_string())?;
             let h = baked.hierarchy().map_err(|e| e.to_string())?;
             print(&fly(&h, &options)?);
             Ok(())
         }
-        _ => Err("give a .clod file or --dem FILE".into()),
+        _ => Err("give one .clod file or --dem FILE (several files stream with --pool)".into()),
     }
+}
+
+/// Flies over paged files with their pages streaming into a pool of `pool_bytes`.
+fn streamed(a: &FlyoverArgs, options: &FlyoverOptions, pool_bytes: u64) -> Result<(), String> {
+    if a.files.is_empty() {
+        return Err("--pool flies paged .clod files: give one or more".into());
+    }
+    let stream = StreamOptions {
+        pool_bytes,
+        io_latency: Duration::from_secs_f32(a.io_latency / 1e3),
+        io_bytes_per_s: f64::from(a.io_bandwidth) * 1e6,
+        camera_polygons: a.camera_polygons,
+    };
+    let flight = fly_streamed(&a.files, options, &stream)?;
+    if a.json {
+        println!("{}", flight.json());
+    } else {
+        print!("{}", flight.human());
+    }
+    Ok(())
 }
 
 /// The experiment's options from the flags.

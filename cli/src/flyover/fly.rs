@@ -11,7 +11,7 @@ mod interleaved;
 mod per_camera;
 mod shared;
 
-pub(crate) use common::{cameras, compact_now, index_lists};
+pub(crate) use common::{cameras, compact_now, index_lists, percentile};
 pub use common::{
     frame, mean, state_bytes, summarise, Compaction, Flight, IndexBuffers, Record, Summary,
 };

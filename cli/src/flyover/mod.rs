@@ -25,6 +25,8 @@ pub mod placement;
 pub mod popping;
 mod report;
 pub mod routes;
+pub mod streamed;
+mod streamed_report;
 
 use std::sync::Arc;
 
@@ -246,7 +248,14 @@ pub struct Flyover {
 
 /// Every camera's views for `options`, computed up front.
 pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>, Vec<Vec<View>>) {
-    let ground = Ground::new(h);
+    views_over(&Ground::new(h), options)
+}
+
+/// Every camera's views for `options` over `ground`, computed up front.
+pub fn views_over(
+    ground: &Ground,
+    options: &FlyoverOptions,
+) -> (Vec<&'static str>, Vec<Vec<View>>) {
     let speed = ground.size / 600.0;
     let all = routes();
     let chosen: Vec<_> = (0..options.cameras.clamp(1, 4))
@@ -257,7 +266,7 @@ pub fn views(h: &Hierarchy<'_>, options: &FlyoverOptions) -> (Vec<&'static str>,
         .iter()
         .map(|r| {
             (0..options.frames)
-                .map(|f| view_at(r, f, speed, &ground))
+                .map(|f| view_at(r, f, speed, ground))
                 .collect()
         })
         .collect();
@@ -277,6 +286,20 @@ pub fn view_projections(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Vec<Vec<
                 .collect()
         })
         .collect()
+}
+
+/// The refinement parameters of `options` (morphs as the camera's memory has them), checked.
+pub fn refine_params(options: &FlyoverOptions) -> Result<RefineParams, String> {
+    let params = RefineParams {
+        tolerance_px: options.tolerance,
+        visit_fraction: options.visit_fraction,
+        morph_speed_px_s: options.morph_speed_px_s,
+        morph_radius_tolerances: options.morph_radius_tolerances,
+        morph_guard_rad: options.morph_guard_rad,
+        ..RefineParams::default()
+    };
+    params.validate().map_err(|e| e.to_string())?;
+    Ok(params)
 }
 
 /// A flight's views and cameras, sized, before the measured flight.
@@ -303,15 +326,7 @@ fn prepare(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Prepared, Stri
     }
     let (names, views) = views(h, options);
     let morphing = options.geomorphs && options.mode != Mode::Shared;
-    let params = RefineParams {
-        tolerance_px: options.tolerance,
-        visit_fraction: options.visit_fraction,
-        morph_speed_px_s: options.morph_speed_px_s,
-        morph_radius_tolerances: options.morph_radius_tolerances,
-        morph_guard_rad: options.morph_guard_rad,
-        ..RefineParams::default()
-    };
-    params.validate().map_err(|e| e.to_string())?;
+    let params = refine_params(options)?;
     // The shared state's baseline re-refines to each camera's view in full.
     let params = if options.mode == Mode::Shared {
         params.amortised(1.0)

@@ -36,11 +36,15 @@ impl Ground {
     /// The ground of a hierarchy: highest full-resolution point per cell; cells without
     /// points take the highest point of all, so the routes stay clear.
     pub fn new(h: &Hierarchy<'_>) -> Self {
+        Self::of_points(|| h.positions().iter().map(|p| p.xyz))
+    }
+
+    /// The ground of the points `points` gives (called twice): highest point per cell.
+    pub fn of_points<I: Iterator<Item = [f32; 3]>>(points: impl Fn() -> I) -> Self {
         let mut lo = [f32::INFINITY; 2];
         let mut hi = [f32::NEG_INFINITY; 2];
         let mut top = f32::NEG_INFINITY;
-        for p in h.positions() {
-            let [x, y, z] = p.xyz;
+        for [x, y, z] in points() {
             lo = [lo[0].min(x), lo[1].min(z)];
             hi = [hi[0].max(x), hi[1].max(z)];
             top = top.max(y);
@@ -52,8 +56,7 @@ impl Ground {
         let cells = GROUND_CELLS;
         let cell = extent / cells as f32;
         let mut heights = vec![f32::NEG_INFINITY; (cells + 1) * (cells + 1)];
-        for p in h.positions() {
-            let [x, y, z] = p.xyz;
+        for [x, y, z] in points() {
             let i = (((x - lo[0]) / cell) as usize).min(cells);
             let j = (((z - lo[1]) / cell) as usize).min(cells);
             let c = &mut heights[j * (cells + 1) + i];

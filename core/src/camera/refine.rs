@@ -329,12 +329,12 @@ impl Front<'_> {
             Err(e) => {
                 st.forced_splits += applied;
                 match e {
-                    OpError::Absent { page, .. } => {
+                    OpError::Absent { page, node } => {
                         st.deferred_splits += 1;
                         let excess = h.split_bounds(v).map_or(0.0, |b| {
                             (pass.test.projected_px(b) - pass.test.tolerance_px()).max(0.0)
                         });
-                        h.want(Absent { page }, excess);
+                        h.want(Absent { page, node }, excess);
                     }
                     OpError::StackFull { .. } => st.stack_overflows += 1,
                     OpError::CapacityFull { .. } => st.capacity_refusals += 1,

@@ -21,6 +21,8 @@ use crate::ids::{NodeId, PageKey, PolyId, PolyKey, PositionId, SurfaceGroupId};
 pub struct Absent {
     /// The page holding the missing records.
     pub page: PageKey,
+    /// The node whose split waits for it.
+    pub node: NodeId,
 }
 
 /// Read access to a validated hierarchy's records (see the module docs).

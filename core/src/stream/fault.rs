@@ -90,6 +90,12 @@ impl core::error::Error for StreamError {}
 pub enum InstallError {
     /// The page's bytes failed: it is reported here, once, and stays absent.
     Fault(PageFault),
+    /// A parent of the page is still loading: the slot keeps its bytes; complete it again
+    /// once the parent is installed.
+    Wait,
+    /// A parent of the page failed while it loaded: its slot is free again and the page
+    /// absent (nothing is wrong with its bytes, so nothing is reported).
+    Abandoned(PageKey),
     /// The call does not fit the pool's state.
     Misuse(StreamError),
 }
@@ -98,6 +104,12 @@ impl core::fmt::Display for InstallError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::Fault(e) => e.fmt(f),
+            Self::Wait => write!(f, "a parent page is still loading"),
+            Self::Abandoned(k) => write!(
+                f,
+                "file {}: page {}: a parent failed, so it is not installed",
+                k.file, k.page
+            ),
             Self::Misuse(e) => e.fmt(f),
         }
     }

@@ -157,14 +157,16 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
         }
     }
 
-    /// `Err` with the page of `id` unless it holds a record of `kind` at hand.
-    fn present(&self, id: u32, kind: RecordKind) -> Result<(), Absent> {
+    /// `Err` with the page of `id` unless it holds a record of `kind` at hand, for the split
+    /// of `node`.
+    fn present(&self, node: NodeId, id: u32, kind: RecordKind) -> Result<(), Absent> {
         let page = self.ids.page(id);
         let absent = Absent {
             page: PageKey {
                 file: self.file,
                 page,
             },
+            node,
         };
         let held = self.view(page).is_some_and(|v| {
             let i = self.ids.index(id) as usize;
@@ -263,23 +265,24 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
     /// The node's page (its split record), its children's pages, the floating child's
     /// position and vertices, and the polygons the split creates.
     fn split_ready(&self, node: NodeId) -> Result<(), Absent> {
-        self.present(node.0, RecordKind::Splits)?;
+        let present = |id: u32, kind| self.present(node, id, kind);
+        present(node.0, RecordKind::Splits)?;
         let Some(s) = self.split(node) else {
             return Ok(()); // a leaf: the camera refuses its split itself
         };
-        self.present(s.stationary.0, RecordKind::Nodes)?;
-        self.present(s.floating.0, RecordKind::Nodes)?;
+        present(s.stationary.0, RecordKind::Nodes)?;
+        present(s.floating.0, RecordKind::Nodes)?;
         for f in [s.f_l, s.f_r] {
             if f.is_some() {
-                self.present(f.0, RecordKind::Polygons)?;
+                present(f.0, RecordKind::Polygons)?;
             }
         }
         let Some(n) = self.node(s.floating) else {
             return Ok(());
         };
-        self.present(n.position.0, RecordKind::Positions)?;
+        present(n.position.0, RecordKind::Positions)?;
         for k in self.vertex_keys(n.position) {
-            self.present(k.vertex, RecordKind::Vertices)?;
+            present(k.vertex, RecordKind::Vertices)?;
         }
         Ok(())
     }
@@ -292,12 +295,39 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
         self.count_use(node, -1);
     }
 
+    /// Lists the absent page, and the resident pages the waiting split reads (so the pool
+    /// keeps them, most recently wanted, while the split waits for the rest).
     fn want(&self, absent: Absent, excess_px: f32) {
+        self.list_want(absent.page.page, excess_px);
+        let node = absent.node;
+        let page = |id: u32| self.ids.page(id);
+        // The waiting node's own page may be the absent one (a forced split's node).
+        if self.present(node, node.0, RecordKind::Splits).is_err() {
+            return;
+        }
+        let Some(s) = self.split(node).copied() else {
+            return;
+        };
+        for id in [node.0, s.stationary.0, s.floating.0, s.f_l.0, s.f_r.0] {
+            if id != u32::MAX && page(id) >= self.root_pages && page(id) != absent.page.page {
+                self.list_want(page(id), excess_px);
+            }
+        }
+    }
+}
+
+impl StreamedHierarchy<'_, '_, '_, '_> {
+    /// Puts page `page` in the wants list at `excess_px` (raising a recent entry's).
+    fn list_want(&self, page: u32, excess_px: f32) {
+        let page = PageKey {
+            file: self.file,
+            page,
+        };
         let len = self.want_len.get() as usize;
         let mut r = self.reads.get();
         // A pass defers many splits into the same few pages, near one another.
         let recent = &self.wants[len.saturating_sub(RECENT)..len];
-        if let Some(w) = recent.iter().find(|w| w.get().page == absent.page) {
+        if let Some(w) = recent.iter().find(|w| w.get().page == page) {
             let mut got = w.get();
             got.excess_px = got.excess_px.max(excess_px);
             w.set(got);
@@ -305,10 +335,7 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
         }
         match self.wants.get(len) {
             Some(w) => {
-                w.set(Want {
-                    page: absent.page,
-                    excess_px,
-                });
+                w.set(Want { page, excess_px });
                 self.want_len.set(len as u32 + 1);
                 r.wanted += 1;
             }

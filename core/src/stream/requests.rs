@@ -1,7 +1,7 @@
 //! A frame's requests: the absent parents they need, which of them can load now, and in
 //! what order.
 
-use super::residency::{Residency, ABSENT, RESIDENT, STATE_MASK};
+use super::residency::{Parents, Residency, ABSENT, LOADING, PLANNED, RESIDENT, STATE_MASK};
 
 impl Residency<'_, '_> {
     /// Adds to this frame's requests the absent parents of every requested page, each at the
@@ -38,18 +38,47 @@ impl Residency<'_, '_> {
         }
     }
 
-    /// Puts the requested pages whose parents are all resident at the start of the heap
-    /// array (by page index); their number.
+    /// Puts the requested pages that can load now at the start of the heap array; their
+    /// number. A page can load when each parent is resident, loading, or itself loadable
+    /// now: a chain of pages loads at once, and each installs after its parents (a
+    /// parent's priority is at least its children's and ties go to the earlier page, so
+    /// the loads' order puts parents first).
     pub(super) fn gather_loadable(&mut self) -> usize {
+        let len = self.requests as usize;
+        self.sort_requests_by_page(len);
         let mut n = 0;
-        for i in 0..self.requests as usize {
+        for k in 0..len {
+            let i = self.w.requests.heap[k] as usize;
             let g = self.w.requests.page[i] as usize;
-            if self.w.pages.state[g] & STATE_MASK == ABSENT && self.parents_resident(g) {
+            if self.w.pages.state[g] == ABSENT && self.parents_ready(g) {
+                self.w.pages.state[g] = PLANNED; // absent (0), and loadable now
                 self.w.requests.heap[n] = g as u32;
                 n += 1;
             }
         }
         n
+    }
+
+    /// Clears the marks [`gather_loadable`](Self::gather_loadable) left on the first
+    /// `loadable` pages of the heap array that did not start loading.
+    pub(super) fn clear_planned(&mut self, loadable: usize) {
+        for k in 0..loadable {
+            let g = self.w.requests.heap[k] as usize;
+            self.w.pages.state[g] &= !PLANNED;
+        }
+    }
+
+    /// Sorts the heap array's first `len` entries into the requests' indices in ascending
+    /// page order (a heapsort in place).
+    fn sort_requests_by_page(&mut self, len: usize) {
+        let r = &mut self.w.requests;
+        let mut heap_len = 0;
+        for i in 0..len {
+            heap_push(r.heap, r.page, &mut heap_len, i as u32);
+        }
+        while let Some(top) = heap_pop(r.heap, r.page, &mut heap_len) {
+            r.heap[heap_len] = top;
+        }
     }
 
     /// Orders the first `k` of the `loadable` pages at the start of the heap array by
@@ -74,14 +103,34 @@ impl Residency<'_, '_> {
         chosen
     }
 
-    /// `true` if every parent of page `g` is resident.
-    pub(super) fn parents_resident(&self, g: usize) -> bool {
+    /// Where the parents of page `g` are.
+    pub(super) fn parents_state(&self, g: usize) -> Parents {
+        let key = self.key_of(g);
+        let base = self.w.file_base[key.file as usize] as usize;
+        let Some(t) = self.table(key.file) else {
+            return Parents::Gone;
+        };
+        let mut state = Parents::Resident;
+        for &p in t.parents(key.page) {
+            match self.w.pages.state[base + p as usize] & STATE_MASK {
+                RESIDENT => {}
+                LOADING => state = Parents::Loading,
+                _ => return Parents::Gone,
+            }
+        }
+        state
+    }
+
+    /// `true` if every parent of page `g` is resident, loading, or loadable now.
+    fn parents_ready(&self, g: usize) -> bool {
         let key = self.key_of(g);
         let base = self.w.file_base[key.file as usize] as usize;
         self.table(key.file).is_some_and(|t| {
-            t.parents(key.page)
-                .iter()
-                .all(|&p| self.w.pages.state[base + p as usize] & STATE_MASK == RESIDENT)
+            t.parents(key.page).iter().all(|&p| {
+                let q = base + p as usize;
+                let state = self.w.pages.state[q];
+                state == PLANNED || matches!(state & STATE_MASK, RESIDENT | LOADING)
+            })
         })
     }
 }

@@ -32,6 +32,19 @@ const EVICTABLE: u32 = 4;
 pub(super) const STATE_MASK: u32 = 3;
 /// Set in a pinned page's state word: resident outside the pool, never evicted.
 const PINNED: u32 = 8;
+/// Set, during a [`Residency::schedule`], in an absent page's state word that can load now.
+pub(super) const PLANNED: u32 = 16;
+
+/// Where a page's parents are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Parents {
+    /// All resident.
+    Resident,
+    /// All resident or loading, some loading.
+    Loading,
+    /// Some absent or failed.
+    Gone,
+}
 
 /// What [`Residency::want`] found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -341,14 +354,16 @@ impl<'a, 'm> Residency<'a, 'm> {
             let Some(slot) = self.find_slot(evicted, &mut stats) else {
                 break;
             };
-            if !self.parents_resident(g) {
-                // Making room evicted one of its parents: it waits for a later frame.
+            if self.parents_state(g) == Parents::Gone {
+                // Making room evicted one of its parents (or a parent found no slot): it
+                // waits for a later frame.
                 self.lists.put_free(&mut self.w.slots, slot);
                 continue;
             }
             loads[stats.loads as usize] = self.start_load(g, slot);
             stats.loads += 1;
         }
+        self.clear_planned(loadable);
         stats.waiting = loadable as u32 - stats.loads;
         stats
     }
@@ -378,6 +393,14 @@ impl<'a, 'm> Residency<'a, 'm> {
         validate: impl FnOnce(PageKey, &[u8], &Self) -> Result<(), FormatError>,
     ) -> Result<PageKey, InstallError> {
         let (g, key) = self.loading(slot).map_err(InstallError::Misuse)?;
+        match self.parents_state(g) {
+            Parents::Resident => {}
+            Parents::Loading => return Err(InstallError::Wait),
+            Parents::Gone => {
+                self.abandon(g, slot);
+                return Err(InstallError::Abandoned(key));
+            }
+        }
         if let Err(kind) = self.check(key, slot, validate) {
             self.give_up(g, slot);
             return Err(InstallError::Fault(PageFault { key, kind }));
@@ -424,6 +447,14 @@ impl<'a, 'm> Residency<'a, 'm> {
             });
         }
         validate(key, bytes, self).map_err(FaultKind::Content)
+    }
+
+    /// A loading page whose parent failed: its slot is freed, its parents lose a child, and
+    /// it is absent again.
+    fn abandon(&mut self, g: usize, slot: u32) {
+        self.give_up(g, slot);
+        self.w.pages.state[g] = ABSENT;
+        self.totals.failed -= 1;
     }
 
     /// A loading page failed: its slot is freed, its parents lose a child, it stays failed.

@@ -339,7 +339,7 @@ impl Front<'_> {
             // children's) are absent defers the chain here, before it reads them.
             if let Err(a) = h.split_ready(u) {
                 return Err(OpError::Absent {
-                    node: u,
+                    node: a.node,
                     page: a.page,
                 });
             }
