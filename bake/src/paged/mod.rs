@@ -3,7 +3,7 @@
 //!
 //! [`write_paged`] reads a whole-file hierarchy (the in-core or the blocked bake's output)
 //! and writes its paged form: the top of the hierarchy and the base mesh in the root page,
-//! the rest in runs of the depth-first split order (`partition`), every record renumbered
+//! the rest in treelets, each a subtree's top levels (`partition`), every record renumbered
 //! page-major (`renumber`). Pages are written first, after the root's planned length, then
 //! the root with the page table; the file is read back (every page's checksum and records)
 //! before it replaces the target. The materials and the bake's report travel in the root;

@@ -1,19 +1,19 @@
 //! Which page each node's records go to: the top of the hierarchy to the root page, the rest
-//! in treelets: the top levels of a subtree, breadth first, as many nodes as fit a page.
+//! in pages of treelets: a subtree's top [`TREELET_LEVELS`] levels, and as many neighbouring
+//! treelets as fit.
 //!
 //! A node's records are its node record, its split record and bounds, the polygons its split
 //! creates, and the position (with its vertex-table entries and vertices) it brings when it
 //! is a root or a floating child. A leaf goes to its parent's page.
 //!
-//! A camera's front cuts across the hierarchy at some depth, so a page should hold a region's
-//! nodes over a band of depths, not a path to the leaves: a treelet page holds the levels
-//! below its root until the page is full, and the nodes below it start treelets of their own.
-//! A front then touches about one page per treelet it crosses, and a page's ancestors are a
-//! few treelets up, not one page per level: runs of the depth-first order, tried first, put
-//! a path from a node to its leaves in each page, so a front at a middle depth touched nearly
-//! every page, and the chain of parent pages grew with the depth. A treelet that leaves room
-//! takes the next treelets of the same parent pages, so pages stay full and have few parents;
-//! a parent always lies in the same or an earlier page.
+//! A camera's front cuts across the hierarchy at some depth, and it uses a page's nodes down
+//! to the level it crosses there, not the ones below. So a page holds a region's nodes over a
+//! narrow band of depths: the nodes below a treelet start treelets of their own, and a page
+//! takes the next treelets of the same parent pages while it has room. Runs of the
+//! depth-first order, tried first, put a path from a node to its leaves in each page, so a
+//! front at a middle depth touched nearly every page; treelets as deep as a page holds left
+//! most of each page below the front. A parent always lies in the same or an earlier page, and
+//! a page has few parent pages.
 
 use std::collections::VecDeque;
 
@@ -113,6 +113,7 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
     let pages = Treelets {
         h,
         with_leaves: &with_leaves,
+        depth: &depth,
         budget,
     }
     .fill(&mut home, frontier)?;
@@ -129,6 +130,10 @@ pub(crate) fn partition(h: &Hierarchy<'_>, page_bytes: u32) -> Result<Partition,
     })
 }
 
+/// Levels of a treelet at most: a front uses the nodes of a treelet down to the level it
+/// crosses, so short treelets, many to a page, keep more of each page in use.
+const TREELET_LEVELS: u32 = 2;
+
 /// Most parent pages a page takes treelets from.
 const MAX_PARENT_PAGES: usize = 2;
 
@@ -136,6 +141,7 @@ const MAX_PARENT_PAGES: usize = 2;
 struct Treelets<'a, 'h> {
     h: &'a Hierarchy<'h>,
     with_leaves: &'a [u64],
+    depth: &'a [u32],
     budget: u64,
 }
 
@@ -169,8 +175,13 @@ impl Treelets<'_, '_> {
             // The treelet: breadth first from `r` while the page has room; what does not fit
             // roots treelets of its own.
             level.push_back(r);
+            let bottom = self.depth[r as usize] + TREELET_LEVELS;
             while let Some(v) = level.pop_front() {
                 let bytes = self.with_leaves[v as usize];
+                if self.depth[v as usize] >= bottom {
+                    frontier.push_back(v);
+                    continue;
+                }
                 if filled + bytes > self.budget {
                     frontier.push_back(v);
                     frontier.extend(level.drain(..));
@@ -190,9 +201,10 @@ impl Treelets<'_, '_> {
     }
 }
 
-/// The splittable nodes in depth-first preorder from the roots, stationary child first: a
-/// run of it is a few subtrees, whatever order the bake numbered them in (the blocked bake
-/// numbers block by block), and a parent comes before its children.
+/// The splittable nodes in depth-first preorder from the roots, stationary child first: the
+/// first treelets' roots are taken in this order, so neighbouring treelets lie in
+/// neighbouring pages whatever order the bake numbered the nodes in (the blocked bake
+/// numbers block by block).
 fn preorder(h: &Hierarchy<'_>) -> Vec<u32> {
     let splits = h.splits();
     let mut order = Vec::with_capacity(splits.len());
