@@ -54,7 +54,21 @@ struct Pool<'a> {
     config: PoolConfig,
 }
 
-impl Pool<'_> {
+impl<'a> Pool<'a> {
+    /// The residency over this memory, serving `root`'s file.
+    fn residency<'m>(&'m mut self, root: &PagedRoot<'a>) -> Residency<'a, 'm> {
+        let mut r = Residency::new(
+            self.config,
+            &mut self.words,
+            self.bytes.bytes_mut(),
+            &mut self.tables,
+        )
+        .expect("pool");
+        r.add_file(root.table(), root.paged().root_pages)
+            .expect("file");
+        r
+    }
+
     fn new(root: &PagedRoot<'_>, slots: u32) -> Self {
         let slot_bytes = root.paged().largest_page.next_multiple_of(64);
         let config = PoolConfig::new(
@@ -161,10 +175,7 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
     let root = file.root().expect("root");
     let mut p = Pool::new(&root, root.table().len() as u32);
     let config = p.config;
-    let mut pool =
-        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
-    pool.add_file(root.table(), root.paged().root_pages)
-        .expect("file");
+    let mut pool = p.residency(&root);
     // Every page, parents before children.
     for page in 0..root.table().len() as u32 {
         pool.begin_frame();
@@ -238,10 +249,7 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
     let root = file.root().expect("root");
     let mut p = Pool::new(&root, root.table().len() as u32);
     let config = p.config;
-    let mut pool =
-        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
-    pool.add_file(root.table(), root.paged().root_pages)
-        .expect("file");
+    let mut pool = p.residency(&root);
     let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
     let mut lists = lists(&config, &mut wants, &mut words);
     let mut paged_mem = Vec::new();
@@ -299,10 +307,7 @@ fn a_pool_a_third_of_the_file_evicts_only_what_the_fronts_left() {
     let streamed_pages = root.table().len() as u32 - root.paged().root_pages;
     let mut p = Pool::new(&root, streamed_pages / 3);
     let config = p.config;
-    let mut pool =
-        Residency::new(p.config, &mut p.words, p.bytes.bytes_mut(), &mut p.tables).expect("pool");
-    pool.add_file(root.table(), root.paged().root_pages)
-        .expect("file");
+    let mut pool = p.residency(&root);
     let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
     let mut lists = lists(&config, &mut wants, &mut words);
     let (camera_config, words_needed) = {
