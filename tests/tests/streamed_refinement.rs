@@ -16,7 +16,7 @@ use caveclod_core::stream::{
     FrameLists, LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, Want,
 };
 use caveclod_core::{
-    CameraConfig, CameraState, HierarchyRecords, LookAt, RefineParams, RefineStats, View,
+    CameraConfig, CameraState, HierarchyRecords, LookAt, OpError, RefineParams, RefineStats, View,
 };
 use caveclod_io::{AlignedBytes, PagedFile};
 use caveclod_tests::check::check_front;
@@ -277,6 +277,20 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
         let st = cam.refine(&streamed, &v, &params).expect("paged");
         assert_eq!(streamed.reads().absent_reads, 0, "frame {frames}");
         deferred += st.deferred_splits;
+        if frames == 0 {
+            // A split asked for by hand waits as refinement's do.
+            let nodes: Vec<_> = cam.active_nodes().collect();
+            let absent = nodes
+                .iter()
+                .filter(|&&n| matches!(cam.split(&streamed, n), Err(OpError::Absent { .. })))
+                .count();
+            assert!(
+                absent > 0,
+                "{} deferred, none refused by hand",
+                st.deferred_splits
+            );
+            assert_eq!(streamed.reads().absent_reads, 0);
+        }
         if st.deferred_splits == 0 && st.operations() == 0 {
             // The same surface, in another slot order: the two got there by other paths.
             let (a, b) = (surface(&whole_cam, &whole), surface(&cam, &streamed));

@@ -292,7 +292,8 @@ impl CameraState<'_> {
         self.is_for(h) && self.front.can_collapse(h, node)
     }
 
-    /// Splits active `node` if [`can_split`](Self::can_split).
+    /// Splits active `node` if [`can_split`](Self::can_split); [`OpError::Absent`] if its
+    /// records lie in a page that is not resident (a streamed hierarchy).
     pub fn split(&mut self, h: &impl HierarchyRecords, node: NodeId) -> Result<(), OpError> {
         self.check(h)?;
         if h.split(node).is_none() {
@@ -305,6 +306,10 @@ impl CameraState<'_> {
         if !self.front.is_node_active(h, node) {
             return Err(OpError::NotActive { node });
         }
+        h.split_ready(node).map_err(|a| OpError::Absent {
+            node: a.node,
+            page: a.page,
+        })?;
         let slots = self
             .front
             .split_slots(h, node)
