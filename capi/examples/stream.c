@@ -130,6 +130,8 @@ int main(int argc, char **argv) {
                 faults += 1;
                 fprintf(stderr, "%s: page %u: %s (kind %u)\n", argv[1], fault.page,
                         caveclod_status_message((int32_t)s), fault.kind);
+            } else if (s == CAVECLOD_STATUS_PAGE_ABANDONED) {
+                /* A parent loaded in this frame failed: the page stays absent, unreported. */
             } else {
                 return fail("caveclod_pool_install", s);
             }
