@@ -93,12 +93,6 @@ impl ScreenTest {
         &self.view
     }
 
-    /// The tolerance in pixels.
-    #[inline]
-    pub fn tolerance_px(&self) -> f32 {
-        self.tolerance_px
-    }
-
     /// The square of the tolerance in radians: a node's squared error is compared with it
     /// times its squared distance.
     #[inline]
@@ -129,6 +123,12 @@ impl ScreenTest {
     #[inline]
     pub fn error_fits(&self, error: f32, distance: f32) -> bool {
         self.scale == f32::INFINITY || error <= self.scale * distance
+    }
+
+    /// How far `b`'s projected error exceeds the tolerance, in pixels (0 within it).
+    #[inline]
+    pub fn excess_px(&self, b: &SplitBounds) -> f32 {
+        (self.projected_px(b) - self.tolerance_px).max(0.0)
     }
 
     /// A node's error projected to the screen, in pixels: the larger of its uniform error and

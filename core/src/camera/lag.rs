@@ -70,7 +70,7 @@ impl CameraState<'_> {
                 continue;
             };
             if c.wants_split(b) {
-                let excess = (test.projected_px(b) - test.tolerance_px()).max(0.0);
+                let excess = test.excess_px(b);
                 lag.over_tolerance += 1;
                 lag.excess_px += excess;
                 lag.worst_excess_px = lag.worst_excess_px.max(excess);

@@ -331,9 +331,7 @@ impl Front<'_> {
                 match e {
                     OpError::Absent { page, node } => {
                         st.deferred_splits += 1;
-                        let excess = h.split_bounds(v).map_or(0.0, |b| {
-                            (pass.test.projected_px(b) - pass.test.tolerance_px()).max(0.0)
-                        });
+                        let excess = h.split_bounds(v).map_or(0.0, |b| pass.test.excess_px(b));
                         h.want(Absent { page, node }, excess);
                     }
                     OpError::StackFull { .. } => st.stack_overflows += 1,

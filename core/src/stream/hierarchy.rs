@@ -17,7 +17,7 @@ use core::cell::Cell;
 
 use super::frame_lists::{FrameLists, StreamedReads, Want};
 use super::residency::Residency;
-use crate::format::paged::{PageView, PagedRoot, RecordKind, SegmentedId};
+use crate::format::paged::{PageContext, PageView, PagedRoot, RecordKind, SegmentedId};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
@@ -33,6 +33,8 @@ pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
     pool: &'s Residency<'a, 'm>,
     file: u32,
     ids: SegmentedId,
+    /// Which ids name records: the page table's counts.
+    cx: PageContext<'s>,
     root_pages: u32,
     id_bound: usize,
     pages: usize,
@@ -63,6 +65,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             pool,
             file,
             ids,
+            cx: root.context(),
             root_pages: root.paged().root_pages,
             id_bound,
             pages: pages as usize,
@@ -94,10 +97,8 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             page,
         };
         let slot = self.pool.resident_slot(key).map(|s| s as usize);
-        let (Some(d), Some(listed)) = (
-            slot.and_then(|s| self.deltas.get(s)),
-            slot.and_then(|s| self.listed.get(s)),
-        ) else {
+        let cells = slot.and_then(|s| Some((s, self.deltas.get(s)?, self.listed.get(s)?)));
+        let Some((slot, d, listed)) = cells else {
             let mut r = self.reads.get();
             r.untracked_uses += 1;
             self.reads.set(r);
@@ -109,7 +110,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             let n = self.touched_len.get();
             // `touched` has a place per slot, and a slot is listed once.
             if let Some(t) = self.touched.get(n as usize) {
-                t.set(slot.unwrap_or(0) as u32);
+                t.set(slot as u32);
                 self.touched_len.set(n + 1);
             }
         }
@@ -128,11 +129,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             file: self.file,
             page,
         };
-        let v = if page < self.root_pages {
-            self.root.root_page(page)
-        } else {
-            self.pool.page_view(key, self.root)
-        };
+        let v = self.pool.page_view(key, self.root);
         if let Some(v) = v {
             place.set(Some((page, v)));
         }
@@ -168,17 +165,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             },
             node,
         };
-        let held = self.view(page).is_some_and(|v| {
-            let i = self.ids.index(id) as usize;
-            match kind {
-                RecordKind::Nodes => i < v.nodes.len(),
-                RecordKind::Polygons => i < v.polygons.len(),
-                RecordKind::Positions => i < v.positions.len(),
-                RecordKind::Vertices => i < v.vertices.len(),
-                RecordKind::Splits => i < v.splits.len(),
-                RecordKind::VertexKeys => i < v.vertex_table.len(),
-            }
-        });
+        let held = self.cx.exists(id, kind) && self.view(page).is_some();
         if held {
             Ok(())
         } else {

@@ -29,7 +29,7 @@ pub struct PageContext<'t> {
 
 impl PageContext<'_> {
     /// `true` if `id` names a record of `kind` in some page.
-    fn exists(&self, id: u32, kind: RecordKind) -> bool {
+    pub(crate) fn exists(&self, id: u32, kind: RecordKind) -> bool {
         let page = self.ids.page(id);
         self.table
             .entry(page)
