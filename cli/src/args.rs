@@ -203,6 +203,10 @@ pub struct FlyoverArgs {
     /// With --pool: each camera's polygon budget, which its memory follows.
     #[arg(long, default_value_t = 262_144, requires = "pool")]
     pub camera_polygons: u32,
+    /// With --pool: how far the cameras' tolerance may be scaled up when the pool is nearly
+    /// full or the reads fall behind (1: never; the flight then waits at full quality).
+    #[arg(long, default_value_t = 16.0, value_parser = at_least_one, requires = "pool")]
+    pub max_pressure: f32,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -346,5 +350,12 @@ fn non_negative(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!("`{s}`: expected a finite number of zero or more")),
+    }
+}
+
+fn at_least_one(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("`{s}`: expected a finite number of 1 or more")),
     }
 }

@@ -2,7 +2,7 @@
 
 use std::collections::HashSet;
 
-use caveclod_core::{CameraState, Hierarchy, NodeId, PolyId};
+use caveclod_core::{CameraState, Hierarchy, HierarchyRecords, NodeId, PolyId};
 
 /// Checks every invariant of `cam` over `h`; returns a description of the first violation.
 pub fn check_front(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Result<(), String> {
@@ -107,7 +107,7 @@ fn check_corners(
 
 /// Every neighbour link of `f` is symmetric, across the edge the two share.
 fn check_neighbours(
-    h: &Hierarchy<'_>,
+    h: &impl HierarchyRecords,
     cam: &CameraState<'_>,
     f: PolyId,
     corners: [NodeId; 3],
@@ -140,7 +140,7 @@ fn check_neighbours(
 /// Emission: every index is the vertex of the polygon's group at the corner's position, and
 /// each surface's list holds exactly its polygons.
 fn check_emission(
-    h: &Hierarchy<'_>,
+    h: &impl HierarchyRecords,
     cam: &CameraState<'_>,
     polys: &[PolyId],
 ) -> Result<(), String> {
@@ -152,12 +152,15 @@ fn check_emission(
         .map_err(|e| e.to_string())?;
     let mut cursor = offsets.clone();
     for &f in polys {
-        let poly = h.polygons()[f.index()];
+        let poly = *h.polygon(f).ok_or(format!("{f} has no record"))?;
         let s = poly.surface.index();
         let corners = cam.polygon_corners(h, f).ok_or("corners")?;
         for k in 0..3 {
             let idx = out[cursor[s] as usize + k];
-            let pos = h.nodes()[corners[k].index()].position;
+            let pos = h
+                .node(corners[k])
+                .ok_or(format!("{f} corner {k} has no record"))?
+                .position;
             let keys = h.vertex_keys(pos);
             if !keys
                 .iter()
@@ -168,7 +171,8 @@ fn check_emission(
                     poly.group.0
                 ));
             }
-            if h.vertices()[idx as usize].position != h.positions()[pos.index()].xyz {
+            let at = h.position(pos).map(|p| p.xyz);
+            if h.vertex(idx).map(|v| v.position) != at || at.is_none() {
                 return Err(format!(
                     "{f} corner {k}: vertex {idx} not at the corner's position"
                 ));
@@ -186,6 +190,62 @@ fn check_emission(
         }
     }
     Ok(())
+}
+
+/// Every invariant of `cam` over records that may be streamed (only what the front stands
+/// on is read): the active nodes are exactly those found by descending from the roots
+/// through the split nodes, the active polygons exactly the base polygons and those the
+/// splits made, each listed once and counted; every corner is active; every neighbour link
+/// is symmetric; emission gives each corner its group's vertex at the corner's position.
+pub fn check_records_front(h: &impl HierarchyRecords, cam: &CameraState<'_>) -> Result<(), String> {
+    let mut want_nodes = HashSet::new();
+    let mut want_polys: HashSet<PolyId> = (0..h.base_polygon_count() as u32).map(PolyId).collect();
+    let mut stack: Vec<NodeId> = h.roots().to_vec();
+    while let Some(v) = stack.pop() {
+        if !cam.is_split(v) {
+            want_nodes.insert(v);
+            continue;
+        }
+        let s = h
+            .split(v)
+            .ok_or(format!("split node {v} has no split record"))?;
+        want_polys.insert(s.f_l);
+        if s.f_r.is_some() {
+            want_polys.insert(s.f_r);
+        }
+        stack.extend([s.stationary, s.floating]);
+    }
+    let nodes: HashSet<NodeId> = cam.active_nodes().collect();
+    if nodes.len() != cam.active_node_count() as usize || nodes != want_nodes {
+        return Err(format!(
+            "active nodes {} (count {}) differ from the derived {}",
+            nodes.len(),
+            cam.active_node_count(),
+            want_nodes.len()
+        ));
+    }
+    let polys: Vec<PolyId> = cam.active_polygons(h).collect();
+    let poly_set: HashSet<PolyId> = polys.iter().copied().collect();
+    if polys.len() != poly_set.len()
+        || poly_set != want_polys
+        || polys.len() != cam.active_polygon_count() as usize
+    {
+        return Err(format!(
+            "active polygons {} differ from the derived {}",
+            polys.len(),
+            want_polys.len()
+        ));
+    }
+    for &f in &polys {
+        let corners = cam
+            .polygon_corners(h, f)
+            .ok_or(format!("{f} has no corners"))?;
+        if let Some(k) = (0..3).find(|&k| !want_nodes.contains(&corners[k])) {
+            return Err(format!("{f} corner {k} = {} is not active", corners[k]));
+        }
+        check_neighbours(h, cam, f, corners)?;
+    }
+    check_emission(h, cam, &polys)
 }
 
 /// Splits everything (forcing as needed) until no active node can be split.

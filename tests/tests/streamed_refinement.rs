@@ -20,6 +20,7 @@ use caveclod_core::{
 };
 use caveclod_io::{AlignedBytes, PagedFile};
 use caveclod_tests::check::check_front;
+use caveclod_tests::soak::streamed::check_page_uses;
 use caveclod_tests::{bake, meshes, BakedMesh};
 
 /// A terrain, baked, its paged form opened (the root read), and that file's bytes.
@@ -105,20 +106,7 @@ fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> (u3
 /// Every streamed page's uses are the front nodes standing on it, over all `cameras`, and
 /// each such page is resident.
 fn assert_uses(pool: &Residency<'_, '_>, root: &PagedRoot<'_>, cameras: &[&CameraState<'_>]) {
-    let ids = root.ids();
-    let mut on = vec![0u32; root.table().len()];
-    for cam in cameras {
-        for n in cam.active_nodes() {
-            on[ids.page(n.0) as usize] += 1;
-        }
-    }
-    for page in root.paged().root_pages..root.table().len() as u32 {
-        let key = PageKey { file: 0, page };
-        assert_eq!(pool.uses(key), Some(on[page as usize]), "page {page}");
-        if on[page as usize] > 0 {
-            assert_eq!(pool.state(key), Some(PageState::Resident), "page {page}");
-        }
-    }
+    check_page_uses(pool, root, cameras).unwrap_or_else(|e| panic!("{e}"));
 }
 
 /// Lists for a frame over `pool`.

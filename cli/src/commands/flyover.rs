@@ -49,6 +49,7 @@ fn streamed(a: &FlyoverArgs, options: &FlyoverOptions, pool_bytes: u64) -> Resul
         io_latency: Duration::from_secs_f32(a.io_latency / 1e3),
         io_bytes_per_s: f64::from(a.io_bandwidth) * 1e6,
         camera_polygons: a.camera_polygons,
+        max_pressure: a.max_pressure,
     };
     let flight = fly_streamed(&a.files, options, &stream)?;
     if a.json {

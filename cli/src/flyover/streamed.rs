@@ -8,8 +8,10 @@
 //! frame's lists (wants, and which pages the fronts stand on), installs the pages that
 //! arrived, and schedules loads, evicting pages no front stands on. Per frame the flight
 //! records requests, installs, evictions, bytes read, deferred splits, how long the oldest
-//! wanted page has been waited for, and the lag: the error excess over the tolerance that
-//! the fronts still hold (outside the timed refinement).
+//! wanted page has been waited for, and the lag: the error excess over the flight's
+//! tolerance that the fronts still hold (outside the timed refinement). When the pool is
+//! nearly full or the reads fall behind, a [`Pressure`] scales the cameras' tolerance up
+//! (the frame records the scale); the lag is measured against the unscaled tolerance.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -17,7 +19,8 @@ use std::time::{Duration, Instant};
 
 use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::stream::{
-    FrameLists, PageKey, PageTable, PoolConfig, Residency, StreamedHierarchy, StreamedReads, Want,
+    FrameLists, PageKey, PageTable, PoolConfig, Pressure, PressureSignal, Residency,
+    StreamedHierarchy, StreamedReads, Want,
 };
 use caveclod_core::{CameraConfig, CameraState, RefineParams, View};
 use caveclod_io::pages::{DiskModel, ReaderConfig};
@@ -45,6 +48,8 @@ pub struct StreamOptions {
     pub io_bytes_per_s: f64,
     /// Each camera's polygon budget: its memory follows it, not the files.
     pub camera_polygons: u32,
+    /// The largest scale streaming pressure may put on the tolerance (1: none).
+    pub max_pressure: f32,
 }
 
 /// What one frame did, over all files and cameras.
@@ -74,6 +79,8 @@ pub struct StreamedFrame {
     pub lag_px: f32,
     /// The largest excess of one node (pixels).
     pub worst_lag_px: f32,
+    /// The scale streaming pressure put on the tolerance this frame.
+    pub pressure: f32,
 }
 
 /// A streamed flight's record.
@@ -184,13 +191,18 @@ pub fn fly_streamed(
     };
     let mut waited: HashMap<PageKey, usize> = HashMap::new();
     let mut faults = Vec::new();
+    let mut pressure = Pressure::new().with_max_scale(stream.max_pressure);
     for f in 0..options.frames {
         pool.begin_frame();
-        let mut frame = StreamedFrame::default();
+        let mut frame = StreamedFrame {
+            pressure: pressure.scale(),
+            ..StreamedFrame::default()
+        };
         let fly = Fly {
             roots: &roots,
             views: &views,
-            params: &params,
+            params: &pressure.params(params),
+            base: &params,
             frame: f,
         };
         fly.refine(
@@ -213,7 +225,14 @@ pub fn fly_streamed(
         frame.evictions = s.schedule.evictions;
         frame.bytes_read = s.bytes_read;
         frame.faults = s.faults;
-        frame.resident = pool.stats().resident;
+        let stats = pool.stats();
+        frame.resident = stats.resident;
+        pressure.update(&PressureSignal::new(
+            config.slots,
+            &stats,
+            frame.deferred,
+            frame.active_nodes,
+        ));
         flight.frames.push(frame);
     }
     flight.reads = lists.reads();
@@ -229,7 +248,10 @@ pub fn fly_streamed(
 struct Fly<'a> {
     roots: &'a [PagedRoot<'a>],
     views: &'a [Vec<View>],
+    /// The parameters refined with: the flight's, under the pool's pressure.
     params: &'a RefineParams,
+    /// The flight's own, which the lag is measured against.
+    base: &'a RefineParams,
     frame: usize,
 }
 
@@ -261,7 +283,7 @@ impl Fly<'_> {
                 frame.active_nodes += st.active_nodes;
                 frame.active_polygons += st.active_polygons;
                 let lag = cam
-                    .lag(&records, view, self.params)
+                    .lag(&records, view, self.base)
                     .map_err(|e| e.to_string())?;
                 frame.lag_px += lag.excess_px;
                 frame.worst_lag_px = frame.worst_lag_px.max(lag.worst_excess_px);

@@ -61,7 +61,7 @@ impl StreamedFlight {
                     "faults": f.faults, "resident": f.resident, "deferred": f.deferred,
                     "active_nodes": f.active_nodes, "active_polygons": f.active_polygons,
                     "oldest_want_frames": f.oldest_want, "lag_px": f.lag_px,
-                    "worst_lag_px": f.worst_lag_px,
+                    "worst_lag_px": f.worst_lag_px, "pressure": f.pressure,
                 })
             })
             .collect();
@@ -76,6 +76,8 @@ impl StreamedFlight {
             "refine_mean_ms": mean_ms(&self.refine_ns),
             "refine_p99_ms": percentile(&self.refine_ns, 0.99) as f64 / 1e6,
             "settled_share": self.settled_share(),
+            "pressure_mean": self.frames.iter().map(|f| f64::from(f.pressure)).sum::<f64>()
+                / self.frames.len().max(1) as f64,
             "absent_reads": self.reads.absent_reads,
             "untracked_uses": self.reads.untracked_uses,
             "wants_dropped": self.reads.wants_dropped,
@@ -116,6 +118,12 @@ impl StreamedFlight {
             let (mean, p99, max) = self.spread(f);
             o += &format!("  {name:<22} {mean:>8.1} {p99:>8} {max:>8}\n");
         }
+        let pressure = self.column(|f| f.pressure);
+        o += &format!(
+            "tolerance scale under pool pressure: {:.2} mean, {:.2} max\n",
+            pressure.iter().sum::<f32>() / pressure.len().max(1) as f32,
+            pressure.iter().copied().fold(1.0, f32::max)
+        );
         let lag = self.column(|f| f.lag_px);
         let worst = self.column(|f| f.worst_lag_px);
         o += &format!(

@@ -247,6 +247,10 @@ impl Front<'_> {
     /// none.
     #[inline(always)]
     fn prefetch_ahead(&self, h: &impl HierarchyRecords, at: usize, reading: Readings) {
+        // Past the live entries lie stale ones, whose pages may have gone.
+        if at >= self.active_nodes as usize {
+            return;
+        }
         let Some(ahead) = self.active.get(at) else {
             return;
         };

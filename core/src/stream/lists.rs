@@ -15,6 +15,9 @@ pub(crate) struct Lists {
     /// The eviction list's first (least recently wanted) and last slots.
     pub head: u32,
     pub tail: u32,
+    /// Slots on the free list, and on the eviction list.
+    pub free_slots: u32,
+    pub evictable: u32,
 }
 
 impl Lists {
@@ -30,6 +33,8 @@ impl Lists {
             free: if n > 0 { 0 } else { NONE },
             head: NONE,
             tail: NONE,
+            free_slots: n as u32,
+            evictable: 0,
         }
     }
 
@@ -38,6 +43,7 @@ impl Lists {
         let s = self.free;
         let next = *slots.next.get(s as usize)?;
         self.free = next;
+        self.free_slots -= 1;
         slots.next[s as usize] = NONE;
         Some(s)
     }
@@ -48,6 +54,7 @@ impl Lists {
         slots.prev[s as usize] = NONE;
         slots.next[s as usize] = self.free;
         self.free = s;
+        self.free_slots += 1;
     }
 
     /// Appends slot `s` to the eviction list: evicted last.
@@ -59,6 +66,7 @@ impl Lists {
             None => self.head = s,
         }
         self.tail = s;
+        self.evictable += 1;
     }
 
     /// Takes slot `s` out of the eviction list.
@@ -74,6 +82,7 @@ impl Lists {
         }
         slots.prev[s as usize] = NONE;
         slots.next[s as usize] = NONE;
+        self.evictable -= 1;
     }
 
     /// The least recently wanted slot of the eviction list, taken off it.

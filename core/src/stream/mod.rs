@@ -19,6 +19,8 @@
 //!    into [`Residency::loading_slot_mut`] and calls [`Residency::complete`], which checks
 //!    the page's checksum and contents, or [`Residency::fail`]. A bad page is reported
 //!    there, once, and stays absent; the frame goes on at the coarser level.
+//! 4. When the pool is nearly full or the reads fall behind, a [`Pressure`] scales every
+//!    camera's tolerance up (and back down when they catch up).
 //!
 //! Closure holds throughout: a page is resident only while its parents are, so a collapse
 //! never needs I/O and eviction goes from the leaves up. The pool's bookkeeping and bytes
@@ -31,6 +33,7 @@ mod frame_lists;
 mod hierarchy;
 mod install;
 mod lists;
+mod pressure;
 mod requests;
 mod residency;
 
@@ -40,4 +43,5 @@ pub use config::{FileTables, PoolConfig, PoolError};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
 pub use frame_lists::{FrameLists, StreamedReads, Want};
 pub use hierarchy::StreamedHierarchy;
+pub use pressure::{Pressure, PressureSignal};
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};

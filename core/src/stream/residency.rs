@@ -106,6 +106,11 @@ pub struct PoolStats {
     pub bytes_installed: u64,
     /// Pages evicted.
     pub evictions: u64,
+    /// Slots free now.
+    pub free_slots: u32,
+    /// Resident pages nothing holds now (the eviction list): with the free slots, the room
+    /// a frame's loads have without touching what the fronts stand on.
+    pub evictable: u32,
 }
 
 /// The pages of a fixed pool: which are resident, which loading, which wanted this frame,
@@ -217,7 +222,11 @@ impl<'a, 'm> Residency<'a, 'm> {
 
     /// Totals since the pool was made.
     pub fn stats(&self) -> PoolStats {
-        self.totals
+        PoolStats {
+            free_slots: self.lists.free_slots,
+            evictable: self.lists.evictable,
+            ..self.totals
+        }
     }
 
     /// Where page `key` is; `None` for a key the pool does not serve.

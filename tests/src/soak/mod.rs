@@ -19,6 +19,7 @@
 
 pub mod invariants;
 pub mod pilot;
+pub mod streamed;
 pub mod terrain;
 
 use std::fmt;
