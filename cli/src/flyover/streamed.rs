@@ -171,24 +171,9 @@ pub fn fly_streamed(
     let mut streamer =
         Streamer::new(sources, reader, LOADS_PER_FRAME).map_err(|e| format!("page reader: {e}"))?;
 
-    let mut flight = StreamedFlight {
-        files: paths.to_vec(),
-        names,
-        frames: Vec::with_capacity(options.frames),
-        refine_ns: Vec::with_capacity(options.frames * cameras.len()),
-        faults: Vec::new(),
-        open_to_first_frame: Duration::ZERO,
-        pages: (
-            roots.iter().map(|r| r.table().len()).sum(),
-            roots.iter().map(|r| r.paged().root_pages as usize).sum(),
-        ),
-        pool: (config.pool_bytes(), config.slots),
-        bookkeeping_bytes: 4 * (words_len(&config)) + WANTS * std::mem::size_of::<Want>(),
-        camera_bytes: cameras.iter().map(CameraState::bytes).sum(),
-        root_bytes: files.iter().map(|f| f.root_bytes().len()).sum(),
-        reads: StreamedReads::default(),
-        peak_rss: None,
-    };
+    let mut flight = StreamedFlight::new(paths, names, &files, &roots, &config, &cameras);
+    flight.frames.reserve(options.frames);
+    flight.refine_ns.reserve(options.frames * cameras.len());
     let mut waited: HashMap<PageKey, usize> = HashMap::new();
     let mut faults = Vec::new();
     let mut pressure = Pressure::new().with_max_scale(stream.max_pressure);
@@ -242,6 +227,37 @@ pub fn fly_streamed(
         .collect();
     flight.peak_rss = caveclod_bake::ooc::peak_rss_bytes();
     Ok(flight)
+}
+
+impl StreamedFlight {
+    /// An empty record of a flight over `files`, with the memory it holds.
+    fn new(
+        paths: &[PathBuf],
+        names: Vec<&'static str>,
+        files: &[PagedFile],
+        roots: &[PagedRoot<'_>],
+        config: &PoolConfig,
+        cameras: &[CameraState<'_>],
+    ) -> Self {
+        Self {
+            files: paths.to_vec(),
+            names,
+            frames: Vec::new(),
+            refine_ns: Vec::new(),
+            faults: Vec::new(),
+            open_to_first_frame: Duration::ZERO,
+            pages: (
+                roots.iter().map(|r| r.table().len()).sum(),
+                roots.iter().map(|r| r.paged().root_pages as usize).sum(),
+            ),
+            pool: (config.pool_bytes(), config.slots),
+            bookkeeping_bytes: 4 * (words_len(config)) + WANTS * std::mem::size_of::<Want>(),
+            camera_bytes: cameras.iter().map(CameraState::bytes).sum(),
+            root_bytes: files.iter().map(|f| f.root_bytes().len()).sum(),
+            reads: StreamedReads::default(),
+            peak_rss: None,
+        }
+    }
 }
 
 /// One frame's refinement of every camera over every file.

@@ -14,7 +14,7 @@ use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{
     FrameLists, LoadRequest, PageKey, PageState, PageTable, PoolConfig, Pressure, PressureSignal,
-    Residency, StreamedHierarchy, Want,
+    Residency, ScheduleStats, StreamedHierarchy, Want,
 };
 use caveclod_core::{CameraConfig, CameraState, RefineStats};
 
@@ -123,29 +123,11 @@ pub fn run_streamed(
         FrameLists::new(&memory.config, &mut wants, &mut list_words).map_err(|e| e.to_string())?;
 
     let mut rng = SplitMix64::new(config.seed);
-    let configs: [CameraConfig; CAMERAS] = {
-        let records = StreamedHierarchy::new(root, &pool, 0, &mut lists);
-        std::array::from_fn(|_| {
-            let budget = [500, 2_000, 8_000, 30_000][rng.below(4)];
-            let c = CameraConfig::with_polygon_budget(&records, budget);
-            if one_in(&mut rng, 4) {
-                c
-            } else {
-                c.with_morphs([16, 256, MAX_MORPHS][rng.below(3)])
-            }
-        })
-    };
-    let mut memories: Vec<Vec<u32>> = {
-        let records = StreamedHierarchy::new(root, &pool, 0, &mut lists);
-        configs
-            .iter()
-            .map(|c| vec![0u32; CameraState::words_needed_for(&records, c)])
-            .collect()
-    };
+    let mut memories = camera_memories(root, &pool, &mut lists, &mut rng);
     let mut cams = {
         let records = StreamedHierarchy::new(root, &pool, 0, &mut lists);
         let mut cams = Vec::with_capacity(CAMERAS);
-        for (m, c) in memories.iter_mut().zip(&configs) {
+        for (m, c) in memories.iter_mut() {
             cams.push(CameraState::with_config(&records, m, c).map_err(|e| e.to_string())?);
         }
         cams
@@ -187,17 +169,8 @@ pub fn run_streamed(
         }
         pool.apply(&mut lists)
             .map_err(|e| format!("frame {frame}: {e}"))?;
-        let s = pool.schedule(&mut loads, &mut evicted);
-        for l in &loads[..s.loads as usize] {
-            let bytes = file
-                .get(l.offset as usize..l.offset as usize + l.size as usize)
-                .ok_or("a page past the file's end")?;
-            pool.loading_slot_mut(l.slot)
-                .map_err(|e| e.to_string())?
-                .copy_from_slice(bytes);
-            pool.install(l.slot, root)
-                .map_err(|e| format!("frame {frame}: install: {e}"))?;
-        }
+        let s = load(&mut pool, root, file, &mut loads, &mut evicted)
+            .map_err(|e| format!("frame {frame}: {e}"))?;
         report.installs += u64::from(s.loads);
         report.evictions += u64::from(s.evictions);
         let scale = pressure.update(&PressureSignal::new(
@@ -225,6 +198,48 @@ pub fn run_streamed(
     report.absent_reads = reads.absent_reads;
     report.untracked_uses = u64::from(reads.untracked_uses);
     Ok(report)
+}
+
+/// Each camera's configuration (a polygon budget, morphs or none) and memory.
+fn camera_memories(
+    root: &PagedRoot<'_>,
+    pool: &Residency<'_, '_>,
+    lists: &mut FrameLists<'_>,
+    rng: &mut SplitMix64,
+) -> Vec<(Vec<u32>, CameraConfig)> {
+    let records = StreamedHierarchy::new(root, pool, 0, lists);
+    (0..CAMERAS)
+        .map(|_| {
+            let budget = [500, 2_000, 8_000, 30_000][rng.below(4)];
+            let mut c = CameraConfig::with_polygon_budget(&records, budget);
+            if !one_in(rng, 4) {
+                c = c.with_morphs([16, 256, MAX_MORPHS][rng.below(3)]);
+            }
+            (vec![0u32; CameraState::words_needed_for(&records, &c)], c)
+        })
+        .collect()
+}
+
+/// Schedules the frame's loads and installs them from the file's bytes, synchronously.
+fn load(
+    pool: &mut Residency<'_, '_>,
+    root: &PagedRoot<'_>,
+    file: &[u8],
+    loads: &mut [LoadRequest],
+    evicted: &mut [PageKey],
+) -> Result<ScheduleStats, String> {
+    let s = pool.schedule(loads, evicted);
+    for l in &loads[..s.loads as usize] {
+        let bytes = file
+            .get(l.offset as usize..l.offset as usize + l.size as usize)
+            .ok_or("a page past the file's end")?;
+        pool.loading_slot_mut(l.slot)
+            .map_err(|e| e.to_string())?
+            .copy_from_slice(bytes);
+        pool.install(l.slot, root)
+            .map_err(|e| format!("install: {e}"))?;
+    }
+    Ok(s)
 }
 
 /// The terrain's box from the file's bounds.
