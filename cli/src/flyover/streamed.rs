@@ -215,6 +215,7 @@ pub fn fly_streamed(
         pressure.update(&PressureSignal::new(
             config.slots,
             &stats,
+            &s.schedule,
             frame.deferred,
             frame.active_nodes,
         ));

@@ -3,15 +3,18 @@
 //! quality when its pool is nearly full.
 //!
 //! One scale multiplies the tolerance of every camera refining over the pool. Each frame it
-//! looks at two signals: the room the pool has for loads (free slots and pages nothing
-//! holds), and the splits deferred for pages against the fronts' nodes. Too little room or
-//! too many deferrals raise the scale by a step; plenty of both lowers it, more slowly, back
-//! towards 1. A coarser tolerance collapses the fronts out of the deepest pages (they
+//! looks at three signals: the room the pool has for loads (free slots and pages nothing
+//! holds), whether the reads fall behind (loadable pages the schedule had to leave for a
+//! later frame), and the splits deferred for pages against the fronts' nodes. Too little
+//! room, or many deferrals while the reads fall behind, raise the scale by a step; room with
+//! the reads keeping up lowers it, more slowly, back towards 1. Deferrals while the reads
+//! keep up are the latency of a page on its way, which a coarser tolerance would not
+//! shorten. A coarser tolerance collapses the fronts out of the deepest pages (they
 //! become evictable) and stops wanting pages the reads could not bring in time, so the
 //! splits that still wait are few and recent. The lag a camera keeps against its own
 //! tolerance is the price, and the scale says how much was paid.
 
-use super::PoolStats;
+use super::{PoolStats, ScheduleStats};
 use crate::RefineParams;
 
 /// One scale on the tolerance of every camera over a pool (see the module docs).
@@ -31,6 +34,9 @@ pub struct PressureSignal {
     /// Slots a load may take this frame without touching a front: free, or holding a page
     /// nothing holds ([`PoolStats::free_slots`] + [`PoolStats::evictable`]).
     pub room: u32,
+    /// Loadable pages the schedule left for a later frame: the reads fall behind, or no slot
+    /// was free ([`ScheduleStats::waiting`]).
+    pub waiting: u32,
     /// Splits deferred for absent pages this frame, over every camera.
     pub deferred: u32,
     /// The nodes of every front after this frame's refinement.
@@ -38,12 +44,19 @@ pub struct PressureSignal {
 }
 
 impl PressureSignal {
-    /// The signals from the pool's stats after this frame's loads were scheduled, and the
-    /// cameras' refinement counts.
-    pub fn new(slots: u32, pool: &PoolStats, deferred: u32, active_nodes: u32) -> Self {
+    /// The signals from the pool's stats after this frame's loads were scheduled, what the
+    /// schedule did, and the cameras' refinement counts.
+    pub fn new(
+        slots: u32,
+        pool: &PoolStats,
+        schedule: &ScheduleStats,
+        deferred: u32,
+        active_nodes: u32,
+    ) -> Self {
         Self {
             slots,
             room: pool.free_slots.saturating_add(pool.evictable),
+            waiting: schedule.waiting,
             deferred,
             active_nodes,
         }
@@ -54,20 +67,19 @@ impl PressureSignal {
 const ROOM_LOW: f32 = 1.0 / 32.0;
 /// Room above this share lets the scale fall.
 const ROOM_HIGH: f32 = 1.0 / 8.0;
-/// Deferred splits above this share of the fronts' nodes raise the scale.
+/// Deferred splits above this share of the fronts' nodes, while the reads fall behind,
+/// raise the scale.
 const DEFERRED_HIGH: f32 = 0.004;
-/// Deferred splits below this share let the scale fall.
-const DEFERRED_LOW: f32 = 0.001;
 
 impl Pressure {
-    /// No pressure yet (scale 1), rising by 4% a frame under pressure and falling by 1% a
+    /// No pressure yet (scale 1), rising by 4% a frame under pressure and falling by 2% a
     /// frame without, to at most 16.
     pub const fn new() -> Self {
         Self {
             scale: 1.0,
             max_scale: 16.0,
             rise: 1.04,
-            fall: 1.01,
+            fall: 1.02,
         }
     }
 
@@ -106,15 +118,16 @@ impl Pressure {
     }
 
     /// Reads one frame's signals and moves the scale: up a step when the pool is nearly full
-    /// or too many splits waited, down a step when it has room and few did. Returns the
-    /// scale for the next frame.
+    /// or many splits waited while the reads fell behind, down a step when the pool has room
+    /// and the reads keep up. Returns the scale for the next frame.
     pub fn update(&mut self, s: &PressureSignal) -> f32 {
         let slots = s.slots.max(1) as f32;
         let room = s.room as f32 / slots;
+        let behind = s.waiting > 0;
         let deferred = s.deferred as f32 / s.active_nodes.max(1) as f32;
-        if room < ROOM_LOW || deferred > DEFERRED_HIGH {
+        if room < ROOM_LOW || (behind && deferred > DEFERRED_HIGH) {
             self.scale = (self.scale * self.rise).min(self.max_scale);
-        } else if room > ROOM_HIGH && deferred < DEFERRED_LOW {
+        } else if room > ROOM_HIGH && !behind {
             self.scale = (self.scale / self.fall).max(1.0);
         }
         self.scale
@@ -131,10 +144,11 @@ impl Default for Pressure {
 mod tests {
     use super::*;
 
-    fn signal(room: u32, deferred: u32) -> PressureSignal {
+    fn signal(room: u32, waiting: u32, deferred: u32) -> PressureSignal {
         PressureSignal {
             slots: 1000,
             room,
+            waiting,
             deferred,
             active_nodes: 10_000,
         }
@@ -143,19 +157,24 @@ mod tests {
     #[test]
     fn pressure_raises_the_scale_and_its_end_lowers_it_to_one() {
         let mut p = Pressure::new().with_max_scale(4.0);
-        assert_eq!(p.update(&signal(500, 0)), 1.0, "no pressure, no scale");
-        let full = p.update(&signal(10, 0));
+        assert_eq!(p.update(&signal(500, 0, 0)), 1.0, "no pressure, no scale");
+        let full = p.update(&signal(10, 0, 0));
         assert!(full > 1.0, "a nearly full pool raises it");
-        let waiting = p.update(&signal(500, 100));
-        assert!(waiting > full, "1% of the front waiting raises it");
+        let behind = p.update(&signal(500, 5, 100));
+        assert!(
+            behind > full,
+            "1% of the front waiting on slow reads raises it"
+        );
+        let latency = p.update(&signal(100, 0, 100));
+        assert_eq!(latency, behind, "waits while the reads keep up hold it");
         for _ in 0..200 {
-            p.update(&signal(10, 100));
+            p.update(&signal(10, 5, 100));
         }
         assert_eq!(p.scale(), 4.0, "held at the largest scale");
-        let held = p.update(&signal(100, 20));
-        assert_eq!(held, 4.0, "between the bands the scale holds");
+        let held = p.update(&signal(500, 5, 20));
+        assert_eq!(held, 4.0, "room while the reads fall behind holds it");
         for _ in 0..1000 {
-            p.update(&signal(500, 0));
+            p.update(&signal(500, 0, 0));
         }
         assert_eq!(p.scale(), 1.0, "never below 1");
         let params = p.params(RefineParams::default());
@@ -167,6 +186,6 @@ mod tests {
         let mut p = Pressure::new()
             .with_max_scale(f32::NAN)
             .with_steps(f32::INFINITY, 0.5);
-        assert_eq!(p.update(&signal(0, 10_000)), 1.0);
+        assert_eq!(p.update(&signal(0, 10, 10_000)), 1.0);
     }
 }

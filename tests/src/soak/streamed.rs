@@ -176,6 +176,7 @@ pub fn run_streamed(
         let scale = pressure.update(&PressureSignal::new(
             slots,
             &pool.stats(),
+            &s,
             deferred,
             active_nodes,
         ));
