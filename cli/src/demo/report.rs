@@ -106,12 +106,14 @@ pub(super) fn report(
     model: &Loaded,
     f: &Flights,
     r: &Ratios,
+    streaming: &str,
     seconds: f64,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# caveclod demo report\n");
     inputs(&mut s, terrain, model, f, seconds);
     s.push_str(&results_table(f, r));
+    s.push_str(streaming);
     how_measured(&mut s, f);
     huge_pages(&mut s, terrain);
     paper_unit(&mut s, f);
