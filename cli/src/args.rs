@@ -207,6 +207,10 @@ pub struct FlyoverArgs {
     /// full or the reads fall behind (1: never; the flight then waits at full quality).
     #[arg(long, default_value_t = 16.0, value_parser = at_least_one, requires = "pool")]
     pub max_pressure: f32,
+    /// With --pool and one paged file: fly the same views over this whole-file form of it
+    /// afterwards, at the tolerances the streamed flight used, and compare refinement times.
+    #[arg(long, requires = "pool")]
+    pub baseline: Option<PathBuf>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,

@@ -50,6 +50,7 @@ fn streamed(a: &FlyoverArgs, options: &FlyoverOptions, pool_bytes: u64) -> Resul
         io_bytes_per_s: f64::from(a.io_bandwidth) * 1e6,
         camera_polygons: a.camera_polygons,
         max_pressure: a.max_pressure,
+        baseline: a.baseline.clone(),
     };
     let flight = fly_streamed(&a.files, options, &stream)?;
     if a.json {

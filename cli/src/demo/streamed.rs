@@ -55,6 +55,7 @@ pub(super) fn fly(terrain: &Loaded, frames: usize) -> Result<StreamedFlight, Str
         io_bytes_per_s: IO_BYTES_PER_S,
         camera_polygons: CAMERA_POLYGONS,
         max_pressure: 16.0,
+        baseline: None,
     };
     fly_streamed(&[paged], &options, &stream)
 }

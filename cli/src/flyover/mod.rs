@@ -26,6 +26,7 @@ pub mod popping;
 mod report;
 pub mod routes;
 pub mod streamed;
+mod streamed_baseline;
 mod streamed_report;
 
 use std::sync::Arc;

@@ -26,6 +26,7 @@ use caveclod_core::{CameraConfig, CameraState, RefineParams, View};
 use caveclod_io::pages::{DiskModel, ReaderConfig};
 use caveclod_io::{AlignedBytes, PagedFile, Streamer};
 
+use super::streamed_baseline::{Baseline, BaselineFlight};
 use super::{morphs_for_budget, refine_params, views_over, FlyoverOptions, Ground};
 
 /// Frames a second of the flight's clock, which the simulated disk runs on.
@@ -38,7 +39,7 @@ const READS_IN_FLIGHT: usize = 256;
 const LOADS_PER_FRAME: usize = 128;
 
 /// How the pages stream.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct StreamOptions {
     /// The pool's size in bytes.
     pub pool_bytes: u64,
@@ -50,6 +51,8 @@ pub struct StreamOptions {
     pub camera_polygons: u32,
     /// The largest scale streaming pressure may put on the tolerance (1: none).
     pub max_pressure: f32,
+    /// The whole-file form of the one paged file, flown after it as the baseline.
+    pub baseline: Option<PathBuf>,
 }
 
 /// What one frame did, over all files and cameras.
@@ -81,6 +84,10 @@ pub struct StreamedFrame {
     pub worst_lag_px: f32,
     /// The scale streaming pressure put on the tolerance this frame.
     pub pressure: f32,
+    /// Refinement operations applied, over every camera.
+    pub operations: u32,
+    /// The longest refinement of one camera this frame, in milliseconds.
+    pub refine_max_ms: f32,
 }
 
 /// A streamed flight's record.
@@ -109,8 +116,11 @@ pub struct StreamedFlight {
     pub root_bytes: usize,
     /// What refinement read and asked for.
     pub reads: StreamedReads,
-    /// The process's peak resident set, in bytes, where the system says.
+    /// The process's peak resident set, in bytes, where the system says (before the
+    /// baseline flight).
     pub peak_rss: Option<u64>,
+    /// The same flight over the whole file, when asked for.
+    pub baseline: Option<Baseline>,
 }
 
 /// Flies `options`' cameras over the paged files `paths` with their pages streaming into
@@ -120,6 +130,9 @@ pub fn fly_streamed(
     options: &FlyoverOptions,
     stream: &StreamOptions,
 ) -> Result<StreamedFlight, String> {
+    if stream.baseline.is_some() && paths.len() != 1 {
+        return Err("--baseline compares one paged file with its whole form".into());
+    }
     let opened = Instant::now();
     let files = paths
         .iter()
@@ -160,17 +173,7 @@ pub fn fly_streamed(
     let mut memories = camera_memories(&roots, &pool, &mut lists, views.len(), stream, morphs);
     let mut cameras = make_cameras(&roots, &pool, &mut lists, &mut memories, stream, morphs)?;
 
-    let reader = ReaderConfig {
-        max_in_flight: READS_IN_FLIGHT,
-        max_read_len: config.slot_bytes,
-        disk: (stream.io_bytes_per_s > 0.0)
-            .then(|| DiskModel::new(stream.io_latency, stream.io_bytes_per_s)),
-        ..ReaderConfig::default()
-    };
-    let sources = files.iter().map(PagedFile::source).collect();
-    let mut streamer =
-        Streamer::new(sources, reader, LOADS_PER_FRAME).map_err(|e| format!("page reader: {e}"))?;
-
+    let mut streamer = streamer_for(&files, &config, stream)?;
     let mut flight = StreamedFlight::new(paths, names, &files, &roots, &config, &cameras);
     flight.frames.reserve(options.frames);
     flight.refine_ns.reserve(options.frames * cameras.len());
@@ -227,6 +230,18 @@ pub fn fly_streamed(
         .map(|e| format!("{}: {e}", paths[e.key.file as usize].display()))
         .collect();
     flight.peak_rss = caveclod_bake::ooc::peak_rss_bytes();
+    if let Some(path) = &stream.baseline {
+        let scales: Vec<f32> = flight.frames.iter().map(|f| f.pressure).collect();
+        let baseline = BaselineFlight {
+            root: &roots[0],
+            views: &views,
+            params: &params,
+            scales: &scales,
+            camera_polygons: stream.camera_polygons,
+            morphs,
+        };
+        flight.baseline = Some(baseline.fly(path)?);
+    }
     Ok(flight)
 }
 
@@ -257,6 +272,7 @@ impl StreamedFlight {
             root_bytes: files.iter().map(|f| f.root_bytes().len()).sum(),
             reads: StreamedReads::default(),
             peak_rss: None,
+            baseline: None,
         }
     }
 }
@@ -295,7 +311,10 @@ impl Fly<'_> {
                 let st = cam
                     .refine(&records, view, self.params)
                     .map_err(|e| format!("frame {}: camera {k}: {e}", self.frame))?;
-                refine_ns.push(t.elapsed().as_nanos() as u64);
+                let ns = t.elapsed().as_nanos() as u64;
+                refine_ns.push(ns);
+                frame.refine_max_ms = frame.refine_max_ms.max(ns as f32 / 1e6);
+                frame.operations += st.operations();
                 frame.deferred += st.deferred_splits;
                 frame.active_nodes += st.active_nodes;
                 frame.active_polygons += st.active_polygons;
@@ -308,6 +327,23 @@ impl Fly<'_> {
         }
         Ok(())
     }
+}
+
+/// The page reader for `files`, through the simulated disk `stream` describes.
+fn streamer_for(
+    files: &[PagedFile],
+    config: &PoolConfig,
+    stream: &StreamOptions,
+) -> Result<Streamer, String> {
+    let reader = ReaderConfig {
+        max_in_flight: READS_IN_FLIGHT,
+        max_read_len: config.slot_bytes,
+        disk: (stream.io_bytes_per_s > 0.0)
+            .then(|| DiskModel::new(stream.io_latency, stream.io_bytes_per_s)),
+        ..ReaderConfig::default()
+    };
+    let sources = files.iter().map(PagedFile::source).collect();
+    Streamer::new(sources, reader, LOADS_PER_FRAME).map_err(|e| format!("page reader: {e}"))
 }
 
 /// The pool for `roots`' files: slots of their largest streamed page.

@@ -34,6 +34,29 @@ impl StreamedFlight {
         good as f64 / settled.len() as f64
     }
 
+    /// Refinement p99 streamed over the baseline's (with a baseline), over the whole flight
+    /// and after [`SETTLE_FRAMES`] (while the first pages arrive, a front's growth spreads
+    /// over many frames, where over the whole file it is one frame's work).
+    pub fn p99_ratio(&self) -> Option<(f64, f64)> {
+        let b = self.baseline.as_ref()?;
+        let ratio = |streamed: &[u64], whole: &[u64]| {
+            percentile(streamed, 0.99) as f64 / percentile(whole, 0.99).max(1) as f64
+        };
+        Some((
+            ratio(&self.refine_ns, &b.refine_ns),
+            ratio(
+                self.settled_ns(&self.refine_ns),
+                self.settled_ns(&b.refine_ns),
+            ),
+        ))
+    }
+
+    /// The camera-frames of `ns` (frame-major) after [`SETTLE_FRAMES`].
+    fn settled_ns<'n>(&self, ns: &'n [u64]) -> &'n [u64] {
+        let per_frame = ns.len() / self.frames.len().max(1);
+        ns.get(SETTLE_FRAMES * per_frame..).unwrap_or(&[])
+    }
+
     fn column<T: Copy>(&self, f: impl Fn(&StreamedFrame) -> T) -> Vec<T> {
         self.frames.iter().map(f).collect()
     }
@@ -62,6 +85,7 @@ impl StreamedFlight {
                     "active_nodes": f.active_nodes, "active_polygons": f.active_polygons,
                     "oldest_want_frames": f.oldest_want, "lag_px": f.lag_px,
                     "worst_lag_px": f.worst_lag_px, "pressure": f.pressure,
+                    "operations": f.operations, "refine_max_ms": f.refine_max_ms,
                 })
             })
             .collect();
@@ -75,6 +99,7 @@ impl StreamedFlight {
             "open_to_first_frame_ms": self.open_to_first_frame.as_secs_f64() * 1e3,
             "refine_mean_ms": mean_ms(&self.refine_ns),
             "refine_p99_ms": percentile(&self.refine_ns, 0.99) as f64 / 1e6,
+            "settled_refine_p99_ms": percentile(self.settled_ns(&self.refine_ns), 0.99) as f64 / 1e6,
             "settled_share": self.settled_share(),
             "pressure_mean": self.frames.iter().map(|f| f64::from(f.pressure)).sum::<f64>()
                 / self.frames.len().max(1) as f64,
@@ -82,6 +107,15 @@ impl StreamedFlight {
             "untracked_uses": self.reads.untracked_uses,
             "wants_dropped": self.reads.wants_dropped,
             "faults": self.faults,
+            "baseline": self.baseline.as_ref().map(|b| json!({
+                "file": b.file.display().to_string(),
+                "refine_mean_ms": mean_ms(&b.refine_ns),
+                "refine_p99_ms": percentile(&b.refine_ns, 0.99) as f64 / 1e6,
+                "active_polygons_mean": b.active_polygons_mean,
+                "settled_refine_p99_ms": percentile(self.settled_ns(&b.refine_ns), 0.99) as f64 / 1e6,
+                "p99_ratio": self.p99_ratio().map(|r| r.0),
+                "settled_p99_ratio": self.p99_ratio().map(|r| r.1),
+            })),
             "frames": frames,
         })
     }
@@ -141,6 +175,15 @@ impl StreamedFlight {
             mean_ms(&self.refine_ns),
             percentile(&self.refine_ns, 0.99) as f64 / 1e6
         );
+        if let (Some(b), Some((all, settled))) = (&self.baseline, self.p99_ratio()) {
+            o += &format!(
+                "refinement over the whole file {} (the same views and tolerances): {:.3} ms mean, {:.3} ms p99, {:.0} polygons per camera; streamed p99 / whole-file p99: {all:.2} (after frame {SETTLE_FRAMES}: {settled:.2})\n",
+                b.file.display(),
+                mean_ms(&b.refine_ns),
+                percentile(&b.refine_ns, 0.99) as f64 / 1e6,
+                b.active_polygons_mean,
+            );
+        }
         o += &format!(
             "memory: pool {:.1} MiB, bookkeeping {:.2} MiB, cameras {:.1} MiB, roots {:.2} MiB; peak RSS {}\n",
             mib(self.pool.0 as f64),

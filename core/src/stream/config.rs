@@ -1,7 +1,7 @@
 //! What a pool is sized by, where its bookkeeping lies in the caller's words, and why a
 //! configuration or its memory was refused.
 
-use crate::format::paged::PageTable;
+use crate::format::paged::{PageArray, PageTable};
 
 /// The sizes of a [`Residency`](super::Residency): fixed when it is made, so its memory is
 /// the caller's and never grows.
@@ -80,10 +80,14 @@ impl PoolConfig {
 }
 
 /// Words per page: its slot, state, front uses, resident or loading children, the frame it
-/// was last wanted in, and its place in that frame's requests.
-pub(crate) const PAGE_WORDS: usize = 6;
-/// Words per slot: its page, and the links of the eviction or free list.
-pub(crate) const SLOT_WORDS: usize = 3;
+/// was last wanted in, its place in that frame's requests, and its slot again while it is
+/// streamed and resident (the one word a record read looks at).
+pub(crate) const PAGE_WORDS: usize = 7;
+/// Words per slot: its page, the links of the eviction or free list, and where its page's
+/// arrays lie (a start and a length in bytes per [`PageArray`]).
+pub(crate) const SLOT_WORDS: usize = 3 + ARRAY_WORDS;
+/// Words per slot of where its page's arrays lie.
+pub(crate) const ARRAY_WORDS: usize = 2 * PageArray::COUNT;
 /// Words per request: the page, its priority, and a place in the heap.
 pub(crate) const REQUEST_WORDS: usize = 3;
 /// Words per file: its first page's global index.
@@ -97,6 +101,8 @@ pub(crate) struct PageWords<'m> {
     pub children: &'m mut [u32],
     pub wanted: &'m mut [u32],
     pub request: &'m mut [u32],
+    /// The slot of a streamed, resident page; `NONE` otherwise.
+    pub resident: &'m mut [u32],
 }
 
 /// The per-slot arrays.
@@ -104,6 +110,8 @@ pub(crate) struct SlotWords<'m> {
     pub page: &'m mut [u32],
     pub prev: &'m mut [u32],
     pub next: &'m mut [u32],
+    /// [`ARRAY_WORDS`] per slot: each array's start and length in bytes within the slot.
+    pub arrays: &'m mut [u32],
 }
 
 /// This frame's requests: page, priority (`f32` bits), and the heap of their indices.
@@ -151,11 +159,13 @@ impl<'m> Words<'m> {
                 children: take(p),
                 wanted: take(p),
                 request: take(p),
+                resident: take(p),
             },
             slots: SlotWords {
                 page: take(s),
                 prev: take(s),
                 next: take(s),
+                arrays: take(s * ARRAY_WORDS),
             },
             requests: RequestWords {
                 page: take(r),

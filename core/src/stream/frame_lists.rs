@@ -175,7 +175,7 @@ mod tests {
             max_requests: 4,
             ..PoolConfig::new(2 * SIZE as u64, SIZE as u32, 1, PAGES as u32)
         };
-        let mut words = [0u32; 64];
+        let mut words = [0u32; 128];
         let mut bytes = [0u64; 2 * SIZE / 8 + 8];
         let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut bytes);
         let skip = bytes.as_ptr().align_offset(64);

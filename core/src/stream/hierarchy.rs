@@ -2,9 +2,9 @@
 //! the pages resident in a pool.
 //!
 //! A camera refines over it exactly as over a whole file (see
-//! [`HierarchyRecords`]). A record is found from its page-major id: the page is a shift, its
-//! arrays come from the root (a root page) or from its pool slot, and a few recently used
-//! pages' arrays are kept at hand so the layout is not worked out again on every read. A
+//! [`HierarchyRecords`]). A record is found from its page-major id: the page is a shift, and
+//! its array comes from the root (a root page, whose arrays are cast once a frame) or from
+//! its pool slot, where the pool noted each array's place when it installed the page. A
 //! split whose records lie in a page that is not resident is deferred by the camera, and the
 //! page goes into the caller's [`FrameLists`] with the split's error excess; so do the
 //! changes of which pages the fronts stand on. After the frame's refinement the host hands
@@ -15,17 +15,22 @@
 
 use core::cell::Cell;
 
+use bytemuck::Pod;
+
 use super::frame_lists::{FrameLists, StreamedReads, Want};
 use super::residency::Residency;
-use crate::format::paged::{PageContext, PageView, PagedRoot, RecordKind, SegmentedId};
+use crate::format::paged::{PageArray, PageContext, PageView, PagedRoot, RecordKind, SegmentedId};
 use crate::format::{
     BaseFace, Meta, Node, Polygon, Position, Split, SplitBounds, Vertex, VertexKey,
 };
 use crate::hierarchy::{Absent, HierarchyRecords};
 use crate::ids::{NodeId, PageKey, PolyId, PositionId};
 
-/// Pages whose arrays are kept at hand (a power of two: a page's place is its low bits).
-const RECENT: usize = 8;
+/// Root pages whose arrays are cast once a frame (the others' on each read; a paged file
+/// has one or a few).
+const ROOT_VIEWS: usize = 4;
+/// Wants looked back over for a page already listed.
+const WANTS_LOOKED_BACK: usize = 8;
 
 /// A paged file's records over its root and a pool (see the module docs).
 pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
@@ -38,7 +43,10 @@ pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
     root_pages: u32,
     id_bound: usize,
     pages: usize,
-    recent: [Cell<Option<(u32, PageView<'s>)>>; RECENT],
+    /// The file's first page's global index in the pool.
+    first_page: usize,
+    /// The first root pages' arrays.
+    root_views: [Option<PageView<'s>>; ROOT_VIEWS],
     wants: &'w [Cell<Want>],
     want_len: &'w Cell<u32>,
     deltas: &'w [Cell<u32>],
@@ -69,7 +77,8 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             root_pages: root.paged().root_pages,
             id_bound,
             pages: pages as usize,
-            recent: Default::default(),
+            first_page: pool.file_pages(file).map_or(usize::MAX, |(first, _)| first),
+            root_views: core::array::from_fn(|p| root.root_page(p as u32)),
             wants: Cell::from_mut(&mut *lists.wants).as_slice_of_cells(),
             want_len: Cell::from_mut(&mut lists.want_len),
             deltas: Cell::from_mut(&mut *lists.deltas).as_slice_of_cells(),
@@ -116,42 +125,44 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
         }
     }
 
-    /// The arrays of page `page`, if it is resident.
+    /// Whether page `page` is resident (a root page always is).
     #[inline]
-    fn view(&self, page: u32) -> Option<PageView<'s>> {
-        let place = &self.recent[page as usize % RECENT];
-        if let Some((p, v)) = place.get() {
-            if p == page {
-                return Some(v);
-            }
-        }
+    fn resident(&self, page: u32) -> bool {
         let key = PageKey {
             file: self.file,
             page,
         };
-        let v = self.pool.page_view(key, self.root);
-        if let Some(v) = v {
-            place.set(Some((page, v)));
-        }
-        v
+        page < self.root_pages || self.pool.resident_slot(key).is_some()
     }
 
-    /// The view holding record `id`, counting a read of an absent page.
+    /// The array of `array` holding record `id` (`pick` takes it from a root page's arrays),
+    /// and the record's index there; a read of an absent page is counted.
     #[inline]
-    fn holding(&self, id: u32) -> Option<(PageView<'s>, usize)> {
+    fn array_of<T: Pod>(
+        &self,
+        id: u32,
+        array: PageArray,
+        pick: impl FnOnce(&PageView<'s>) -> &'s [T],
+    ) -> Option<(&'s [T], usize)> {
         let page = self.ids.page(id);
-        match self.view(page) {
-            Some(v) => Some((v, self.ids.index(id) as usize)),
-            None => {
-                // An id of no page (`NONE`, out of range) is no read of an absent page.
-                if (page as usize) < self.pages {
-                    let mut r = self.reads.get();
-                    r.absent_reads += 1;
-                    self.reads.set(r);
-                }
-                None
-            }
+        let index = self.ids.index(id) as usize;
+        if page < self.root_pages {
+            return match self.root_views.get(page as usize) {
+                Some(v) => v.as_ref().map(|v| (pick(v), index)),
+                None => self.root.root_page(page).map(|v| (pick(&v), index)),
+            };
         }
+        let found = match self.first_page.checked_add(page as usize) {
+            Some(g) if (page as usize) < self.pages => self.pool.array_at::<T>(g, array),
+            _ => None,
+        };
+        // An id of no page (`NONE`, out of range) is no read of an absent page.
+        if found.is_none() && (page as usize) < self.pages {
+            let mut reads = self.reads.get();
+            reads.absent_reads += 1;
+            self.reads.set(reads);
+        }
+        found.map(|a| (a, index))
     }
 
     /// `Err` with the page of `id` unless it holds a record of `kind` at hand, for the split
@@ -165,7 +176,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             },
             node,
         };
-        let held = self.cx.exists(id, kind) && self.view(page).is_some();
+        let held = self.cx.exists(id, kind) && self.resident(page);
         if held {
             Ok(())
         } else {
@@ -209,44 +220,54 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
 
     #[inline]
     fn node(&self, node: NodeId) -> Option<&Node> {
-        let (v, i) = self.holding(node.0)?;
-        v.nodes.get(i)
+        let (a, i) = self.array_of(node.0, PageArray::Nodes, |v| v.nodes)?;
+        a.get(i)
     }
 
     #[inline]
     fn split(&self, node: NodeId) -> Option<&Split> {
-        let (v, i) = self.holding(node.0)?;
-        v.splits.get(i)
+        let (a, i) = self.array_of(node.0, PageArray::Splits, |v| v.splits)?;
+        a.get(i)
     }
 
     #[inline]
     fn split_bounds(&self, node: NodeId) -> Option<&SplitBounds> {
-        let (v, i) = self.holding(node.0)?;
-        v.bounds.get(i)
+        let (a, i) = self.array_of(node.0, PageArray::Bounds, |v| v.bounds)?;
+        a.get(i)
     }
 
     #[inline]
     fn polygon(&self, poly: PolyId) -> Option<&Polygon> {
-        let (v, i) = self.holding(poly.0)?;
-        v.polygons.get(i)
+        let (a, i) = self.array_of(poly.0, PageArray::Polygons, |v| v.polygons)?;
+        a.get(i)
     }
 
     #[inline]
     fn position(&self, position: PositionId) -> Option<&Position> {
-        let (v, i) = self.holding(position.0)?;
-        v.positions.get(i)
+        let (a, i) = self.array_of(position.0, PageArray::Positions, |v| v.positions)?;
+        a.get(i)
     }
 
     #[inline]
     fn vertex_keys(&self, position: PositionId) -> &[VertexKey] {
-        self.holding(position.0)
-            .map_or(&[], |(v, i)| v.vertex_keys(i))
+        let offsets = self.array_of(position.0, PageArray::VertexTableOffsets, |v| {
+            v.vertex_table_offsets
+        });
+        let Some((offsets, i)) = offsets else {
+            return &[];
+        };
+        let (Some(&a), Some(&b)) = (offsets.get(i), offsets.get(i + 1)) else {
+            return &[];
+        };
+        self.array_of(position.0, PageArray::VertexTable, |v| v.vertex_table)
+            .and_then(|(table, _)| table.get(a as usize..b as usize))
+            .unwrap_or(&[])
     }
 
     #[inline]
     fn vertex(&self, vertex: u32) -> Option<&Vertex> {
-        let (v, i) = self.holding(vertex)?;
-        v.vertices.get(i)
+        let (a, i) = self.array_of(vertex, PageArray::Vertices, |v| v.vertices)?;
+        a.get(i)
     }
 
     /// The node's page (its split record), its children's pages, the floating child's
@@ -313,7 +334,7 @@ impl StreamedHierarchy<'_, '_, '_, '_> {
         let len = self.want_len.get() as usize;
         let mut r = self.reads.get();
         // A pass defers many splits into the same few pages, near one another.
-        let recent = &self.wants[len.saturating_sub(RECENT)..len];
+        let recent = &self.wants[len.saturating_sub(WANTS_LOOKED_BACK)..len];
         if let Some(w) = recent.iter().find(|w| w.get().page == page) {
             let mut got = w.get();
             got.excess_px = got.excess_px.max(excess_px);

@@ -27,6 +27,7 @@
 //! are caller memory sized by a [`PoolConfig`]; nothing allocates, and no call's work grows
 //! with the files' sizes: requests, parents and the eviction list are touched, never scanned.
 
+mod arrays;
 mod config;
 mod fault;
 mod frame_lists;

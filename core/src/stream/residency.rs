@@ -158,6 +158,7 @@ impl<'a, 'm> Residency<'a, 'm> {
         let lists = Lists::all_free(&mut w.slots);
         w.pages.slot.fill(NONE);
         w.pages.state.fill(ABSENT);
+        w.pages.resident.fill(NONE);
         w.pages.uses.fill(0);
         w.pages.children.fill(0);
         w.pages.wanted.fill(0);
@@ -310,8 +311,21 @@ impl<'a, 'm> Residency<'a, 'm> {
     #[inline]
     pub(crate) fn resident_slot(&self, key: PageKey) -> Option<u32> {
         let g = self.global(key)?;
-        let state = self.w.pages.state[g];
-        (state & (STATE_MASK | PINNED) == RESIDENT).then(|| self.w.pages.slot[g])
+        let slot = self.w.pages.resident[g];
+        (slot != NONE).then_some(slot)
+    }
+
+    /// The first global index of file `file`'s pages, and how many it has.
+    pub(crate) fn file_pages(&self, file: u32) -> Option<(usize, usize)> {
+        let table = self.table(file)?;
+        Some((self.w.file_base[file as usize] as usize, table.len()))
+    }
+
+    /// The slot of global page `g` while it is streamed and resident.
+    #[inline]
+    pub(crate) fn resident_slot_at(&self, g: usize) -> Option<u32> {
+        let slot = *self.w.pages.resident.get(g)?;
+        (slot != NONE).then_some(slot)
     }
 
     /// Moves the uses of the page in `slot` by `delta` (see [`apply`](Self::apply)).
@@ -415,6 +429,8 @@ impl<'a, 'm> Residency<'a, 'm> {
             return Err(InstallError::Fault(PageFault { key, kind }));
         }
         self.w.pages.state[g] = RESIDENT;
+        self.w.pages.resident[g] = slot;
+        self.note_arrays(key, slot);
         self.totals.loading -= 1;
         self.totals.resident += 1;
         self.totals.installs += 1;
@@ -529,6 +545,7 @@ impl<'a, 'm> Residency<'a, 'm> {
         *out = self.key_of(g);
         self.w.pages.state[g] = ABSENT;
         self.w.pages.slot[g] = NONE;
+        self.w.pages.resident[g] = NONE;
         self.w.slots.page[s as usize] = NONE;
         self.totals.resident -= 1;
         self.totals.evictions += 1;

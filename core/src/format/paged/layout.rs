@@ -46,6 +46,33 @@ impl RecordKind {
     }
 }
 
+/// The arrays a page holds, in layout order (the colours, which refinement does not read,
+/// left out).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PageArray {
+    /// [`Node`] per node.
+    Nodes = 0,
+    /// [`Split`] per split.
+    Splits = 1,
+    /// [`SplitBounds`] per split.
+    Bounds = 2,
+    /// [`Polygon`] per polygon.
+    Polygons = 3,
+    /// [`Position`] per position.
+    Positions = 4,
+    /// `u32` per position plus one: where each position's vertex-table entries start.
+    VertexTableOffsets = 5,
+    /// [`VertexKey`] per entry.
+    VertexTable = 6,
+    /// [`Vertex`] per vertex.
+    Vertices = 7,
+}
+
+impl PageArray {
+    /// How many there are.
+    pub const COUNT: usize = 8;
+}
+
 /// The byte ranges of a page's arrays, each starting on 64 bytes, in this order.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PageLayout {
@@ -73,6 +100,20 @@ pub struct PageLayout {
 }
 
 impl PageLayout {
+    /// The byte ranges of the arrays of [`PageArray`], in its order.
+    pub fn arrays(&self) -> [&Range<usize>; PageArray::COUNT] {
+        [
+            &self.nodes,
+            &self.splits,
+            &self.bounds,
+            &self.polygons,
+            &self.positions,
+            &self.vertex_table_offsets,
+            &self.vertex_table,
+            &self.vertices,
+        ]
+    }
+
     /// The layout of a page with `counts` (in [`RecordKind`] order) and colours or not;
     /// `None` if it would not fit in `usize` or a split count exceeds the node count.
     pub fn new(counts: [u32; 6], colours: bool) -> Option<Self> {

@@ -29,7 +29,7 @@ mod view;
 
 pub use crate::format::FLAG_PAGED;
 pub use check::{check_page, PageContext};
-pub use layout::{PageLayout, RecordKind, SegmentedId};
+pub use layout::{PageArray, PageLayout, RecordKind, SegmentedId};
 pub use meta::{paged_tags, PagedMeta, PAGE_HAS_COLOURS};
 pub use root::PagedRoot;
 pub use table::{PageEntry, PageField, PageTable, PageTableError};
