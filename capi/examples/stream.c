@@ -1,21 +1,27 @@
-/* stream.c: a paged .clod streamed through a page pool, the host doing the I/O.
+/* stream.c: a camera over a paged .clod streamed through a page pool, the host doing the
+ * I/O.
  *
  * usage: stream FILE.clod [FRAMES [POOL_SLOTS]]
  *
- * Reads the file's root only, makes a pool of POOL_SLOTS slots (default: a quarter of the
- * streamed pages), then each frame wants a window of pages that slides over the file, asks
- * the pool which pages to load into which slots, reads them with fseek and fread, and hands
- * them back to the pool, which checks each one. A page that fails is reported once and
- * stays absent; the frames go on. Prints one JSON line with the totals. */
+ * Reads the file's root only and makes a pool of POOL_SLOTS slots (default: a quarter of the
+ * streamed pages). Each frame a camera, orbiting the model and moving in and out, refines
+ * over the streamed file: splits whose pages are absent wait and their pages go into the
+ * frame's lists. The lists go to the pool, which says which pages to load into which slots;
+ * the host reads them with fseek and fread and hands them back, and the pool checks each
+ * one. A page that fails is reported once and stays absent; the frames go on. When the pool
+ * is too small for what the camera wants, a pressure scales its tolerance up, so it leaves
+ * pages to be evicted for the ones it wants now. Prints one JSON line with the totals. */
 
 #include "caveclod.h"
 
 #include <stdint.h>
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define WINDOW 12
+#define WANTS 256
+#define PI 3.14159265f
 
 static int fail(const char *what, CaveclodStatus status) {
     printf("{\"error\": \"%s\", \"status\": %d, \"message\": \"%s\"}\n", what, (int)status,
@@ -28,6 +34,32 @@ static void *aligned(size_t len, void **owner) {
     unsigned char *block = malloc(len + 64);
     *owner = block;
     return block == NULL ? NULL : block + (64 - (size_t)((uintptr_t)block % 64)) % 64;
+}
+
+/* Frame `frame` of an orbit round the box `lo`..`hi`, from over twice its size away in to
+ * a fifth, where most of the model is out of view. */
+static CaveclodView orbit(const float lo[3], const float hi[3], unsigned long frame) {
+    CaveclodView v;
+    float c[3], size = 0.0f, a = (float)frame * 0.03f, r;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        c[k] = 0.5f * (lo[k] + hi[k]);
+        size = fmaxf(size, hi[k] - lo[k]);
+    }
+    r = size * (1.3f + 1.1f * cosf(a * 0.7f));
+    v.eye[0] = c[0] + r * cosf(a);
+    v.eye[1] = c[1] + 0.3f * r;
+    v.eye[2] = c[2] + r * sinf(a);
+    memcpy(v.target, c, sizeof c);
+    v.up[0] = 0.0f;
+    v.up[1] = 1.0f;
+    v.up[2] = 0.0f;
+    v.fov_y = PI / 3.0f;
+    v.aspect = 1280.0f / 720.0f;
+    v.near = size * 0.001f;
+    v.far = size * 100.0f;
+    v.viewport_height = 720;
+    return v;
 }
 
 /* The file's root (its header's `file_len` first bytes), 64-byte aligned. */
@@ -56,14 +88,25 @@ int main(int argc, char **argv) {
     CaveclodPageKey evicted[16];
     CaveclodScheduleStats stats;
     CaveclodPageFault fault;
-    CaveclodPageInfo info;
-    CaveclodWanted wanted;
+    CaveclodPageInfo top;
+    CaveclodFrameLists lists;
+    CaveclodStreamedFile streamed_file;
+    CaveclodCameraConfig camera_config;
+    CaveclodCamera cam;
+    CaveclodRefineStats rs;
+    CaveclodRefineParams params;
+    CaveclodPressure pressure;
+    float scale = 1.0f, max_scale = 1.0f;
+    CaveclodStreamedReads reads;
+    CaveclodView view;
     CaveclodStatus s;
     FILE *f;
-    void *root_bytes, *memory, *pool_bytes, *root_block = NULL, *memory_block, *pool_block;
-    size_t root_len = 0, memory_len = 0;
-    unsigned long frames = 200, installs = 0, evictions = 0, faults = 0, frame;
-    uint32_t file, page, i, streamed;
+    void *root_bytes, *memory, *pool_bytes, *lists_memory, *camera_memory;
+    void *root_block = NULL, *memory_block, *pool_block, *lists_block, *camera_block;
+    size_t root_len = 0, memory_len = 0, lists_len = 0, camera_len = 0;
+    unsigned long frames = 200, installs = 0, evictions = 0, faults = 0, deferred = 0, frame;
+    unsigned long polygons = 0;
+    uint32_t file, i, streamed, waited;
 
     if (argc < 2 || argc > 4) {
         fprintf(stderr, "usage: stream FILE.clod [FRAMES [POOL_SLOTS]]\n");
@@ -103,13 +146,48 @@ int main(int argc, char **argv) {
         return fail("caveclod_pool_add_file", s);
     }
 
+    /* The frame's lists, and a camera of at most 20,000 polygons over the streamed file. */
+    if ((s = caveclod_frame_lists_memory_size(&pool, WANTS, &lists_len)) != CAVECLOD_STATUS_OK) {
+        return fail("caveclod_frame_lists_memory_size", s);
+    }
+    lists_memory = aligned(lists_len, &lists_block);
+    s = caveclod_frame_lists_init(&pool, WANTS, lists_memory, lists_len, &lists);
+    if (s != CAVECLOD_STATUS_OK) {
+        return fail("caveclod_frame_lists_init", s);
+    }
+    streamed_file.root = &root;
+    streamed_file.pool = &pool;
+    streamed_file.file = file;
+    streamed_file.lists = &lists;
+    caveclod_camera_config_polygon_budget_streamed(&streamed_file, 20000, &camera_config);
+    s = caveclod_camera_memory_size_streamed(&streamed_file, &camera_config, &camera_len);
+    if (s != CAVECLOD_STATUS_OK) {
+        return fail("caveclod_camera_memory_size_streamed", s);
+    }
+    camera_memory = aligned(camera_len, &camera_block);
+    s = caveclod_camera_init_streamed(&streamed_file, &camera_config, camera_memory, camera_len,
+                                      &cam);
+    if (s != CAVECLOD_STATUS_OK) {
+        return fail("caveclod_camera_init_streamed", s);
+    }
+    caveclod_paged_root_page(&root, 0, &top);
+    caveclod_pressure_init(16.0f, &pressure);
+
     for (frame = 0; frame < frames; ++frame) {
         caveclod_pool_begin_frame(&pool);
-        /* What the cameras want: a window sliding over the streamed pages. */
-        for (i = 0; i < WINDOW && streamed > 0; ++i) {
-            page = counts.root_pages + (uint32_t)((frame / 2 + i) % streamed);
-            caveclod_paged_root_page(&root, page, &info);
-            caveclod_pool_want(&pool, file, page, info.max_error, &wanted);
+        /* The camera refines over what is resident; what it waits for goes into the lists. */
+        view = orbit(top.bounds_min, top.bounds_max, frame);
+        caveclod_refine_params_default(&params);
+        params.tolerance_px *= scale;
+        s = caveclod_camera_refine_streamed(&cam, &streamed_file, &view, &params, &rs, &waited);
+        if (s != CAVECLOD_STATUS_OK) {
+            return fail("caveclod_camera_refine_streamed", s);
+        }
+        deferred += waited;
+        polygons = rs.active_polygons;
+        /* The lists go to the pool: wanted pages, and the pages the front stands on. */
+        if ((s = caveclod_pool_apply(&pool, &lists)) != CAVECLOD_STATUS_OK) {
+            return fail("caveclod_pool_apply", s);
         }
         /* "Load page P into slot S". */
         caveclod_pool_schedule(&pool, loads, 16, evicted, 16, &stats);
@@ -136,11 +214,19 @@ int main(int argc, char **argv) {
                 return fail("caveclod_pool_install", s);
             }
         }
+        /* A full pool, or splits piling up while the reads fall behind, coarsen the camera. */
+        caveclod_pressure_update(&pressure, &pool, &stats, waited, rs.active_nodes, &scale);
+        max_scale = scale > max_scale ? scale : max_scale;
     }
+    caveclod_frame_lists_reads(&lists, &reads);
     printf("{\"frames\": %lu, \"pages\": %u, \"slots\": %u, \"installs\": %lu, "
-           "\"evictions\": %lu, \"faults\": %lu}\n",
-           frames, counts.pages, config.slots, installs, evictions, faults);
+           "\"evictions\": %lu, \"faults\": %lu, \"deferred\": %lu, \"polygons\": %lu, "
+           "\"absent_reads\": %llu, \"max_scale\": %.2f}\n",
+           frames, counts.pages, config.slots, installs, evictions, faults, deferred, polygons,
+           (unsigned long long)reads.absent_reads, (double)max_scale);
     fclose(f);
+    free(camera_block);
+    free(lists_block);
     free(pool_block);
     free(memory_block);
     free(root_block);

@@ -15,7 +15,7 @@
 // A program built against a header checks `caveclod_abi_version() >> 16` against
 // `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 // a higher minor version only adds calls or status values.
-#define CAVECLOD_ABI_VERSION ((1 << 16) | 3)
+#define CAVECLOD_ABI_VERSION ((1 << 16) | 4)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -45,6 +45,12 @@
 
 // Words (of 8 bytes) of a `CaveclodPool`.
 #define CAVECLOD_POOL_WORDS 64
+
+// Words (of 8 bytes) of a `CaveclodFrameLists`.
+#define CAVECLOD_FRAME_LISTS_WORDS 32
+
+// Words (of 8 bytes) of a `CaveclodPressure`.
+#define CAVECLOD_PRESSURE_WORDS 4
 
 // What a call did. `CAVECLOD_STATUS_OK` is zero; every other value names one reason a call
 // did nothing (or, for emission, left its outputs unusable), and
@@ -481,6 +487,46 @@ typedef struct CaveclodPageFault {
     // Zero.
     uint32_t reserved;
 } CaveclodPageFault;
+
+// A frame's lists for one thread's cameras: an opaque value `caveclod_frame_lists_init`
+// fills, over memory the caller sizes with `caveclod_frame_lists_memory_size`.
+typedef struct CaveclodFrameLists {
+    uint64_t opaque[CAVECLOD_FRAME_LISTS_WORDS];
+} CaveclodFrameLists;
+
+// What refinement over streamed files read and asked for, since the lists were made.
+typedef struct CaveclodStreamedReads {
+    // Wants listed.
+    uint32_t wanted;
+    // Wants that did not fit the lists (asked again by a later frame).
+    uint32_t wants_dropped;
+    // Front nodes that joined or left in a page that is not resident (stays 0).
+    uint32_t untracked_uses;
+    // Zero.
+    uint32_t reserved;
+    // Reads of a record in a page that is not resident (stays 0).
+    uint64_t absent_reads;
+} CaveclodStreamedReads;
+
+// One paged file's records as cameras read them: its root, the pool serving it, its index
+// there (as `caveclod_pool_add_file` numbered it), and the frame's lists.
+typedef struct CaveclodStreamedFile {
+    // The file's root.
+    const struct CaveclodPagedRoot *root;
+    // The pool serving its pages.
+    const struct CaveclodPool *pool;
+    // The file's index in the pool.
+    uint32_t file;
+    // The frame's lists, which the calls write to.
+    struct CaveclodFrameLists *lists;
+} CaveclodStreamedFile;
+
+// One scale on the tolerance of every camera over a pool, raised while the pool is nearly
+// full or splits pile up while the reads fall behind, and lowered back to 1 when both ease
+// (the core's `stream::Pressure`): an opaque value `caveclod_pressure_init` fills.
+typedef struct CaveclodPressure {
+    uint64_t opaque[CAVECLOD_PRESSURE_WORDS];
+} CaveclodPressure;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1009,6 +1055,166 @@ enum CaveclodStatus caveclod_pool_fail(struct CaveclodPool *p,
 //
 // Thread-safe: any thread, any time.
 const char *caveclod_status_message(int32_t status);
+
+// Writes to `bytes` how much memory (aligned to `CAVECLOD_MEMORY_ALIGN`) a frame's lists
+// for `pool` with room for `max_wants` wanted pages need.
+//
+// Thread-safety: any thread, while nothing changes `pool`.
+//
+// # Safety
+// `pool` is null or an initialised pool; `bytes` is null or writable.
+enum CaveclodStatus caveclod_frame_lists_memory_size(const struct CaveclodPool *pool,
+                                                     uint32_t max_wants,
+                                                     size_t *bytes);
+
+// Makes `out` empty lists for `pool` in `memory[0..bytes]` (at least
+// `caveclod_frame_lists_memory_size`, aligned to `CAVECLOD_MEMORY_ALIGN`, may be
+// uninitialised). Allocates nothing. Give each thread that refines its own lists.
+//
+// Thread-safety: any thread, while nothing changes `pool`.
+//
+// # Safety
+// `pool` is null or an initialised pool; `memory` is null or valid for reads and writes of
+// `bytes` bytes that nothing else uses while the lists are in use; `out` is null or
+// writable.
+enum CaveclodStatus caveclod_frame_lists_init(const struct CaveclodPool *pool,
+                                              uint32_t max_wants,
+                                              void *memory,
+                                              size_t bytes,
+                                              struct CaveclodFrameLists *out);
+
+// Writes to `out` what refinement over streamed files read and asked for through `lists`.
+//
+// Thread-safety: the thread that owns `lists`.
+//
+// # Safety
+// `lists` is null or initialised lists nothing else uses during the call; `out` is null or
+// writable.
+enum CaveclodStatus caveclod_frame_lists_reads(struct CaveclodFrameLists *lists,
+                                               struct CaveclodStreamedReads *out);
+
+// Hands the frame's lists to the pool, after every camera refined over it and before
+// `caveclod_pool_schedule`: the wanted pages are requested, and each page's count of the
+// front nodes standing on it moves (a page a front stands on is never evicted). The lists
+// are empty again.
+//
+// Thread-safety: the thread that owns the pool, while no camera refines over it.
+//
+// # Safety
+// `pool` and `lists` are null or initialised, and nothing else uses them during the call.
+enum CaveclodStatus caveclod_pool_apply(struct CaveclodPool *pool,
+                                        struct CaveclodFrameLists *lists);
+
+// `caveclod_camera_config_polygon_budget` for a camera over the streamed file `f`.
+//
+// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool.
+//
+// # Safety
+// `f` is null or a readable `CaveclodStreamedFile` of initialised handles; `out` is null or
+// writable.
+enum CaveclodStatus caveclod_camera_config_polygon_budget_streamed(const struct CaveclodStreamedFile *f,
+                                                                   uint32_t max_active_polygons,
+                                                                   struct CaveclodCameraConfig *out);
+
+// `caveclod_camera_memory_size` for a camera over the streamed file `f`: its memory follows
+// `config`'s capacity, not the file's size.
+//
+// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool.
+//
+// # Safety
+// `f` is null or a readable `CaveclodStreamedFile` of initialised handles; `config` is null
+// or readable; `bytes` is null or writable.
+enum CaveclodStatus caveclod_camera_memory_size_streamed(const struct CaveclodStreamedFile *f,
+                                                         const struct CaveclodCameraConfig *config,
+                                                         size_t *bytes);
+
+// `caveclod_camera_init` for a camera over the streamed file `f`, at its base mesh (which
+// lies in the root).
+//
+// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool; `out`
+// and `memory` must not be used by another thread during the call.
+//
+// # Safety
+// As `caveclod_camera_init`'s, with `f` a readable `CaveclodStreamedFile` of initialised
+// handles whose root's bytes outlive the camera.
+enum CaveclodStatus caveclod_camera_init_streamed(const struct CaveclodStreamedFile *f,
+                                                  const struct CaveclodCameraConfig *config,
+                                                  void *memory,
+                                                  size_t bytes,
+                                                  struct CaveclodCamera *out);
+
+// `caveclod_camera_refine` over the streamed file `f`: a split whose records lie in an
+// absent page waits (counted in `*deferred_splits` unless that is null) and its page goes
+// into the lists with the split's screen-space error excess; the camera shows the coarser
+// surface until the page arrives. Nothing reads an absent page.
+//
+// Thread-safety: the thread that owns `cam` and `f`'s lists; cameras on several threads
+// refine over one pool at once, each thread with its own lists, while nothing changes it.
+//
+// # Safety
+// `cam` is null or a camera nothing else uses during the call; `f` is null or a readable
+// `CaveclodStreamedFile` of initialised handles; `view` and `params` are null or readable;
+// `stats` and `deferred_splits` are null or writable.
+enum CaveclodStatus caveclod_camera_refine_streamed(struct CaveclodCamera *cam,
+                                                    const struct CaveclodStreamedFile *f,
+                                                    const struct CaveclodView *view,
+                                                    const struct CaveclodRefineParams *params,
+                                                    struct CaveclodRefineStats *stats,
+                                                    uint32_t *deferred_splits);
+
+// `caveclod_camera_reset` over the streamed file `f`: the front goes back to the base mesh
+// and leaves every streamed page (apply the lists before dropping the camera).
+//
+// Thread-safety: as `caveclod_camera_refine_streamed`.
+//
+// # Safety
+// `cam` is null or a camera nothing else uses during the call; `f` is null or a readable
+// `CaveclodStreamedFile` of initialised handles.
+enum CaveclodStatus caveclod_camera_reset_streamed(struct CaveclodCamera *cam,
+                                                   const struct CaveclodStreamedFile *f);
+
+// `caveclod_camera_emit_packed` over the streamed file `f`. Indices name vertices by their
+// page-major ids (`(page << page_bits) | index`), which a host drawing from a vertex pool
+// maps to its own slots.
+//
+// Thread-safety: as `caveclod_camera_refine_streamed`.
+//
+// # Safety
+// As `caveclod_camera_emit_packed`'s, with `f` a readable `CaveclodStreamedFile` of
+// initialised handles.
+enum CaveclodStatus caveclod_camera_emit_packed_streamed(struct CaveclodCamera *cam,
+                                                         const struct CaveclodStreamedFile *f,
+                                                         uint32_t *out,
+                                                         size_t capacity,
+                                                         uint32_t *offsets,
+                                                         size_t offset_count,
+                                                         bool morphed,
+                                                         size_t *total);
+
+// Makes `out` a pressure at scale 1 that may scale the tolerance up to `max_scale` (at
+// least 1; 1 never scales).
+//
+// Thread-safety: any thread.
+//
+// # Safety
+// `out` is null or writable.
+enum CaveclodStatus caveclod_pressure_init(float max_scale, struct CaveclodPressure *out);
+
+// After a frame's `caveclod_pool_schedule`: reads the pool's room, what `schedule` did, and
+// the frame's deferred splits and active nodes summed over the cameras; moves the scale and
+// writes it to `*scale`. Multiply every camera's `tolerance_px` by it next frame.
+//
+// Thread-safety: the thread that owns the pool, while nothing changes it.
+//
+// # Safety
+// `pressure` and `pool` are null or initialised; `schedule` is null or readable; `scale`
+// is null or writable.
+enum CaveclodStatus caveclod_pressure_update(struct CaveclodPressure *pressure,
+                                             const struct CaveclodPool *pool,
+                                             const struct CaveclodScheduleStats *schedule,
+                                             uint32_t deferred_splits,
+                                             uint32_t active_nodes,
+                                             float *scale);
 
 #ifdef __cplusplus
 }  // extern "C"

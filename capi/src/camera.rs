@@ -4,7 +4,7 @@
 //! slice per surface that per-surface emission builds its output lists in (so emission
 //! allocates nothing for any number of surfaces).
 
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_core::{CameraConfig, CameraState, HierarchyRecords, RefineParams};
 
 use crate::ffi::{self, guarded, Result};
 use crate::hierarchy::{hierarchy, CaveclodHierarchy};
@@ -58,7 +58,10 @@ pub(crate) unsafe fn camera<'a>(cam: *mut CaveclodCamera) -> Result<&'a mut Came
 ///
 /// # Safety
 /// As [`camera`].
-unsafe fn camera_for<'a>(cam: *mut CaveclodCamera, h: &Hierarchy<'_>) -> Result<&'a mut Camera> {
+pub(crate) unsafe fn camera_for<'a>(
+    cam: *mut CaveclodCamera,
+    h: &impl HierarchyRecords,
+) -> Result<&'a mut Camera> {
     // SAFETY: the caller's contract.
     let cam = unsafe { camera(cam) }?;
     if cam.state.is_for(h) {
@@ -75,7 +78,7 @@ struct MemoryLayout {
     total_bytes: usize,
 }
 
-fn memory_layout(h: &Hierarchy<'_>, config: &CameraConfig) -> Result<MemoryLayout> {
+fn memory_layout(h: &impl HierarchyRecords, config: &CameraConfig) -> Result<MemoryLayout> {
     let words = CameraState::words_needed_for(h, config);
     let state_bytes = words
         .checked_mul(4)
@@ -157,10 +160,23 @@ pub unsafe extern "C" fn caveclod_camera_memory_size(
         let h = unsafe { hierarchy(h) }?;
         // SAFETY: the caller's contract.
         let config = unsafe { ffi::input(config) }?.to_config(h)?;
-        let layout = memory_layout(h, &config)?;
         // SAFETY: the caller's contract.
-        unsafe { ffi::output(bytes, layout.total_bytes) }
+        unsafe { camera_memory_size(h, &config, bytes) }
     })
+}
+
+/// Writes the memory a camera with `config` over `h` needs to `bytes`.
+///
+/// # Safety
+/// `bytes` is null or writable.
+pub(crate) unsafe fn camera_memory_size(
+    h: &impl HierarchyRecords,
+    config: &CameraConfig,
+    bytes: *mut usize,
+) -> Result<()> {
+    let layout = memory_layout(h, config)?;
+    // SAFETY: the caller's contract.
+    unsafe { ffi::output(bytes, layout.total_bytes) }
 }
 
 /// Makes `out` a camera at the base mesh of `h`, with `config`'s capacity, in
@@ -195,38 +211,54 @@ pub unsafe extern "C" fn caveclod_camera_init(
         let h = unsafe { hierarchy(h) }?;
         // SAFETY: the caller's contract.
         let config = unsafe { ffi::input(config) }?.to_config(h)?;
-        let layout = memory_layout(h, &config)?;
-        if memory.is_null() {
-            return Err(CaveclodStatus::NullPointer);
-        }
-        if memory.align_offset(CAVECLOD_MEMORY_ALIGN) != 0 {
-            return Err(CaveclodStatus::Misaligned);
-        }
-        if bytes < layout.total_bytes {
-            return Err(CaveclodStatus::MemoryTooSmall);
-        }
-        let base = memory.cast::<u8>();
-        // SAFETY: `memory` is valid for `bytes >= total_bytes` bytes; zeroing the state
-        // words first makes every `u32` of the slice below initialised.
-        unsafe { base.write_bytes(0, layout.state_bytes) };
-        // SAFETY: aligned (to 8, so to 4), initialised, `words * 4 <= state_bytes` bytes,
-        // used only through this camera while it lives (the caller's contract, which is
-        // what `'static` stands for here).
-        let words: &'static mut [u32] =
-            unsafe { core::slice::from_raw_parts_mut(base.cast::<u32>(), layout.words) };
-        let state = CameraState::with_config(h, words, &config)?;
-        // SAFETY: `state_bytes <= total_bytes <= bytes`; the table starts at a multiple of
-        // `CAVECLOD_MEMORY_ALIGN`, enough for slices (asserted).
-        let lists = unsafe { base.add(layout.state_bytes) }.cast::<&'static mut [u32]>();
-        let camera = Camera {
-            state,
-            lists,
-            surfaces: h.surface_count(),
-        };
-        // SAFETY: `out` is writable and the blob holds a `Cell<Camera>` (asserted).
-        unsafe { ffi::fill(out, CAMERA_TAG, camera) };
-        Ok(())
+        // SAFETY: the caller's contract.
+        unsafe { init_camera(h, &config, memory, bytes, out) }
     })
+}
+
+/// Makes `out` (its tag cleared) a camera at the base mesh of `h` with `config`, in
+/// `memory[0..bytes]`.
+///
+/// # Safety
+/// As `caveclod_camera_init`'s; `out` is non-null, aligned and writable.
+pub(crate) unsafe fn init_camera(
+    h: &impl HierarchyRecords,
+    config: &CameraConfig,
+    memory: *mut core::ffi::c_void,
+    bytes: usize,
+    out: *mut CaveclodCamera,
+) -> Result<()> {
+    let layout = memory_layout(h, config)?;
+    if memory.is_null() {
+        return Err(CaveclodStatus::NullPointer);
+    }
+    if memory.align_offset(CAVECLOD_MEMORY_ALIGN) != 0 {
+        return Err(CaveclodStatus::Misaligned);
+    }
+    if bytes < layout.total_bytes {
+        return Err(CaveclodStatus::MemoryTooSmall);
+    }
+    let base = memory.cast::<u8>();
+    // SAFETY: `memory` is valid for `bytes >= total_bytes` bytes; zeroing the state words
+    // first makes every `u32` of the slice below initialised.
+    unsafe { base.write_bytes(0, layout.state_bytes) };
+    // SAFETY: aligned (to 8, so to 4), initialised, `words * 4 <= state_bytes` bytes, used
+    // only through this camera while it lives (the caller's contract, which is what
+    // `'static` stands for here).
+    let words: &'static mut [u32] =
+        unsafe { core::slice::from_raw_parts_mut(base.cast::<u32>(), layout.words) };
+    let state = CameraState::with_config(h, words, config)?;
+    // SAFETY: `state_bytes <= total_bytes <= bytes`; the table starts at a multiple of
+    // `CAVECLOD_MEMORY_ALIGN`, enough for slices (asserted).
+    let lists = unsafe { base.add(layout.state_bytes) }.cast::<&'static mut [u32]>();
+    let camera = Camera {
+        state,
+        lists,
+        surfaces: h.surface_count(),
+    };
+    // SAFETY: `out` is writable and the blob holds a `Cell<Camera>` (asserted).
+    unsafe { ffi::fill(out, CAMERA_TAG, camera) };
+    Ok(())
 }
 
 /// Puts the camera back at the base mesh of `h` (and ends its morphs).
@@ -297,17 +329,34 @@ pub unsafe extern "C" fn caveclod_camera_refine(
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, h) }?;
         // SAFETY: the caller's contract.
-        let view = unsafe { ffi::input(view) }?.to_view()?;
-        let params = if params.is_null() {
-            RefineParams::default()
-        } else {
-            // SAFETY: the caller's contract.
-            unsafe { ffi::input(params) }?.to_params()
-        };
-        let s = cam.state.refine(h, &view, &params)?;
-        // SAFETY: the caller's contract.
-        unsafe { ffi::optional_output(stats, s.into()) }
+        unsafe { refine_camera(cam, h, view, params, stats) }.map(|_| ())
     })
+}
+
+/// One refinement pass of `cam` over `h` (see `caveclod_camera_refine`); the splits that
+/// waited for absent pages.
+///
+/// # Safety
+/// `view` and `params` are null or readable; `stats` is null or writable.
+pub(crate) unsafe fn refine_camera(
+    cam: &mut Camera,
+    h: &impl HierarchyRecords,
+    view: *const CaveclodView,
+    params: *const CaveclodRefineParams,
+    stats: *mut CaveclodRefineStats,
+) -> Result<u32> {
+    // SAFETY: the caller's contract.
+    let view = unsafe { ffi::input(view) }?.to_view()?;
+    let params = if params.is_null() {
+        RefineParams::default()
+    } else {
+        // SAFETY: the caller's contract.
+        unsafe { ffi::input(params) }?.to_params()
+    };
+    let s = cam.state.refine(h, &view, &params)?;
+    // SAFETY: the caller's contract.
+    unsafe { ffi::optional_output(stats, s.into()) }?;
+    Ok(s.deferred_splits)
 }
 
 /// Writes the camera's counts to `out`: active nodes and polygons, splits, morphs, and the

@@ -1,10 +1,10 @@
 //! Index emission into caller buffers: per-surface counts, per-surface lists, one packed
 //! list with offsets, and the morphing vertices a morphed emission points at.
 
-use caveclod_core::MorphVertex;
+use caveclod_core::{HierarchyRecords, MorphVertex};
 
-use crate::camera::{camera, CaveclodCamera};
-use crate::ffi::{self, guarded};
+use crate::camera::{camera, Camera, CaveclodCamera};
+use crate::ffi::{self, guarded, Result};
 use crate::hierarchy::{hierarchy, CaveclodHierarchy};
 use crate::status::CaveclodStatus;
 
@@ -162,24 +162,55 @@ pub unsafe extern "C" fn caveclod_camera_emit_packed(
         let h = unsafe { hierarchy(h) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera(cam) }?;
-        if out.is_null() || offsets.is_null() {
-            return Err(CaveclodStatus::NullPointer);
-        }
-        // SAFETY: non-null, valid and disjoint (the caller's contract).
-        let (out, offsets) = unsafe {
-            (
-                ffi::slice_mut(out, capacity)?,
-                ffi::slice_mut(offsets, offset_count)?,
-            )
+        let out = PackedOut {
+            out,
+            capacity,
+            offsets,
+            offset_count,
+            total,
         };
-        let n = if morphed {
-            cam.state.emit_indices_packed_morphed(h, out, offsets)
-        } else {
-            cam.state.emit_indices_packed(h, out, offsets)
-        }?;
         // SAFETY: the caller's contract.
-        unsafe { ffi::optional_output(total, n) }
+        unsafe { emit_packed(cam, h, &out, morphed) }
     })
+}
+
+/// Where packed emission writes (see `caveclod_camera_emit_packed`).
+pub(crate) struct PackedOut {
+    pub out: *mut u32,
+    pub capacity: usize,
+    pub offsets: *mut u32,
+    pub offset_count: usize,
+    pub total: *mut usize,
+}
+
+/// Packed emission of `cam` over `h` into `o`.
+///
+/// # Safety
+/// `o.out` is null or writable for `o.capacity` indices, `o.offsets` null or writable for
+/// `o.offset_count` entries, the two not overlapping; `o.total` null or writable.
+pub(crate) unsafe fn emit_packed(
+    cam: &Camera,
+    h: &impl HierarchyRecords,
+    o: &PackedOut,
+    morphed: bool,
+) -> Result<()> {
+    if o.out.is_null() || o.offsets.is_null() {
+        return Err(CaveclodStatus::NullPointer);
+    }
+    // SAFETY: non-null, valid and disjoint (the caller's contract).
+    let (out, offsets) = unsafe {
+        (
+            ffi::slice_mut(o.out, o.capacity)?,
+            ffi::slice_mut(o.offsets, o.offset_count)?,
+        )
+    };
+    let n = if morphed {
+        cam.state.emit_indices_packed_morphed(h, out, offsets)
+    } else {
+        cam.state.emit_indices_packed(h, out, offsets)
+    }?;
+    // SAFETY: the caller's contract.
+    unsafe { ffi::optional_output(o.total, n) }
 }
 
 /// Points `*vertices` at the camera's morph slots up to the highest in use and writes their

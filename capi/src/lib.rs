@@ -44,6 +44,7 @@ mod octree;
 mod paged_root;
 mod pool;
 mod status;
+mod streamed;
 mod types;
 
 pub use arena::*;
@@ -54,13 +55,14 @@ pub use octree::*;
 pub use paged_root::*;
 pub use pool::*;
 pub use status::{caveclod_status_message, CaveclodStatus};
+pub use streamed::*;
 pub use types::*;
 
 /// The version of this C ABI: the major version in the high 16 bits, the minor in the low.
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
 /// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 /// a higher minor version only adds calls or status values.
-pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 3;
+pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 4;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

@@ -26,7 +26,7 @@ pub struct CaveclodPool {
     opaque: [u64; CAVECLOD_POOL_WORDS],
 }
 
-type Pool = Residency<'static, 'static>;
+pub(crate) type Pool = Residency<'static, 'static>;
 type Table = Option<PageTable<'static>>;
 
 const POOL_TAG: u64 = u64::from_le_bytes(*b"ccldPool");
@@ -179,9 +179,18 @@ fn memory_layout(config: &PoolConfig) -> Result<(usize, usize)> {
 ///
 /// # Safety
 /// `p` is null or points to a `CaveclodPool` nothing else uses during the call.
-unsafe fn pool<'a>(p: *mut CaveclodPool) -> Result<&'a mut Pool> {
+pub(crate) unsafe fn pool<'a>(p: *mut CaveclodPool) -> Result<&'a mut Pool> {
     // SAFETY: the caller's contract.
     unsafe { ffi::handle_mut(p, POOL_TAG) }
+}
+
+/// The pool of an initialised handle, read only.
+///
+/// # Safety
+/// `p` is null or points to a `CaveclodPool` nothing writes during `'a`.
+pub(crate) unsafe fn pool_ref<'a>(p: *const CaveclodPool) -> Result<&'a Pool> {
+    // SAFETY: the caller's contract.
+    unsafe { ffi::handle(p, POOL_TAG) }
 }
 
 /// Writes to `bytes` how much memory (aligned to `CAVECLOD_MEMORY_ALIGN`) a pool of

@@ -2,7 +2,7 @@
 //! a camera configuration, and the counts of a hierarchy and of a camera.
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::{CameraConfig, Hierarchy, LookAt, RefineParams, RefineStats, View};
+use caveclod_core::{CameraConfig, HierarchyRecords, LookAt, RefineParams, RefineStats, View};
 
 use crate::ffi::Result;
 use crate::status::CaveclodStatus;
@@ -217,12 +217,12 @@ impl From<CameraConfig> for CaveclodCameraConfig {
 }
 
 impl CaveclodCameraConfig {
-    /// The core's configuration for `h`, if `h` allows it.
-    pub fn to_config(&self, h: &Hierarchy<'_>) -> Result<CameraConfig> {
-        let splits = h.splits().len() as u64;
+    /// The core's configuration for `h` (a whole file or a streamed one), if `h` allows it.
+    pub fn to_config(&self, h: &impl HierarchyRecords) -> Result<CameraConfig> {
+        let splits = h.split_id_bound() as u64;
         let morph_slots = 2 * u64::from(self.max_morphs);
         if u64::from(self.max_pairs) > splits
-            || h.vertices().len() as u64 + morph_slots >= u64::from(u32::MAX)
+            || h.vertex_id_bound() as u64 + morph_slots >= u64::from(u32::MAX)
         {
             return Err(CaveclodStatus::InvalidConfig);
         }

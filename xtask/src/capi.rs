@@ -10,8 +10,9 @@
 //!   the octree of an out-of-core bake;
 //! - `arena.c` must give the Rust twin's counts (`examples/fixed_arena.rs`), and report a
 //!   full arena as its status (exit code 3) when given too small a one;
-//! - `stream.c` must stream a paged Spot through a four-slot pool (installs, evictions, no
-//!   fault), and report a damaged page once while the rest stream.
+//! - `stream.c` must refine a camera over a paged Spot streaming through an eight-slot pool
+//!   (installs, evictions, no fault, no read of an absent page), and report a damaged page
+//!   once while the rest stream.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -416,20 +417,27 @@ fn arena_c_against_its_twin(b: &Built) -> Result<(), String> {
     Ok(())
 }
 
-/// `stream.c` streams the paged Spot through a pool of a few slots: pages are installed
-/// and evicted, none fails; with the first streamed page's bytes flipped, that page fails
-/// once and the pages outside its subtree stream on.
+/// `stream.c` refines a camera over the paged Spot streaming through a pool of a few slots:
+/// pages are installed and evicted, none fails, nothing reads an absent page; with the first
+/// streamed page's bytes flipped, that page fails once and the pages outside its subtree
+/// stream on.
 fn stream_c_through_a_small_pool(b: &Built) -> Result<(), String> {
     let mut run_c = Command::new(&b.stream_c);
-    run_c.arg(&b.paged_clod).args(["200", "4"]);
+    run_c.arg(&b.paged_clod).args(["200", "8"]);
     let text = output(run_c)?;
     print!("stream.c:        {text}");
     let (installs, evictions) = (field(&text, "installs"), field(&text, "evictions"));
     if installs.is_none_or(|n| n == 0)
         || evictions.is_none_or(|n| n == 0)
         || field(&text, "faults") != Some(0)
+        || field(&text, "absent_reads") != Some(0)
+        || field(&text, "deferred").is_none_or(|n| n == 0)
     {
-        return Err("stream.c: expected installs and evictions and no fault".into());
+        return Err(
+            "stream.c: expected installs, evictions, deferred splits, no fault and no read of \
+             an absent page"
+                .into(),
+        );
     }
     let mut bytes =
         std::fs::read(&b.paged_clod).map_err(|e| format!("{}: {e}", b.paged_clod.display()))?;
@@ -446,7 +454,7 @@ fn stream_c_through_a_small_pool(b: &Built) -> Result<(), String> {
     let damaged = b.dir.join("spot-paged-damaged.clod");
     std::fs::write(&damaged, &bytes).map_err(|e| format!("{}: {e}", damaged.display()))?;
     let mut run_c = Command::new(&b.stream_c);
-    run_c.arg(&damaged).args(["200", "4"]);
+    run_c.arg(&damaged).args(["200", "8"]);
     let text = output(run_c)?;
     print!("stream.c, a damaged page: {text}");
     if field(&text, "faults") != Some(1) || field(&text, "installs").is_none_or(|n| n == 0) {
