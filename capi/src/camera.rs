@@ -229,16 +229,7 @@ pub(crate) unsafe fn init_camera(
     out: *mut CaveclodCamera,
 ) -> Result<()> {
     let layout = memory_layout(h, config)?;
-    if memory.is_null() {
-        return Err(CaveclodStatus::NullPointer);
-    }
-    if memory.align_offset(CAVECLOD_MEMORY_ALIGN) != 0 {
-        return Err(CaveclodStatus::Misaligned);
-    }
-    if bytes < layout.total_bytes {
-        return Err(CaveclodStatus::MemoryTooSmall);
-    }
-    let base = memory.cast::<u8>();
+    let base = ffi::caller_memory(memory, bytes, layout.total_bytes)?;
     // SAFETY: `memory` is valid for `bytes >= total_bytes` bytes; zeroing the state words
     // first makes every `u32` of the slice below initialised.
     unsafe { base.write_bytes(0, layout.state_bytes) };

@@ -101,6 +101,26 @@ pub(crate) struct Cell<T> {
     pub value: T,
 }
 
+/// The caller's memory for a handle, checked: non-null (`NullPointer`), aligned to
+/// `CAVECLOD_MEMORY_ALIGN` (`Misaligned`), at least `needed` of its `bytes`
+/// (`MemoryTooSmall`).
+pub(crate) fn caller_memory(
+    memory: *mut core::ffi::c_void,
+    bytes: usize,
+    needed: usize,
+) -> Result<*mut u8> {
+    if memory.is_null() {
+        return Err(CaveclodStatus::NullPointer);
+    }
+    if memory.align_offset(crate::camera::CAVECLOD_MEMORY_ALIGN) != 0 {
+        return Err(CaveclodStatus::Misaligned);
+    }
+    if bytes < needed {
+        return Err(CaveclodStatus::MemoryTooSmall);
+    }
+    Ok(memory.cast())
+}
+
 /// `true` if a `Cell<T>` fits in a blob `B` wherever an 8-aligned `B` lies.
 pub(crate) const fn fits<B, T>() -> bool {
     let cell = core::mem::size_of::<Cell<T>>();

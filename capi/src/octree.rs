@@ -8,7 +8,6 @@
 
 use caveclod_core::{Octree, OctreeCut};
 
-use crate::camera::CAVECLOD_MEMORY_ALIGN;
 use crate::ffi::{self, guarded, Result};
 use crate::hierarchy::{hierarchy, CaveclodHierarchy};
 use crate::status::CaveclodStatus;
@@ -223,17 +222,9 @@ pub unsafe extern "C" fn caveclod_octree_cut_init(
         unsafe { ffi::clear_tag::<_, OctreeCut<'static>>(out) };
         // SAFETY: the caller's contract.
         let o = unsafe { octree(o) }?;
-        if memory.is_null() {
-            return Err(CaveclodStatus::NullPointer);
-        }
-        if memory.align_offset(CAVECLOD_MEMORY_ALIGN) != 0 {
-            return Err(CaveclodStatus::Misaligned);
-        }
         let words = OctreeCut::words_needed(o);
-        if bytes / 4 < words {
-            return Err(CaveclodStatus::MemoryTooSmall);
-        }
-        let base = memory.cast::<u32>();
+        let needed = words.saturating_mul(4);
+        let base = ffi::caller_memory(memory, bytes, needed)?.cast::<u32>();
         // SAFETY: valid for `bytes >= 4 * words` bytes; zeroed so every word is initialised.
         unsafe { base.write_bytes(0, words) };
         // SAFETY: aligned, initialised, used only through this cut while it lives (the

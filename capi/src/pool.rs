@@ -242,16 +242,10 @@ pub unsafe extern "C" fn caveclod_pool_init(
         // SAFETY: the caller's contract.
         let config = config_of(unsafe { ffi::input(config) }?);
         let (table_bytes, total) = memory_layout(&config)?;
-        if memory.is_null() || pool_bytes.is_null() {
+        if pool_bytes.is_null() {
             return Err(CaveclodStatus::NullPointer);
         }
-        if memory.align_offset(CAVECLOD_MEMORY_ALIGN) != 0 {
-            return Err(CaveclodStatus::Misaligned);
-        }
-        if memory_bytes < total {
-            return Err(CaveclodStatus::MemoryTooSmall);
-        }
-        let base = memory.cast::<u8>();
+        let base = ffi::caller_memory(memory, memory_bytes, total)?;
         let tables = base.cast::<Table>();
         for i in 0..config.files as usize {
             // SAFETY: `table_bytes` bytes at `base` hold `files` tables, aligned (asserted).

@@ -4,41 +4,16 @@
 //! pages at first, nothing reads an absent page, the front grows as pages arrive, emission
 //! writes three indices per polygon, and the frame loop allocates nothing.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "../../core/tests/counting/mod.rs"]
+mod counting;
+
 use std::mem::MaybeUninit;
 
 use caveclod::*;
 use caveclod_bake::paged::{write_paged, PageOptions};
 use caveclod_tests::{bake, meshes};
 
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
-
-// SAFETY: every method forwards to `System` with the caller's arguments unchanged; the
-// counter is a thread-local `Cell` with a const initialiser, which never allocates.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: forwarded; the caller upholds `alloc`'s contract.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded; `ptr` came from this allocator, hence from `System`.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+use counting::allocations;
 
 fn ok(s: CaveclodStatus) {
     assert_eq!(s, CaveclodStatus::Ok, "{s:?}");
@@ -64,6 +39,7 @@ fn paged() -> Vec<u8> {
 
 #[test]
 fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
+    counting::assert_counting();
     let file = paged();
     let root_len = u64::from_le_bytes(file[16..24].try_into().expect("8 bytes")) as usize;
     let (_root_words, root_bytes) = aligned(root_len);

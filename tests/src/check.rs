@@ -46,6 +46,23 @@ fn check_active_sets(
     want_nodes: &HashSet<NodeId>,
     want_polys: &HashSet<PolyId>,
 ) -> Result<Vec<PolyId>, String> {
+    let polys = compare_active_sets(h, cam, want_nodes, want_polys)?;
+    for v in h.nodes().iter().enumerate().map(|(i, _)| NodeId(i as u32)) {
+        if cam.is_node_active(h, v) != want_nodes.contains(&v) {
+            return Err(format!("is_node_active({v}) wrong"));
+        }
+    }
+    Ok(polys)
+}
+
+/// The camera's active nodes and polygons, each listed once and counted, against the
+/// derived sets; returns the active polygons in the camera's order.
+fn compare_active_sets(
+    h: &impl HierarchyRecords,
+    cam: &CameraState<'_>,
+    want_nodes: &HashSet<NodeId>,
+    want_polys: &HashSet<PolyId>,
+) -> Result<Vec<PolyId>, String> {
     let nodes: HashSet<NodeId> = cam.active_nodes().collect();
     if nodes.len() != cam.active_node_count() as usize || &nodes != want_nodes {
         return Err(format!(
@@ -66,11 +83,6 @@ fn check_active_sets(
             polys.len(),
             want_polys.len()
         ));
-    }
-    for v in h.nodes().iter().enumerate().map(|(i, _)| NodeId(i as u32)) {
-        if cam.is_node_active(h, v) != want_nodes.contains(&v) {
-            return Err(format!("is_node_active({v}) wrong"));
-        }
     }
     Ok(polys)
 }
@@ -215,27 +227,7 @@ pub fn check_records_front(h: &impl HierarchyRecords, cam: &CameraState<'_>) -> 
         }
         stack.extend([s.stationary, s.floating]);
     }
-    let nodes: HashSet<NodeId> = cam.active_nodes().collect();
-    if nodes.len() != cam.active_node_count() as usize || nodes != want_nodes {
-        return Err(format!(
-            "active nodes {} (count {}) differ from the derived {}",
-            nodes.len(),
-            cam.active_node_count(),
-            want_nodes.len()
-        ));
-    }
-    let polys: Vec<PolyId> = cam.active_polygons(h).collect();
-    let poly_set: HashSet<PolyId> = polys.iter().copied().collect();
-    if polys.len() != poly_set.len()
-        || poly_set != want_polys
-        || polys.len() != cam.active_polygon_count() as usize
-    {
-        return Err(format!(
-            "active polygons {} differ from the derived {}",
-            polys.len(),
-            want_polys.len()
-        ));
-    }
+    let polys = compare_active_sets(h, cam, &want_nodes, &want_polys)?;
     for &f in &polys {
         let corners = cam
             .polygon_corners(h, f)
