@@ -229,7 +229,7 @@ pub(crate) unsafe fn init_camera(
     out: *mut CaveclodCamera,
 ) -> Result<()> {
     let layout = memory_layout(h, config)?;
-    let base = ffi::caller_memory(memory, bytes, layout.total_bytes)?;
+    let base = ffi::caller_memory(memory, CAVECLOD_MEMORY_ALIGN, bytes, layout.total_bytes)?;
     // SAFETY: `memory` is valid for `bytes >= total_bytes` bytes; zeroing the state words
     // first makes every `u32` of the slice below initialised.
     unsafe { base.write_bytes(0, layout.state_bytes) };

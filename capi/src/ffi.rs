@@ -101,18 +101,18 @@ pub(crate) struct Cell<T> {
     pub value: T,
 }
 
-/// The caller's memory for a handle, checked: non-null (`NullPointer`), aligned to
-/// `CAVECLOD_MEMORY_ALIGN` (`Misaligned`), at least `needed` of its `bytes`
-/// (`MemoryTooSmall`).
+/// The caller's memory for a handle, checked: non-null (`NullPointer`), aligned to `align`
+/// (`Misaligned`), at least `needed` of its `bytes` (`MemoryTooSmall`).
 pub(crate) fn caller_memory(
     memory: *mut core::ffi::c_void,
+    align: usize,
     bytes: usize,
     needed: usize,
 ) -> Result<*mut u8> {
     if memory.is_null() {
         return Err(CaveclodStatus::NullPointer);
     }
-    if memory.align_offset(crate::camera::CAVECLOD_MEMORY_ALIGN) != 0 {
+    if memory.align_offset(align) != 0 {
         return Err(CaveclodStatus::Misaligned);
     }
     if bytes < needed {

@@ -8,6 +8,7 @@
 
 use caveclod_core::{Octree, OctreeCut};
 
+use crate::camera::CAVECLOD_MEMORY_ALIGN;
 use crate::ffi::{self, guarded, Result};
 use crate::hierarchy::{hierarchy, CaveclodHierarchy};
 use crate::status::CaveclodStatus;
@@ -224,7 +225,7 @@ pub unsafe extern "C" fn caveclod_octree_cut_init(
         let o = unsafe { octree(o) }?;
         let words = OctreeCut::words_needed(o);
         let needed = words.saturating_mul(4);
-        let base = ffi::caller_memory(memory, bytes, needed)?.cast::<u32>();
+        let base = ffi::caller_memory(memory, CAVECLOD_MEMORY_ALIGN, bytes, needed)?.cast::<u32>();
         // SAFETY: valid for `bytes >= 4 * words` bytes; zeroed so every word is initialised.
         unsafe { base.write_bytes(0, words) };
         // SAFETY: aligned, initialised, used only through this cut while it lives (the

@@ -245,7 +245,7 @@ pub unsafe extern "C" fn caveclod_pool_init(
         if pool_bytes.is_null() {
             return Err(CaveclodStatus::NullPointer);
         }
-        let base = ffi::caller_memory(memory, memory_bytes, total)?;
+        let base = ffi::caller_memory(memory, CAVECLOD_MEMORY_ALIGN, memory_bytes, total)?;
         let tables = base.cast::<Table>();
         for i in 0..config.files as usize {
             // SAFETY: `table_bytes` bytes at `base` hold `files` tables, aligned (asserted).

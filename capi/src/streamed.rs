@@ -149,7 +149,7 @@ pub unsafe extern "C" fn caveclod_frame_lists_init(
         // SAFETY: the caller's contract.
         let config = *unsafe { pool_ref(pool) }?.config();
         let (wants_bytes, total) = lists_layout(&config, max_wants)?;
-        let base = ffi::caller_memory(memory, bytes, total)?;
+        let base = ffi::caller_memory(memory, CAVECLOD_MEMORY_ALIGN, bytes, total)?;
         let wants = base.cast::<Want>();
         for i in 0..max_wants as usize {
             // SAFETY: `wants_bytes` bytes at `base` hold `max_wants` wants, aligned (asserted).
