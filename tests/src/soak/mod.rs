@@ -190,7 +190,7 @@ pub fn run(
     };
     let mut lists: Vec<Vec<u32>> = (0..h.surface_count()).map(|_| vec![0; most]).collect();
     let mut slices: Vec<&mut [u32]> = lists.iter_mut().map(Vec::as_mut_slice).collect();
-    let terrain = Terrain::of(h);
+    let terrain = Terrain::of(h.meta());
     let mut rng = SplitMix64::new(config.seed);
     let mut pilots: [Pilot; CAMERAS] = std::array::from_fn(|_| Pilot::new(&mut rng, &terrain));
     let mut report = SoakReport::default();

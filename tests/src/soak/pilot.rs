@@ -6,6 +6,7 @@
 
 use std::f32::consts::PI;
 
+use caveclod_core::format::Meta;
 use caveclod_core::glam::Vec3;
 use caveclod_core::{CameraConfig, Hierarchy, LookAt, RefineParams, Regulator, View};
 
@@ -53,9 +54,8 @@ pub struct Terrain {
 }
 
 impl Terrain {
-    /// The box of `h`'s positions.
-    pub fn of(h: &Hierarchy<'_>) -> Self {
-        let m = h.meta();
+    /// The box of the positions of the file whose counts are `m` (whole or paged).
+    pub fn of(m: &Meta) -> Self {
         let (lo, hi) = (
             Vec3::from_array(m.bounds_min),
             Vec3::from_array(m.bounds_max),

@@ -11,7 +11,6 @@
 //! counter says), and reads no absent page (the lists count it).
 
 use caveclod_core::format::paged::PagedRoot;
-use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{
     FrameLists, LoadRequest, PageKey, PageState, PageTable, PoolConfig, Pressure, PressureSignal,
     Residency, ScheduleStats, StreamedHierarchy, Want,
@@ -132,7 +131,7 @@ pub fn run_streamed(
         }
         cams
     };
-    let terrain = terrain_of(root);
+    let terrain = Terrain::of(root.meta());
     let mut pilots: Vec<Pilot> = (0..CAMERAS)
         .map(|_| Pilot::new(&mut rng, &terrain))
         .collect();
@@ -241,17 +240,6 @@ fn load(
             .map_err(|e| format!("install: {e}"))?;
     }
     Ok(s)
-}
-
-/// The terrain's box from the file's bounds.
-fn terrain_of(root: &PagedRoot<'_>) -> Terrain {
-    let m = root.meta();
-    let (lo, hi) = (
-        Vec3::from_array(m.bounds_min),
-        Vec3::from_array(m.bounds_max),
-    );
-    let size = (hi.x - lo.x).max(hi.z - lo.z).max(1e-3);
-    Terrain { lo, hi, size }
 }
 
 /// A camera's random events: a teleport, a reset, new knobs.
