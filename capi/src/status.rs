@@ -118,9 +118,9 @@ impl From<CameraError> for CaveclodStatus {
     fn from(e: CameraError) -> Self {
         match e {
             CameraError::Capacity { .. } => Self::MemoryTooSmall,
-            CameraError::TooManyPairs { .. } | CameraError::TooManyMorphs { .. } => {
-                Self::InvalidConfig
-            }
+            CameraError::TooManyPairs { .. }
+            | CameraError::TooManyMorphs { .. }
+            | CameraError::IndexEdits { .. } => Self::InvalidConfig,
         }
     }
 }
@@ -139,6 +139,7 @@ impl From<EmitError> for CaveclodStatus {
     fn from(e: EmitError) -> Self {
         match e {
             EmitError::WrongHierarchy => Self::WrongHierarchy,
+            EmitError::NoIndexEdits => Self::InvalidArgument,
             EmitError::TooFewOutputs { .. } | EmitError::OutputTooSmall { .. } => {
                 Self::OutputTooSmall
             }

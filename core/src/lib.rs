@@ -86,8 +86,8 @@ mod view;
 /// buffer's bytes to upload, with the crate's own version.
 pub use bytemuck;
 pub use camera::{
-    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, OpError,
-    RefineStats,
+    CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, IndexEdit,
+    IndexEdits, OpError, RefineStats, SurfaceDraw,
 };
 pub use format::error::FormatError;
 pub use glam;

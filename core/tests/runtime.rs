@@ -365,6 +365,7 @@ fn too_little_camera_memory_is_refused() {
         index_cache: true,
         hashed_pair_map: false,
         max_morphs: 0,
+        edit_list: 0,
     };
     assert_eq!(
         CameraState::with_config(&h, &mut memory, &config).err(),
@@ -384,6 +385,7 @@ fn a_full_camera_refuses_splits_without_failing() {
         index_cache: true,
         hashed_pair_map: true,
         max_morphs: 0,
+        edit_list: 0,
     };
     let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
     let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");
@@ -519,6 +521,7 @@ fn refine_stats_count_every_split_applied() {
             // Both layouts of the pair map (small budgets hash where asked).
             hashed_pair_map: max_pairs % 2 == 0,
             max_morphs: 0,
+            edit_list: 0,
         };
         let mut memory = vec![0u32; CameraState::words_needed_for(&h, &config)];
         let mut cam = CameraState::with_config(&h, &mut memory, &config).expect("memory");

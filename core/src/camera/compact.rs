@@ -138,23 +138,30 @@ impl Front<'_> {
         let cached = self.caches_indices();
         // A pair's two slots and two cache entries (`live` bounds every index: `compact`
         // checked it against both arrays).
-        let take = |f: &Self, k: usize| -> ([PolySlot; 2], [SlotTriangle; 2]) {
+        // A pair's places in the index buffer go with it (see `placement`).
+        let take = |f: &Self, k: usize| -> ([PolySlot; 2], [SlotTriangle; 2], [u32; 2]) {
             let s = [f.slots[base + 2 * k], f.slots[base + 2 * k + 1]];
             let t = if cached {
                 [f.triangles[base + 2 * k], f.triangles[base + 2 * k + 1]]
             } else {
                 [EMPTY; 2]
             };
-            (s, t)
+            let place = |i: usize| f.placement.place.get(i).copied().unwrap_or(NONE);
+            (s, t, [place(base + 2 * k), place(base + 2 * k + 1)])
         };
-        let put = |f: &mut Self, k: usize, (s, t): ([PolySlot; 2], [SlotTriangle; 2])| {
-            f.slots[base + 2 * k] = s[0];
-            f.slots[base + 2 * k + 1] = s[1];
-            if cached {
-                f.triangles[base + 2 * k] = t[0];
-                f.triangles[base + 2 * k + 1] = t[1];
-            }
-        };
+        let put =
+            |f: &mut Self, k: usize, (s, t, p): ([PolySlot; 2], [SlotTriangle; 2], [u32; 2])| {
+                f.slots[base + 2 * k] = s[0];
+                f.slots[base + 2 * k + 1] = s[1];
+                if cached {
+                    f.triangles[base + 2 * k] = t[0];
+                    f.triangles[base + 2 * k + 1] = t[1];
+                }
+                for side in 0..2 {
+                    let slot = base + 2 * k + side;
+                    f.placement.put(slot as u32, p[side]);
+                }
+            };
         for start in 0..n {
             // The pair now owned by `owner[start]` was at `pair_of`'s entry until moved.
             let Some(src) = self.old_place(start, n) else {

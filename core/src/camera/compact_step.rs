@@ -28,10 +28,10 @@
 //! holds still ends in exactly the order of [`CameraState::compact`].
 
 use super::compact_progress::{Progress, GAPS, IDLE, PAIRS, RECORDS, SQUEEZE};
-use super::records::{next, prev, PolySlot, FREE, NONE};
+use super::fan::FanStart;
+use super::records::{next, prev, FREE, NONE};
 use super::state::{CameraState, Front};
 use crate::hierarchy::HierarchyRecords;
-use crate::ids::NodeId;
 
 /// A corner or link value no record or slot has: the middle of a three-way rename.
 const PARKED: u32 = NONE - 1;
@@ -44,13 +44,6 @@ pub struct CompactProgress {
     /// The call ended a compaction cycle: a cycle the front did not change under leaves the
     /// camera in [`CameraState::compact`]'s order.
     pub finished: bool,
-}
-
-/// Where a record's fan starts: a slot naming it, or no polygon at all.
-#[derive(Clone, Copy)]
-enum FanStart {
-    At(u32),
-    Empty,
 }
 
 impl Front<'_> {
@@ -187,36 +180,6 @@ impl Front<'_> {
         Some(looked_a + looked_b + 3 * work + 2)
     }
 
-    /// A slot naming live record `r`, or `Empty` for a root no base polygon names (a vertex
-    /// without polygons), with the slots looked at to find it; `None` if the front
-    /// contradicts the hierarchy.
-    fn fan_start(&self, h: &impl HierarchyRecords, r: u32) -> Option<(FanStart, u32)> {
-        let node = self.active.get(r as usize)?.node;
-        if node & FREE != 0 {
-            return None;
-        }
-        let n = h.node(NodeId(node))?;
-        let names = |s: u32| {
-            self.slots
-                .get(s as usize)
-                .is_some_and(|p| p.corners.contains(&r))
-        };
-        if h.node(n.parent).is_none() {
-            let found = (0..self.base).find(|&s| names(s));
-            let looked = found.map_or(self.base, |s| s + 1);
-            return Some((found.map_or(FanStart::Empty, FanStart::At), looked));
-        }
-        let pair = self.pair_of.get(n.parent.index())?;
-        if pair >= self.pairs {
-            return None;
-        }
-        let left = self.base + 2 * pair;
-        [left, left + 1]
-            .into_iter()
-            .find(|&s| names(s))
-            .map(|s| (FanStart::At(s), 2))
-    }
-
     /// Walks the fan of record `r` from `start`: its slots each name `r` once and the walk
     /// closes or ends at two borders; the number of slots, or `None`.
     fn check_fan(&self, start: FanStart, r: u32) -> Option<u32> {
@@ -282,48 +245,6 @@ impl Front<'_> {
         }
     }
 
-    /// Visits the fan of record `r` from slot `s0` (each slot with the corner naming `r`),
-    /// round one way and, from a border, the other way; `false` as soon as `visit` says so,
-    /// a slot does not name `r`, or the walk runs longer than the front has polygons.
-    fn walk_fan(&self, s0: u32, r: u32, mut visit: impl FnMut(&PolySlot, usize) -> bool) -> bool {
-        let bound = self.active_polygons.saturating_add(1);
-        for back in [false, true] {
-            let mut s = s0;
-            let mut steps = 0u32;
-            loop {
-                let Some(slot) = self.slots.get(s as usize) else {
-                    return false;
-                };
-                let Some(j) = slot.corners.iter().position(|&c| c == r) else {
-                    return false;
-                };
-                // The way back starts at the first slot, which the way out visited.
-                let first_again = back && s == s0;
-                if !first_again && !visit(slot, j) {
-                    return false;
-                }
-                let link = if back {
-                    slot.neighbours[next(j)]
-                } else {
-                    slot.neighbours[prev(j)]
-                };
-                if link == s0 {
-                    // Closed: every slot was visited going one way.
-                    return !back;
-                }
-                if link == NONE {
-                    break;
-                }
-                s = link;
-                steps += 1;
-                if steps > bound {
-                    return false;
-                }
-            }
-        }
-        true
-    }
-
     /// Swaps pairs `a` and `b` (both live): their slots, index-cache entries, owners, the
     /// map's entries, their refusal and coarsening bits, and the links into them.
     fn swap_pairs(&mut self, a: u32, b: u32) -> Option<u32> {
@@ -386,10 +307,7 @@ impl Front<'_> {
         }
         for side in 0..2 {
             self.slots.swap((la + side) as usize, (lb + side) as usize);
-            if self.caches_indices() {
-                self.triangles
-                    .swap((la + side) as usize, (lb + side) as usize);
-            }
+            self.swap_cached(la + side, lb + side);
         }
         for &x in &moved {
             let s = &mut self.slots[x as usize];

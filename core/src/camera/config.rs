@@ -32,6 +32,12 @@ pub struct CameraConfig {
     /// [`full`](Self::full) and [`with_polygon_budget`](Self::with_polygon_budget), and a
     /// camera without morphs splits and collapses at once.
     pub max_morphs: u32,
+    /// Entries of the list of index-buffer places that changed since the host last took
+    /// the camera's [`index_edits`](crate::CameraState::index_edits); 0 (the default) keeps
+    /// no placement. With one, each polygon keeps a place in a device index buffer and the
+    /// host writes only the places that changed ([`with_index_edits`](Self::with_index_edits)
+    /// says how to size it). Needs the index cache.
+    pub edit_list: u32,
 }
 
 impl CameraConfig {
@@ -43,6 +49,7 @@ impl CameraConfig {
             index_cache: true,
             hashed_pair_map: false,
             max_morphs: 0,
+            edit_list: 0,
         }
     }
 
@@ -56,6 +63,7 @@ impl CameraConfig {
             index_cache: true,
             hashed_pair_map: false,
             max_morphs: 0,
+            edit_list: 0,
         }
     }
 
@@ -81,6 +89,23 @@ impl CameraConfig {
     /// says the room is too small for the flight.
     pub fn with_morphs(self, max_morphs: u32) -> Self {
         Self { max_morphs, ..self }
+    }
+
+    /// This configuration keeping its polygons' places in a device index buffer, with a
+    /// list of `list` changed places between two [`index_edits`](crate::CameraState::index_edits).
+    ///
+    /// How to size it: an operation changes the places of its pair and of the polygons round
+    /// the vertex it moves (about eight), a morph's start or end those round its vertex (about
+    /// six), and a frame's list holds each place once. A list that fills asks the host to
+    /// rewrite every place on its next edits (counted in
+    /// [`IndexEdits::everything`](crate::IndexEdits::everything)), which is exact but costs
+    /// what full emission costs. Each camera keeps 4 bytes per polygon slot, 4 bytes and two
+    /// bits per place (a place per slot and surface) and 4 bytes per entry.
+    pub fn with_index_edits(self, list: u32) -> Self {
+        Self {
+            edit_list: list,
+            ..self
+        }
     }
 
     /// The default forced-split stack: 32 entries per level of the hierarchy's depth, at
@@ -119,6 +144,14 @@ pub enum CameraError {
         /// Vertices of the hierarchy.
         vertex_count: u32,
     },
+    /// Index edits asked for without the index cache they read, or with more places
+    /// (polygon slots × surfaces) than 32-bit indices can address three at a time.
+    IndexEdits {
+        /// Places the configuration needs.
+        places: u64,
+        /// Whether the index cache is on.
+        index_cache: bool,
+    },
 }
 
 impl core::fmt::Display for CameraError {
@@ -147,6 +180,19 @@ impl core::fmt::Display for CameraError {
                 "max_morphs {max_morphs}: two slots per morph after {vertex_count} vertices \
                  exceed 32-bit indices"
             ),
+            Self::IndexEdits {
+                places,
+                index_cache,
+            } => {
+                if *index_cache {
+                    write!(
+                        f,
+                        "index edits: {places} places exceed 32-bit index offsets"
+                    )
+                } else {
+                    write!(f, "index edits need the index cache")
+                }
+            }
         }
     }
 }

@@ -50,6 +50,9 @@ pub enum EmitError {
         /// Its corner.
         corner: u8,
     },
+    /// [`index_edits`](CameraState::index_edits) on a camera made without
+    /// [`CameraConfig::edit_list`](crate::CameraConfig::edit_list).
+    NoIndexEdits,
     /// A surface received a different number of indices than the camera counted: the camera
     /// was used on after an [`OpError::Inconsistent`](crate::OpError::Inconsistent) without
     /// a [`reset`](CameraState::reset). The output is not usable.
@@ -77,6 +80,7 @@ impl core::fmt::Display for EmitError {
                 needed,
                 given,
             } => crate::outputs::write_too_small(f, *surface, *needed, *given),
+            Self::NoIndexEdits => write!(f, "the camera keeps no index edits"),
             Self::MissingVertex { poly, corner } => {
                 write!(
                     f,

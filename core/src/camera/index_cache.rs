@@ -142,6 +142,7 @@ impl Front<'_> {
             i
         });
         *t.indices.get_mut(corner)? = index;
+        self.placement.mark_slot(slot);
         Some(before)
     }
 
@@ -167,11 +168,38 @@ impl Front<'_> {
         }
     }
 
-    /// Writes `slot`'s entry.
+    /// Writes the entry of `slot`, which now holds a new polygon (or nothing), and gives the
+    /// polygon its place in the index buffer.
     #[inline]
     pub fn set_cached(&mut self, slot: u32, entry: SlotTriangle) {
         if let Some(t) = self.triangles.get_mut(slot as usize) {
             *t = entry;
+            self.placement.unplace(slot);
+            if entry.surface != NO_POLYGON {
+                self.placement.place_new(slot, entry.surface);
+            }
+        }
+    }
+
+    /// The polygons of `slots` leave the front: their places are freed.
+    #[inline]
+    pub fn uncache(&mut self, slots: [u32; 2]) {
+        for s in slots {
+            self.placement.unplace(s);
+        }
+    }
+
+    /// Places the base polygons (a reset; the placement starts over).
+    pub fn place_base_slots(&mut self) {
+        if !self.placement.is_on() {
+            return;
+        }
+        self.placement.clear();
+        for slot in 0..(self.base as usize).min(self.triangles.len()) {
+            let surface = self.triangles[slot].surface;
+            if surface != NO_POLYGON {
+                self.placement.place_new(slot as u32, surface);
+            }
         }
     }
 
@@ -190,13 +218,28 @@ impl Front<'_> {
         }
     }
 
-    /// Moves slot `from`'s entry to slot `to` (a pair filling a hole).
+    /// Moves slot `from`'s entry to slot `to` (a pair filling a hole); its polygon keeps its
+    /// place.
     #[inline]
     pub fn move_cached(&mut self, from: u32, to: u32) {
         if let Some(&t) = self.triangles.get(from as usize) {
             if let Some(dst) = self.triangles.get_mut(to as usize) {
                 *dst = t;
+                self.placement.move_slot(from, to);
             }
+        }
+    }
+
+    /// Swaps the entries of slots `a` and `b` (compaction swapping pairs); their polygons
+    /// keep their places.
+    #[inline]
+    pub fn swap_cached(&mut self, a: u32, b: u32) {
+        if self.caches_indices()
+            && (a as usize) < self.triangles.len()
+            && (b as usize) < self.triangles.len()
+        {
+            self.triangles.swap(a as usize, b as usize);
+            self.placement.swap_slots(a, b);
         }
     }
 

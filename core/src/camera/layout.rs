@@ -8,6 +8,8 @@ use super::morph_map::MorphMap;
 use super::morph_pool;
 use super::morph_pool::{MorphScalars, Morphs};
 use super::pair_map::PairMap;
+use super::placement;
+use super::placement::{Placement, PlacementScalars};
 use super::records::{ACTIVE_WORDS, NONE, SLOT_WORDS, TRIANGLE_WORDS};
 use super::state::{CameraState, Front};
 use crate::hierarchy::HierarchyRecords;
@@ -48,7 +50,7 @@ impl Layout {
     }
 
     /// Words of each array, in the order they lie in memory.
-    fn array_words(&self) -> [usize; 13] {
+    fn array_words(&self) -> [usize; 19] {
         let c = &self.config;
         let mp = c.max_pairs as usize;
         let triangles = if c.index_cache {
@@ -58,6 +60,8 @@ impl Layout {
         };
         let [morph_vertices, morph_states, morph_map, coarsening, morph_free] =
             morph_pool::words(c.max_morphs as usize, self.vertices, mp);
+        let [place, slot_of, free, marked, list, regions] =
+            placement::words(self.slots(), self.surfaces, c.edit_list as usize);
         [
             PairMap::words(self.splits, mp, c.hashed_pair_map),
             mp,
@@ -72,6 +76,12 @@ impl Layout {
             morph_map,
             coarsening,
             morph_free,
+            place,
+            slot_of,
+            free,
+            marked,
+            list,
+            regions,
         ]
     }
 
@@ -99,6 +109,7 @@ pub(crate) struct Scalars {
     visit_cursor: u32,
     compaction: Progress,
     refined: bool,
+    placement: PlacementScalars,
 }
 
 impl Scalars {
@@ -118,6 +129,7 @@ impl Scalars {
             visit_cursor: 0,
             compaction: Progress::IDLE,
             refined: false,
+            placement: PlacementScalars::default(),
         }
     }
 }
@@ -127,7 +139,7 @@ impl<'m> CameraState<'m> {
     /// least `layout.words()` words) and whose other state is `scalars`. Nothing is written:
     /// the words are the camera's as they were when `scalars` was taken, or are reset next.
     pub(crate) fn carve(memory: &'m mut [u32], layout: &Layout, scalars: Scalars) -> Self {
-        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len, morph_vertex_words, morph_state_words, morph_map_words, coarsening_words, free_words] =
+        let [pair_words, owner_words, active_words, slot_words, surfaces, refused_len, triangle_words, stack_len, morph_vertex_words, morph_state_words, morph_map_words, coarsening_words, free_words, place_words, slot_of_words, hole_words, marked_words, list_words, region_words] =
             layout.array_words();
         let c = &layout.config;
         let (pair_of, rest) = memory.split_at_mut(pair_words);
@@ -142,7 +154,13 @@ impl<'m> CameraState<'m> {
         let (morph_states, rest) = rest.split_at_mut(morph_state_words);
         let (morph_map, rest) = rest.split_at_mut(morph_map_words);
         let (coarsening, rest) = rest.split_at_mut(coarsening_words);
-        let (morph_free, _) = rest.split_at_mut(free_words);
+        let (morph_free, rest) = rest.split_at_mut(free_words);
+        let (place, rest) = rest.split_at_mut(place_words);
+        let (slot_of, rest) = rest.split_at_mut(slot_of_words);
+        let (holes, rest) = rest.split_at_mut(hole_words);
+        let (marked, rest) = rest.split_at_mut(marked_words);
+        let (list, rest) = rest.split_at_mut(list_words);
+        let (regions, _) = rest.split_at_mut(region_words);
         let mp = c.max_pairs as usize;
         Self {
             front: Front {
@@ -173,6 +191,15 @@ impl<'m> CameraState<'m> {
                 visit_cursor: scalars.visit_cursor,
                 refined: scalars.refined,
                 compaction: scalars.compaction,
+                placement: Placement {
+                    place,
+                    slot_of,
+                    free: holes,
+                    marked,
+                    list,
+                    regions: bytemuck::cast_slice_mut(regions),
+                    scalars: scalars.placement,
+                },
             },
             stack: bytemuck::cast_slice_mut(stack),
         }
@@ -196,6 +223,7 @@ impl<'m> CameraState<'m> {
             visit_cursor: f.visit_cursor,
             refined: f.refined,
             compaction: f.compaction,
+            placement: f.placement.scalars,
         }
     }
 }

@@ -57,6 +57,16 @@ impl<'m> CameraState<'m> {
                 split_count: ns as u32,
             });
         }
+        if config.edit_list > 0 {
+            let slots = h.base_polygon_count() as u64 + 2 * u64::from(config.max_pairs);
+            let places = slots * h.surface_count() as u64;
+            if !config.index_cache || 3 * places >= u64::from(NONE) {
+                return Err(CameraError::IndexEdits {
+                    places,
+                    index_cache: config.index_cache,
+                });
+            }
+        }
         let slots = 2 * u64::from(config.max_morphs);
         if h.vertex_id_bound() as u64 + slots >= u64::from(NONE) {
             return Err(CameraError::TooManyMorphs {
@@ -116,5 +126,6 @@ impl<'m> CameraState<'m> {
         f.compaction = Progress::IDLE;
         f.morphs.clear();
         f.cache_slots(h, 0, f.base as usize);
+        f.place_base_slots();
     }
 }

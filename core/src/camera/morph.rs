@@ -103,13 +103,15 @@ impl Front<'_> {
         }
     }
 
-    /// Ends morph `m`; a coarsening pair's bits go with it.
-    fn free_morph(&mut self, m: u32) {
+    /// Ends morph `m`; a coarsening pair's bits go with it, and the polygons round its
+    /// vertex are marked for the index edits (their corners stop pointing at its slots).
+    fn free_morph(&mut self, h: &impl HierarchyRecords, m: u32) {
         if let Some(state) = self.morphs.state(m) {
             if state.phase == COARSENING {
                 self.set_phase(m, NodeId(state.parent), REFINING);
             }
             self.morphs.free(m);
+            self.mark_floating_fan(h, NodeId(state.parent));
         }
     }
 
@@ -191,12 +193,13 @@ impl Front<'_> {
         if !mapped {
             // The map has room for every slot (see `morph_map`); a camera whose own
             // bookkeeping says otherwise moves this vertex at once.
-            self.free_morph(m);
+            self.free_morph(h, m);
             return false;
         }
         if phase == COARSENING {
             self.set_phase(m, parent, COARSENING);
         }
+        self.mark_floating_fan(h, parent);
         true
     }
 
@@ -220,7 +223,7 @@ impl Front<'_> {
     /// Ends the morph of the vertices at `floating`'s position, if any (its pair collapsed).
     pub fn end_morph_of(&mut self, h: &impl HierarchyRecords, floating: NodeId) {
         if let Some(m) = self.morph_of(h, floating) {
-            self.free_morph(m);
+            self.free_morph(h, m);
         }
     }
 
@@ -276,7 +279,7 @@ impl Front<'_> {
             }
             st.morphs_dropped += 1;
         } else if let Some(m) = running {
-            self.free_morph(m);
+            self.free_morph(h, m);
             st.morphs_finished += 1;
         }
         false
@@ -410,7 +413,7 @@ impl Front<'_> {
                     if t <= 0.0 && st.operations() < max_ops {
                         if let Some(slots) = self.collapse_slots(h, parent) {
                             self.apply_collapse(h, parent, slots)?;
-                            self.free_morph(m);
+                            self.free_morph(h, m);
                             st.collapses += 1;
                             st.morphs_finished += 1;
                             continue;
@@ -430,7 +433,7 @@ impl Front<'_> {
             }
             let t = (t + up).min(1.0);
             if t >= 1.0 {
-                self.free_morph(m);
+                self.free_morph(h, m);
                 st.morphs_finished += 1;
             } else {
                 self.morphs.set_t(m, t);

@@ -5,6 +5,7 @@ use super::certificate::Odometer;
 use super::compact_progress::Progress;
 use super::morph_pool::Morphs;
 use super::pair_map::PairMap;
+use super::placement::Placement;
 use super::records::{ActiveVertex, PolySlot, SlotTriangle};
 use crate::ids::NodeId;
 #[cfg(doc)]
@@ -34,6 +35,11 @@ use crate::{gpu::MorphVertex, CameraConfig, Hierarchy, RefineStats};
 /// | `morph_map` | 2 × (4 × `max_morphs` + 1) + vertices / 32, 0 without morphs | a bit per vertex (it morphs), and the morph slot by morphing vertex, hashed, for morphed emission |
 /// | `coarsening` | `max_pairs` / 32, 0 without morphs | a bit per pair: its floating child coarsen-morphs |
 /// | `morph_free` | `max_morphs` / 32 | a bit per free morph (a new one takes the lowest) |
+/// | `place` | slots (0 without index edits) | per slot its polygon's place in the device index buffer |
+/// | `slot_of` | slots × surfaces (0 without) | per place the slot whose polygon lies there |
+/// | `free`, `marked` | places / 32 each (0 without) | a bit per place: a hole; changed since the last edits |
+/// | `list` | `edit_list` | the places changed since the last edits |
+/// | `regions` | 5 × surfaces (0 without) | per surface its places' first, capacity, end, holes |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff
@@ -140,4 +146,7 @@ pub(crate) struct Front<'m> {
     pub refined: bool,
     /// How far an incremental compaction has come (see `compact_step`).
     pub compaction: Progress,
+    /// Each polygon's place in the device index buffer, and the places changed since the
+    /// host last took the edits (empty arrays without [`CameraConfig::edit_list`]).
+    pub placement: Placement<'m>,
 }

@@ -103,6 +103,7 @@ impl Front<'_> {
                 }
             }
         }
+        self.uncache([fl, fr]);
         self.remove_pair(k, v)
     }
 
