@@ -160,6 +160,10 @@ pub struct FlyoverArgs {
     /// paper's cameras did (the library keeps each polygon's indices by default).
     #[arg(long)]
     pub no_index_cache: bool,
+    /// Keep each camera's index buffer edited in place: a place per polygon and a list of
+    /// this many changed places, taken each frame after emission and timed apart (0: off).
+    #[arg(long, default_value_t = 0)]
+    pub index_edits: u32,
     /// With --threads, leave the camera threads to the system instead of pinning each to
     /// a core with the cameras shared out by cost.
     #[arg(long)]

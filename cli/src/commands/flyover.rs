@@ -88,5 +88,6 @@ fn options(a: &FlyoverArgs) -> FlyoverOptions {
         morph_radius_tolerances: a.morph_radius,
         morph_guard_rad: a.morph_guard.to_radians(),
         target_polygons: a.target_polygons,
+        index_edits: a.index_edits,
     }
 }

@@ -177,6 +177,11 @@ pub struct FlyoverOptions {
     /// How far beyond the view's sides a morphing camera refines, in radians
     /// ([`RefineParams::morph_guard_rad`]).
     pub morph_guard_rad: f32,
+    /// Index edits ([`CameraConfig::edit_list`]): each camera keeps its polygons' places
+    /// in a device index buffer and a list of this many changed places; after emission,
+    /// each frame also takes the camera's edits ([`CameraState::index_edits`]), timed
+    /// apart, so the two ways to prepare a draw are measured in the same run (0: off).
+    pub index_edits: u32,
     /// Fly every camera with a [`caveclod_core::Regulator`] holding this many active
     /// polygons, starting at `tolerance` (a state per camera on one thread only). The
     /// cameras are budgeted to the target plus 25%, without a sizing flight.
@@ -204,6 +209,7 @@ impl Default for FlyoverOptions {
             morph_radius_tolerances: RefineParams::default().morph_radius_tolerances,
             morph_guard_rad: RefineParams::default().morph_guard_rad,
             target_polygons: None,
+            index_edits: 0,
         }
     }
 }
@@ -446,7 +452,10 @@ fn pin_costs(options: &FlyoverOptions, p: &Prepared) -> Option<Vec<f64>> {
 
 /// Flies `options` over `h`.
 pub fn fly(h: &Hierarchy<'_>, options: &FlyoverOptions) -> Result<Flyover, String> {
-    let p = prepare(h, options)?;
+    let mut p = prepare(h, options)?;
+    if options.index_cache {
+        p.config.edit_list = options.index_edits;
+    }
     let mut pilots = Vec::new();
     let flight = if options.mode == Mode::Shared {
         fly_shared(h, &p.views, &p.params, &p.config, options.compaction())?

@@ -60,6 +60,12 @@ impl Flyover {
                     "refine_ms_p99": r.refine_ms_p99(),
                     "refine_cpu_ms_p99": r.refine_cpu_ms_p99(),
                     "emit_ms_mean": r.emit_ms_mean(),
+                    "index_edits": (!r.edits.is_empty()).then(|| json!({
+                        "ms_mean": r.edits_ms_mean(),
+                        "edits_mean": r.edits_mean(),
+                        "bytes_per_changed_polygon": r.edit_bytes_per_change(),
+                        "frames_rewriting_everything": r.edits_everything,
+                    })),
                     "active_polygons_mean": r.active_mean(),
                     "active_polygons_max": r.active_max(),
                     "indices_total": r.indices_total(),
@@ -336,6 +342,22 @@ impl Flyover {
                 r.active_mean(),
                 r.active_max(),
                 r.refusals,
+            );
+        }
+        for (name, r) in self.names.iter().zip(&self.flight.records) {
+            if r.edits.is_empty() {
+                continue;
+            }
+            let _ = writeln!(
+                o,
+                "  {:<14} index edits: {:.3} ms mean against emission's {:.3} ms, {:.0} edits a \
+                 frame, {:.1} bytes per changed polygon, {} frames rewrote every place",
+                name,
+                r.edits_ms_mean(),
+                r.emit_ms_mean(),
+                r.edits_mean(),
+                r.edit_bytes_per_change(),
+                r.edits_everything,
             );
         }
         let _ = writeln!(

@@ -27,6 +27,7 @@ fn modes_fly_and_per_camera_state_saves_operations() {
         morph_radius_tolerances: 16.0,
         morph_guard_rad: 0.1,
         target_polygons: None,
+        index_edits: 0,
     };
     let per = fly(&h, &options).expect("per-camera flight");
     let shared = fly(

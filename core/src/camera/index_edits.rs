@@ -14,6 +14,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::emit::EmitError;
+use super::index_cache::BATCH;
 use super::morph::MorphRemap;
 use super::records::{NONE, NO_POLYGON};
 use super::state::CameraState;
@@ -127,40 +128,50 @@ impl CameraState<'_> {
         let moves = self.front.placement.close_holes(self.hole_moves(max_moves));
         let f = &self.front;
         let remap = MorphRemap::of(&f.morphs, h.vertex_id_bound() as u32);
-        let edit = |place: u32| {
-            let slot = f
-                .placement
-                .slot_of
-                .get(place as usize)
-                .copied()
-                .unwrap_or(NONE);
-            let indices = match f.triangles.get(slot as usize) {
-                Some(t) if t.surface != NO_POLYGON => match &remap {
-                    Some(m) => m.triangle(t.indices),
-                    None => t.indices,
-                },
-                _ => HOLE,
-            };
-            IndexEdit { place, indices }
-        };
         let p = &f.placement;
         let mut n = 0;
-        let mut write = |place: u32| {
-            if p.drawn(place) {
+        let mut write = |places: &[u32]| {
+            // Two links per place, its slot and the slot's cache entry, each taken for a
+            // batch before the next so that their misses overlap.
+            let mut slots = [NONE; BATCH];
+            for (s, &place) in slots.iter_mut().zip(places) {
+                *s = p.slot_of.get(place as usize).copied().unwrap_or(NONE);
+            }
+            for (&place, &slot) in places.iter().zip(&slots) {
+                if !p.drawn(place) {
+                    continue;
+                }
+                let indices = match f.triangles.get(slot as usize) {
+                    Some(t) if t.surface != NO_POLYGON => match &remap {
+                        Some(m) => m.triangle(t.indices),
+                        None => t.indices,
+                    },
+                    _ => HOLE,
+                };
                 if let Some(e) = out.get_mut(n) {
-                    *e = edit(place);
+                    *e = IndexEdit { place, indices };
                     n += 1;
                 }
             }
         };
         if p.scalars.everything {
+            let mut batch = [0u32; BATCH];
             for g in p.regions.iter() {
-                (g.first..g.first + g.len).for_each(&mut write);
+                let end = g.first + g.len;
+                let mut at = g.first;
+                while at < end {
+                    let k = (end - at).min(BATCH as u32) as usize;
+                    for (i, b) in batch[..k].iter_mut().enumerate() {
+                        *b = at + i as u32;
+                    }
+                    write(&batch[..k]);
+                    at += k as u32;
+                }
             }
         } else {
             p.list[..p.scalars.listed as usize]
-                .iter()
-                .for_each(|&place| write(place));
+                .chunks(BATCH)
+                .for_each(&mut write);
         }
         let everything = p.scalars.everything;
         let mut holes = 0;

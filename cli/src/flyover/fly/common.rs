@@ -4,7 +4,8 @@
 use std::time::{Duration, Instant};
 
 use caveclod_core::{
-    CameraConfig, CameraState, FrontLag, Hierarchy, RefineParams, RefineStats, View,
+    CameraConfig, CameraState, FrontLag, Hierarchy, IndexEdit, RefineParams, RefineStats,
+    SurfaceDraw, View,
 };
 
 use caveclod_io::CameraPool;
@@ -36,6 +37,13 @@ pub struct Record {
     pub lag_worst_px: f32,
     pub morphs_started: u64,
     pub morphs_dropped: u64,
+    /// Per frame with index edits: the time to take them, the edits, and the polygons
+    /// whose places they wrote (edits less hole moves).
+    pub edits_ns: Vec<u64>,
+    pub edits: Vec<u32>,
+    pub edit_changes: Vec<u32>,
+    /// Frames whose edits rewrote every place (a reset, or more changes than the list).
+    pub edits_everything: u64,
 }
 
 impl Record {
@@ -73,6 +81,39 @@ impl Record {
         self.overflows += u64::from(st.stack_overflows);
         self.morphs_started += u64::from(st.morphs_started);
         self.morphs_dropped += u64::from(st.morphs_dropped);
+    }
+
+    /// Records a frame's index edits, taken in `took`.
+    pub fn push_edits(&mut self, e: &caveclod_core::IndexEdits, took: Duration) {
+        self.edits_ns.push(took.as_nanos() as u64);
+        self.edits.push(e.edits as u32);
+        self.edit_changes
+            .push((e.edits as u32).saturating_sub(e.moves));
+        self.edits_everything += u64::from(e.everything);
+    }
+
+    /// Mean time to take a frame's index edits, ms (0 without edits).
+    pub fn edits_ms_mean(&self) -> f64 {
+        mean(Self::steady(&self.edits_ns).iter().map(|&x| x as f64)) * 1e-6
+    }
+
+    /// Bytes the edits of the steady frames write to the device per changed polygon: each
+    /// edit is [`IndexEdit`]'s 16 bytes, a place and its three indices.
+    pub fn edit_bytes_per_change(&self) -> f64 {
+        let edits: u64 = Self::steady(&self.edits)
+            .iter()
+            .map(|&x| u64::from(x))
+            .sum();
+        let changes: u64 = Self::steady(&self.edit_changes)
+            .iter()
+            .map(|&x| u64::from(x))
+            .sum();
+        (edits * std::mem::size_of::<IndexEdit>() as u64) as f64 / changes.max(1) as f64
+    }
+
+    /// Mean edits per frame.
+    pub fn edits_mean(&self) -> f64 {
+        mean(Self::steady(&self.edits).iter().map(|&x| f64::from(x)))
     }
 
     /// Records how far the front lags its view (measured outside the timed work).
@@ -182,7 +223,14 @@ pub struct IndexBuffers {
     pub indices: Vec<u32>,
     /// Where each surface starts in `indices`.
     pub offsets: Vec<u32>,
+    /// A camera's index edits of a frame, and its surfaces' draws.
+    pub edits: Vec<IndexEdit>,
+    pub draws: Vec<SurfaceDraw>,
 }
+
+/// Holes closed per frame of index edits: more than a frame's collapses free, so the draws
+/// stay at the polygons' count.
+pub const HOLE_MOVES: u32 = 256;
 
 impl IndexBuffers {
     /// Room for the largest front a camera with `max_pairs` splits can hold.
@@ -191,6 +239,8 @@ impl IndexBuffers {
         Self {
             indices: vec![0; 3 * polys],
             offsets: vec![0; h.surface_count() + 1],
+            edits: Vec::new(),
+            draws: vec![SurfaceDraw::default(); h.surface_count()],
         }
     }
 }
@@ -268,6 +318,7 @@ pub fn frame(
         .map_err(|e| format!("refine: {e}"))?;
     let t1 = Instant::now();
     let c1 = thread_cpu_ns();
+    let mut edits = None;
     let n = match out {
         Some(out) => {
             // A camera with morph memory points its morphing corners at their slots.
@@ -278,15 +329,44 @@ pub fn frame(
             }
             .map_err(|e| format!("emit: {e}"))?;
             std::hint::black_box(&out.indices);
+            if cam.index_places() > 0 {
+                edits = Some(take_edits(h, cam, out)?);
+            }
             n
         }
         None => 0,
     };
     let t2 = Instant::now();
+    let t2 = match edits {
+        Some((e, took)) => {
+            rec.push_edits(&e, took);
+            t2 - took
+        }
+        None => t2,
+    };
     rec.push(&st, t1 - t0, t2 - t1, n);
     rec.refine_cpu_ns.push(c1.saturating_sub(c0));
     rec.push_lag(&cam.lag(h, view, params).map_err(|e| format!("lag: {e}"))?);
     Ok(())
+}
+
+/// Takes `cam`'s index edits into `out` (room made first, outside the time), and the time
+/// they took.
+fn take_edits(
+    h: &Hierarchy<'_>,
+    cam: &mut CameraState<'_>,
+    out: &mut IndexBuffers,
+) -> Result<(caveclod_core::IndexEdits, Duration), String> {
+    let needed = cam.index_edits_needed(HOLE_MOVES);
+    if out.edits.len() < needed {
+        out.edits.resize(needed, IndexEdit::default());
+    }
+    let t = Instant::now();
+    let e = cam
+        .index_edits(h, HOLE_MOVES, &mut out.edits, &mut out.draws)
+        .map_err(|e| format!("index edits: {e}"))?;
+    std::hint::black_box(&out.edits);
+    Ok((e, t.elapsed()))
 }
 
 /// This thread's CPU time in nanoseconds (0 where the clock cannot be read).
