@@ -98,6 +98,7 @@ fn main() {
         Context::headless(&HeadlessDesc {
             validation: false,
             prefer_lavapipe: true,
+            synchronization_validation: false,
         }),
         "no Vulkan device",
     );

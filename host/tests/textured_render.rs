@@ -110,6 +110,7 @@ fn flight_helmet_at_full_detail_equals_the_gltf_drawn_directly() {
         Context::headless(&HeadlessDesc {
             validation: true,
             prefer_lavapipe: true,
+            synchronization_validation: false,
         }),
         "context",
     );

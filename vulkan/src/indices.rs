@@ -1,11 +1,12 @@
 //! Index buffers of one camera (the design decisions are on [`CameraIndices`]).
 
 use ash::vk;
-use caveclod_core::{CameraState, Hierarchy};
+use caveclod_core::{CameraState, Hierarchy, HierarchyRecords, IndexEdits};
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
+use crate::index_edits::EditedBuffer;
 
 /// Smallest index buffer, in indices.
 const MIN_INDICES: u64 = 1024;
@@ -39,6 +40,10 @@ pub enum IndexSource<'a, 'c> {
     },
     /// Given lists, one per surface (e.g. an unbaked mesh drawn directly).
     Lists(&'a [&'a [u32]]),
+    /// Given lists whose morphing corners point at a camera's morph slots, as morphed
+    /// emission writes them (a host that emits on its own threads, or reorders), for a
+    /// draw with the camera's [`CameraMorphs`](crate::CameraMorphs).
+    MorphedLists(&'a [&'a [u32]]),
 }
 
 impl<'a, 'c> IndexSource<'a, 'c> {
@@ -61,6 +66,17 @@ impl<'a, 'c> IndexSource<'a, 'c> {
 ///   least twice as large when its list no longer fits, so a camera flying towards more
 ///   detail reallocates O(log n) times, never per frame.
 ///
+/// **Edited** ([`edited`](Self::edited)): one device-local buffer that a camera keeping
+/// index edits ([`CameraConfig::edit_list`](caveclod_core::CameraConfig::edit_list)) patches
+/// each frame with only the places that changed: [`fill_edits`](Self::fill_edits) takes the
+/// edits into a host-visible staging buffer per frame in flight, and
+/// [`record_edits`](Self::record_edits) records their copies, outside rendering, before the
+/// frame's draws. Each copy is 12 bytes at its place; a hole holds a degenerate triangle,
+/// which draws nothing. One device buffer serves every frame in flight: the copies of frame
+/// `n + 1` wait, by a barrier, for the index reads of every earlier submission on the queue,
+/// so a frame still drawing never sees the next one's edits (the caller submits the frames
+/// on one queue, in order).
+///
 /// The record path ([`Recorder`](crate::Recorder)) leaves the ring to the caller: it
 /// [`fill`](Self::fill)s slot `s` for the frame it records into slot `s` (after that
 /// frame's previous use of the slot completed on the GPU), then records with the same
@@ -76,6 +92,8 @@ pub struct CameraIndices {
     /// Per frame slot: filled by morphed emission ([`IndexSource::MorphedCamera`]).
     morphed: Vec<bool>,
     grows: u64,
+    /// The edited device buffer, for buffers made by [`edited`](Self::edited).
+    edited: Option<EditedBuffer>,
 }
 
 impl CameraIndices {
@@ -90,7 +108,82 @@ impl CameraIndices {
             vertex_bounds: vec![0; frames_in_flight.max(1)],
             morphed: vec![false; frames_in_flight.max(1)],
             grows: 0,
+            edited: None,
         }
+    }
+
+    /// An edited index buffer (see the type's docs) for a camera of `places` index places
+    /// ([`CameraState::index_places`]) over `surfaces` surfaces, and its staging for
+    /// `frames_in_flight` frame slots.
+    pub fn edited(
+        ctx: &Context,
+        name: &str,
+        surfaces: usize,
+        places: usize,
+        frames_in_flight: usize,
+    ) -> Result<Self> {
+        let mut made = Self::new(name, surfaces, frames_in_flight);
+        made.edited = Some(EditedBuffer::new(
+            ctx,
+            name,
+            places as u64,
+            frames_in_flight,
+        )?);
+        Ok(made)
+    }
+
+    /// Whether the buffer is edited in place ([`edited`](Self::edited)).
+    pub fn is_edited(&self) -> bool {
+        self.edited.is_some()
+    }
+
+    /// Takes `camera`'s index edits for frame slot `frame`, closing at most `max_moves`
+    /// holes (see [`CameraState::index_edits`]); [`record_edits`](Self::record_edits) then
+    /// records them. The GPU must be done with the slot's previous frame (the caller's
+    /// fence for that slot). The indices are morphed emission's when the camera has morph
+    /// memory, for a draw with its [`CameraMorphs`](crate::CameraMorphs).
+    pub fn fill_edits(
+        &mut self,
+        ctx: &Context,
+        frame: usize,
+        hierarchy: &impl HierarchyRecords,
+        camera: &mut CameraState<'_>,
+        max_moves: u32,
+    ) -> Result<IndexEdits> {
+        if hierarchy.surface_count() != self.surface_count() {
+            return Err(Error::InvalidArgument(format!(
+                "{}: the hierarchy has {} surfaces, the index buffers {}",
+                self.name,
+                hierarchy.surface_count(),
+                self.surface_count()
+            )));
+        }
+        let Some(edited) = self.edited.as_mut() else {
+            return Err(Error::InvalidArgument(format!(
+                "{}: index edits into buffers not made by CameraIndices::edited",
+                self.name
+            )));
+        };
+        let e = edited.fill(ctx, &self.name, frame, hierarchy, camera, max_moves)?;
+        let slots = if camera.max_morphs() > 0 {
+            camera.morph_vertices().len()
+        } else {
+            0
+        };
+        self.vertex_bounds[frame] =
+            u32::try_from(hierarchy.vertex_id_bound() + slots).unwrap_or(u32::MAX);
+        self.morphed[frame] = camera.max_morphs() > 0;
+        Ok(e)
+    }
+
+    /// Records the copies [`fill_edits`](Self::fill_edits) took for `frame` into `cmd`,
+    /// which must be recording outside rendering, before the frame's draws; returns the index
+    /// bytes they write (0, recording nothing, for buffers that are not edited or a frame
+    /// without edits). The staging buffer must stay alive until the GPU has executed `cmd`.
+    pub fn record_edits(&self, ctx: &Context, cmd: vk::CommandBuffer, frame: usize) -> u64 {
+        self.edited
+            .as_ref()
+            .map_or(0, |e| e.record(ctx, cmd, frame))
     }
 
     /// Surfaces (index lists per frame).
@@ -103,9 +196,10 @@ impl CameraIndices {
         self.slots.len()
     }
 
-    /// Buffers (re)allocated so far, all surfaces and slots together.
+    /// Buffers (re)allocated so far, all surfaces and slots together (staging buffers, for
+    /// edited ones).
     pub fn grow_count(&self) -> u64 {
-        self.grows
+        self.grows + self.edited.as_ref().map_or(0, EditedBuffer::grow_count)
     }
 
     /// Capacity of surface `surface`'s buffer in `frame`, in indices (0 before first use).
@@ -129,20 +223,26 @@ impl CameraIndices {
         self.morphed.get(frame).copied().unwrap_or(false)
     }
 
-    /// Index bytes `frame`'s buffers hold as last filled, all surfaces (what a draw of the
-    /// slot reads).
+    /// Index bytes `frame`'s fill wrote, all surfaces: every index of emitted lists, the
+    /// copies of edited buffers.
     pub fn index_bytes(&self, frame: usize) -> u64 {
+        if let Some(e) = &self.edited {
+            return e.written_bytes(frame);
+        }
         self.slots
             .get(frame)
             .map_or(0, |f| f.iter().map(|s| 4 * u64::from(s.count)).sum())
     }
 
-    /// The buffer and index count (32-bit indices, from offset 0) of `surface` in `frame`,
+    /// The buffer, first index and index count (32-bit indices) of `surface` in `frame`,
     /// as last filled; `None` when empty. For hosts that draw with their own pipelines.
-    pub fn draw_range(&self, frame: usize, surface: usize) -> Option<(vk::Buffer, u32)> {
+    pub fn draw_range(&self, frame: usize, surface: usize) -> Option<(vk::Buffer, u32, u32)> {
+        if let Some(e) = &self.edited {
+            return e.draw_range(frame, surface);
+        }
         let s = self.slots.get(frame)?.get(surface)?;
         match (&s.buffer, s.count) {
-            (Some(b), n) if n > 0 => Some((b.raw, n)),
+            (Some(b), n) if n > 0 => Some((b.raw, 0, n)),
             _ => None,
         }
     }
@@ -185,6 +285,12 @@ impl CameraIndices {
         frame: usize,
         source: IndexSource<'_, '_>,
     ) -> Result<u64> {
+        if self.edited.is_some() {
+            return Err(Error::InvalidArgument(format!(
+                "{}: edited index buffers take the camera's edits (fill_edits)",
+                self.name
+            )));
+        }
         if frame >= self.slots.len() {
             return Err(Error::InvalidArgument(format!(
                 "frame slot {frame} of {} slots",
@@ -210,7 +316,7 @@ impl CameraIndices {
                 }
                 (0..surfaces).map(|s| state.index_count(s) as u64).collect()
             }
-            IndexSource::Lists(lists) => {
+            IndexSource::Lists(lists) | IndexSource::MorphedLists(lists) => {
                 if lists.len() != surfaces {
                     return Err(Error::InvalidArgument(format!(
                         "{}: {} index lists given for {surfaces} surfaces",
@@ -253,7 +359,7 @@ impl CameraIndices {
                 let slots = cam.morph_vertices().len();
                 u32::try_from(hierarchy.vertices().len() + slots).unwrap_or(u32::MAX)
             }
-            IndexSource::Lists(lists) => {
+            IndexSource::Lists(lists) | IndexSource::MorphedLists(lists) => {
                 let mut bound = 0u32;
                 for (s, list) in lists.iter().enumerate() {
                     outs[s][..list.len()].copy_from_slice(list);
@@ -267,7 +373,10 @@ impl CameraIndices {
         };
         drop(outs);
         self.vertex_bounds[frame] = vertex_bound;
-        self.morphed[frame] = matches!(source, IndexSource::MorphedCamera { .. });
+        self.morphed[frame] = matches!(
+            source,
+            IndexSource::MorphedCamera { .. } | IndexSource::MorphedLists(_)
+        );
         let mut bytes = 0u64;
         for (slot, &n) in slots.iter_mut().zip(&written) {
             slot.count = n;
@@ -278,7 +387,7 @@ impl CameraIndices {
 
     /// Destroys every buffer. The GPU must be done with them.
     pub fn destroy(self, ctx: &Context) -> Result<()> {
-        let mut first_err = None;
+        let mut first_err = self.edited.map(|e| e.destroy(ctx)).and_then(Result::err);
         for slot in self.slots.into_iter().flatten() {
             if let Some(b) = slot.buffer {
                 if let Err(e) = b.destroy(ctx) {

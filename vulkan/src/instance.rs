@@ -19,8 +19,14 @@ pub(crate) struct OwnedInstance {
 }
 
 /// Loads the Vulkan loader and creates a Vulkan 1.3 instance. With `validation`, the
-/// Khronos layer is enabled if installed and its messages go to `log`.
-pub(crate) fn create(validation: bool, log: &Arc<ValidationLog>) -> Result<OwnedInstance> {
+/// Khronos layer is enabled if installed and its messages go to `log`; with `synchronization`
+/// too, so is its synchronization validation (through `VK_EXT_validation_features`, which the
+/// layer provides).
+pub(crate) fn create(
+    validation: bool,
+    synchronization: bool,
+    log: &Arc<ValidationLog>,
+) -> Result<OwnedInstance> {
     // SAFETY: loading the system's Vulkan loader library; nothing else runs its code yet.
     let entry = unsafe { ash::Entry::load() }?;
     // SAFETY: plain query.
@@ -47,16 +53,28 @@ pub(crate) fn create(validation: bool, log: &Arc<ValidationLog>) -> Result<Owned
         .engine_name(c"caveclod-vulkan")
         .api_version(vk::API_VERSION_1_3);
     let layers = [validation::VALIDATION_LAYER.as_ptr()];
-    let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
+    let mut extensions = Vec::new();
+    if debug {
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    let sync = validation && synchronization;
+    if sync {
+        extensions.push(ash::ext::validation_features::NAME.as_ptr());
+    }
+    let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
     let mut messenger_info = validation::messenger_info(log);
-    let mut info = vk::InstanceCreateInfo::default().application_info(&app);
+    let mut info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_extension_names(&extensions);
     if validation {
         info = info.enabled_layer_names(&layers);
     }
     if debug {
-        info = info
-            .enabled_extension_names(&extensions)
-            .push_next(&mut messenger_info);
+        info = info.push_next(&mut messenger_info);
+    }
+    if sync {
+        info = info.push_next(&mut features);
     }
     // SAFETY: every pointer in `info` refers to locals alive for the call.
     let instance =

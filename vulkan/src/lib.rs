@@ -88,6 +88,7 @@ mod fault;
 mod frame;
 mod geomorph;
 mod image;
+mod index_edits;
 mod indices;
 mod instance;
 mod material;

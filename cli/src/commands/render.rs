@@ -96,6 +96,7 @@ fn render_frame(
     let ctx = Context::headless(&HeadlessDesc {
         validation: a.validate,
         prefer_lavapipe: !a.gpu,
+        synchronization_validation: false,
     })
     .map_err(|e| format!("no Vulkan device for rendering: {e}"))?;
     let desc = SnapshotDesc {

@@ -151,6 +151,7 @@ fn draw_model(
         let ctx = Context::headless(&HeadlessDesc {
             validation: false,
             prefer_lavapipe: true,
+            synchronization_validation: false,
         })
         .map_err(|e| e.to_string())?;
         let desc = SnapshotDesc {

@@ -34,6 +34,7 @@ pub fn render_flight(
     let ctx = Context::headless(&HeadlessDesc {
         validation: false,
         prefer_lavapipe: true,
+        synchronization_validation: false,
     })
     .map_err(|e| e.to_string())?;
     let device = ctx.device_name().to_string();

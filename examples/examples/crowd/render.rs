@@ -57,6 +57,7 @@ pub fn render_run(
     let ctx = Context::headless(&HeadlessDesc {
         validation: false,
         prefer_lavapipe: true,
+        synchronization_validation: false,
     })
     .map_err(|e| e.to_string())?;
     let result = render_with(&ctx, h, gm, path, places, run, total_frames, frames, out);

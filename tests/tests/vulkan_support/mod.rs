@@ -22,9 +22,20 @@ pub const BACKGROUND: [u8; 4] = [0, 0, 0, 255];
 
 /// A headless context on lavapipe with the validation layer, which must be installed.
 pub fn context() -> Context {
+    context_with(false)
+}
+
+/// [`context`] with the layer's synchronization validation too: hazards between commands
+/// and between frames in flight are messages.
+pub fn sync_context() -> Context {
+    context_with(true)
+}
+
+fn context_with(synchronization_validation: bool) -> Context {
     let ctx = match Context::headless(&HeadlessDesc {
         validation: true,
         prefer_lavapipe: true,
+        synchronization_validation,
     }) {
         Ok(c) => c,
         Err(e) => panic!("no Vulkan context (install lavapipe: cargo xtask setup): {e}"),

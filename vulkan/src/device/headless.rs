@@ -16,6 +16,9 @@ pub struct HeadlessDesc {
     pub validation: bool,
     /// Prefer a CPU device (lavapipe) over GPUs: deterministic images for tests.
     pub prefer_lavapipe: bool,
+    /// With `validation`, also enable the layer's synchronization validation (hazards
+    /// between commands, and between submissions on the queue, reported as messages).
+    pub synchronization_validation: bool,
 }
 
 impl Default for HeadlessDesc {
@@ -23,6 +26,7 @@ impl Default for HeadlessDesc {
         Self {
             validation: true,
             prefer_lavapipe: true,
+            synchronization_validation: false,
         }
     }
 }
@@ -82,7 +86,7 @@ impl Context {
     /// and an allocator.
     pub fn headless(desc: &HeadlessDesc) -> Result<Self> {
         let log = ValidationLog::new();
-        let owned = instance::create(desc.validation, &log)?;
+        let owned = instance::create(desc.validation, desc.synchronization_validation, &log)?;
         match Self::headless_device(&owned, desc.prefer_lavapipe) {
             Ok(picked) => {
                 let device = picked.device.clone();

@@ -276,6 +276,9 @@ impl Renderer {
             .iter()
             .filter_map(|(_, c)| c.refine_morphs)
             .collect();
+        for (_, c) in cameras {
+            c.indices.record_edits(ctx, cmd, slot);
+        }
         if !morphs.is_empty() {
             self.recorder.record_morph_blends(ctx, cmd, slot, &morphs)?;
         }

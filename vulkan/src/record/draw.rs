@@ -121,7 +121,7 @@ impl Recorder {
     ) -> u32 {
         let mut draws = 0;
         for s in (0..cam.indices.surface_count()).filter(|&s| wanted(s)) {
-            let Some((buffer, count)) = cam.indices.draw_range(slot, s) else {
+            let Some((buffer, first, count)) = cam.indices.draw_range(slot, s) else {
                 continue;
             };
             let (set, push) = match cam.materials.and_then(|m| m.get(s)) {
@@ -138,7 +138,7 @@ impl Recorder {
                 }
             };
             // SAFETY: `cmd` is recording with `pipeline` bound; `buffer` holds `count`
-            // indices below the bound vertex count (checked by `Recorder::check_camera`);
+            // indices from `first` below the bound vertex count (checked by `Recorder::check_camera`);
             // the set was written for this recorder's layout and names live images.
             unsafe {
                 d.cmd_bind_descriptor_sets(
@@ -157,7 +157,7 @@ impl Recorder {
                     0,
                     bytemuck::bytes_of(&push),
                 );
-                d.cmd_draw_indexed(cmd, count, instances, 0, 0, 0);
+                d.cmd_draw_indexed(cmd, count, instances, first, 0, 0);
             }
             draws += 1;
         }
