@@ -15,7 +15,7 @@
 // A program built against a header checks `caveclod_abi_version() >> 16` against
 // `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 // a higher minor version only adds calls or status values.
-#define CAVECLOD_ABI_VERSION ((1 << 16) | 4)
+#define CAVECLOD_ABI_VERSION ((1 << 16) | 5)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -333,6 +333,38 @@ typedef struct CaveclodBounds {
     // The greatest x, y and z.
     float max[3];
 } CaveclodBounds;
+
+// One place of a camera's index buffer and the triangle it now holds: write `indices` to
+// indices `3 × place .. 3 × place + 3` of the buffer. A hole holds three equal indices,
+// which draw nothing.
+typedef struct CaveclodIndexEdit {
+    // The place (a triangle of the buffer).
+    uint32_t place;
+    // Its three vertex indices.
+    uint32_t indices[3];
+} CaveclodIndexEdit;
+
+// One surface's draw over a camera's index buffer: `index_count` indices from
+// `first_index` (what `vkCmdDrawIndexed` or `glDrawElements` take).
+typedef struct CaveclodSurfaceDraw {
+    // The first index.
+    uint32_t first_index;
+    // Indices to draw (three per place in use or hole).
+    uint32_t index_count;
+} CaveclodSurfaceDraw;
+
+// What one `caveclod_camera_index_edits` handed out.
+typedef struct CaveclodIndexEdits {
+    // Edits written.
+    size_t edits;
+    // Polygons moved into holes.
+    uint32_t moves;
+    // Holes still drawn (as nothing).
+    uint32_t holes;
+    // Every drawn place was written (a new or reset camera, or more changes than the list
+    // holds).
+    bool everything;
+} CaveclodIndexEdits;
 
 // The validated octree of a file baked out of core: an opaque value like
 // `CaveclodHierarchy` (nothing to free, may be copied, shared by any number of threads).
@@ -802,6 +834,87 @@ enum CaveclodStatus caveclod_hierarchy_bounds(const struct CaveclodHierarchy *h,
 enum CaveclodStatus caveclod_hierarchy_vertices(const struct CaveclodHierarchy *h,
                                                 const void **vertices,
                                                 size_t *bytes);
+
+// Writes to `*bytes` the memory a camera with `config` keeping index edits (a list of
+// `edit_list` changed places) over `h` needs: `caveclod_camera_memory_size`'s, plus 4 bytes
+// per polygon slot, 4 bytes and two bits per place (a place per slot and surface) and 4
+// bytes per list entry. `CAVECLOD_STATUS_INVALID_CONFIG` as there, and for an `edit_list`
+// of 0 or a configuration without the index cache.
+//
+// Thread-safety: any thread, concurrently with any call that reads `h`.
+//
+// # Safety
+// `h` is null or an opened hierarchy; `config` is null or readable; `bytes` is null or
+// writable.
+enum CaveclodStatus caveclod_camera_memory_size_edited(const struct CaveclodHierarchy *h,
+                                                       const struct CaveclodCameraConfig *config,
+                                                       uint32_t edit_list,
+                                                       size_t *bytes);
+
+// `caveclod_camera_init` for a camera keeping index edits (a list of `edit_list` changed
+// places), in memory of `caveclod_camera_memory_size_edited` bytes. Its first
+// `caveclod_camera_index_edits` writes every place.
+//
+// Thread-safety: as `caveclod_camera_init`.
+//
+// # Safety
+// As `caveclod_camera_init`.
+enum CaveclodStatus caveclod_camera_init_edited(const struct CaveclodHierarchy *h,
+                                                const struct CaveclodCameraConfig *config,
+                                                uint32_t edit_list,
+                                                void *memory,
+                                                size_t bytes,
+                                                struct CaveclodCamera *out);
+
+// Writes to `*places` the triangles of the camera's index buffer: the buffer holds
+// `3 × places` indices (0 for a camera without index edits).
+//
+// Thread-safety: the thread that owns `cam`.
+//
+// # Safety
+// `cam` is null or a camera nothing else uses during the call; `places` is null or
+// writable.
+enum CaveclodStatus caveclod_camera_index_places(struct CaveclodCamera *cam, size_t *places);
+
+// Writes to `*edits` the most edits the next `caveclod_camera_index_edits` with
+// `max_moves` writes: the room its `out` needs.
+//
+// Thread-safety: the thread that owns `cam`.
+//
+// # Safety
+// `cam` is null or a camera nothing else uses during the call; `edits` is null or
+// writable.
+enum CaveclodStatus caveclod_camera_index_edits_needed(struct CaveclodCamera *cam,
+                                                       uint32_t max_moves,
+                                                       size_t *edits);
+
+// Moves at most `max_moves` polygons into holes, then writes to `out` (room for `capacity`
+// edits) every place of the camera's index buffer that changed since the last call, with
+// the triangle it now holds (morphed emission's indices when the camera has morph memory),
+// and to `draws` (`draw_count` at least the surfaces) each surface's range; `*result`
+// says what was written. Copy the edits into the buffer before the frame's draws; the
+// draws then show exactly the triangles of `caveclod_camera_emit_packed` (morphed), in
+// another order. Allocates nothing.
+//
+// Returns `CAVECLOD_STATUS_OUTPUT_TOO_SMALL` when `capacity` (see
+// `caveclod_camera_index_edits_needed`) or `draw_count` is too small, nothing changed then;
+// `CAVECLOD_STATUS_INVALID_ARGUMENT` for a camera made without index edits;
+// `CAVECLOD_STATUS_NULL_POINTER`; `CAVECLOD_STATUS_WRONG_HIERARCHY`.
+//
+// Thread-safety: the thread that owns `cam`, concurrently with any call that reads `h`.
+//
+// # Safety
+// `cam` is null or a camera nothing else uses during the call; `h` is null or an opened
+// hierarchy; `out` is null or writable for `capacity` edits, `draws` null or writable for
+// `draw_count` entries, the two not overlapping; `result` null or writable.
+enum CaveclodStatus caveclod_camera_index_edits(struct CaveclodCamera *cam,
+                                                const struct CaveclodHierarchy *h,
+                                                uint32_t max_moves,
+                                                struct CaveclodIndexEdit *out,
+                                                size_t capacity,
+                                                struct CaveclodSurfaceDraw *draws,
+                                                size_t draw_count,
+                                                struct CaveclodIndexEdits *result);
 
 // Makes `out` the octree stored in `h`'s file. `CAVECLOD_STATUS_NO_OCTREE` when the file
 // has none, `CAVECLOD_STATUS_INVALID_FILE` when its octree sections are invalid.

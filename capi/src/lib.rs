@@ -40,6 +40,7 @@ mod camera;
 mod emit;
 mod ffi;
 mod hierarchy;
+mod index_edits;
 mod octree;
 mod paged_root;
 mod pool;
@@ -51,6 +52,7 @@ pub use arena::*;
 pub use camera::*;
 pub use emit::*;
 pub use hierarchy::*;
+pub use index_edits::*;
 pub use octree::*;
 pub use paged_root::*;
 pub use pool::*;
@@ -62,7 +64,7 @@ pub use types::*;
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
 /// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 /// a higher minor version only adds calls or status values.
-pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 4;
+pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 5;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

@@ -75,6 +75,8 @@ fn the_c_entry_points_do_not_allocate() {
     let pointers: Vec<*mut u32> = lists.iter_mut().map(|l| l.as_mut_ptr()).collect();
     let capacities: Vec<usize> = lists.iter().map(Vec::len).collect();
     let mut written = vec![0u32; 8];
+    let mut edits = vec![CaveclodIndexEdit::default(); 1 << 14];
+    let mut draws = vec![CaveclodSurfaceDraw::default(); 8];
     let mut h = MaybeUninit::<CaveclodHierarchy>::uninit();
     let mut cam = MaybeUninit::<CaveclodCamera>::uninit();
     let mut morph_cam = MaybeUninit::<CaveclodCamera>::uninit();
@@ -112,9 +114,10 @@ fn the_c_entry_points_do_not_allocate() {
             cam.as_mut_ptr(),
         ));
         config.max_morphs = 64;
-        ok(caveclod_camera_init(
+        ok(caveclod_camera_init_edited(
             h,
             &config,
+            256,
             morph_memory.as_mut_ptr().cast(),
             8 * morph_memory.len(),
             morph_cam.as_mut_ptr(),
@@ -173,6 +176,17 @@ fn the_c_entry_points_do_not_allocate() {
                 offsets.len(),
                 true,
                 std::ptr::null_mut(),
+            ));
+            let mut result = CaveclodIndexEdits::default();
+            ok(caveclod_camera_index_edits(
+                morph_cam,
+                h,
+                32,
+                edits.as_mut_ptr(),
+                edits.len(),
+                draws.as_mut_ptr(),
+                draws.len(),
+                &mut result,
             ));
             let mut slots = std::ptr::null();
             let mut count = 0usize;
