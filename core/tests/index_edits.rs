@@ -1,8 +1,8 @@
 //! Index edits on the golden hierarchy: a device index buffer patched each frame with only
 //! the places that changed draws, after every frame, exactly the triangles of morphed
 //! emission (with holes that draw nothing), over any flight, frame times, morph memory,
-//! list size, compaction (whole or in steps), resets and hole moves; and a frame that
-//! changes nothing hands out nothing.
+//! list size, compaction (whole or in steps), resets, finished morphs and hole moves; and a
+//! frame that changes nothing hands out nothing.
 
 mod common;
 
@@ -209,6 +209,7 @@ proptest! {
                 2..=5 => {
                     cam.compact_step(&h, u32::from(action) * 50);
                 }
+                6 => cam.finish_morphs(),
                 _ => {}
             }
             device.update(&h, &mut cam, u32::from(action % 4) * 4);

@@ -529,6 +529,8 @@ impl CameraState<'_> {
             // A coarsening pair's remembered bit says "legal"; without the morph it would read
             // as a refusal.
             f.refused.fill(0);
+            // Every morphed corner points at its vertex again: the index edits rewrite all.
+            f.placement.mark_everything();
         }
         f.morphs.clear();
     }

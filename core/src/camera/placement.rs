@@ -131,6 +131,13 @@ impl Placement<'_> {
         }
     }
 
+    /// Marks every place (the next edits rewrite the whole buffer).
+    pub fn mark_everything(&mut self) {
+        if self.is_on() {
+            self.scalars.everything = true;
+        }
+    }
+
     /// Marks the place of `slot`'s polygon, if it has one.
     #[inline]
     pub fn mark_slot(&mut self, slot: u32) {

@@ -7,16 +7,20 @@
 //! compacted whole, or take a step of an incremental compaction; have a random active node
 //! force-split or its parent collapsed through the operations API, or its morphs finished.
 //! Then it is refined and its indices are emitted into the caller's buffers in one of the
-//! four forms (packed or per-surface lists, plain or morphed). Now and then every camera is made again
-//! in its own memory with a new capacity ([`pilot::draw_config`]: full or a polygon budget,
-//! morph memory or none, hashed pair map, index cache, small forced-split stacks).
+//! four forms (packed or per-surface lists, plain or morphed), and a camera keeping index
+//! edits applies them to its copy of its index buffer ([`edits`]). Now and then every camera
+//! is made again in its own memory with a new capacity ([`pilot::draw_config`]: full or a
+//! polygon budget, morph memory or none, hashed pair map, index cache, index edits, small
+//! forced-split stacks).
 //!
 //! Every frame checks what is cheap (the counts a pass reports against the camera's, the
 //! capacity, emitted counts); every `check_every` frames, and after the last,
-//! [`FrontChecker`] checks every camera's full invariants from scratch. The frame loop
+//! [`FrontChecker`] checks every camera's full invariants from scratch, and each edited copy
+//! against morphed emission (allocations outside the frame loop's count). The frame loop
 //! allocates nothing: set-up sizes every buffer, and [`run`] counts the allocations of the
 //! loop with the caller's counter (a counting global allocator), reporting them.
 
+pub mod edits;
 pub mod invariants;
 pub mod pilot;
 pub mod streamed;
@@ -27,8 +31,9 @@ use std::hint::black_box;
 
 use caveclod_core::{CameraConfig, CameraState, Hierarchy, NodeId, OpError, RefineStats};
 
+use edits::{EditedCopy, MAX_MOVES};
 pub use invariants::{Checked, FrontChecker};
-use pilot::{draw_config, one_in, Pilot, Terrain, Tolerance, MAX_MORPHS};
+use pilot::{draw_config, one_in, Pilot, Terrain, Tolerance, EDIT_LIST, MAX_MORPHS};
 
 use caveclod_bake::generate::SplitMix64;
 
@@ -88,6 +93,8 @@ pub struct SoakReport {
     pub morph_finishes: u64,
     /// Indices emitted into the caller's buffers.
     pub indices_emitted: u64,
+    /// Index edits applied to the cameras' copies of their index buffers.
+    pub edits_applied: u64,
     /// Most active polygons of one camera after a pass.
     pub max_active_polygons: u32,
     /// Full invariant checks (one camera each) and what they covered.
@@ -178,9 +185,13 @@ pub fn run(
         what,
     };
     // Set-up: everything that allocates.
-    let largest = CameraConfig::full(h).with_morphs(MAX_MORPHS);
+    let largest = CameraConfig::full(h)
+        .with_morphs(MAX_MORPHS)
+        .with_index_edits(EDIT_LIST);
     let words = CameraState::words_needed_for(h, &largest);
     let mut memory: [Vec<u32>; CAMERAS] = std::array::from_fn(|_| vec![0u32; words]);
+    let places = (h.base_polygon_count() + 2 * h.splits().len()) * h.surface_count();
+    let mut copies: [EditedCopy; CAMERAS] = std::array::from_fn(|_| EditedCopy::new(h, places));
     let mut checker = FrontChecker::new(h);
     let most = 3 * h.polygon_count();
     let mut out = Outputs {
@@ -217,8 +228,15 @@ pub fn run(
         let mut cams = made.map(|m| m.ok());
         report.reconfigurations += CAMERAS as u64;
         for _ in 0..life {
-            for (c, (cam, pilot)) in cams.iter_mut().zip(&mut pilots).enumerate() {
+            for (c, ((cam, pilot), copy)) in cams
+                .iter_mut()
+                .zip(&mut pilots)
+                .zip(&mut copies)
+                .enumerate()
+            {
                 let Some(cam) = cam.as_mut() else { continue };
+                let moves = rng.below(MAX_MOVES as usize + 1) as u32;
+                copy.update(h, cam, moves).map_err(|e| fail(frame, c, e))?;
                 camera_frame(
                     h,
                     cam,
@@ -234,11 +252,16 @@ pub fn run(
             frame += 1;
             report.frames = frame;
             if frame % check_every == 0 || frame == config.frames {
-                for (c, cam) in cams.iter().enumerate() {
-                    let Some(cam) = cam.as_ref() else { continue };
+                for (c, (cam, copy)) in cams.iter_mut().zip(&mut copies).enumerate() {
+                    let Some(cam) = cam.as_mut() else { continue };
                     let done = checker.check(h, cam).map_err(|e| fail(frame - 1, c, e))?;
                     report.invariant_checks += 1;
                     add_checked(&mut report.checked, &done);
+                    let before = allocations();
+                    check_copy(h, cam, copy, &mut out).map_err(|e| fail(frame - 1, c, e))?;
+                    report.edits_applied += copy.applied;
+                    copy.applied = 0;
+                    outside += allocations() - before;
                 }
                 report.allocations = allocations() - start - outside;
                 let before = allocations();
@@ -249,6 +272,19 @@ pub fn run(
     }
     report.allocations = allocations() - start - outside;
     Ok(report)
+}
+
+/// Brings `copy` up to `cam`'s front and checks it against morphed emission.
+fn check_copy(
+    h: &Hierarchy<'_>,
+    cam: &mut CameraState<'_>,
+    copy: &mut EditedCopy,
+    out: &mut Outputs,
+) -> Result<(), String> {
+    copy.update(h, cam, 0)?;
+    cam.emit_indices_packed_morphed(h, &mut out.packed, &mut out.offsets)
+        .map_err(|e| format!("emission: {e}"))?;
+    copy.check(cam, &out.packed, &out.offsets)
 }
 
 fn add_checked(total: &mut Checked, c: &Checked) {

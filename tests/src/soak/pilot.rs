@@ -14,6 +14,8 @@ use caveclod_bake::generate::SplitMix64;
 
 /// Most geomorphs a soak camera may be given; camera memory is sized for it.
 pub const MAX_MORPHS: u32 = 4096;
+/// The longest list of changed index places a soak camera keeps.
+pub const EDIT_LIST: u32 = 4096;
 
 /// The motion clock: one frame at 60 Hz (the morph clock `dt_s` is drawn separately).
 const FRAME_S: f32 = 1.0 / 60.0;
@@ -82,8 +84,9 @@ fn pick<T: Copy>(rng: &mut SplitMix64, options: &[T]) -> T {
 
 /// A camera configuration: full or a polygon budget (from a fiftieth of the hierarchy's
 /// polygons to all), with or without morph memory (from
-/// one morph to [`MAX_MORPHS`]), the pair map hashed or not, the index cache on or off, and
-/// now and then a forced-split stack too small for deep forced splits.
+/// one morph to [`MAX_MORPHS`]), the pair map hashed or not, the index cache on or off, with
+/// the cache half the time index edits (a list from 1 to [`EDIT_LIST`] places), and now and
+/// then a forced-split stack too small for deep forced splits.
 pub fn draw_config(rng: &mut SplitMix64, h: &Hierarchy<'_>) -> CameraConfig {
     let mut c = if one_in(rng, 3) {
         CameraConfig::full(h)
@@ -96,6 +99,9 @@ pub fn draw_config(rng: &mut SplitMix64, h: &Hierarchy<'_>) -> CameraConfig {
     }
     c.hashed_pair_map = one_in(rng, 4);
     c.index_cache = !one_in(rng, 4);
+    if c.index_cache && one_in(rng, 2) {
+        c = c.with_index_edits(pick(rng, &[1, 64, EDIT_LIST]));
+    }
     if one_in(rng, 8) {
         c.stack_len = pick(rng, &[4, 16, 64]);
     }
