@@ -197,8 +197,8 @@ impl Side {
         }
     }
 
-    /// Fills the slot from `fill` and draws the cameras' fronts; returns the image and the
-    /// index bytes written.
+    /// Fills the next slot from `fill` and draws the cameras' fronts, leaving the frame in
+    /// flight; returns its slot and the index bytes written.
     fn draw(
         &mut self,
         ctx: &Context,
@@ -207,7 +207,7 @@ impl Side {
         cams: &mut [CameraState<'_>],
         looks: &[LookAt],
         fill: Fill<'_>,
-    ) -> (RgbaImage, u64) {
+    ) -> (usize, u64) {
         let slot = ok(self.renderer.begin_frame(ctx), "begin frame");
         for (c, ((cam, ind), m)) in cams
             .iter_mut()
@@ -251,11 +251,12 @@ impl Side {
             })
             .collect();
         let stats = ok(self.renderer.render(ctx, &draws), "render");
-        drop(draws);
-        (
-            ok(self.renderer.read_target(ctx, 0), "read back"),
-            stats.index_bytes,
-        )
+        (slot, stats.index_bytes)
+    }
+
+    /// The image of the frame last drawn in `slot` (waiting for that frame alone).
+    fn image(&self, ctx: &Context, slot: usize) -> RgbaImage {
+        ok(self.renderer.read_slot_target(ctx, slot, 0), "read back")
     }
 
     fn destroy(self, ctx: &Context) {
@@ -303,6 +304,9 @@ fn fly(ctx: &Context, h: &Hierarchy<'_>, vertices: &VertexBuffer, in_flight: usi
         ..RefineParams::default()
     };
     let (mut edit_bytes, mut emit_bytes) = (0, 0);
+    // Frames drawn and not yet compared: each is compared once the frames after it fill the
+    // ring, so `in_flight` frames overlap on the queue.
+    let mut pending = std::collections::VecDeque::new();
     for f in 0..FRAMES {
         let looks: Vec<LookAt> = (0..4).map(|c| look(size, c, f)).collect();
         for (c, (l, v)) in looks.iter().zip(quadrants()).enumerate() {
@@ -316,33 +320,43 @@ fn fly(ctx: &Context, h: &Hierarchy<'_>, vertices: &VertexBuffer, in_flight: usi
                 "frame {f}, camera {c}"
             );
         }
-        let (a, wa) = edited.draw(ctx, h, vertices, &mut cams, &looks, Fill::Edits);
-        let (b, _) = listed.draw(ctx, h, vertices, &mut cams, &looks, Fill::Copies(&copies));
+        let (slot, written) = edited.draw(ctx, h, vertices, &mut cams, &looks, Fill::Edits);
+        let (listed_slot, _) =
+            listed.draw(ctx, h, vertices, &mut cams, &looks, Fill::Copies(&copies));
+        assert_eq!(slot, listed_slot);
         if f > 0 {
-            edit_bytes += wa;
+            edit_bytes += written;
             emit_bytes += cams
                 .iter()
                 .map(|c| 4 * c.total_index_count() as u64)
                 .sum::<u64>();
         }
-        if a.pixels != b.pixels {
-            save(&a, &format!("edited-{in_flight}-{f}.png"));
-            save(&b, &format!("listed-{in_flight}-{f}.png"));
-            panic!(
-                "{in_flight} in flight, frame {f}: edited {:?}",
-                ok(a.diff(&b), "diff")
-            );
-        }
         if f % EMISSION_EVERY == 0 {
             let (e, _) = emitted_side.draw(ctx, h, vertices, &mut cams, &looks, Fill::Emission);
-            let d = ok(a.diff(&e), "diff");
+            let e = emitted_side.image(ctx, e);
+            let d = ok(edited.image(ctx, slot).diff(&e), "diff");
             assert!(
                 d.pixels - d.equal <= 16,
                 "{in_flight} in flight, frame {f}: edited against emission's order {d:?}"
             );
         }
-        if f == FRAMES / 2 {
-            save(&a, &format!("edited-{in_flight}.png"));
+        pending.push_back((f, slot));
+        while pending.len() >= in_flight || (f + 1 == FRAMES && !pending.is_empty()) {
+            let Some((g, slot)) = pending.pop_front() else {
+                break;
+            };
+            let (a, b) = (edited.image(ctx, slot), listed.image(ctx, slot));
+            if a.pixels != b.pixels {
+                save(&a, &format!("edited-{in_flight}-{g}.png"));
+                save(&b, &format!("listed-{in_flight}-{g}.png"));
+                panic!(
+                    "{in_flight} in flight, frame {g}: edited {:?}",
+                    ok(a.diff(&b), "diff")
+                );
+            }
+            if g == FRAMES / 2 {
+                save(&a, &format!("edited-{in_flight}.png"));
+            }
         }
     }
     for side in [edited, listed, emitted_side] {

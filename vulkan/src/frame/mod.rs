@@ -371,7 +371,16 @@ impl Renderer {
         let slot = self
             .last_slot
             .ok_or_else(|| Error::InvalidArgument("no frame rendered yet".into()))?;
-        let s = &self.slots[slot];
+        self.read_slot_target(ctx, slot, t)
+    }
+
+    /// Waits for the frame last rendered in `slot` (the slot [`render`](Self::render)
+    /// reported) and returns target `t`'s pixels as that frame left them, while later frames
+    /// stay in flight; valid until the slot's next [`begin_frame`](Self::begin_frame).
+    pub fn read_slot_target(&self, ctx: &Context, slot: usize, t: usize) -> Result<RgbaImage> {
+        let s = self.slots.get(slot).ok_or_else(|| {
+            Error::InvalidArgument(format!("frame slot {slot} of {}", self.slots.len()))
+        })?;
         let buffer = s.readback.get(t).ok_or_else(|| {
             Error::InvalidArgument(format!(
                 "target {t}: no read-back buffer (read-back disabled or no such target)"
