@@ -11,7 +11,7 @@ use caveclod_core::{
     SurfaceDraw,
 };
 use common::golden_hierarchy;
-use common::morphs::{approach, packed};
+use common::morphs::{approach, surface_triangles};
 use proptest::prelude::*;
 
 /// A camera's device index buffer, as a host keeps it: one triangle per place.
@@ -67,15 +67,7 @@ impl Device {
 
 /// Morphed emission's triangles per surface, sorted.
 fn emitted(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Vec<Vec<[u32; 3]>> {
-    let (out, offsets) = packed(h, cam, true);
-    (0..h.surface_count())
-        .map(|s| {
-            let r = &out[offsets[s] as usize..offsets[s + 1] as usize];
-            let mut t: Vec<[u32; 3]> = r.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-            t.sort_unstable();
-            t
-        })
-        .collect()
+    surface_triangles(h, cam, true)
 }
 
 fn edit_config(h: &Hierarchy<'_>, max_morphs: u32, list: u32) -> CameraConfig {

@@ -15,9 +15,11 @@ use caveclod_tests::bake::bake;
 use caveclod_tests::meshes;
 use caveclod_vulkan::{
     CameraIndices, CameraMorphs, Context, IndexSource, LookAt, MorphStage, RecordCamera, Renderer,
-    RendererDesc, RgbaImage, VertexBuffer, Viewport,
+    RendererDesc, RgbaImage, VertexBuffer,
 };
-use vulkan_support::{assert_clean, ok, plain_camera, save, sync_context, terrain_camera};
+use vulkan_support::{
+    assert_clean, ok, plain_camera, quadrants, save, sync_context, terrain_camera,
+};
 
 const SIZE: u32 = 256;
 const MAX_MORPHS: u32 = 4096;
@@ -26,17 +28,6 @@ const FRAMES: usize = 300;
 const MOVES: u32 = 64;
 /// Frames between draws in emission's own order.
 const EMISSION_EVERY: usize = 15;
-
-/// The four quadrants of the target.
-fn quadrants() -> [Viewport; 4] {
-    let half = SIZE / 2;
-    [(0, 0), (half, 0), (0, half), (half, half)].map(|(x, y)| Viewport {
-        x,
-        y,
-        width: half,
-        height: half,
-    })
-}
 
 /// Camera `c`'s look in frame `f`: circling the terrain, each at its own speed, distance
 /// and height, so fronts split and collapse every frame.
@@ -241,7 +232,7 @@ impl Side {
             .indices
             .iter()
             .zip(&self.morphs)
-            .zip(quadrants())
+            .zip(quadrants(SIZE))
             .zip(looks)
             .map(|(((ind, m), viewport), look)| {
                 (
@@ -309,7 +300,7 @@ fn fly(ctx: &Context, h: &Hierarchy<'_>, vertices: &VertexBuffer, in_flight: usi
     let mut pending = std::collections::VecDeque::new();
     for f in 0..FRAMES {
         let looks: Vec<LookAt> = (0..4).map(|c| look(size, c, f)).collect();
-        for (c, (l, v)) in looks.iter().zip(quadrants()).enumerate() {
+        for (c, (l, v)) in looks.iter().zip(quadrants(SIZE)).enumerate() {
             let view = l.view(v.width, v.height);
             ok(cams[c].refine(h, &view, &params), "refine");
             ok(twins[c].refine(h, &view, &params), "refine twin");

@@ -15,22 +15,11 @@ use caveclod_vulkan::{
     CameraIndices, CameraMorphs, Context, IndexSource, LookAt, MorphStage, RecordCamera, Renderer,
     RendererDesc, RgbaImage, VertexBuffer, Viewport,
 };
-use vulkan_support::{assert_clean, context, ok, plain_camera, save, terrain_camera};
+use vulkan_support::{assert_clean, context, ok, plain_camera, quadrants, save, terrain_camera};
 
 const SIZE: u32 = 384;
 const MAX_MORPHS: u32 = 4096;
 const FRAMES: usize = 2;
-
-/// The four quadrants of the target.
-fn quadrants() -> [Viewport; 4] {
-    let half = SIZE / 2;
-    [(0, 0), (half, 0), (0, half), (half, half)].map(|(x, y)| Viewport {
-        x,
-        y,
-        width: half,
-        height: half,
-    })
-}
 
 /// Four views of the terrain from around it.
 fn looks(size: f32) -> [LookAt; 4] {
@@ -71,7 +60,7 @@ fn upload(ctx: &Context, h: &Hierarchy<'_>, colours: &[[u8; 4]]) -> VertexBuffer
 /// never morphs), refines it to its view's front, then `c + 1` more passes of 0.1 s with the
 /// view still, so its refine morphs stand part-way (a different part for each camera).
 fn refine_mid_morph(h: &Hierarchy<'_>, cam: &mut CameraState<'_>, look: &LookAt, c: usize) {
-    let v = quadrants()[c];
+    let v = quadrants(SIZE)[c];
     let view = look.view(v.width, v.height);
     let first = RefineParams {
         dt_s: 0.0,
@@ -151,7 +140,7 @@ fn draw(
     }
     let draws: Vec<(usize, RecordCamera<'_>)> = indices
         .iter()
-        .zip(quadrants())
+        .zip(quadrants(SIZE))
         .zip(looks)
         .enumerate()
         .map(|(c, ((ind, viewport), look))| {
@@ -238,7 +227,7 @@ fn vertex_stage_compute_stage_and_cpu_draw_four_cameras_mid_morph_alike() {
         save(image, name);
     }
     let background = [0u8, 0, 0, 255];
-    for (q, v) in quadrants().iter().enumerate() {
+    for (q, v) in quadrants(SIZE).iter().enumerate() {
         let covered = (v.y..v.y + v.height)
             .flat_map(|y| (v.x..v.x + v.width).map(move |x| (x, y)))
             .filter(|&(x, y)| {

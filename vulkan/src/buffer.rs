@@ -131,3 +131,13 @@ impl Buffer {
         ctx.free("buffer free", self.allocation)
     }
 }
+
+/// The capacity a ring buffer grows to when `needed` exceeds `cap`: at least `min`, doubled
+/// until it holds `needed`, so a growing need reallocates O(log n) times, never per frame.
+pub(crate) fn doubled(cap: u64, min: u64, needed: u64) -> u64 {
+    let mut new_cap = cap.max(min).max(1);
+    while new_cap < needed {
+        new_cap = new_cap.saturating_mul(2);
+    }
+    new_cap
+}

@@ -5,7 +5,7 @@
 use ash::vk;
 use caveclod_core::{CameraState, HierarchyRecords, IndexEdit, IndexEdits, SurfaceDraw};
 
-use crate::buffer::{Buffer, BufferDesc};
+use crate::buffer::{doubled, Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
 
@@ -67,10 +67,7 @@ impl EditedBuffer {
         if edits <= cap {
             return Ok(());
         }
-        let mut new_cap = cap.max(MIN_EDITS);
-        while new_cap < edits {
-            new_cap *= 2;
-        }
+        let new_cap = doubled(cap, MIN_EDITS, edits);
         let buffer = Buffer::new(
             ctx,
             &format!("{name} index edits f{frame}"),

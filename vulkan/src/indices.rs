@@ -3,7 +3,7 @@
 use ash::vk;
 use caveclod_core::{CameraState, Hierarchy, HierarchyRecords, IndexEdits};
 
-use crate::buffer::{Buffer, BufferDesc};
+use crate::buffer::{doubled, Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::index_edits::EditedBuffer;
@@ -254,10 +254,7 @@ impl CameraIndices {
         if needed <= cap {
             return Ok(());
         }
-        let mut new_cap = cap.max(MIN_INDICES);
-        while new_cap < needed {
-            new_cap *= 2;
-        }
+        let new_cap = doubled(cap, MIN_INDICES, needed);
         let name = format!("{} index buffer f{frame} s{surface}", self.name);
         let buffer = Buffer::new(
             ctx,

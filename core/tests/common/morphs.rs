@@ -117,7 +117,16 @@ pub fn sorted_front(cam: &CameraState<'_>) -> Vec<NodeId> {
 
 /// Each surface's triangles, sorted: the front's picture, whatever the slot order.
 pub fn triangles(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Vec<Vec<[u32; 3]>> {
-    let (out, offsets) = packed(h, cam, false);
+    surface_triangles(h, cam, false)
+}
+
+/// Each surface's triangles of packed emission (`morphed` or plain), sorted.
+pub fn surface_triangles(
+    h: &Hierarchy<'_>,
+    cam: &CameraState<'_>,
+    morphed: bool,
+) -> Vec<Vec<[u32; 3]>> {
+    let (out, offsets) = packed(h, cam, morphed);
     (0..h.surface_count())
         .map(|s| {
             let r = &out[offsets[s] as usize..offsets[s + 1] as usize];

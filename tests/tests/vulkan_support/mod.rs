@@ -99,6 +99,17 @@ pub fn save(image: &RgbaImage, name: &str) {
     ok(caveclod_host::write_png(image, &dir.join(name)), "png");
 }
 
+/// The four quadrants of a `size` × `size` target.
+pub fn quadrants(size: u32) -> [Viewport; 4] {
+    let half = size / 2;
+    [(0, 0), (half, 0), (0, half), (half, half)].map(|(x, y)| Viewport {
+        x,
+        y,
+        width: half,
+        height: half,
+    })
+}
+
 /// A camera looking at the middle of a `size` × `size` terrain from `angle` (radians around
 /// the y axis) at distance `distance` (in terrain sizes) and height `height`.
 pub fn terrain_camera(size: f32, angle: f32, distance: f32, height: f32) -> LookAt {
