@@ -85,7 +85,7 @@ fn edits_need_the_index_cache_and_memory_of_their_own() {
     let places = slots * h.surface_count();
     assert_eq!(
         CameraState::words_needed_for(&h, &config) - plain,
-        slots + places + 2 * places.div_ceil(32) + 100 + 5 * h.surface_count()
+        slots + places + 2 * places.div_ceil(32) + 100 + 3 * h.surface_count()
     );
     let uncached = CameraConfig {
         index_cache: false,

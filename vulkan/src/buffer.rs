@@ -132,12 +132,33 @@ impl Buffer {
     }
 }
 
-/// The capacity a ring buffer grows to when `needed` exceeds `cap`: at least `min`, doubled
-/// until it holds `needed`, so a growing need reallocates O(log n) times, never per frame.
-pub(crate) fn doubled(cap: u64, min: u64, needed: u64) -> u64 {
+/// Makes `slot` a host-visible buffer (`usage`) of at least `needed` elements of `stride`
+/// bytes: kept when it holds them, else replaced by one of at least `min` elements doubled
+/// until it does (so a growing need reallocates O(log n) times, never per frame), named
+/// `name()`, the old one destroyed. Returns whether it grew. The GPU must be done with the
+/// old buffer.
+pub(crate) fn reserve_host(
+    ctx: &Context,
+    slot: &mut Option<Buffer>,
+    name: impl FnOnce() -> String,
+    (stride, min, needed): (u64, u64, u64),
+    usage: vk::BufferUsageFlags,
+) -> Result<bool> {
+    let cap = slot.as_ref().map_or(0, |b| b.desc.size / stride.max(1));
+    if needed <= cap {
+        return Ok(false);
+    }
     let mut new_cap = cap.max(min).max(1);
     while new_cap < needed {
         new_cap = new_cap.saturating_mul(2);
     }
-    new_cap
+    let buffer = Buffer::new(
+        ctx,
+        &name(),
+        BufferDesc::cpu_to_gpu(new_cap * stride, usage),
+    )?;
+    if let Some(old) = slot.replace(buffer) {
+        old.destroy(ctx)?;
+    }
+    Ok(true)
 }

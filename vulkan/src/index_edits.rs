@@ -5,7 +5,7 @@
 use ash::vk;
 use caveclod_core::{CameraState, HierarchyRecords, IndexEdit, IndexEdits, SurfaceDraw};
 
-use crate::buffer::{doubled, Buffer, BufferDesc};
+use crate::buffer::{reserve_host, Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
 
@@ -59,24 +59,14 @@ impl EditedBuffer {
 
     /// Makes sure slot `frame`'s staging buffer holds `edits` edits, doubling it if not.
     fn reserve(&mut self, ctx: &Context, name: &str, frame: usize, edits: u64) -> Result<()> {
-        let slot = &mut self.slots[frame];
-        let cap = slot
-            .staging
-            .as_ref()
-            .map_or(0, |b| b.desc.size / EDIT_BYTES);
-        if edits <= cap {
-            return Ok(());
-        }
-        let new_cap = doubled(cap, MIN_EDITS, edits);
-        let buffer = Buffer::new(
+        let grew = reserve_host(
             ctx,
-            &format!("{name} index edits f{frame}"),
-            BufferDesc::cpu_to_gpu(new_cap * EDIT_BYTES, vk::BufferUsageFlags::TRANSFER_SRC),
+            &mut self.slots[frame].staging,
+            || format!("{name} index edits f{frame}"),
+            (EDIT_BYTES, MIN_EDITS, edits),
+            vk::BufferUsageFlags::TRANSFER_SRC,
         )?;
-        if let Some(old) = slot.staging.replace(buffer) {
-            old.destroy(ctx)?;
-        }
-        self.grows += 1;
+        self.grows += u64::from(grew);
         Ok(())
     }
 

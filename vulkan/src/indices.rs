@@ -3,7 +3,7 @@
 use ash::vk;
 use caveclod_core::{CameraState, Hierarchy, HierarchyRecords, IndexEdits};
 
-use crate::buffer::{doubled, Buffer, BufferDesc};
+use crate::buffer::{reserve_host, Buffer};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::index_edits::EditedBuffer;
@@ -165,13 +165,7 @@ impl CameraIndices {
             )));
         };
         let e = edited.fill(ctx, &self.name, frame, hierarchy, camera, max_moves)?;
-        let slots = if camera.max_morphs() > 0 {
-            camera.morph_vertices().len()
-        } else {
-            0
-        };
-        self.vertex_bounds[frame] =
-            u32::try_from(hierarchy.vertex_id_bound() + slots).unwrap_or(u32::MAX);
+        self.vertex_bounds[frame] = morphed_bound(hierarchy.vertex_id_bound(), camera);
         self.morphed[frame] = camera.max_morphs() > 0;
         Ok(e)
     }
@@ -250,26 +244,20 @@ impl CameraIndices {
     /// Makes sure `surface` in `frame` holds `needed` indices, doubling its buffer if not.
     /// The frame's previous GPU work must be complete.
     fn reserve(&mut self, ctx: &Context, frame: usize, surface: usize, needed: u64) -> Result<()> {
-        let cap = self.capacity(frame, surface);
-        if needed <= cap {
-            return Ok(());
-        }
-        let new_cap = doubled(cap, MIN_INDICES, needed);
-        let name = format!("{} index buffer f{frame} s{surface}", self.name);
-        let buffer = Buffer::new(
-            ctx,
-            &name,
-            BufferDesc::cpu_to_gpu(new_cap * 4, vk::BufferUsageFlags::INDEX_BUFFER),
-        )?;
+        let name = &self.name;
         let slot = self
             .slots
             .get_mut(frame)
             .and_then(|f| f.get_mut(surface))
             .ok_or_else(|| Error::InvalidArgument(format!("no slot {frame}/{surface}")))?;
-        if let Some(old) = slot.buffer.replace(buffer) {
-            old.destroy(ctx)?;
-        }
-        self.grows += 1;
+        let grew = reserve_host(
+            ctx,
+            &mut slot.buffer,
+            || format!("{name} index buffer f{frame} s{surface}"),
+            (4, MIN_INDICES, needed),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+        )?;
+        self.grows += u64::from(grew);
         Ok(())
     }
 
@@ -353,8 +341,7 @@ impl CameraIndices {
                 camera: cam,
             } => {
                 cam.emit_indices_morphed(hierarchy, &mut outs, &mut written)?;
-                let slots = cam.morph_vertices().len();
-                u32::try_from(hierarchy.vertices().len() + slots).unwrap_or(u32::MAX)
+                morphed_bound(hierarchy.vertices().len(), cam)
             }
             IndexSource::Lists(lists) | IndexSource::MorphedLists(lists) => {
                 let mut bound = 0u32;
@@ -394,4 +381,10 @@ impl CameraIndices {
         }
         first_err.map_or(Ok(()), Err)
     }
+}
+
+/// The vertices morphed indices of `camera` may name: `vertices` persistent ones, then its
+/// morph slots in use (none without morph memory).
+fn morphed_bound(vertices: usize, camera: &CameraState<'_>) -> u32 {
+    u32::try_from(vertices + camera.morph_vertices().len()).unwrap_or(u32::MAX)
 }

@@ -97,8 +97,8 @@ impl CameraConfig {
     /// How to size it: an operation changes the places of its pair and of the polygons round
     /// the vertex it moves, a morph's start or end those round its vertex, and a frame's list
     /// holds each place once: on a rough terrain about five or six places per operation,
-    /// morphs included (`caveclod flyover --index-edits` reports the edits per frame). A list that fills asks the host to
-    /// rewrite every place on its next edits (counted in
+    /// morphs included (`caveclod flyover --index-edits` reports the edits per frame). A list
+    /// that fills asks the host to rewrite every place on its next edits (counted in
     /// [`IndexEdits::everything`](crate::IndexEdits::everything)), which is exact but costs
     /// what full emission costs. Each camera keeps 4 bytes per polygon slot, 4 bytes and two
     /// bits per place (a place per slot and surface) and 4 bytes per entry.

@@ -156,9 +156,8 @@ impl CameraState<'_> {
         };
         if p.scalars.everything {
             let mut batch = [0u32; BATCH];
-            for g in p.regions.iter() {
-                let end = g.first + g.len;
-                let mut at = g.first;
+            for r in 0..p.regions.len() {
+                let (mut at, end) = (p.drawn_range(r).start, p.drawn_range(r).end);
                 while at < end {
                     let k = (end - at).min(BATCH as u32) as usize;
                     for (i, b) in batch[..k].iter_mut().enumerate() {
@@ -175,10 +174,11 @@ impl CameraState<'_> {
         }
         let everything = p.scalars.everything;
         let mut holes = 0;
-        for (d, g) in draws.iter_mut().zip(p.regions.iter()) {
+        for (r, (d, g)) in draws.iter_mut().zip(p.regions.iter()).enumerate() {
+            let range = p.drawn_range(r);
             *d = SurfaceDraw {
-                first_index: 3 * g.first,
-                index_count: 3 * g.len,
+                first_index: 3 * range.start,
+                index_count: 3 * (range.end - range.start),
             };
             holes += g.holes;
         }

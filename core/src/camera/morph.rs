@@ -198,8 +198,11 @@ impl Front<'_> {
         }
         if phase == COARSENING {
             self.set_phase(m, parent, COARSENING);
+            // The vertex starts to morph: its polygons' corners now point at the slots. A
+            // refine morph starts on the split that just wrote every polygon round its
+            // vertex, which marked them already.
+            self.mark_floating_fan(h, parent);
         }
-        self.mark_floating_fan(h, parent);
         true
     }
 

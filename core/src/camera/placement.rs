@@ -24,18 +24,16 @@ use bytemuck::{Pod, Zeroable};
 
 use super::records::NONE;
 
-/// One surface's places: `first..first + capacity` of the buffer, drawn over
-/// `first..first + len`.
+/// One surface's places: region `r` is `r × slots .. (r + 1) × slots` of the buffer (every
+/// region holds as many places as the camera has slots), drawn over its first `len`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub(crate) struct Region {
-    pub first: u32,
-    pub capacity: u32,
     /// Places in use or holes: the draw's count.
     pub len: u32,
     /// Free places below `len`.
     pub holes: u32,
-    /// No hole lies below this place (relative to `first`).
+    /// No hole lies below this place (relative to the region's first).
     pub low: u32,
 }
 
@@ -109,10 +107,16 @@ impl Placement<'_> {
         !self.list.is_empty()
     }
 
-    /// Places per region.
+    /// Places per region: the camera's slots.
     #[inline]
     fn capacity(&self) -> u32 {
         self.place.len() as u32
+    }
+
+    /// The first place of region `r`.
+    #[inline]
+    pub fn first(&self, r: usize) -> u32 {
+        r as u32 * self.capacity()
     }
 
     /// Marks place `p` to be written.
@@ -152,7 +156,8 @@ impl Placement<'_> {
         if g.holes == 0 {
             return None;
         }
-        let (start, end) = (g.first + g.low, g.first + g.len);
+        let first = self.first(r);
+        let (start, end) = (first + g.low, first + g.len);
         let mut w = start / 32;
         while w * 32 < end {
             let mut bits = *self.free.get(w as usize)?;
@@ -162,7 +167,7 @@ impl Placement<'_> {
             if bits != 0 {
                 let p = w * 32 + bits.trailing_zeros();
                 if p < end {
-                    self.regions[r].low = p - g.first;
+                    self.regions[r].low = p - first;
                     return Some(p);
                 }
                 return None;
@@ -185,10 +190,10 @@ impl Placement<'_> {
                 self.regions[r].holes -= 1;
                 p
             }
-            None => match self.regions.get_mut(r) {
-                Some(g) if g.len < g.capacity => {
+            None => match (self.first(r), self.capacity(), self.regions.get_mut(r)) {
+                (first, capacity, Some(g)) if g.len < capacity => {
                     g.len += 1;
-                    g.first + g.len - 1
+                    first + g.len - 1
                 }
                 // A region holds every slot, so this is a camera used on after an
                 // inconsistency: the next reset places everything again.
@@ -222,13 +227,14 @@ impl Placement<'_> {
             *s = NONE;
         }
         let r = (p / self.capacity()) as usize;
+        let first = self.first(r);
         if let Some(g) = self.regions.get_mut(r) {
-            if p + 1 == g.first + g.len {
+            if p + 1 == first + g.len {
                 g.len -= 1;
             } else {
                 set_bit(self.free, p, true);
                 g.holes += 1;
-                g.low = g.low.min(p - g.first);
+                g.low = g.low.min(p - first);
                 self.mark(p);
             }
         }
@@ -289,8 +295,7 @@ impl Placement<'_> {
                 let Some(hole) = self.lowest_hole(r) else {
                     break;
                 };
-                let g = self.regions[r];
-                let last = g.first + g.len - 1;
+                let last = self.first(r) + self.regions[r].len - 1;
                 let slot = self.slot_of[last as usize];
                 set_bit(self.free, hole, false);
                 self.slot_of[hole as usize] = slot;
@@ -312,9 +317,9 @@ impl Placement<'_> {
         let Some(&g) = self.regions.get(r) else {
             return;
         };
-        let mut g = g;
+        let (mut g, first) = (g, self.first(r));
         while g.len > 0 && g.holes > 0 {
-            let last = g.first + g.len - 1;
+            let last = first + g.len - 1;
             if !bit(self.free, last) {
                 break;
             }
@@ -338,14 +343,7 @@ impl Placement<'_> {
         self.slot_of.fill(NONE);
         self.free.fill(0);
         self.marked.fill(0);
-        let capacity = self.capacity();
-        for (r, g) in self.regions.iter_mut().enumerate() {
-            *g = Region {
-                first: r as u32 * capacity,
-                capacity,
-                ..Region::default()
-            };
-        }
+        self.regions.fill(Region::default());
         self.scalars = PlacementScalars {
             listed: 0,
             everything: true,
@@ -367,8 +365,16 @@ impl Placement<'_> {
     /// Whether place `p` is to be drawn: below its region's `len`.
     #[inline]
     pub fn drawn(&self, p: u32) -> bool {
+        let r = (p / self.capacity().max(1)) as usize;
         self.regions
-            .get((p / self.capacity().max(1)) as usize)
-            .is_some_and(|g| p < g.first + g.len)
+            .get(r)
+            .is_some_and(|g| p < self.first(r) + g.len)
+    }
+
+    /// The places region `r` draws.
+    #[inline]
+    pub fn drawn_range(&self, r: usize) -> core::ops::Range<u32> {
+        let first = self.first(r);
+        first..first + self.regions.get(r).map_or(0, |g| g.len)
     }
 }

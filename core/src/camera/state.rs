@@ -39,7 +39,7 @@ use crate::{gpu::MorphVertex, CameraConfig, Hierarchy, RefineStats};
 /// | `slot_of` | slots × surfaces (0 without) | per place the slot whose polygon lies there |
 /// | `free`, `marked` | places / 32 each (0 without) | a bit per place: a hole; changed since the last edits |
 /// | `list` | `edit_list` | the places changed since the last edits |
-/// | `regions` | 5 × surfaces (0 without) | per surface its places' first, capacity, end, holes |
+/// | `regions` | 3 × surfaces (0 without) | per surface its places' end, holes and lowest possible hole |
 ///
 /// Design decisions:
 /// - **Activity is one map from split node to pair.** Following Hoppe, a node is active iff

@@ -228,8 +228,8 @@ pub struct IndexBuffers {
     pub draws: Vec<SurfaceDraw>,
 }
 
-/// Holes closed per frame of index edits: more than a frame's collapses free, so the draws
-/// stay at the polygons' count.
+/// Holes closed per frame of index edits at most: a bound on the frame's extra edits; holes
+/// beyond it wait for the next frames (the draws count them as degenerate triangles).
 pub const HOLE_MOVES: u32 = 256;
 
 impl IndexBuffers {
