@@ -141,7 +141,10 @@ impl CameraIndices {
     /// holes (see [`CameraState::index_edits`]); [`record_edits`](Self::record_edits) then
     /// records them. The GPU must be done with the slot's previous frame (the caller's
     /// fence for that slot). The indices are morphed emission's when the camera has morph
-    /// memory, for a draw with its [`CameraMorphs`](crate::CameraMorphs).
+    /// memory, for a draw with its [`CameraMorphs`](crate::CameraMorphs). The edits taken
+    /// leave the camera: record them before the next `fill_edits`, or the device buffer
+    /// misses them (after a dropped frame, `reset` the camera so the next edits rewrite
+    /// every place).
     pub fn fill_edits(
         &mut self,
         ctx: &Context,
