@@ -87,7 +87,7 @@ mod view;
 pub use bytemuck;
 pub use camera::{
     CameraConfig, CameraError, CameraState, CompactProgress, EmitError, FrontLag, IndexEdit,
-    IndexEdits, OpError, RefineStats, SurfaceDraw,
+    IndexEdits, OpError, RefineStats, SurfaceDraw, COMPACT_STEP,
 };
 pub use format::error::FormatError;
 pub use glam;

@@ -276,3 +276,56 @@ proptest! {
         prop_assert_eq!(order(&h, &cam), stepped);
     }
 }
+
+/// The frame loop's policy: nothing while the churn since the last cycle stays under a
+/// quarter of the front, then bounded steps every frame until the cycle ends, in the full
+/// compaction's order when the front held still.
+#[test]
+fn compaction_as_needed_starts_on_churn_and_steps_until_done() {
+    let h = golden_hierarchy();
+    let mut memory = vec![0u32; CameraState::words_needed(&h)];
+    let mut cam = CameraState::new(&h, &mut memory).expect("memory");
+    let p = fine().without_morphs();
+    settle(&h, &mut cam, &approach(&h, 1.0), &p);
+    cam.compact(&h);
+    assert_eq!(cam.churn(), 0);
+    let idle = cam.compact_as_needed(&h, 64);
+    assert_eq!((idle.work, idle.finished), (0, false));
+    assert!(!cam.compacting());
+    // Coming close churns the front past a quarter of it.
+    let near = approach(&h, 0.0);
+    settle(&h, &mut cam, &near, &p);
+    assert!(
+        cam.churn() >= cam.active_node_count() / 4,
+        "the view churns the front: {} of {}",
+        cam.churn(),
+        cam.active_node_count()
+    );
+    let mut twin_memory = vec![0u32; CameraState::words_needed(&h)];
+    let mut twin = CameraState::new(&h, &mut twin_memory).expect("memory");
+    settle(&h, &mut twin, &approach(&h, 1.0), &p);
+    settle(&h, &mut twin, &near, &p);
+    twin.compact(&h);
+    let mut steps = 0;
+    loop {
+        let done = cam.compact_as_needed(&h, 64);
+        steps += 1;
+        assert!(
+            done.work > 0 && done.work <= 64 + 64,
+            "a bounded step: {done:?}"
+        );
+        if done.finished {
+            break;
+        }
+        assert!(cam.compacting());
+        assert!(steps < 1_000_000, "the cycle ends");
+    }
+    assert!(steps > 1, "a cycle takes several bounded steps");
+    assert_eq!(order(&h, &cam), order(&h, &twin));
+    let after = cam.compact_as_needed(&h, 64);
+    assert_eq!(
+        (after.work, after.finished),
+        (0, false),
+        "no churn since the cycle began"
+    );
+}

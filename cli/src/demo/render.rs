@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use caveclod_core::glam::Vec3;
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams, COMPACT_STEP};
 use caveclod_host::{terrain_colours, write_png};
 use caveclod_vulkan::{
     CameraIndices, CameraMorphs, Context, HeadlessDesc, IndexSource, LookAt, MaterialSet,
@@ -87,6 +87,7 @@ fn draw(
         // picture before it to morph from.
         for (i, cam) in cams.iter_mut().enumerate() {
             let view = looks[i].view(viewports[i].width, viewports[i].height);
+            cam.compact_as_needed(h, COMPACT_STEP);
             if let Err(e) = cam.refine(h, &view, &params) {
                 outcome = Err(format!("camera {i}, frame {f}: {e}"));
             }

@@ -40,7 +40,7 @@ mod refine;
 mod state;
 mod stats;
 
-pub use compact_step::CompactProgress;
+pub use compact_step::{CompactProgress, COMPACT_STEP};
 pub use config::{CameraConfig, CameraError};
 pub use emit::EmitError;
 pub use index_edits::{IndexEdit, IndexEdits, SurfaceDraw};

@@ -112,6 +112,9 @@ impl Front<'_> {
             }
             self.morphs.free(m);
             self.mark_floating_fan(h, NodeId(state.parent));
+            if let Some(s) = h.split(NodeId(state.parent)) {
+                self.link_lineage(h, s.floating);
+            }
         }
     }
 
@@ -164,6 +167,7 @@ impl Front<'_> {
                 None => return false,
             },
         };
+        let base = h.vertex_id_bound() as u32;
         let mut mapped = true;
         for k in 0..VERTICES_PER_MORPH {
             let slot = m * VERTICES_PER_MORPH as u32 + k as u32;
@@ -172,7 +176,7 @@ impl Front<'_> {
                     mapped &= self.morphs.map.insert(key.vertex, slot).is_some();
                     let coarse = h.vertex_index(key.group, at).unwrap_or(any_coarse.vertex);
                     MorphVertex {
-                        from: coarse,
+                        from: self.chained_from(base, coarse, slot),
                         to: key.vertex,
                         t,
                         coarse,
@@ -196,6 +200,9 @@ impl Front<'_> {
             self.free_morph(h, m);
             return false;
         }
+        // No morph starts at the new morph's position yet: a refine morph's floating child
+        // was made by this split, and a coarsen morph's is a leaf (its collapse is legal),
+        // so neither is split. `free_morph` links when one ends.
         if phase == COARSENING {
             self.set_phase(m, parent, COARSENING);
             // The vertex starts to morph: its polygons' corners now point at the slots. A
@@ -345,29 +352,50 @@ impl Front<'_> {
         }
     }
 
-    /// Points every morphing vertex's `from` at the slot of its `coarse` vertex while that
-    /// vertex morphs too, and at `coarse` itself otherwise (see [`MorphVertex::from`]):
-    /// run after every pass that started or ended morphs, before the GPU reads the slots.
-    pub(super) fn link_morph_chains(&mut self, h: &impl HierarchyRecords) {
+    /// Where a slot `slot` whose blend starts at persistent vertex `coarse` starts: the slot
+    /// of `coarse` while that vertex morphs, else `coarse` (see [`MorphVertex::from`]).
+    #[inline]
+    fn chained_from(&self, base: u32, coarse: u32, slot: u32) -> u32 {
+        match self.morphs.map.get(coarse) {
+            Some(k) if k != slot => base.saturating_add(k),
+            _ => coarse,
+        }
+    }
+
+    /// Links again the morphs that start where `floating` stands, after its vertices
+    /// started or stopped morphing. A morph starts at its parent's position, so those that
+    /// start at `floating`'s are the morphs of the splits along its stationary line
+    /// (`floating`, its stationary child, and so on while split): a walk down the split
+    /// nodes, not over the morphs. Each link is then exact after every change, between
+    /// passes too.
+    fn link_lineage(&mut self, h: &impl HierarchyRecords, floating: NodeId) {
         let base = h.vertex_id_bound() as u32;
-        let n = self.morphs.live_vertices().len();
-        for s in 0..n {
-            let Some(v) = self
-                .morphs
-                .vertices
-                .get(s)
-                .copied()
-                .filter(|v| !v.is_idle())
-            else {
-                continue;
-            };
-            let from = match self.morphs.map.get(v.coarse) {
-                Some(k) if k as usize != s => base.saturating_add(k),
-                _ => v.coarse,
-            };
-            if let Some(slot) = self.morphs.vertices.get_mut(s) {
-                slot.from = from;
+        let mut node = floating;
+        // A validated hierarchy is a tree, so the line ends; the bound keeps it so whatever
+        // the records say.
+        for _ in 0..=h.meta().max_depth {
+            if !self.is_split(node) {
+                return;
             }
+            let Some(&s) = h.split(node) else {
+                return;
+            };
+            if let Some(m) = self.morph_of(h, s.floating) {
+                for k in 0..VERTICES_PER_MORPH as u32 {
+                    let slot = m * VERTICES_PER_MORPH as u32 + k;
+                    let Some(v) = self.morphs.vertices.get(slot as usize).copied() else {
+                        continue;
+                    };
+                    if v.is_idle() {
+                        continue;
+                    }
+                    let from = self.chained_from(base, v.coarse, slot);
+                    if let Some(dst) = self.morphs.vertices.get_mut(slot as usize) {
+                        dst.from = from;
+                    }
+                }
+            }
+            node = s.stationary;
         }
     }
 

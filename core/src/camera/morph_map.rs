@@ -124,10 +124,12 @@ impl<'m> MorphMap<'m> {
         Err(len)
     }
 
-    /// The slot of `vertex`, if it morphs.
+    /// The slot of `vertex`, if it morphs: a vertex that does not is answered by its bit,
+    /// without a probe (most asked are not: a collapse's floating child long settled, a
+    /// morph's coarse vertex).
     #[inline]
     pub fn get(&self, vertex: u32) -> Option<u32> {
-        if vertex == NONE {
+        if vertex == NONE || (!self.bits.is_empty() && self.bit(vertex) == 0) {
             return None;
         }
         let at = self.find(vertex).ok()?;

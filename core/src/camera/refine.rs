@@ -21,7 +21,7 @@
 //!    its bounds against the criterion)? Then try the split (forced, counted); else does its
 //!    coarsening parent no longer want its split? Then try the collapse (remembered
 //!    refusals, legality, a coarsen morph first);
-//! 4. **finish**: relink the morph chains where morphs changed and report.
+//! 4. **finish**: report.
 //!
 //! Whether a node wants its split is the criterion's answer (see `criterion`); this module
 //! holds the walk.
@@ -148,7 +148,7 @@ impl CameraState<'_> {
             f.sweep_morphs(h, &pass.c, &pass.params, &mut pass.st, pass.max_ops)?;
         }
         f.walk(h, self.stack, &mut pass)?;
-        Ok(f.finish_pass(h, pass.st))
+        Ok(f.finish_pass(pass.st))
     }
 }
 
@@ -415,14 +415,8 @@ impl Front<'_> {
         }
     }
 
-    /// The pass's report, after relinking the morph chains where morphs changed; the camera
-    /// counts as refined from now on.
-    fn finish_pass(&mut self, h: &impl HierarchyRecords, mut st: RefineStats) -> RefineStats {
-        // Slots change only where a morph started, ended or a collapse ended one.
-        let changed = st.morphs_started + st.morphs_finished + st.collapses > 0;
-        if changed && self.morphs.scalars.live > 0 {
-            self.link_morph_chains(h);
-        }
+    /// The pass's report; the camera counts as refined from now on.
+    fn finish_pass(&mut self, mut st: RefineStats) -> RefineStats {
         st.active_nodes = self.active_nodes;
         st.active_polygons = self.active_polygons;
         st.morphing = self.morphs.scalars.live;

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, Stage};
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams, COMPACT_STEP};
 use caveclod_io::{AlignedBytes, ClodBytes};
 use caveclod_vulkan::MorphStage;
 use caveclod_vulkan::Viewport;
@@ -310,6 +310,9 @@ impl<'h> Scene<'h> {
             // A new or reset camera's first pass does not morph (`CameraState::refine`).
             let params = &params;
             let start = Instant::now();
+            // Incremental compaction keeps the front's records close in memory, a bounded
+            // step a frame.
+            c.state.compact_as_needed(&self.h, COMPACT_STEP);
             let stats = c
                 .state
                 .refine(&self.h, &view, params)
