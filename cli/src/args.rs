@@ -143,8 +143,9 @@ pub struct FlyoverArgs {
     /// (0: never).
     #[arg(long, default_value_t = 30)]
     pub compact_every: usize,
-    /// Work per frame of an incremental compaction (comparisons and moves), advanced every
-    /// frame of a state until its cycle ends; 0 compacts whole when due (a spike).
+    /// Most work per frame of an incremental compaction (comparisons and moves: an eighth of
+    /// the front's nodes, up to this), advanced every frame of a state until its cycle ends;
+    /// 0 compacts whole when due (a spike).
     #[arg(long, default_value_t = crate::flyover::COMPACT_STEP)]
     pub compact_step: u32,
     /// Share of its active list a camera's refinement visits per frame, resuming where the

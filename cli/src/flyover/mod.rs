@@ -89,10 +89,11 @@ pub fn morphs_for_sizing(sizing: &Flight, stride: usize, params: &RefineParams) 
     ((most as f64 * MORPH_HEADROOM).ceil() as u32).max(256)
 }
 
-/// The fly-over's default work per frame of an incremental compaction: the library's
-/// [`caveclod_core::COMPACT_STEP`]. Whole compaction when due (`--compact-step 0`) costs
-/// about as much over a flight but spends it in one frame: on a rough 1200 × 1200 grid at
-/// 1 px (80,000 polygons per camera) it lifts the refinement p99 several times.
+/// The fly-over's default most work per frame of an incremental compaction: the library's
+/// [`caveclod_core::COMPACT_STEP`]. Whole compaction when due (`--compact-step 0`) spends a
+/// cycle's work in one frame: on a rough 1200 × 1200 grid at 1 px (80,000 polygons per
+/// camera) it lifts the refinement p99 about three times, on St. Helens at 1 px (14,000)
+/// more than twice.
 pub const COMPACT_STEP: u32 = caveclod_core::COMPACT_STEP;
 /// The fly-over's default share of the active list a refinement visits per frame.
 pub const VISIT_FRACTION: f32 = 1.0 / 3.0;
@@ -140,9 +141,10 @@ pub struct FlyoverOptions {
     /// together no longer fit the caches one camera alone fits, so their refinement costs
     /// far more than four times one camera's.
     pub compact_every: usize,
-    /// Work per frame of an incremental compaction ([`CameraState::compact_step`]): a
-    /// compaction due starts a cycle that each frame of the state advances by this much until
-    /// it ends, inside the timed refinement; 0 compacts whole when due
+    /// Most work per frame of an incremental compaction ([`CameraState::compact_step`]): a
+    /// compaction due starts a cycle that each frame of the state advances by an eighth of
+    /// its front's nodes, up to this ([`CameraState::compact_budget`]), until it ends, inside
+    /// the timed refinement; 0 compacts whole when due
     /// ([`CameraState::compact`]), a spike of several milliseconds on a large front.
     pub compact_step: u32,
     /// Share of its active list a camera's refinement visits per frame

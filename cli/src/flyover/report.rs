@@ -144,7 +144,7 @@ impl Flyover {
         let compaction = match (self.options.compact_every, self.options.compact_step) {
             (0, _) => "never".to_string(),
             (every, 0) => format!("whole every {every} frames"),
-            (every, step) => format!("a cycle every {every} frames, {step} work per frame"),
+            (every, step) => format!("a cycle every {every} frames, up to {step} work per frame"),
         };
         let _ = writeln!(
             o,

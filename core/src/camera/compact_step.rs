@@ -359,22 +359,29 @@ impl CameraState<'_> {
         self.front.compaction.phase != IDLE
     }
 
-    /// A frame loop's compaction, called once a frame: a step of at most `budget` work
-    /// ([`COMPACT_STEP`] suits fronts of tens of thousands of polygons) while a cycle is
-    /// under way, or the first step of a new one once the splits and collapses since the last
-    /// began ([`churn`](Self::churn)) reach a quarter of the active nodes; else nothing.
-    /// Bounded per frame, unlike [`compact`](Self::compact), whose spike grows with the
-    /// front.
-    pub fn compact_as_needed(&mut self, h: &impl HierarchyRecords, budget: u32) -> CompactProgress {
+    /// A frame loop's compaction, called once a frame: a step of
+    /// [`compact_budget(most)`](Self::compact_budget) work while a cycle is under way, or the
+    /// first step of a new one once the splits and collapses since the last began
+    /// ([`churn`](Self::churn)) reach a quarter of the active nodes; else nothing. Bounded
+    /// per frame, unlike [`compact`](Self::compact), whose spike grows with the front.
+    pub fn compact_as_needed(&mut self, h: &impl HierarchyRecords, most: u32) -> CompactProgress {
         if self.compacting() || self.churn() >= (self.active_node_count() / 4).max(1) {
+            let budget = self.compact_budget(most);
             return self.compact_step(h, budget);
         }
         CompactProgress::default()
     }
+
+    /// One frame's step of incremental compaction for this camera's front: an eighth of
+    /// its active nodes' worth of work, at least 256 and at most `most` ([`COMPACT_STEP`]
+    /// suits most). A step sized by the front keeps its cost a small share of a pass over
+    /// that front, small fronts included, while a cycle still ends in a few dozen frames.
+    pub fn compact_budget(&self, most: u32) -> u32 {
+        (self.active_node_count() / 8).max(256).min(most)
+    }
 }
 
-/// A work budget for [`CameraState::compact_step`] per frame: 5,000 comparisons and moves,
-/// small beside a refinement pass over a front of 60,000 to 120,000 polygons (a third of
-/// its records visited per frame), yet enough that a cycle over such a front ends within a
-/// few hundred frames.
+/// The most work of one frame's incremental compaction
+/// ([`CameraState::compact_budget`]): 5,000 comparisons and moves, the step of a front of
+/// 40,000 nodes (80,000 polygons), small beside a refinement pass over it.
 pub const COMPACT_STEP: u32 = 5000;

@@ -272,8 +272,9 @@ pub(crate) fn cameras<'p>(
 pub struct Compaction {
     /// A compaction starts every this many of a state's frames (0: never).
     pub every: usize,
-    /// Work per frame of an incremental compaction ([`CameraState::compact_step`]), every
-    /// frame until its cycle ends; 0 compacts whole ([`CameraState::compact`]) when due.
+    /// Most work per frame of an incremental compaction ([`CameraState::compact_budget`]),
+    /// every frame until its cycle ends; 0 compacts whole ([`CameraState::compact`]) when
+    /// due.
     pub step: u32,
 }
 
@@ -311,7 +312,7 @@ pub fn frame(
     if compact.step == 0 && compact.due {
         cam.compact(h);
     } else if compact.step > 0 && (compact.due || cam.compacting()) {
-        cam.compact_step(h, compact.step);
+        cam.compact_step(h, cam.compact_budget(compact.step));
     }
     let st = cam
         .refine(h, view, params)
