@@ -9,6 +9,7 @@
 
 use super::records::{next, prev, PolySlot, FREE, NONE};
 use super::state::Front;
+use crate::format::Split;
 use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
 
@@ -122,6 +123,33 @@ impl Front<'_> {
             .filter(|&k| k != NONE && k < self.pairs)
     }
 
+    /// Walks down the stationary line of `parent`'s floating child: that child, then its
+    /// stationary child, and so on while this camera has them split; `visit` sees each split
+    /// node's split record. Returns the last split node (`parent` where the child is not
+    /// split) and the node after it, which holds the floating child's position now. These
+    /// are the nodes that have held that position, so the splits that made pairs naming it
+    /// and every morph that starts at it. `None` for a leaf `parent`. Bounded by the
+    /// hierarchy's depth, whatever the records say.
+    pub(super) fn walk_stationary_line(
+        &mut self,
+        h: &impl HierarchyRecords,
+        parent: NodeId,
+        mut visit: impl FnMut(&mut Self, &Split),
+    ) -> Option<(NodeId, NodeId)> {
+        let s = h.split(parent)?;
+        let (mut made_by, mut holder) = (parent, s.floating);
+        for _ in 0..=h.meta().max_depth {
+            if self.live_pair(holder).is_none() {
+                break;
+            }
+            let x = h.split(holder)?;
+            visit(self, x);
+            made_by = holder;
+            holder = x.stationary;
+        }
+        Some((made_by, holder))
+    }
+
     /// Marks, for the index edits, the places of the polygons round the vertex that
     /// `parent`'s split brought (its floating child's position): its morph starts or ends,
     /// so their morphed corners change. The record holding that position is the floating
@@ -131,19 +159,16 @@ impl Front<'_> {
         if !self.placement.is_on() {
             return;
         }
-        let Some(s) = h.split(parent) else {
+        if let Some((made_by, holder)) = self.walk_stationary_line(h, parent, |_, _| {}) {
+            self.mark_fan_of(made_by, holder);
+        }
+    }
+
+    /// Marks the fan round the record of `holder`, found in the pair of `made_by`'s split
+    /// (the end of a stationary line, see [`walk_stationary_line`](Self::walk_stationary_line)).
+    pub(super) fn mark_fan_of(&mut self, made_by: NodeId, holder: NodeId) {
+        if !self.placement.is_on() {
             return;
-        };
-        let (mut made_by, mut holder) = (parent, s.floating);
-        for _ in 0..=h.meta().max_depth {
-            if self.live_pair(holder).is_none() {
-                break;
-            }
-            made_by = holder;
-            holder = match h.split(holder) {
-                Some(x) => x.stationary,
-                None => return,
-            };
         }
         let Some(k) = self.live_pair(made_by) else {
             return;

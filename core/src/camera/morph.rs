@@ -59,6 +59,7 @@ use super::ops::OpError;
 use super::records::NONE;
 use super::state::{CameraState, Front};
 use super::stats::RefineStats;
+use crate::format::Split;
 use crate::gpu::{MorphVertex, MAX_MORPH_CHAIN};
 use crate::hierarchy::HierarchyRecords;
 use crate::ids::NodeId;
@@ -111,9 +112,13 @@ impl Front<'_> {
                 self.set_phase(m, NodeId(state.parent), REFINING);
             }
             self.morphs.free(m);
-            self.mark_floating_fan(h, NodeId(state.parent));
-            if let Some(s) = h.split(NodeId(state.parent)) {
-                self.link_lineage(h, s.floating);
+            // The morphs that start at its vertex start at the persistent vertex now, and
+            // its polygons' corners stop pointing at its slots: one walk down the line.
+            let base = h.vertex_id_bound() as u32;
+            let parent = NodeId(state.parent);
+            let end = self.walk_stationary_line(h, parent, |f, s| f.link_morph_of(h, base, s));
+            if let Some((made_by, holder)) = end {
+                self.mark_fan_of(made_by, holder);
             }
         }
     }
@@ -200,9 +205,7 @@ impl Front<'_> {
             self.free_morph(h, m);
             return false;
         }
-        // No morph starts at the new morph's position yet: a refine morph's floating child
-        // was made by this split, and a coarsen morph's is a leaf (its collapse is legal),
-        // so neither is split. `free_morph` links when one ends.
+        // No morph starts at the new morph's position yet (see `link_morph_of`).
         if phase == COARSENING {
             self.set_phase(m, parent, COARSENING);
             // The vertex starts to morph: its polygons' corners now point at the slots. A
@@ -362,40 +365,27 @@ impl Front<'_> {
         }
     }
 
-    /// Links again the morphs that start where `floating` stands, after its vertices
-    /// started or stopped morphing. A morph starts at its parent's position, so those that
-    /// start at `floating`'s are the morphs of the splits along its stationary line
-    /// (`floating`, its stationary child, and so on while split): a walk down the split
-    /// nodes, not over the morphs. Each link is then exact after every change, between
-    /// passes too.
-    fn link_lineage(&mut self, h: &impl HierarchyRecords, floating: NodeId) {
-        let base = h.vertex_id_bound() as u32;
-        let mut node = floating;
-        // A validated hierarchy is a tree, so the line ends; the bound keeps it so whatever
-        // the records say.
-        for _ in 0..=h.meta().max_depth {
-            if !self.is_split(node) {
-                return;
-            }
-            let Some(&s) = h.split(node) else {
-                return;
+    /// Links again the morph of `split`'s floating child, if it morphs: a split along the
+    /// stationary line of a vertex whose morph ended (see `free_morph`), whose morph starts
+    /// at that vertex. A morph start needs no such walk: its floating child was just made
+    /// (a refine morph) or is a leaf (a coarsen morph), so no morph starts at it yet. Each
+    /// link is then exact after every change, between passes too.
+    fn link_morph_of(&mut self, h: &impl HierarchyRecords, base: u32, split: &Split) {
+        let Some(m) = self.morph_of(h, split.floating) else {
+            return;
+        };
+        for k in 0..VERTICES_PER_MORPH as u32 {
+            let slot = m * VERTICES_PER_MORPH as u32 + k;
+            let Some(v) = self.morphs.vertices.get(slot as usize).copied() else {
+                continue;
             };
-            if let Some(m) = self.morph_of(h, s.floating) {
-                for k in 0..VERTICES_PER_MORPH as u32 {
-                    let slot = m * VERTICES_PER_MORPH as u32 + k;
-                    let Some(v) = self.morphs.vertices.get(slot as usize).copied() else {
-                        continue;
-                    };
-                    if v.is_idle() {
-                        continue;
-                    }
-                    let from = self.chained_from(base, v.coarse, slot);
-                    if let Some(dst) = self.morphs.vertices.get_mut(slot as usize) {
-                        dst.from = from;
-                    }
-                }
+            if v.is_idle() {
+                continue;
             }
-            node = s.stationary;
+            let from = self.chained_from(base, v.coarse, slot);
+            if let Some(dst) = self.morphs.vertices.get_mut(slot as usize) {
+                dst.from = from;
+            }
         }
     }
 
