@@ -147,6 +147,7 @@ fn config_of(c: &CaveclodPoolConfig) -> PoolConfig {
         files: c.files,
         pages: c.pages,
         max_requests: c.max_requests,
+        vertex_pool: None,
     }
 }
 

@@ -143,7 +143,9 @@ impl From<EmitError> for CaveclodStatus {
             EmitError::TooFewOutputs { .. } | EmitError::OutputTooSmall { .. } => {
                 Self::OutputTooSmall
             }
-            EmitError::MissingVertex { .. } | EmitError::CountMismatch { .. } => Self::Inconsistent,
+            EmitError::MissingVertex { .. }
+            | EmitError::CountMismatch { .. }
+            | EmitError::NoDeviceVertex { .. } => Self::Inconsistent,
         }
     }
 }

@@ -9,7 +9,7 @@ use caveclod_core::format::checksum64;
 use caveclod_core::format::paged::PageLayout;
 use caveclod_core::stream::{
     FaultKind, InstallError, LoadRequest, PageEntry, PageField, PageKey, PageState, PageTable,
-    PoolConfig, Residency, StreamError, Wanted,
+    PoolConfig, PoolError, Residency, StreamError, VertexPoolLayout, Wanted,
 };
 use caveclod_core::FormatError;
 use counting::{allocations, assert_counting};
@@ -36,10 +36,17 @@ impl Rng {
 }
 
 fn world(pages: u32, seed: u64) -> World {
+    world_of(pages, seed, |_, rng| {
+        [1 + rng.below(200) as u32, 0, 0, 0, 0, 0]
+    })
+}
+
+/// [`world`] with page `p`'s record counts `counts(p, rng)`.
+fn world_of(pages: u32, seed: u64, counts: impl Fn(u32, &mut Rng) -> [u32; 6]) -> World {
     let mut rng = Rng(seed | 1);
     let (mut bytes, mut entries, mut parents) = (vec![0u8; 64], Vec::new(), Vec::new());
     for page in 0..pages {
-        let counts = [1 + rng.below(200) as u32, 0, 0, 0, 0, 0];
+        let counts = counts(page, &mut rng);
         let size = PageLayout::new(counts, false).expect("layout").len as u32;
         let offset = bytes.len() as u64;
         let data: Vec<u8> = (0..size).map(|_| rng.next() as u8).collect();
@@ -416,6 +423,69 @@ fn bad_pages_are_reported_once_and_stay_absent() {
     let stats = r.schedule(&mut loads, &mut []);
     assert_eq!((stats.loads, stats.requested), (0, 0));
     assert_eq!((r.stats().failed, r.stats().resident), (3, 1));
+}
+
+/// A file of pages without parents holding `vertices[p]` vertices each.
+fn world_with_vertices(vertices: &[u32]) -> World {
+    let mut w = world_of(vertices.len() as u32, 5, |p, _| {
+        [1, 0, 0, 0, 0, vertices[p as usize]]
+    });
+    for e in &mut w.entries {
+        e.parent_count = 0;
+    }
+    w
+}
+
+#[test]
+fn a_vertex_pool_is_checked_when_made_and_as_files_are_added() {
+    let bad = |layout| {
+        let config = PoolConfig::new(4 * 2048, 2048, 2, 16).with_vertex_pool(layout);
+        let mut m = Memory {
+            config,
+            words: vec![0; Residency::words_needed(&config)],
+            pool: vec![0; config.pool_bytes() / 8 + 8],
+        };
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut m.pool);
+        let skip = bytes.as_ptr().align_offset(64);
+        let bytes = &mut bytes[skip..skip + config.pool_bytes()];
+        let mut tables = [None, None];
+        Residency::new(config, &mut m.words, bytes, &mut tables).err()
+    };
+    for layout in [(0, 100), (40, 159)] {
+        let (slot_vertices, vertices) = layout;
+        assert!(matches!(
+            bad(VertexPoolLayout {
+                slot_vertices,
+                vertices
+            }),
+            Some(PoolError::BadConfig { .. })
+        ));
+    }
+    // Two root pages of 10 and 20 vertices, streamed pages of at most 40.
+    let w = world_with_vertices(&[10, 20, 40, 7, 33]);
+    let add = |slot_vertices, vertices| {
+        let layout = VertexPoolLayout {
+            slot_vertices,
+            vertices,
+        };
+        let mut m = memory(4, 2, 16);
+        m.config = m.config.with_vertex_pool(layout);
+        m.words.resize(Residency::words_needed(&m.config), 0);
+        let mut tables = [None, None];
+        let mut r = pool(&mut m, &mut tables);
+        [r.add_file(w.table(), 2), r.add_file(w.table(), 2)]
+    };
+    let too_small = |what, needed, room| Err(PoolError::VertexPoolTooSmall { what, needed, room });
+    assert_eq!(
+        add(39, 4 * 39 + 60)[0],
+        too_small("a page's vertices", 40, 39)
+    );
+    assert_eq!(add(40, 4 * 40 + 29)[0], too_small("root vertices", 30, 29));
+    assert_eq!(
+        add(40, 4 * 40 + 30),
+        [Ok(0), too_small("root vertices", 30, 0)]
+    );
+    assert_eq!(add(40, 4 * 40 + 60), [Ok(0), Ok(1)]);
 }
 
 #[test]

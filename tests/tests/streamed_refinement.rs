@@ -8,15 +8,21 @@
 //!   file's.
 //! - The pool counts, per page, the front nodes standing on it, and never evicts such a page:
 //!   a flight through a pool a third of the file evicts what the front left.
+//! - With a device vertex pool beside it, emission, the index edits and the morph slots name
+//!   vertices in that pool: an index buffer patched by the edits draws the front, read
+//!   through the pool's vertices, while its slots are reused.
 
 use caveclod_bake::paged::{write_paged, PageOptions};
 use caveclod_core::format::paged::PagedRoot;
+use caveclod_core::format::Vertex;
 use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{
-    FrameLists, LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, Want,
+    FrameLists, LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy,
+    VertexInstall, VertexPoolLayout, Want,
 };
 use caveclod_core::{
-    CameraConfig, CameraState, HierarchyRecords, LookAt, OpError, RefineParams, RefineStats, View,
+    CameraConfig, CameraState, HierarchyRecords, IndexEdit, LookAt, MorphVertex, OpError,
+    RefineParams, RefineStats, SurfaceDraw, View,
 };
 use caveclod_io::{AlignedBytes, PagedFile};
 use caveclod_tests::check::check_front;
@@ -78,6 +84,21 @@ impl<'a> Pool<'a> {
             1,
             root.table().len() as u32,
         );
+        Self::of(config)
+    }
+
+    /// A pool of `slots` with a device vertex pool beside it, as small as the file allows.
+    fn with_vertex_pool(root: &PagedRoot<'_>, slots: u32) -> Self {
+        let (table, pinned) = (root.table(), root.paged().root_pages);
+        let slot_vertices = table.most_vertices_from(pinned);
+        let layout = VertexPoolLayout {
+            slot_vertices,
+            vertices: slots * slot_vertices + table.vertices_before(pinned) as u32,
+        };
+        Self::of(Self::new(root, slots).config.with_vertex_pool(layout))
+    }
+
+    fn of(config: PoolConfig) -> Self {
         Self {
             words: vec![0; Residency::words_needed(&config)],
             bytes: AlignedBytes::zeroed(config.pool_bytes()),
@@ -101,6 +122,43 @@ fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> (u3
         pool.install(l.slot, root).expect("install");
     }
     (st.loads, st.evictions)
+}
+
+/// [`load`], and each installed page's vertices copied into `device` (its slot's place
+/// first filled with a vertex no page holds, so a stale read shows).
+fn load_with_vertices(
+    pool: &mut Residency<'_, '_>,
+    root: &PagedRoot<'_>,
+    bytes: &[u8],
+    device: &mut [Vertex],
+) -> (u32, u32) {
+    let mut loads = [LoadRequest::default(); 64];
+    let mut evicted = [PageKey::default(); 64];
+    let st = pool.schedule(&mut loads, &mut evicted);
+    let slot_vertices = pool.vertex_pool().expect("vertex pool").slot_vertices as usize;
+    for l in &loads[..st.loads as usize] {
+        let from = &bytes[l.offset as usize..l.offset as usize + l.size as usize];
+        pool.loading_slot_mut(l.slot)
+            .expect("slot")
+            .copy_from_slice(from);
+        pool.install(l.slot, root).expect("install");
+        let at = l.slot as usize * slot_vertices;
+        device[at..at + slot_vertices].fill(STALE);
+        copy_install(device, &pool.page_vertices(l.key).expect("resident"));
+    }
+    (st.loads, st.evictions)
+}
+
+/// A vertex no page holds.
+const STALE: Vertex = Vertex {
+    position: [f32::NAN; 3],
+    normal: [0.0; 3],
+    uv: [0.0; 2],
+};
+
+fn copy_install(device: &mut [Vertex], install: &VertexInstall<'_>) {
+    let at = install.first as usize;
+    device[at..at + install.vertices.len()].copy_from_slice(install.vertices);
 }
 
 /// Every streamed page's uses are the front nodes standing on it, over all `cameras`, and
@@ -350,4 +408,133 @@ fn a_pool_a_third_of_the_file_evicts_only_what_the_fronts_left() {
         "{installs} installs"
     );
     assert!(evictions > 0, "the fronts moved off pages, which made room");
+}
+
+#[test]
+fn a_streamed_camera_draws_from_the_device_vertex_pool_while_its_slots_are_reused() {
+    let (_, file, bytes) = terrain();
+    let root = file.root().expect("root");
+    let streamed_pages = root.table().len() as u32 - root.paged().root_pages;
+    let mut p = Pool::with_vertex_pool(&root, streamed_pages / 3);
+    let config = p.config;
+    let layout = config.vertex_pool.expect("layout");
+    let mut pool = p.residency(&root);
+    // The device pool as a renderer keeps it: the root pages' vertices once, then each
+    // installed page's in its slot.
+    let mut device = vec![STALE; layout.vertices as usize];
+    for page in 0..root.paged().root_pages {
+        copy_install(
+            &mut device,
+            &pool.root_vertices(0, &root, page).expect("root"),
+        );
+    }
+    let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
+    let mut lists = lists(&config, &mut wants, &mut words);
+    let mut memory = Vec::new();
+    let mut cam = {
+        let streamed = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        let c = CameraConfig::with_polygon_budget(&streamed, 1500)
+            .with_morphs(256)
+            .with_index_edits(512);
+        memory.resize(CameraState::words_needed_for(&streamed, &c), 0);
+        CameraState::with_config(&streamed, &mut memory, &c).expect("camera")
+    };
+    let mut places = vec![[u32::MAX - 1; 3]; cam.index_places()];
+    let surfaces = root.meta().surface_count as usize;
+    let (mut edits, mut draws) = (Vec::new(), vec![SurfaceDraw::default(); surfaces]);
+    let (mut installs, mut evictions, mut morphing) = (0, 0, 0);
+    let params = RefineParams::default();
+    for f in 0..400 {
+        pool.begin_frame();
+        let h = StreamedHierarchy::new(&root, &pool, 0, &mut lists);
+        cam.refine(&h, &view(f * 2), &params).expect("refine");
+        edits.resize(cam.index_edits_needed(64), IndexEdit::default());
+        let e = cam
+            .index_edits(&h, 64, &mut edits, &mut draws)
+            .expect("edits");
+        for x in &edits[..e.edits] {
+            places[x.place as usize] = x.indices;
+        }
+        let mut slots = vec![MorphVertex::IDLE; cam.morph_vertices().len()];
+        cam.device_morph_vertices(&h, &mut slots).expect("morphs");
+        check_morph_slots(&h, &cam, &slots, &device);
+        morphing += slots.iter().filter(|m| !m.is_idle()).count();
+        // The places drawn are the front, read through the device pool, a morphing corner
+        // at its fine vertex (where its slot's blend ends).
+        let drawn = draws
+            .iter()
+            .flat_map(|d| &places[d.first_index as usize / 3..][..d.index_count as usize / 3])
+            .filter(|t| !(t[0] == t[1] && t[1] == t[2]))
+            .map(|t| t.map(|i| device_point(&device, &slots, layout.vertices, i)));
+        assert_eq!(sorted(drawn), fine_surface(&cam, &h), "frame {f}");
+        pool.apply(&mut lists).expect("apply");
+        let (l, e) = load_with_vertices(&mut pool, &root, &bytes, &mut device);
+        installs += l;
+        evictions += e;
+    }
+    assert!(
+        installs > streamed_pages / 3 && evictions > 0,
+        "{installs} installs, {evictions} evictions"
+    );
+    assert!(
+        morphing > 100,
+        "{morphing} morphing vertices over the flight"
+    );
+}
+
+/// Each device morph slot names, in the device pool, the vertices its camera slot names by
+/// id.
+fn check_morph_slots(
+    h: &StreamedHierarchy<'_, '_, '_, '_>,
+    cam: &CameraState<'_>,
+    device_slots: &[MorphVertex],
+    device: &[Vertex],
+) {
+    let ids = h.vertex_id_bound() as u32;
+    for (d, m) in device_slots.iter().zip(cam.morph_vertices()) {
+        assert_eq!(d.is_idle(), m.is_idle());
+        if m.is_idle() {
+            continue;
+        }
+        assert_eq!(&device[d.to as usize], h.vertex(m.to).expect("to"));
+        assert_eq!(
+            &device[d.coarse as usize],
+            h.vertex(m.coarse).expect("coarse")
+        );
+        match m.from.checked_sub(ids) {
+            Some(slot) => assert_eq!(d.from, h.device_vertex_bound() as u32 + slot),
+            None => assert_eq!(&device[d.from as usize], h.vertex(m.from).expect("from")),
+        }
+    }
+}
+
+/// The point index `i` names on the device: a pool vertex's, or a morph slot's fine vertex.
+fn device_point(device: &[Vertex], slots: &[MorphVertex], vertices: u32, i: u32) -> [u32; 3] {
+    let v = match i.checked_sub(vertices) {
+        Some(s) => device[slots[s as usize].to as usize],
+        None => device[i as usize],
+    };
+    v.position.map(f32::to_bits)
+}
+
+/// The front as its polygons' fine points: each corner at its node's point, sorted as
+/// [`sorted`] sorts.
+fn fine_surface(cam: &CameraState<'_>, h: &impl HierarchyRecords) -> Vec<[[u32; 3]; 3]> {
+    sorted(
+        front(cam, h)
+            .into_iter()
+            .map(|t| t.map(|p| p.map(f32::to_bits))),
+    )
+}
+
+/// Triangles each from its least corner, sorted.
+fn sorted(tris: impl Iterator<Item = [[u32; 3]; 3]>) -> Vec<[[u32; 3]; 3]> {
+    let mut tris: Vec<[[u32; 3]; 3]> = tris
+        .map(|t| {
+            let least = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+            [t[least], t[(least + 1) % 3], t[(least + 2) % 3]]
+        })
+        .collect();
+    tris.sort_unstable();
+    tris
 }

@@ -13,8 +13,8 @@
 //! past the persistent vertices (see `morph`); with nothing morphing it is the plain
 //! emission.
 
+use super::device_space::{on_device, MorphRemap};
 use super::index_cache::BATCH;
-use super::morph::MorphRemap;
 use super::records::{SlotTriangle, NONE, NO_POLYGON};
 use super::state::CameraState;
 use crate::hierarchy::HierarchyRecords;
@@ -50,6 +50,13 @@ pub enum EmitError {
         /// Its corner.
         corner: u8,
     },
+    /// A corner's vertex has no place in the device's vertex buffer
+    /// ([`HierarchyRecords::device_vertex`]): over a streamed file, its page is not
+    /// resident, which a consistent camera never draws.
+    NoDeviceVertex {
+        /// The vertex.
+        vertex: u32,
+    },
     /// [`index_edits`](CameraState::index_edits) on a camera made without
     /// [`CameraConfig::edit_list`](crate::CameraConfig::edit_list).
     NoIndexEdits,
@@ -81,6 +88,9 @@ impl core::fmt::Display for EmitError {
                 given,
             } => crate::outputs::write_too_small(f, *surface, *needed, *given),
             Self::NoIndexEdits => write!(f, "the camera keeps no index edits"),
+            Self::NoDeviceVertex { vertex } => {
+                write!(f, "vertex {vertex} has no place in the device vertex pool")
+            }
             Self::MissingVertex { poly, corner } => {
                 write!(
                     f,
@@ -174,7 +184,7 @@ impl CameraState<'_> {
         out: &mut [&mut [u32]],
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
-        self.emit_lists(h, out, written, |tri| tri)
+        self.emit_lists(h, out, written, |tri| on_device(h, tri))
     }
 
     /// [`emit_indices`](Self::emit_indices) with every corner whose vertex morphs pointing
@@ -187,9 +197,9 @@ impl CameraState<'_> {
         out: &mut [&mut [u32]],
         written: &mut [u32],
     ) -> Result<usize, EmitError> {
-        match MorphRemap::of(&self.front.morphs, h.vertex_id_bound() as u32) {
-            Some(m) => self.emit_lists(h, out, written, |tri| m.triangle(tri)),
-            None => self.emit_lists(h, out, written, |tri| tri),
+        match MorphRemap::of(&self.front.morphs, h.device_vertex_bound() as u32) {
+            Some(m) => self.emit_lists(h, out, written, |tri| m.triangle(h, tri)),
+            None => self.emit_lists(h, out, written, |tri| on_device(h, tri)),
         }
     }
 
@@ -200,7 +210,7 @@ impl CameraState<'_> {
         h: &impl HierarchyRecords,
         out: &mut [&mut [u32]],
         written: &mut [u32],
-        remap: impl Fn([u32; 3]) -> [u32; 3],
+        remap: impl Fn([u32; 3]) -> Result<[u32; 3], u32>,
     ) -> Result<usize, EmitError> {
         if !self.is_for(h) {
             return Err(EmitError::WrongHierarchy);
@@ -209,14 +219,19 @@ impl CameraState<'_> {
         check_lists(out, written, ns, |s| self.index_count(s))?;
         written[..ns].fill(0);
         let mut total = 0;
+        let mut placeless = None;
         self.for_each_triangle(h, |s, tri| {
             let at = written[s] as usize;
+            let tri = remap(tri).unwrap_or_else(|v| [*placeless.get_or_insert(v); 3]);
             if let Some(dst) = out[s].get_mut(at..at + 3) {
-                dst.copy_from_slice(&remap(tri));
+                dst.copy_from_slice(&tri);
                 written[s] += 3;
                 total += 3;
             }
         })?;
+        if let Some(vertex) = placeless {
+            return Err(EmitError::NoDeviceVertex { vertex });
+        }
         for s in 0..ns {
             let expected = self.index_count(s);
             if written[s] as usize != expected {
@@ -239,7 +254,7 @@ impl CameraState<'_> {
         out: &mut [u32],
         offsets: &mut [u32],
     ) -> Result<usize, EmitError> {
-        self.emit_packed(h, out, offsets, |tri| tri)
+        self.emit_packed(h, out, offsets, |tri| on_device(h, tri))
     }
 
     /// [`emit_indices_packed`](Self::emit_indices_packed) with morphing corners pointing at
@@ -250,9 +265,9 @@ impl CameraState<'_> {
         out: &mut [u32],
         offsets: &mut [u32],
     ) -> Result<usize, EmitError> {
-        match MorphRemap::of(&self.front.morphs, h.vertex_id_bound() as u32) {
-            Some(m) => self.emit_packed(h, out, offsets, |tri| m.triangle(tri)),
-            None => self.emit_packed(h, out, offsets, |tri| tri),
+        match MorphRemap::of(&self.front.morphs, h.device_vertex_bound() as u32) {
+            Some(m) => self.emit_packed(h, out, offsets, |tri| m.triangle(h, tri)),
+            None => self.emit_packed(h, out, offsets, |tri| on_device(h, tri)),
         }
     }
 
@@ -264,20 +279,25 @@ impl CameraState<'_> {
         h: &impl HierarchyRecords,
         out: &mut [u32],
         offsets: &mut [u32],
-        remap: impl Fn([u32; 3]) -> [u32; 3],
+        remap: impl Fn([u32; 3]) -> Result<[u32; 3], u32>,
     ) -> Result<usize, EmitError> {
         if !self.is_for(h) {
             return Err(EmitError::WrongHierarchy);
         }
         let ns = h.surface_count();
         let total = start_packed(out.len(), offsets, ns, |s| self.index_count(s))?;
+        let mut placeless = None;
         self.for_each_triangle(h, |s, tri| {
             let at = offsets[s + 1] as usize;
+            let tri = remap(tri).unwrap_or_else(|v| [*placeless.get_or_insert(v); 3]);
             if let Some(dst) = out.get_mut(at..at + 3) {
-                dst.copy_from_slice(&remap(tri));
+                dst.copy_from_slice(&tri);
                 offsets[s + 1] += 3;
             }
         })?;
+        if let Some(vertex) = placeless {
+            return Err(EmitError::NoDeviceVertex { vertex });
+        }
         // Each cursor must have reached exactly the start of the next surface.
         let mut end = 0usize;
         for s in 0..ns {

@@ -13,9 +13,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::device_space::{on_device, MorphRemap};
 use super::emit::EmitError;
 use super::index_cache::BATCH;
-use super::morph::MorphRemap;
 use super::records::{NONE, NO_POLYGON};
 use super::state::CameraState;
 use crate::hierarchy::HierarchyRecords;
@@ -96,7 +96,9 @@ impl CameraState<'_> {
     /// changed since the last call with what it must hold, and to `draws` (one per surface)
     /// each surface's range; the marks are cleared. The edits are in the order the places
     /// changed, each place once; `out` needs [`index_edits_needed`](Self::index_edits_needed)
-    /// entries, checked before anything changes.
+    /// entries, checked before anything changes. [`EmitError::NoDeviceVertex`] (a camera
+    /// inconsistent with its streamed pool) comes after the marks were cleared: reset the
+    /// camera, whose next edits rewrite everything.
     pub fn index_edits(
         &mut self,
         h: &impl HierarchyRecords,
@@ -127,7 +129,8 @@ impl CameraState<'_> {
         }
         let moves = self.front.placement.close_holes(self.hole_moves(max_moves));
         let f = &self.front;
-        let remap = MorphRemap::of(&f.morphs, h.vertex_id_bound() as u32);
+        let remap = MorphRemap::of(&f.morphs, h.device_vertex_bound() as u32);
+        let mut placeless = None;
         let p = &f.placement;
         let mut n = 0;
         let mut write = |places: &[u32]| {
@@ -143,9 +146,13 @@ impl CameraState<'_> {
                 }
                 let indices = match f.triangles.get(slot as usize) {
                     Some(t) if t.surface != NO_POLYGON => match &remap {
-                        Some(m) => m.triangle(t.indices),
-                        None => t.indices,
-                    },
+                        Some(m) => m.triangle(h, t.indices),
+                        None => on_device(h, t.indices),
+                    }
+                    .unwrap_or_else(|v| {
+                        placeless.get_or_insert(v);
+                        HOLE
+                    }),
                     _ => HOLE,
                 };
                 if let Some(e) = out.get_mut(n) {
@@ -183,6 +190,9 @@ impl CameraState<'_> {
             holes += g.holes;
         }
         self.front.placement.clear_marks();
+        if let Some(vertex) = placeless {
+            return Err(EmitError::NoDeviceVertex { vertex });
+        }
         Ok(IndexEdits {
             edits: n,
             everything,

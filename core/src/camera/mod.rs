@@ -21,6 +21,7 @@ mod compact_progress;
 mod compact_step;
 mod config;
 mod criterion;
+mod device_space;
 mod emit;
 mod fan;
 mod index_cache;

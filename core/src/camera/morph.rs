@@ -53,8 +53,7 @@
 //! duration, so no vertex slides far in one frame however coarse the node that splits.
 
 use super::criterion::Criterion;
-use super::morph_map::MorphMap;
-use super::morph_pool::{MorphState, Morphs, COARSENING, REFINING, VERTICES_PER_MORPH};
+use super::morph_pool::{MorphState, COARSENING, REFINING, VERTICES_PER_MORPH};
 use super::ops::OpError;
 use super::records::NONE;
 use super::state::{CameraState, Front};
@@ -461,46 +460,6 @@ impl Front<'_> {
             }
         }
         Ok(())
-    }
-}
-
-/// Morphed emission's view of the map: `base + slot` for a corner whose vertex morphs.
-pub(crate) struct MorphRemap<'a, 'm> {
-    map: &'a MorphMap<'m>,
-    base: u32,
-}
-
-impl<'a, 'm> MorphRemap<'a, 'm> {
-    /// The remap of a camera's morphing vertices to `base + slot`; `None` when nothing
-    /// morphs (emission is then the plain one).
-    pub fn of(morphs: &'a Morphs<'m>, base: u32) -> Option<Self> {
-        (morphs.scalars.live > 0).then_some(Self {
-            map: &morphs.map,
-            base,
-        })
-    }
-
-    /// A triangle's indices with each morphing vertex at `base + slot`: a triangle without
-    /// one (nearly all) costs the reads of its three bits and one branch (see `morph_map`).
-    #[inline(always)]
-    pub fn triangle(&self, tri: [u32; 3]) -> [u32; 3] {
-        let [a, b, c] = tri.map(|v| self.map.bit(v));
-        if a | b | c == 0 {
-            return tri;
-        }
-        tri.map(|v| self.index(v))
-    }
-
-    /// `base + slot` for a morphing vertex, else the vertex itself.
-    #[inline]
-    fn index(&self, vertex: u32) -> u32 {
-        if self.map.bit(vertex) == 0 {
-            return vertex;
-        }
-        match self.map.get(vertex) {
-            Some(slot) => self.base.saturating_add(slot),
-            None => vertex,
-        }
     }
 }
 

@@ -49,6 +49,23 @@ pub trait HierarchyRecords {
     /// Every vertex has an index below this.
     fn vertex_id_bound(&self) -> usize;
 
+    /// Where vertex `vertex` lies in the device's vertex buffer, the index an index list
+    /// holds for it: the vertex itself over a whole file, whose persistent vertex buffer
+    /// holds every vertex by id; its place in the device vertex pool over a streamed file
+    /// (see [`VertexPoolLayout`](crate::stream::VertexPoolLayout)). `None` if it has no
+    /// place there now (its page is not resident).
+    #[inline(always)]
+    fn device_vertex(&self, vertex: u32) -> Option<u32> {
+        Some(vertex)
+    }
+
+    /// Vertices in the device's vertex buffer: morphing corners are numbered past them
+    /// ([`CameraState::emit_indices_morphed`](crate::CameraState::emit_indices_morphed)).
+    #[inline]
+    fn device_vertex_bound(&self) -> usize {
+        self.vertex_id_bound()
+    }
+
     /// Whether ids are dense (`0..count`): then per-id arrays in a camera cost what the
     /// hierarchy holds; otherwise a camera keeps only maps sized by its own capacity.
     fn dense_ids(&self) -> bool;

@@ -1,6 +1,7 @@
 //! What a pool is sized by, where its bookkeeping lies in the caller's words, and why a
 //! configuration or its memory was refused.
 
+use super::vertex_pool::VertexPoolLayout;
 use crate::format::paged::{PageArray, PageTable};
 
 /// The sizes of a [`Residency`](super::Residency): fixed when it is made, so its memory is
@@ -18,6 +19,9 @@ pub struct PoolConfig {
     pub pages: u32,
     /// Pages that may be wanted in one frame (requests past it are counted and dropped).
     pub max_requests: u32,
+    /// The renderer's device vertex pool, slot for slot beside this pool's bytes; `None`
+    /// for a pool that feeds no device pool (index lists then name vertices by their ids).
+    pub vertex_pool: Option<VertexPoolLayout>,
 }
 
 impl PoolConfig {
@@ -34,7 +38,24 @@ impl PoolConfig {
             files,
             pages,
             max_requests: 4096,
+            vertex_pool: None,
         }
+    }
+
+    /// This pool with a device vertex pool of `layout` beside it (see
+    /// [`VertexPoolLayout`]).
+    pub fn with_vertex_pool(self, layout: VertexPoolLayout) -> Self {
+        Self {
+            vertex_pool: Some(layout),
+            ..self
+        }
+    }
+
+    /// The device vertex pool's slots: the first `slots × slot_vertices` vertices (0 without
+    /// one).
+    pub(crate) fn slot_vertices_total(&self) -> u64 {
+        self.vertex_pool
+            .map_or(0, |l| u64::from(self.slots) * u64::from(l.slot_vertices))
     }
 
     /// Words of bookkeeping the pool keeps in the caller's memory
@@ -75,6 +96,17 @@ impl PoolConfig {
                 what: "pages must be below u32::MAX and max_requests non-zero",
             });
         }
+        if let Some(l) = self.vertex_pool {
+            let fits = l.slot_vertices > 0
+                && self.slot_vertices_total() <= u64::from(l.vertices)
+                && l.vertices < u32::MAX / 2;
+            if !fits {
+                return Err(PoolError::BadConfig {
+                    what: "a vertex pool needs slot_vertices > 0 and room for every slot's \
+                           vertices within vertices, below 2^31",
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -90,8 +122,9 @@ pub(crate) const SLOT_WORDS: usize = 3 + ARRAY_WORDS;
 pub(crate) const ARRAY_WORDS: usize = 2 * PageArray::COUNT;
 /// Words per request: the page, its priority, and a place in the heap.
 pub(crate) const REQUEST_WORDS: usize = 3;
-/// Words per file: its first page's global index.
-pub(crate) const FILE_WORDS: usize = 1;
+/// Words per file: its first page's global index, and where its root pages' vertices start
+/// in the device vertex pool's root region.
+pub(crate) const FILE_WORDS: usize = 2;
 
 /// The per-page arrays, by global page index (a file's pages follow its first one's).
 pub(crate) struct PageWords<'m> {
@@ -127,6 +160,8 @@ pub(crate) struct Words<'m> {
     pub slots: SlotWords<'m>,
     pub requests: RequestWords<'m>,
     pub file_base: &'m mut [u32],
+    /// Per file: its root vertices' start past the device vertex pool's slots.
+    pub file_root_vertices: &'m mut [u32],
 }
 
 impl<'m> Words<'m> {
@@ -173,6 +208,7 @@ impl<'m> Words<'m> {
                 heap: take(r),
             },
             file_base: take(config.files as usize),
+            file_root_vertices: take(config.files as usize),
         })
     }
 }
@@ -209,6 +245,16 @@ pub enum PoolError {
         /// The configured number.
         pages: u32,
     },
+    /// The device vertex pool has no room for a file's vertices: a page holds more than a
+    /// slot's vertices, or its root pages' vertices pass the room left after the slots.
+    VertexPoolTooSmall {
+        /// `"a page's vertices"` or `"root vertices"`.
+        what: &'static str,
+        /// Vertices needed.
+        needed: u64,
+        /// Room for them.
+        room: u64,
+    },
     /// A page is larger than a slot.
     PageTooLarge {
         /// The file's largest page, in bytes.
@@ -237,6 +283,10 @@ impl core::fmt::Display for PoolError {
                     "page pool: {needed} pages needed, configured for {pages}"
                 )
             }
+            Self::VertexPoolTooSmall { what, needed, room } => write!(
+                f,
+                "vertex pool: {what} need {needed} vertices, it has room for {room}"
+            ),
             Self::PageTooLarge {
                 page_bytes,
                 slot_bytes,

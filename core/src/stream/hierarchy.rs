@@ -47,6 +47,8 @@ pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
     first_page: usize,
     /// The first root pages' arrays.
     root_views: [Option<PageView<'s>>; ROOT_VIEWS],
+    /// The first root pages' first vertex in the device vertex pool, and their vertices.
+    root_vertices: [(u32, u32); ROOT_VIEWS],
     wants: &'w [Cell<Want>],
     want_len: &'w Cell<u32>,
     deltas: &'w [Cell<u32>],
@@ -79,6 +81,9 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             pages: pages as usize,
             first_page: pool.file_pages(file).map_or(usize::MAX, |(first, _)| first),
             root_views: core::array::from_fn(|p| root.root_page(p as u32)),
+            root_vertices: core::array::from_fn(|p| {
+                pool.root_vertex_start(file, p as u32).unwrap_or((0, 0))
+            }),
             wants: Cell::from_mut(&mut *lists.wants).as_slice_of_cells(),
             want_len: Cell::from_mut(&mut lists.want_len),
             deltas: Cell::from_mut(&mut *lists.deltas).as_slice_of_cells(),
@@ -216,6 +221,37 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
 
     fn dense_ids(&self) -> bool {
         false
+    }
+
+    /// Its slot's place for a streamed page's vertex, its file's root region's for a root
+    /// page's (see [`VertexPoolLayout`](super::VertexPoolLayout)); the id itself for a
+    /// pool without a device vertex pool.
+    #[inline]
+    fn device_vertex(&self, vertex: u32) -> Option<u32> {
+        if self.pool.vertex_pool().is_none() {
+            return Some(vertex);
+        }
+        let page = self.ids.page(vertex);
+        let index = self.ids.index(vertex);
+        if page < self.root_pages {
+            let (first, count) = match self.root_vertices.get(page as usize) {
+                Some(&cached) => cached,
+                None => self.pool.root_vertex_start(self.file, page)?,
+            };
+            return (index < count).then(|| first + index);
+        }
+        if page as usize >= self.pages {
+            return None;
+        }
+        self.pool
+            .slot_vertex(self.first_page + page as usize, index)
+    }
+
+    fn device_vertex_bound(&self) -> usize {
+        match self.pool.vertex_pool() {
+            Some(layout) => layout.vertices as usize,
+            None => self.id_bound,
+        }
     }
 
     #[inline]

@@ -37,6 +37,7 @@ mod lists;
 mod pressure;
 mod requests;
 mod residency;
+mod vertex_pool;
 
 pub use crate::format::paged::{PageEntry, PageField, PageTable, PageTableError};
 pub use crate::ids::PageKey;
@@ -46,3 +47,4 @@ pub use frame_lists::{FrameLists, StreamedReads, Want};
 pub use hierarchy::StreamedHierarchy;
 pub use pressure::{Pressure, PressureSignal};
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};
+pub use vertex_pool::{VertexInstall, VertexPoolLayout};

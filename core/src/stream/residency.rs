@@ -31,7 +31,7 @@ const FAILED: u32 = 3;
 const EVICTABLE: u32 = 4;
 pub(super) const STATE_MASK: u32 = 3;
 /// Set in a pinned page's state word: resident outside the pool, never evicted.
-const PINNED: u32 = 8;
+pub(super) const PINNED: u32 = 8;
 /// Set, during a [`Residency::schedule`], in an absent page's state word that can load now.
 pub(super) const PLANNED: u32 = 16;
 
@@ -132,6 +132,8 @@ pub struct Residency<'a, 'm> {
     pub(super) dropped: u32,
     pub(super) lists: Lists,
     pub(super) totals: PoolStats,
+    /// The device vertex pool's root region taken by the files added so far.
+    pub(super) root_vertices_used: u32,
 }
 
 impl<'a, 'm> Residency<'a, 'm> {
@@ -175,6 +177,7 @@ impl<'a, 'm> Residency<'a, 'm> {
             dropped: 0,
             lists,
             totals: PoolStats::default(),
+            root_vertices_used: 0,
         })
     }
 
@@ -207,6 +210,7 @@ impl<'a, 'm> Residency<'a, 'm> {
             });
         }
         let file = self.files;
+        self.reserve_vertices(file, &table, pinned)?;
         self.w.file_base[file as usize] = self.pages;
         let base = self.pages as usize;
         self.w.pages.state[base..base + pinned as usize].fill(RESIDENT | PINNED);

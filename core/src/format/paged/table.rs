@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::layout::PageLayout;
+use super::layout::{PageLayout, RecordKind};
 use super::meta::PAGE_HAS_COLOURS;
 use crate::format::SECTION_ALIGN;
 
@@ -194,6 +194,26 @@ impl<'a> PageTable<'a> {
     pub fn largest_page_from(&self, first: u32) -> u32 {
         let streamed = self.entries.get(first as usize..).unwrap_or(&[]);
         streamed.iter().map(|e| e.size).max().unwrap_or(0)
+    }
+
+    /// The most vertices any page from `first` on holds (0 if there are none): with `first`
+    /// the root pages' count, what a device vertex pool's slots must hold.
+    pub fn most_vertices_from(&self, first: u32) -> u32 {
+        let streamed = self.entries.get(first as usize..).unwrap_or(&[]);
+        let vertices = RecordKind::Vertices as usize;
+        streamed
+            .iter()
+            .map(|e| e.counts[vertices])
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The vertices of the pages before `end` together: with `end` the root pages' count,
+    /// what a file's always-resident root needs of a device vertex pool.
+    pub fn vertices_before(&self, end: u32) -> u64 {
+        let first = self.entries.get(..end as usize).unwrap_or(self.entries);
+        let vertices = RecordKind::Vertices as usize;
+        first.iter().map(|e| u64::from(e.counts[vertices])).sum()
     }
 }
 
