@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::stream::{
-    InstallError, LoadRequest, PageFault, PageKey, Residency, ScheduleStats,
+    InstallError, LoadRequest, PageFault, PageKey, PageState, Residency, ScheduleStats,
 };
 
 use crate::pages::{PageReader, PageSource, ReadDone, ReadRequest, ReaderConfig};
@@ -26,17 +26,21 @@ pub struct FrameStreaming {
 }
 
 /// Serves a [`Residency`]'s loads from files through a [`PageReader`]: each frame it
-/// installs the pages that arrived (checked by their file's root), then schedules and
-/// submits new loads, at most a cap a frame. Its buffers are made once, so a frame
+/// installs the pages that arrived (checked by their file's root; at most
+/// [`with_max_installs`](Self::with_max_installs) a frame, the rest wait), then schedules
+/// and submits new loads, at most a cap a frame. Its buffers are made once, so a frame
 /// allocates nothing but a failed page's message.
 pub struct Streamer {
     reader: PageReader,
     loads: Vec<LoadRequest>,
     evicted: Vec<PageKey>,
     done: Vec<ReadDone>,
-    /// Reads that arrived and wait for a parent page to install.
+    /// Reads that arrived and wait for a parent page to install, or for the next frame.
     pending: Vec<ReadDone>,
     max_in_flight: usize,
+    max_installs: usize,
+    /// The pages the last frame installed.
+    installed: Vec<PageKey>,
 }
 
 impl Streamer {
@@ -55,7 +59,24 @@ impl Streamer {
             done: Vec::with_capacity(max_in_flight),
             pending: Vec::with_capacity(max_in_flight),
             max_in_flight,
+            max_installs: usize::MAX,
+            installed: Vec::with_capacity(max_in_flight),
         })
+    }
+
+    /// This streamer installing at most `max_installs` pages a frame (at least one): what a
+    /// device vertex pool copies in a frame (`VertexPool`'s own cap in caveclod-vulkan).
+    pub fn with_max_installs(self, max_installs: usize) -> Self {
+        Self {
+            max_installs: max_installs.max(1),
+            ..self
+        }
+    }
+
+    /// The pages the last [`frame`](Self::frame) installed and left resident, in install
+    /// order: their vertices go to a device vertex pool before a frame's fronts may use them.
+    pub fn installed(&self) -> &[PageKey] {
+        &self.installed
     }
 
     /// After the cameras have said what they want this frame: installs what arrived by
@@ -74,6 +95,10 @@ impl Streamer {
         let room = self.max_in_flight.saturating_sub(held);
         let room = room.min(self.loads.len());
         f.schedule = pool.schedule(&mut self.loads[..room], &mut self.evicted);
+        // A page installed now and evicted by the same schedule (nothing wanted it since it
+        // was asked for) has nothing to copy.
+        self.installed
+            .retain(|&k| pool.state(k) == Some(PageState::Resident));
         for l in &self.loads[..f.schedule.loads as usize] {
             let read = ReadRequest {
                 file: l.key.file,
@@ -118,9 +143,14 @@ impl Streamer {
         self.reader.poll(now, &mut self.done);
         self.pending.append(&mut self.done);
         self.pending.sort_unstable_by_key(|d| (d.file, d.tag >> 32));
+        self.installed.clear();
+        let (installed, cap) = (&mut self.installed, self.max_installs);
         self.pending.retain(|d| {
+            if installed.len() >= cap {
+                return true;
+            }
             let slot = d.tag as u32;
-            let installed = match (&d.result, roots.get(d.file as usize)) {
+            let outcome = match (&d.result, roots.get(d.file as usize)) {
                 (Ok(bytes), Some(root)) => match pool.loading_slot_mut(slot) {
                     Ok(dst) if dst.len() == bytes.len() => {
                         dst.copy_from_slice(bytes);
@@ -130,8 +160,9 @@ impl Streamer {
                 },
                 _ => failed(pool, slot),
             };
-            match installed {
-                Ok(_) => {
+            match outcome {
+                Ok(key) => {
+                    installed.push(key);
                     f.installs += 1;
                     f.bytes_read += d.result.as_ref().map_or(0, |b| b.len() as u64);
                 }

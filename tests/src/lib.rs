@@ -4,6 +4,7 @@
 
 pub mod bake;
 pub mod check;
+pub mod paged;
 pub mod parts;
 pub mod shared_data;
 pub mod soak;

@@ -12,31 +12,26 @@
 //!   vertices in that pool: an index buffer patched by the edits draws the front, read
 //!   through the pool's vertices, while its slots are reused.
 
-use caveclod_bake::paged::{write_paged, PageOptions};
 use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::format::Vertex;
 use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{
-    FrameLists, LoadRequest, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy,
-    VertexInstall, VertexPoolLayout, Want,
+    FrameLists, PageKey, PageState, PoolConfig, Residency, StreamedHierarchy, VertexInstall, Want,
 };
 use caveclod_core::{
     CameraConfig, CameraState, HierarchyRecords, IndexEdit, LookAt, MorphVertex, OpError,
     RefineParams, RefineStats, SurfaceDraw, View,
 };
-use caveclod_io::{AlignedBytes, PagedFile};
+use caveclod_io::PagedFile;
 use caveclod_tests::check::check_front;
+use caveclod_tests::paged::{self, paged_terrain, PoolMemory};
 use caveclod_tests::soak::streamed::check_page_uses;
-use caveclod_tests::{bake, meshes, BakedMesh};
+use caveclod_tests::BakedMesh;
 
-/// A terrain, baked, its paged form opened (the root read), and that file's bytes.
+/// The terrain the tests fly over, paged.
 fn terrain() -> (BakedMesh, PagedFile, Vec<u8>) {
-    let baked = bake(&meshes::terrain(48, 48, 11));
-    let dir = tempfile::tempdir().expect("dir");
-    let path = dir.path().join("terrain.clod");
-    write_paged(&baked.hierarchy(), &path, &PageOptions { page_bytes: 4096 }).expect("paged");
-    let bytes = std::fs::read(&path).expect("read");
-    (baked, PagedFile::open(&path).expect("open"), bytes)
+    let t = paged_terrain(48, 48, 11, 4096);
+    (t.baked, t.file, t.bytes)
 }
 
 /// Frame `f` of a flight low over the terrain, turning.
@@ -53,75 +48,11 @@ fn view(f: u32) -> View {
     .view(640, 400)
 }
 
-/// A pool over every page of `root`'s file, with the root pages pinned.
-struct Pool<'a> {
-    words: Vec<u32>,
-    bytes: AlignedBytes,
-    tables: Vec<Option<caveclod_core::stream::PageTable<'a>>>,
-    config: PoolConfig,
-}
-
-impl<'a> Pool<'a> {
-    /// The residency over this memory, serving `root`'s file.
-    fn residency<'m>(&'m mut self, root: &PagedRoot<'a>) -> Residency<'a, 'm> {
-        let mut r = Residency::new(
-            self.config,
-            &mut self.words,
-            self.bytes.bytes_mut(),
-            &mut self.tables,
-        )
-        .expect("pool");
-        r.add_file(root.table(), root.paged().root_pages)
-            .expect("file");
-        r
-    }
-
-    fn new(root: &PagedRoot<'_>, slots: u32) -> Self {
-        let slot_bytes = root.paged().largest_page.next_multiple_of(64);
-        let config = PoolConfig::new(
-            u64::from(slots) * u64::from(slot_bytes),
-            slot_bytes,
-            1,
-            root.table().len() as u32,
-        );
-        Self::of(config)
-    }
-
-    /// A pool of `slots` with a device vertex pool beside it, as small as the file allows.
-    fn with_vertex_pool(root: &PagedRoot<'_>, slots: u32) -> Self {
-        let (table, pinned) = (root.table(), root.paged().root_pages);
-        let slot_vertices = table.most_vertices_from(pinned);
-        let layout = VertexPoolLayout {
-            slot_vertices,
-            vertices: slots * slot_vertices + table.vertices_before(pinned) as u32,
-        };
-        Self::of(Self::new(root, slots).config.with_vertex_pool(layout))
-    }
-
-    fn of(config: PoolConfig) -> Self {
-        Self {
-            words: vec![0; Residency::words_needed(&config)],
-            bytes: AlignedBytes::zeroed(config.pool_bytes()),
-            tables: vec![None; 1],
-            config,
-        }
-    }
-}
-
 /// Loads what `pool` schedules from the file's `bytes`, synchronously; the loads and the
 /// evictions.
 fn load(pool: &mut Residency<'_, '_>, root: &PagedRoot<'_>, bytes: &[u8]) -> (u32, u32) {
-    let mut loads = [LoadRequest::default(); 64];
-    let mut evicted = [PageKey::default(); 64];
-    let st = pool.schedule(&mut loads, &mut evicted);
-    for l in &loads[..st.loads as usize] {
-        let from = &bytes[l.offset as usize..l.offset as usize + l.size as usize];
-        pool.loading_slot_mut(l.slot)
-            .expect("slot")
-            .copy_from_slice(from);
-        pool.install(l.slot, root).expect("install");
-    }
-    (st.loads, st.evictions)
+    let (installed, evictions) = paged::load(pool, root, bytes, 64);
+    (installed.len() as u32, evictions)
 }
 
 /// [`load`], and each installed page's vertices copied into `device` (its slot's place
@@ -132,21 +63,15 @@ fn load_with_vertices(
     bytes: &[u8],
     device: &mut [Vertex],
 ) -> (u32, u32) {
-    let mut loads = [LoadRequest::default(); 64];
-    let mut evicted = [PageKey::default(); 64];
-    let st = pool.schedule(&mut loads, &mut evicted);
+    let (installed, evictions) = paged::load(pool, root, bytes, 64);
     let slot_vertices = pool.vertex_pool().expect("vertex pool").slot_vertices as usize;
-    for l in &loads[..st.loads as usize] {
-        let from = &bytes[l.offset as usize..l.offset as usize + l.size as usize];
-        pool.loading_slot_mut(l.slot)
-            .expect("slot")
-            .copy_from_slice(from);
-        pool.install(l.slot, root).expect("install");
-        let at = l.slot as usize * slot_vertices;
+    for key in &installed {
+        let install = pool.page_vertices(*key).expect("resident");
+        let at = install.first as usize;
         device[at..at + slot_vertices].fill(STALE);
-        copy_install(device, &pool.page_vertices(l.key).expect("resident"));
+        copy_install(device, &install);
     }
-    (st.loads, st.evictions)
+    (installed.len() as u32, evictions)
 }
 
 /// A vertex no page holds.
@@ -219,7 +144,7 @@ fn a_flight_over_every_page_resident_gives_the_whole_files_fronts() {
     let (baked, file, bytes) = terrain();
     let whole = baked.hierarchy();
     let root = file.root().expect("root");
-    let mut p = Pool::new(&root, root.table().len() as u32);
+    let mut p = PoolMemory::new(&root, root.table().len() as u32);
     let config = p.config;
     let mut pool = p.residency(&root);
     // Every page, parents before children.
@@ -293,7 +218,7 @@ fn splits_wait_for_their_pages_and_then_reach_the_whole_files_front() {
     let (baked, file, bytes) = terrain();
     let whole = baked.hierarchy();
     let root = file.root().expect("root");
-    let mut p = Pool::new(&root, root.table().len() as u32);
+    let mut p = PoolMemory::new(&root, root.table().len() as u32);
     let config = p.config;
     let mut pool = p.residency(&root);
     let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
@@ -365,7 +290,7 @@ fn a_pool_a_third_of_the_file_evicts_only_what_the_fronts_left() {
     let (_, file, bytes) = terrain();
     let root = file.root().expect("root");
     let streamed_pages = root.table().len() as u32 - root.paged().root_pages;
-    let mut p = Pool::new(&root, streamed_pages / 3);
+    let mut p = PoolMemory::new(&root, streamed_pages / 3);
     let config = p.config;
     let mut pool = p.residency(&root);
     let (mut wants, mut words) = ([Want::default(); 256], Vec::new());
@@ -415,7 +340,7 @@ fn a_streamed_camera_draws_from_the_device_vertex_pool_while_its_slots_are_reuse
     let (_, file, bytes) = terrain();
     let root = file.root().expect("root");
     let streamed_pages = root.table().len() as u32 - root.paged().root_pages;
-    let mut p = Pool::with_vertex_pool(&root, streamed_pages / 3);
+    let mut p = PoolMemory::with_vertex_pool(&root, streamed_pages / 3);
     let config = p.config;
     let layout = config.vertex_pool.expect("layout");
     let mut pool = p.residency(&root);

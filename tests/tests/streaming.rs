@@ -31,6 +31,11 @@ struct Flight {
 /// Flies a point across the terrain for `frames` frames, wanting the pages whose boxes lie
 /// within a fifth of the terrain of it.
 fn fly(file: &PagedFile, frames: u32) -> Flight {
+    fly_installing(file, frames, usize::MAX)
+}
+
+/// [`fly`], installing at most `max_installs` pages a frame.
+fn fly_installing(file: &PagedFile, frames: u32, max_installs: usize) -> Flight {
     let root = file.root().expect("root");
     let table = root.table();
     let streamed: u64 = table.entries()[1..].iter().map(|e| u64::from(e.size)).sum();
@@ -49,7 +54,8 @@ fn fly(file: &PagedFile, frames: u32) -> Flight {
         max_read_len: slot_bytes,
         disk: Some(disk),
     };
-    let mut streamer = Streamer::new(vec![file.source()], reader, 8).expect("streamer");
+    let streamer = Streamer::new(vec![file.source()], reader, 8).expect("streamer");
+    let mut streamer = streamer.with_max_installs(max_installs);
     let (lo, hi) = (root.meta().bounds_min, root.meta().bounds_max);
     let reach = (hi[0] - lo[0]) / 5.0;
     let mut flight = Flight {
@@ -84,6 +90,15 @@ fn fly(file: &PagedFile, frames: u32) -> Flight {
         let now = Duration::from_secs_f64(f64::from(frame) / 60.0);
         let f = streamer.frame(&mut pool, &[root], now, &mut flight.faults);
         flight.installs += u64::from(f.installs);
+        assert!(
+            f.installs as usize <= max_installs,
+            "frame {frame}: {}",
+            f.installs
+        );
+        assert!(streamer.installed().len() <= f.installs as usize);
+        for &key in streamer.installed() {
+            assert_eq!(pool.state(key), Some(PageState::Resident));
+        }
         flight.evictions += u64::from(f.schedule.evictions);
         assert_closure(&pool, &root);
     }
@@ -117,6 +132,15 @@ fn pages_stream_through_a_slow_disk_into_a_quarter_sized_pool() {
     assert!(flight.installs > 20, "{} installs", flight.installs);
     assert!(flight.evictions > 0, "no eviction");
     assert!(flight.wanted_resident > 0);
+}
+
+#[test]
+fn a_cap_on_installs_holds_what_arrived_for_the_next_frames() {
+    let dir = tempfile::tempdir().expect("dir");
+    let file = PagedFile::open(paged_terrain(dir.path())).expect("open");
+    let flight = fly_installing(&file, 240, 1);
+    assert!(flight.faults.is_empty(), "{:?}", flight.faults);
+    assert!(flight.installs > 20, "{} installs", flight.installs);
 }
 
 #[test]

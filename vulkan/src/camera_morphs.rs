@@ -4,7 +4,7 @@
 use ash::vk;
 use caveclod_core::format::Vertex;
 use caveclod_core::gpu::{morph_slot_vertex, MorphSlices, MorphSlotsPush};
-use caveclod_core::{CameraState, MorphVertex};
+use caveclod_core::{CameraState, HierarchyRecords, MorphVertex};
 
 use crate::buffer::{Buffer, BufferDesc};
 use crate::device::Context;
@@ -193,6 +193,35 @@ impl CameraMorphs {
             }
         }
         slot.count = live.len() as u32;
+        Ok(slot.count)
+    }
+
+    /// Writes `camera`'s morph slots as the device reads them over `hierarchy`
+    /// ([`CameraState::device_morph_vertices`]: over a streamed file, at their places in its
+    /// [`VertexPool`](crate::VertexPool)) into frame slot `frame`, for
+    /// [`MorphStage::Vertex`] and [`MorphStage::Compute`] (the host stage blends from a
+    /// whole file's vertices: [`fill`](Self::fill)). The GPU must be done with the slot's
+    /// previous contents. Returns the slots written.
+    pub fn fill_device(
+        &mut self,
+        frame: usize,
+        hierarchy: &impl HierarchyRecords,
+        camera: &CameraState<'_>,
+    ) -> Result<u32> {
+        if self.stage == MorphStage::Host {
+            return Err(Error::InvalidArgument(
+                "host-blended morphs read a whole file's vertices: fill them with `fill`".into(),
+            ));
+        }
+        let frames = self.ring.len();
+        let slot = self.ring.get_mut(frame).ok_or_else(|| {
+            Error::InvalidArgument(format!("frame slot {frame} of a morph ring of {frames}"))
+        })?;
+        let words = slot.slots.mapped_mut().ok_or_else(not_mapped)?;
+        let words: &mut [MorphVertex] = bytemuck::try_cast_slice_mut(words)
+            .map_err(|e| Error::InvalidArgument(format!("morph slot mapping: {e}")))?;
+        let n = camera.device_morph_vertices(hierarchy, words)?;
+        slot.count = n as u32;
         Ok(slot.count)
     }
 

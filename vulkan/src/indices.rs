@@ -168,7 +168,7 @@ impl CameraIndices {
             )));
         };
         let e = edited.fill(ctx, &self.name, frame, hierarchy, camera, max_moves)?;
-        self.vertex_bounds[frame] = morphed_bound(hierarchy.vertex_id_bound(), camera);
+        self.vertex_bounds[frame] = morphed_bound(hierarchy.device_vertex_bound(), camera);
         self.morphed[frame] = camera.max_morphs() > 0;
         Ok(e)
     }

@@ -12,6 +12,9 @@
 //! - Per baked mesh one device-local [`VertexBuffer`], uploaded once (submitted, or recorded
 //!   into the host's command buffer with [`VertexBuffer::record_upload`]) and never
 //!   rewritten ([`Context::vertex_uploads`] counts uploads).
+//! - Per streamed hierarchy a [`VertexPool`]: the vertices of the resident pages in a
+//!   device buffer of a fixed size, slot for slot beside the page pool, installs recorded
+//!   into the host's command buffer.
 //! - Per camera [`CameraIndices`]: per surface a host-visible index buffer in each slot of a
 //!   ring over the host's frames in flight, grown by doubling, filled by caveclod-core's
 //!   index emission.
@@ -100,6 +103,7 @@ mod requirements;
 mod target;
 mod texture;
 mod validation;
+mod vertex_pool;
 mod viewport;
 
 pub use buffer::{Buffer, BufferDesc};
@@ -120,4 +124,5 @@ pub use requirements::{DeviceFeatures, FeatureChain, API_VERSION};
 pub use target::{RecorderDesc, Rendering, TargetFormats};
 pub use texture::{Texture, TextureDesc};
 pub use validation::{DebugMessenger, ValidationLog, VALIDATION_LAYER};
+pub use vertex_pool::VertexPool;
 pub use viewport::Viewport;

@@ -14,6 +14,7 @@ use crate::image::{Image, ImageDesc};
 use crate::readback::RgbaImage;
 use crate::record::{RecordCamera, Recorder};
 use crate::target::{RecorderDesc, TargetFormats};
+use crate::vertex_pool::VertexPool;
 
 /// How to make a [`Renderer`].
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +61,8 @@ pub struct FrameStats {
     pub camera_index_bytes: Vec<u64>,
     /// Indexed draws recorded (one per camera and non-empty surface).
     pub draws: u32,
+    /// Vertex bytes the frame copied into vertex pools (page installs).
+    pub vertex_install_bytes: u64,
 }
 
 struct Target {
@@ -249,6 +252,18 @@ impl Renderer {
         ctx: &Context,
         cameras: &[(usize, RecordCamera<'_>)],
     ) -> Result<FrameStats> {
+        self.render_with_pools(ctx, &[], cameras)
+    }
+
+    /// [`render`](Self::render) with the page installs of `pools` (each
+    /// [`fill`](VertexPool::fill)ed for the frame's slot) recorded before everything else:
+    /// the cameras' vertices come from those pools.
+    pub fn render_with_pools(
+        &mut self,
+        ctx: &Context,
+        pools: &[&VertexPool],
+        cameras: &[(usize, RecordCamera<'_>)],
+    ) -> Result<FrameStats> {
         let slot = self.begun.ok_or_else(|| {
             Error::InvalidArgument("a frame is rendered after begin_frame".into())
         })?;
@@ -276,6 +291,9 @@ impl Renderer {
             .iter()
             .filter_map(|(_, c)| c.refine_morphs)
             .collect();
+        for p in pools {
+            stats.vertex_install_bytes += p.record(ctx, cmd, slot);
+        }
         for (_, c) in cameras {
             c.indices.record_edits(ctx, cmd, slot);
         }
