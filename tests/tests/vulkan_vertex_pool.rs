@@ -1,8 +1,8 @@
 //! The device vertex pool on lavapipe: four geomorphing cameras fly a paged terrain through
-//! a page pool a third of the file, their vertices in a `VertexPool` whose slots are reused
-//! as pages come and go (installs recorded into each frame's command buffer, at most a cap a
-//! frame), drawn from edited index buffers with two frames in flight, the validation layer
-//! and its synchronization validation silent. Every few frames the frame is drawn again from
+//! a page pool an eighth of the file, their vertices in a `VertexPool` whose slots are
+//! reused as pages come and go (installs recorded into each frame's command buffer, at most
+//! a cap a frame), drawn from edited index buffers with one, two and three frames in flight,
+//! the validation layer and its synchronization validation silent. Every few frames the frame is drawn again from
 //! a vertex buffer holding what the pool must hold (each page's vertices copied on the CPU
 //! where the pool's installs copy them), with the same indices in the same order: the same
 //! image, pixel for pixel.
@@ -23,7 +23,6 @@ use vulkan_support::{assert_clean, ok, plain_camera, quadrants, save, sync_conte
 const SIZE: u32 = 256;
 const FRAMES: usize = 240;
 const CHECK_EVERY: usize = 12;
-const IN_FLIGHT: usize = 2;
 const MAX_INSTALLS: usize = 8;
 const MAX_MORPHS: u32 = 1024;
 const MOVES: u32 = 64;
@@ -115,7 +114,22 @@ fn copy_install(mirror: &mut [Vertex], i: &VertexInstall<'_>) {
 }
 
 #[test]
-fn a_vertex_pool_draws_what_its_pages_hold_while_its_slots_are_reused() {
+fn a_vertex_pool_one_frame_in_flight() {
+    fly(1);
+}
+
+#[test]
+fn a_vertex_pool_two_frames_in_flight() {
+    fly(2);
+}
+
+#[test]
+fn a_vertex_pool_three_frames_in_flight() {
+    fly(3);
+}
+
+/// Flies the cameras over the pool with `in_flight` frames in flight (see the module docs).
+fn fly(in_flight: usize) {
     let ctx = sync_context();
     let terrain = paged_terrain(128, 128, 11, 2048);
     let root = ok(terrain.file.root(), "root");
@@ -130,7 +144,7 @@ fn a_vertex_pool_draws_what_its_pages_hold_while_its_slots_are_reused() {
         (layout, config.slots),
         false,
         MAX_INSTALLS as u32,
-        IN_FLIGHT,
+        in_flight,
     );
     let mut vertex_pool = ok(made, "vertex pool");
     let mut mirror = vec![STALE; layout.vertices as usize];
@@ -177,14 +191,14 @@ fn a_vertex_pool_draws_what_its_pages_hold_while_its_slots_are_reused() {
         frames_in_flight,
         ..RendererDesc::single(SIZE, SIZE)
     };
-    let mut renderer = ok(Renderer::new(&ctx, desc(IN_FLIGHT)), "renderer");
+    let mut renderer = ok(Renderer::new(&ctx, desc(in_flight)), "renderer");
     let mut reference_renderer = ok(Renderer::new(&ctx, desc(1)), "reference renderer");
     let mut indices: Vec<CameraIndices> = cams
         .iter()
         .enumerate()
         .map(|(c, cam)| {
             let name = format!("camera {c}");
-            let made = CameraIndices::edited(&ctx, &name, surfaces, cam.index_places(), IN_FLIGHT);
+            let made = CameraIndices::edited(&ctx, &name, surfaces, cam.index_places(), in_flight);
             ok(made, "edited indices")
         })
         .collect();
@@ -205,7 +219,7 @@ fn a_vertex_pool_draws_what_its_pages_hold_while_its_slots_are_reused() {
             })
             .collect()
     };
-    let mut morphs = morphs_over(vertex_pool.vertices(), &renderer, IN_FLIGHT);
+    let mut morphs = morphs_over(vertex_pool.vertices(), &renderer, in_flight);
 
     let size = root.meta().bounds_max[0] - root.meta().bounds_min[0];
     let params = RefineParams {
@@ -304,7 +318,7 @@ fn a_vertex_pool_draws_what_its_pages_hold_while_its_slots_are_reused() {
             }
             drawn_everywhere(&image, f);
             if f + CHECK_EVERY >= FRAMES {
-                save(&image, "vertex-pool.png");
+                save(&image, &format!("vertex-pool-{in_flight}.png"));
             }
             r.destroy(&ctx);
             checked += 1;

@@ -32,6 +32,8 @@ struct Slot {
 ///
 /// Design decisions:
 /// - **Fixed size.** The buffer is made once, `layout.vertices` vertices, and never grows;
+///   it must lie within the device's `maxStorageBufferRange`, which the morphing vertex
+///   stage reads it through, whatever the size of the files it serves;
 ///   the page pool's slots are its slots. Its staging is one host-visible buffer per frame
 ///   in flight, room for `max_installs` pages, so a frame creates nothing.
 /// - **Installs are copies recorded into the host's command buffer**:
@@ -73,6 +75,7 @@ impl VertexPool {
         frames_in_flight: usize,
     ) -> Result<Self> {
         check_layout(name, layout, slots, max_installs)?;
+        check_storage_range(ctx, name, layout)?;
         let vertices = device_buffers(ctx, name, layout, colours)?;
         let mut pool = Self {
             vertices,
@@ -291,6 +294,25 @@ fn check_layout(name: &str, layout: VertexPoolLayout, slots: u32, max_installs: 
         )));
     }
     Ok(())
+}
+
+/// Refuses a pool the morphing vertex stage could not read: it binds the vertices as one
+/// storage buffer, within the device's `maxStorageBufferRange` (2^27 bytes on many
+/// devices). A pool sized within it serves a file of any size.
+fn check_storage_range(ctx: &Context, name: &str, layout: VertexPoolLayout) -> Result<()> {
+    // SAFETY: the context's physical device belongs to its instance.
+    let props = unsafe {
+        ctx.instance
+            .get_physical_device_properties(ctx.physical_device)
+    };
+    let range = u64::from(props.limits.max_storage_buffer_range);
+    if layout.bytes() <= range {
+        return Ok(());
+    }
+    Err(Error::InvalidArgument(format!(
+        "vertex pool {name}: {} bytes, past the device's maxStorageBufferRange of {range}",
+        layout.bytes()
+    )))
 }
 
 /// The pool's device-local vertex buffer (and colour buffer).

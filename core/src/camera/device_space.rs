@@ -4,14 +4,12 @@
 //! (see `morph`). On the device a vertex is where the hierarchy puts it
 //! ([`HierarchyRecords::device_vertex`]): the id itself over a whole file, a slot's place in
 //! the device vertex pool over a streamed one; and a morphing corner is the morph slot past
-//! every one of those ([`HierarchyRecords::device_vertex_bound`]). Emission, the index edits
-//! and [`CameraState::device_morph_vertices`] convert here, once, as they write.
+//! every one of those ([`HierarchyRecords::device_vertex_bound`]). Emission and the index
+//! edits convert here, once, as they write; the morph slots in
+//! [`CameraState::device_morph_vertices`](crate::CameraState::device_morph_vertices).
 
-use super::emit::EmitError;
 use super::morph_map::MorphMap;
 use super::morph_pool::Morphs;
-use super::state::CameraState;
-use crate::gpu::MorphVertex;
 use crate::hierarchy::HierarchyRecords;
 
 /// Morphed emission's view of the map: `base + slot` for a corner whose vertex morphs.
@@ -68,50 +66,5 @@ pub(crate) fn on_device(h: &impl HierarchyRecords, tri: [u32; 3]) -> Result<[u32
         (None, _, _) => Err(a),
         (_, None, _) => Err(b),
         _ => Err(c),
-    }
-}
-
-impl CameraState<'_> {
-    /// [`morph_vertices`](Self::morph_vertices) as the device reads them: every vertex at
-    /// its place in the device's vertex buffer, and a chained `from` at its slot past
-    /// [`device_vertex_bound`](HierarchyRecords::device_vertex_bound). Over a whole file
-    /// it writes what `morph_vertices` holds. Writes `out[..n]` and returns `n`;
-    /// [`EmitError::OutputTooSmall`] if `out` is shorter than `morph_vertices()`.
-    pub fn device_morph_vertices(
-        &self,
-        h: &impl HierarchyRecords,
-        out: &mut [MorphVertex],
-    ) -> Result<usize, EmitError> {
-        if !self.is_for(h) {
-            return Err(EmitError::WrongHierarchy);
-        }
-        let live = self.morph_vertices();
-        let Some(out) = out.get_mut(..live.len()) else {
-            return Err(EmitError::OutputTooSmall {
-                surface: None,
-                needed: live.len(),
-                given: out.len(),
-            });
-        };
-        let (ids, device) = (h.vertex_id_bound() as u32, h.device_vertex_bound() as u32);
-        let place = |v: u32| {
-            h.device_vertex(v)
-                .ok_or(EmitError::NoDeviceVertex { vertex: v })
-        };
-        for (o, m) in out.iter_mut().zip(live) {
-            *o = match m.is_idle() {
-                true => MorphVertex::IDLE,
-                false => MorphVertex {
-                    from: match m.from.checked_sub(ids) {
-                        Some(slot) => device.saturating_add(slot),
-                        None => place(m.from)?,
-                    },
-                    to: place(m.to)?,
-                    t: m.t,
-                    coarse: place(m.coarse)?,
-                },
-            };
-        }
-        Ok(live.len())
     }
 }

@@ -17,6 +17,7 @@ use super::device_space::{on_device, MorphRemap};
 use super::index_cache::BATCH;
 use super::records::{SlotTriangle, NONE, NO_POLYGON};
 use super::state::CameraState;
+use crate::gpu::MorphVertex;
 use crate::hierarchy::HierarchyRecords;
 use crate::ids::{PolyId, SurfaceId};
 use crate::outputs::{check_lists, start_packed};
@@ -312,5 +313,50 @@ impl CameraState<'_> {
             }
         }
         Ok(total)
+    }
+}
+
+impl CameraState<'_> {
+    /// [`morph_vertices`](Self::morph_vertices) as the device reads them: every vertex at
+    /// its place in the device's vertex buffer, and a chained `from` at its slot past
+    /// [`device_vertex_bound`](HierarchyRecords::device_vertex_bound). Over a whole file
+    /// it writes what `morph_vertices` holds. Writes `out[..n]` and returns `n`;
+    /// [`EmitError::OutputTooSmall`] if `out` is shorter than `morph_vertices()`.
+    pub fn device_morph_vertices(
+        &self,
+        h: &impl HierarchyRecords,
+        out: &mut [MorphVertex],
+    ) -> Result<usize, EmitError> {
+        if !self.is_for(h) {
+            return Err(EmitError::WrongHierarchy);
+        }
+        let live = self.morph_vertices();
+        let Some(out) = out.get_mut(..live.len()) else {
+            return Err(EmitError::OutputTooSmall {
+                surface: None,
+                needed: live.len(),
+                given: out.len(),
+            });
+        };
+        let (ids, device) = (h.vertex_id_bound() as u32, h.device_vertex_bound() as u32);
+        let place = |v: u32| {
+            h.device_vertex(v)
+                .ok_or(EmitError::NoDeviceVertex { vertex: v })
+        };
+        for (o, m) in out.iter_mut().zip(live) {
+            *o = match m.is_idle() {
+                true => MorphVertex::IDLE,
+                false => MorphVertex {
+                    from: match m.from.checked_sub(ids) {
+                        Some(slot) => device.saturating_add(slot),
+                        None => place(m.from)?,
+                    },
+                    to: place(m.to)?,
+                    t: m.t,
+                    coarse: place(m.coarse)?,
+                },
+            };
+        }
+        Ok(live.len())
     }
 }

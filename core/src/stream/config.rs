@@ -1,7 +1,6 @@
 //! What a pool is sized by, where its bookkeeping lies in the caller's words, and why a
 //! configuration or its memory was refused.
 
-use super::vertex_pool::VertexPoolLayout;
 use crate::format::paged::{PageArray, PageTable};
 
 /// The sizes of a [`Residency`](super::Residency): fixed when it is made, so its memory is
@@ -108,6 +107,46 @@ impl PoolConfig {
             }
         }
         Ok(())
+    }
+}
+
+/// Bytes of one vertex in the device pool.
+const VERTEX_BYTES: u64 = core::mem::size_of::<crate::format::Vertex>() as u64;
+
+/// The shape of a device vertex pool: the page in slot `s` has its vertices at
+/// `s × slot_vertices`, and the files' root pages follow the slots (see
+/// [`Residency::page_vertices`](super::Residency::page_vertices)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VertexPoolLayout {
+    /// Vertices per slot: at least the most any streamed page holds
+    /// ([`PageTable::most_vertices_from`](crate::stream::PageTable::most_vertices_from)).
+    pub slot_vertices: u32,
+    /// Vertices in all: the slots', then room for every file's root vertices
+    /// ([`PageTable::vertices_before`](crate::stream::PageTable::vertices_before)). Morph
+    /// slots are numbered past them.
+    pub vertices: u32,
+}
+
+impl VertexPoolLayout {
+    /// The layout of a device pool of `bytes` with slots of `slot_vertices` and room for
+    /// `root_vertices`, and how many slots it has (the page pool's
+    /// [`PoolConfig::slots`](super::PoolConfig::slots)); `None` if not even one slot fits.
+    pub fn for_bytes(bytes: u64, slot_vertices: u32, root_vertices: u64) -> Option<(Self, u32)> {
+        let vertices = (bytes / VERTEX_BYTES).min(u64::from(u32::MAX / 2 - 1));
+        let slots = vertices
+            .checked_sub(root_vertices)?
+            .checked_div(u64::from(slot_vertices))?;
+        let slots = u32::try_from(slots).ok().filter(|&s| s > 0)?;
+        let layout = Self {
+            slot_vertices,
+            vertices: vertices as u32,
+        };
+        Some((layout, slots))
+    }
+
+    /// The device pool's bytes.
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.vertices) * VERTEX_BYTES
     }
 }
 

@@ -41,10 +41,10 @@ mod vertex_pool;
 
 pub use crate::format::paged::{PageEntry, PageField, PageTable, PageTableError};
 pub use crate::ids::PageKey;
-pub use config::{FileTables, PoolConfig, PoolError};
+pub use config::{FileTables, PoolConfig, PoolError, VertexPoolLayout};
 pub use fault::{FaultKind, InstallError, PageFault, StreamError};
 pub use frame_lists::{FrameLists, StreamedReads, Want};
 pub use hierarchy::StreamedHierarchy;
 pub use pressure::{Pressure, PressureSignal};
 pub use residency::{LoadRequest, PageState, PoolStats, Residency, ScheduleStats, Wanted};
-pub use vertex_pool::{VertexInstall, VertexPoolLayout};
+pub use vertex_pool::VertexInstall;

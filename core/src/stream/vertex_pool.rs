@@ -17,48 +17,11 @@
 //! when the pool installs it, before the first frame whose fronts may use it, and each
 //! file's root vertices ([`Residency::root_vertices`]) once.
 
+use super::config::{PoolError, VertexPoolLayout};
 use super::residency::{Residency, PINNED};
 use crate::format::paged::{PageTable, PageView, PagedRoot, RecordKind};
 use crate::format::Vertex;
 use crate::ids::PageKey;
-
-/// Bytes of one vertex in the device pool.
-const VERTEX_BYTES: u64 = core::mem::size_of::<Vertex>() as u64;
-
-/// The shape of a device vertex pool (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VertexPoolLayout {
-    /// Vertices per slot: at least the most any streamed page holds
-    /// ([`PageTable::most_vertices_from`](crate::stream::PageTable::most_vertices_from)).
-    pub slot_vertices: u32,
-    /// Vertices in all: the slots', then room for every file's root vertices
-    /// ([`PageTable::vertices_before`](crate::stream::PageTable::vertices_before)). Morph
-    /// slots are numbered past them.
-    pub vertices: u32,
-}
-
-impl VertexPoolLayout {
-    /// The layout of a device pool of `bytes` with slots of `slot_vertices` and room for
-    /// `root_vertices`, and how many slots it has (the page pool's
-    /// [`PoolConfig::slots`](super::PoolConfig::slots)); `None` if not even one slot fits.
-    pub fn for_bytes(bytes: u64, slot_vertices: u32, root_vertices: u64) -> Option<(Self, u32)> {
-        let vertices = (bytes / VERTEX_BYTES).min(u64::from(u32::MAX / 2 - 1));
-        let slots = vertices
-            .checked_sub(root_vertices)?
-            .checked_div(u64::from(slot_vertices))?;
-        let slots = u32::try_from(slots).ok().filter(|&s| s > 0)?;
-        let layout = Self {
-            slot_vertices,
-            vertices: vertices as u32,
-        };
-        Some((layout, slots))
-    }
-
-    /// The device pool's bytes.
-    pub fn bytes(&self) -> u64 {
-        u64::from(self.vertices) * VERTEX_BYTES
-    }
-}
 
 /// Vertices to copy into the device pool: `vertices` (and their colours, if the page has
 /// them) go to `first..first + vertices.len()`.
@@ -147,13 +110,13 @@ impl Residency<'_, '_> {
         file: u32,
         table: &PageTable<'_>,
         pinned: u32,
-    ) -> Result<(), super::PoolError> {
+    ) -> Result<(), PoolError> {
         let Some(layout) = self.config.vertex_pool else {
             return Ok(());
         };
         let most = table.most_vertices_from(pinned);
         if most > layout.slot_vertices {
-            return Err(super::PoolError::VertexPoolTooSmall {
+            return Err(PoolError::VertexPoolTooSmall {
                 what: "a page's vertices",
                 needed: u64::from(most),
                 room: u64::from(layout.slot_vertices),
@@ -164,7 +127,7 @@ impl Residency<'_, '_> {
             .saturating_sub(self.config.slot_vertices_total())
             .saturating_sub(u64::from(self.root_vertices_used));
         if needed > room {
-            return Err(super::PoolError::VertexPoolTooSmall {
+            return Err(PoolError::VertexPoolTooSmall {
                 what: "root vertices",
                 needed,
                 room,
