@@ -96,7 +96,8 @@ impl EditedBuffer {
             )));
         }
         let needed = cam.index_edits_needed(max_moves) as u64;
-        self.reserve(ctx, name, frame, needed)?;
+        // One edit at least, so that a frame without edits has a staging buffer to name.
+        self.reserve(ctx, name, frame, needed.max(1))?;
         let slot = &mut self.slots[frame];
         slot.draws.resize(h.surface_count(), SurfaceDraw::default());
         let bytes = slot

@@ -8,7 +8,8 @@
 //!   runtime's 5,000-frame soak among them: `tests/tests/soak.rs`), the reader sweep
 //!   (truncations and byte flips of the shared real inputs through the in-memory bake, in
 //!   release), the no_std build for a microcontroller target, the interactive viewer under
-//!   Xvfb (a resize storm, its screenshot's coverage and no validation message), clippy on the core crate without its
+//!   Xvfb (a resize storm, its screenshot's coverage and no validation message; then over a
+//!   paged terrain streaming through a small vertex pool), clippy on the core crate without its
 //!   `prefetch` feature (where it forbids `unsafe`), the core crate's tests under miri (two
 //!   groups side by side: miri interprets on one core), and
 //!   the C interface (`capi`): the C examples and the C++ test built with the system's
@@ -56,7 +57,8 @@ commands:
                         installs the pinned nightly with miri
   test                  setup, then shader check, fmt, clippy, tests, the reader sweep
                         (release), the C interface (C examples, C++ test), no_std build,
-                        the viewer under Xvfb, clippy without prefetch, miri
+                        the viewer under Xvfb (a mesh; a paged terrain), clippy without
+                        prefetch, miri
   check-shaders         the committed SPIR-V matches the shader sources and passes spirv-val
   capi-header           write capi/include/caveclod.h from the caveclod-capi sources
   capi-check            test's C interface step alone

@@ -90,6 +90,13 @@ fn test_steps() -> Vec<(String, Step)> {
                 .to_string(),
             Box::new(viewer_check),
         ),
+        (
+            "viewer under Xvfb over a paged terrain (generated and baked paged; 4 cameras, \
+             300 frames, its pages streaming through a small vertex pool, no validation \
+             messages, no device resource made after the warm-up)"
+                .to_string(),
+            Box::new(viewer_streamed_check),
+        ),
         // Without its default `prefetch` feature the core crate forbids `unsafe`.
         step(
             "cargo clippy -p caveclod-core --no-default-features -- -D warnings",
@@ -145,6 +152,65 @@ pub(crate) fn test() -> Result<(), String> {
 
 fn secs(d: Duration) -> String {
     format!("{:.1}s", d.as_secs_f64())
+}
+
+/// Triangles of the terrain the paged viewer check flies, its page size, and the viewer's
+/// vertex pool (MiB): a small pool, so that pages come and go.
+const PAGED_TRIANGLES: &str = "300000";
+const PAGED_PAGE_SIZE: &str = "16K";
+const PAGED_VERTEX_POOL: &str = "1";
+
+/// Generates a terrain, bakes it paged, and flies the viewer over it in a virtual X server on
+/// lavapipe, its pages streaming into a small vertex pool; the viewer fails on a validation
+/// message, an empty viewport, or a device resource made after its warm-up.
+fn viewer_streamed_check() -> Result<(), String> {
+    let dir = env::temp_dir().join("caveclod-viewer-paged");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let path = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let (ply, clod, shot) = (path("terrain.ply"), path("terrain.clod"), path("shot.png"));
+    let cli = [
+        "run",
+        "--quiet",
+        "-p",
+        "caveclod-cli",
+        "--bin",
+        "caveclod",
+        "--",
+    ];
+    let generate = ["generate", "--triangles", PAGED_TRIANGLES, "-o", &ply];
+    run(cmd("cargo", &[&cli[..], &generate[..]].concat()))?;
+    let bake = ["bake", &ply, "-o", &clod, "--page-size", PAGED_PAGE_SIZE];
+    run(cmd("cargo", &[&cli[..], &bake[..]].concat()))?;
+    run(cmd(
+        "xvfb-run",
+        &[
+            "-a",
+            "-s",
+            "-screen 0 1280x720x24",
+            "cargo",
+            "run",
+            "--quiet",
+            "-p",
+            "caveclod-examples",
+            "--example",
+            "viewer",
+            "--",
+            &clod,
+            "--cameras",
+            "4",
+            "--frames",
+            "300",
+            "--validation",
+            "--vertex-pool",
+            PAGED_VERTEX_POOL,
+            "--screenshot",
+            &shot,
+            "--min-coverage",
+            "0.1",
+        ],
+    ))?;
+    println!("paged viewer screenshot: {shot}");
+    Ok(())
 }
 
 /// Runs the interactive viewer in a virtual X server on lavapipe: 4 cameras, 300 animated

@@ -59,6 +59,16 @@ impl DepthBands {
         })
     }
 
+    /// No depths: for a file whose nodes are not all at hand (a paged one), which is not
+    /// coloured by depth.
+    pub fn none() -> Self {
+        Self {
+            depth: Vec::new(),
+            levels: 1,
+            lists: vec![Vec::new()],
+        }
+    }
+
     /// Bands (index lists) drawn.
     pub fn band_count(&self) -> usize {
         self.lists.len()

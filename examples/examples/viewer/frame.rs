@@ -6,13 +6,20 @@
 use std::time::Instant;
 
 use caveclod_core::glam::Mat4;
+use caveclod_core::stream::StreamedHierarchy;
+use caveclod_core::CameraState;
 use caveclod_host::{rendering, Acquired, ReadbackBuffer};
 use caveclod_vulkan::ash::vk;
-use caveclod_vulkan::{CameraMorphs, IndexSource, RecordCamera, RgbaImage, Viewport};
+use caveclod_vulkan::{
+    CameraMorphs, Context, IndexSource, MorphStage, RecordCamera, RgbaImage, Viewport,
+};
 
 use crate::scene::{ColourMode, Frozen, Scene};
 use crate::ui::{self, PanelInfo};
-use crate::viewer::Viewer;
+use crate::viewer::{Rings, Vertices, Viewer};
+
+/// Holes a streamed camera's index edits close a frame.
+const EDIT_MOVES: u32 = 256;
 
 /// The background, as stored in the image (sRGB bytes), so screenshots can tell it apart.
 pub const BACKGROUND_SRGB: [u8; 3] = [28, 30, 36];
@@ -69,8 +76,19 @@ impl Viewer {
         let Some(image) = self.acquire(slot)? else {
             return Ok(Outcome::Skipped);
         };
-        scene.refine(&viewports)?;
-        self.emit(scene, slot)?;
+        let stage = scene.settings.morphs.stage();
+        let (ctx, rings) = (&self.ctx, &mut self.res.rings);
+        scene.refine(&viewports, &mut |i, h, camera| {
+            fill_streamed(ctx, &mut rings[i], slot, stage, h, camera)
+                .map_err(|e| format!("camera {}: {e}", i + 1))
+        })?;
+        match (&mut self.res.vertices, scene.h.streamed()) {
+            (Vertices::Pool(pool), Some(s)) => pool
+                .fill(slot, &s.installed_vertices())
+                .map(drop)
+                .map_err(|e| format!("vertex pool: {e}"))?,
+            _ => self.emit(scene, slot)?,
+        }
         let views: Vec<(Viewport, Mat4)> = viewports
             .iter()
             .zip(&scene.cameras)
@@ -132,7 +150,9 @@ impl Viewer {
 
     /// Emits each camera's front into its ring's `slot`: per surface, or regrouped by depth.
     fn emit(&mut self, scene: &mut Scene<'_>, slot: usize) -> Result<(), String> {
-        let h = &scene.h;
+        let Some(h) = scene.h.whole() else {
+            return Ok(());
+        };
         for (i, c) in scene.cameras.iter_mut().enumerate() {
             let rings = &mut self.res.rings[i];
             let start = Instant::now();
@@ -265,7 +285,7 @@ impl Viewer {
             .map(|(&(viewport, view_proj), rings)| RecordCamera {
                 viewport,
                 view_proj,
-                vertices: &self.res.vertices,
+                vertices: self.res.vertices.buffer(),
                 indices: if by_depth {
                     &rings.bands
                 } else {
@@ -288,6 +308,13 @@ impl Viewer {
         let (host, frames) = (&self.host, &mut self.res.frames);
         let d = host.device();
         let cmd = frames.begin(host, slot).map_err(|e| e.to_string())?;
+        // A paged file's page installs and edited index buffers: copies, before the draws.
+        if let Vertices::Pool(pool) = &self.res.vertices {
+            pool.record(&self.ctx, cmd, slot);
+        }
+        for r in &self.res.rings {
+            r.surfaces.record_edits(&self.ctx, cmd, slot);
+        }
         self.res
             .recorder
             .record_morph_blends(&self.ctx, cmd, slot, &morphs)
@@ -337,6 +364,29 @@ impl Viewer {
         self.swapchain_reports += u64::from(recreate);
         Ok(())
     }
+}
+
+/// Fills a streamed camera's ring for `slot` while the frame's records `h` are at hand: its
+/// index edits, and its morph slots in the vertex pool for the stage that blends them.
+fn fill_streamed(
+    ctx: &Context,
+    rings: &mut Rings,
+    slot: usize,
+    stage: Option<MorphStage>,
+    h: &StreamedHierarchy<'_, '_, '_, '_>,
+    camera: &mut CameraState<'_>,
+) -> Result<(), String> {
+    rings
+        .surfaces
+        .fill_edits(ctx, slot, h, camera, EDIT_MOVES)
+        .map_err(|e| e.to_string())?;
+    if let Some(stage) = stage {
+        rings
+            .morphs_mut(stage)
+            .fill_device(slot, h, camera)
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
 
 /// The clear colour that is stored as [`BACKGROUND_SRGB`]: converted to linear for an

@@ -24,6 +24,8 @@
 //!   --spacing M         metres per grid cell for .npy heightfields (and .dem override)
 //!   --resize-every N    with --frames: a resize storm, a new window size every N frames
 //!                       (see the `storm` module); fails unless each got a swapchain
+//!   --vertex-pool MIB   a paged file's device vertex pool, MiB (default 64): its pages
+//!                       stream from the file into a page pool of as many slots
 //! ```
 //!
 //! Keys are listed in the panel ([`controls::KEY_HELP`]). With `--frames`, validation
@@ -35,6 +37,7 @@ mod frame;
 mod scene;
 mod screenshot;
 mod storm;
+mod stream;
 mod ui;
 mod viewer;
 
@@ -43,7 +46,6 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use caveclod_core::glam::Vec2;
-use caveclod_core::CameraState;
 use clap::Parser;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
@@ -61,6 +63,9 @@ use viewer::{Viewer, WindowDesc};
 /// Seconds of animation per frame with `--frames`, so a run animates the same however
 /// fast the device draws.
 const FRAMES_DT: f32 = 1.0 / 30.0;
+/// Frames after which a paged file's run makes no more device resources: its pool, index
+/// buffers and staging are made, and a `--frames` run fails if another one is.
+const WARM_UP: u64 = 60;
 
 #[derive(Parser, Debug)]
 #[command(about = "Interactive viewer of caveclod hierarchies (see the module docs)")]
@@ -98,6 +103,9 @@ struct Args {
     /// With --frames: ask for a new window size every N frames (a resize storm).
     #[arg(long, requires = "frames")]
     resize_every: Option<u64>,
+    /// A paged file's device vertex pool, MiB.
+    #[arg(long, default_value_t = 64)]
+    vertex_pool: u64,
 }
 
 fn main() -> ExitCode {
@@ -111,23 +119,38 @@ fn main() -> ExitCode {
     }
 }
 
-/// Loads the hierarchy, makes the cameras, runs the window until it closes (or the frames
-/// are done) and reports.
+/// Opens the file (streamed, if it is paged), makes the cameras, runs the window until it
+/// closes (or the frames are done) and reports.
 fn run(args: &Args) -> Result<ExitCode, String> {
+    let named = |e: &dyn std::fmt::Display| format!("{}: {e}", args.input.display());
+    let mut memories = Vec::new();
+    if let Some(file) = scene::open_paged(&args.input)? {
+        let root = file.root().map_err(|e| named(&e))?;
+        let mut memory = stream::StreamMemory::new(&root, args.vertex_pool << 20)?;
+        let streamed = stream::Streamed::new(&file, root, &mut memory).map_err(|e| named(&e))?;
+        return fly(args, scene::Records::Streamed(streamed), &mut memories);
+    }
     let asset = scene::load(&args.input, args.spacing)?;
-    let h = asset
-        .hierarchy()
-        .map_err(|e| format!("{}: {e}", args.input.display()))?;
-    let words = CameraState::words_needed_for(&h, &scene::camera_config(&h));
-    let mut memories = vec![vec![0u32; words]; usize::from(args.cameras)];
+    let h = asset.hierarchy().map_err(|e| named(&e))?;
+    fly(args, scene::Records::Whole(h), &mut memories)
+}
+
+/// Makes the cameras over `records`, each in one of `memories`, and runs the window.
+fn fly<'h>(
+    args: &Args,
+    mut records: scene::Records<'h>,
+    memories: &'h mut Vec<Vec<u32>>,
+) -> Result<ExitCode, String> {
+    let words = records.camera_words();
+    *memories = vec![vec![0u32; words]; usize::from(args.cameras)];
     let texture_dir = args.input.parent().map_or_else(
         || std::path::PathBuf::from("."),
         std::path::Path::to_path_buf,
     );
     let scene = Scene::new(
-        h,
+        records,
         texture_dir,
-        &mut memories,
+        memories,
         args.tolerance,
         args.frames.is_some(),
     )?;
@@ -172,6 +195,8 @@ struct App<'a, 'h> {
     fps: FpsMeter,
     capture: Option<Capture>,
     storm: Option<ResizeStorm>,
+    /// caveclod's device resources made by the end of the warm-up, and by the last frame.
+    resources: (Option<u64>, u64),
 }
 
 impl<'a, 'h> App<'a, 'h> {
@@ -191,6 +216,7 @@ impl<'a, 'h> App<'a, 'h> {
                 fps: 0.0,
             },
             capture: None,
+            resources: (None, 0),
             storm: args.resize_every.zip(args.frames).map(|(every, frames)| {
                 let base = winit::dpi::PhysicalSize::new(args.width, args.height);
                 ResizeStorm::new(every, frames, base)
@@ -212,7 +238,8 @@ impl<'a, 'h> App<'a, 'h> {
             Action::Finer => s.scale_tolerance(0.8),
             Action::Wireframe => s.settings.wireframe = !s.settings.wireframe,
             Action::CycleColour => {
-                s.settings.colour = s.settings.colour.next(s.h.materials().is_some())
+                let (materials, depth) = (s.h.materials().is_some(), s.h.whole().is_some());
+                s.settings.colour = s.settings.colour.next(materials, depth)
             }
             Action::CycleMorphs => s.settings.morphs = s.settings.morphs.next(),
             Action::Freeze => {
@@ -269,6 +296,11 @@ impl<'a, 'h> App<'a, 'h> {
             Ok(Outcome::Drawn(shot)) => {
                 self.started.get_or_insert(now);
                 self.drawn += 1;
+                let made = viewer.ctx.resources_created();
+                if self.drawn == WARM_UP {
+                    self.resources.0 = Some(made);
+                }
+                self.resources.1 = made;
                 self.fps.tick();
                 self.capture = shot.or(self.capture.take());
                 if last {
@@ -287,6 +319,18 @@ impl<'a, 'h> App<'a, 'h> {
             self.drawn,
             self.drawn.saturating_sub(1) as f64 / secs.max(1e-9)
         );
+        if let Some(t) = self.scene.h.streamed().map(|s| s.totals) {
+            eprintln!(
+                "streaming: {} pages installed, {} evicted, {} faults, {} splits waiting",
+                t.installs, t.evictions, t.faults, t.deferred
+            );
+            if let Some(warm) = self.resources.0 {
+                eprintln!(
+                    "caveclod's device resources: {warm} made by frame {WARM_UP}, {} by frame {}",
+                    self.resources.1, self.drawn
+                );
+            }
+        }
         for (i, c) in self.scene.cameras.iter().enumerate() {
             eprintln!(
                 "camera {}: {} polygons, {} operations, refine {:.2} ms, emit {:.2} ms",
@@ -333,6 +377,8 @@ impl<'a, 'h> App<'a, 'h> {
         if self.args.frames.is_some() {
             eprintln!("{} validation messages", messages.len());
             ok &= messages.is_empty();
+            let (warm, last) = self.resources;
+            ok &= self.scene.h.streamed().is_none() || warm.is_none_or(|w| w == last);
         }
         Ok(if ok {
             ExitCode::SUCCESS

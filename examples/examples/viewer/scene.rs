@@ -9,12 +9,33 @@ use std::time::Instant;
 
 use caveclod_bake::import::ImportOptions;
 use caveclod_bake::pipeline::{bake_file, Stage};
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, LookAt, RefineParams, COMPACT_STEP};
-use caveclod_io::{AlignedBytes, ClodBytes};
+use caveclod_core::format::materials::Materials;
+use caveclod_core::format::Meta;
+use caveclod_core::stream::StreamedHierarchy;
+use caveclod_core::{
+    CameraConfig, CameraState, Hierarchy, HierarchyRecords, LookAt, RefineParams, View,
+    COMPACT_STEP,
+};
+use caveclod_io::{AlignedBytes, ClodBytes, PagedFile};
 use caveclod_vulkan::MorphStage;
 use caveclod_vulkan::Viewport;
 
 use crate::controls::CameraControl;
+use crate::stream::Streamed;
+
+/// The paged file at `path`, if it is a `.clod` file written paged (its root is read).
+pub fn open_paged(path: &Path) -> Result<Option<PagedFile>, String> {
+    let is_clod = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("clod"));
+    if !is_clod {
+        return Ok(None);
+    }
+    match PagedFile::open(path) {
+        Ok(file) if file.root().is_ok() => Ok(Some(file)),
+        _ => Ok(None),
+    }
+}
 
 /// Maps a `.clod` file, or bakes any other file caveclod-bake imports (OBJ, PLY, glTF,
 /// DEM, NPY) in memory, reporting its stages on stderr.
@@ -111,13 +132,13 @@ pub enum ColourMode {
 }
 
 impl ColourMode {
-    /// The next mode; materials only when the file has them.
-    pub fn next(self, has_materials: bool) -> Self {
+    /// The next mode; materials only when the file has them, depth only over a whole file.
+    pub fn next(self, has_materials: bool, has_depth: bool) -> Self {
         match self {
             Self::Materials => Self::Surface,
-            Self::Surface => Self::Depth,
-            Self::Depth if has_materials => Self::Materials,
-            Self::Depth => Self::Surface,
+            Self::Surface if has_depth => Self::Depth,
+            Self::Surface | Self::Depth if has_materials => Self::Materials,
+            Self::Surface | Self::Depth => Self::Surface,
         }
     }
 
@@ -134,10 +155,82 @@ impl ColourMode {
 /// 72 bytes each.
 const MAX_MORPHS: u32 = 8192;
 
-/// The configuration of the viewer's cameras: full resolution anywhere, with morph memory.
-pub fn camera_config(h: &Hierarchy<'_>) -> CameraConfig {
-    CameraConfig::full(h).with_morphs(MAX_MORPHS)
+/// What the cameras refine over: a whole file, or a paged one streaming.
+// One per viewer, made once and never moved in a loop: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+pub enum Records<'h> {
+    Whole(Hierarchy<'h>),
+    Streamed(Streamed<'h>),
 }
+
+impl<'h> Records<'h> {
+    /// The configuration of the viewer's cameras: full resolution anywhere over a whole
+    /// file, a polygon budget and index edits over a paged one; with morph memory.
+    pub fn camera_config(&mut self) -> CameraConfig {
+        match self {
+            Self::Whole(h) => CameraConfig::full(h).with_morphs(MAX_MORPHS),
+            Self::Streamed(s) => s.camera_config(MAX_MORPHS),
+        }
+    }
+
+    /// Words each camera needs.
+    pub fn camera_words(&mut self) -> usize {
+        let config = self.camera_config();
+        match self {
+            Self::Whole(h) => CameraState::words_needed_for(h, &config),
+            Self::Streamed(s) => CameraState::words_needed_for(&s.records(), &config),
+        }
+    }
+
+    /// A camera in `memory`.
+    fn camera(&mut self, memory: &'h mut [u32]) -> Result<CameraState<'h>, String> {
+        let config = self.camera_config();
+        match self {
+            Self::Whole(h) => CameraState::with_config(h, memory, &config),
+            Self::Streamed(s) => CameraState::with_config(&s.records(), memory, &config),
+        }
+        .map_err(|e| e.to_string())
+    }
+
+    pub fn meta(&self) -> &Meta {
+        match self {
+            Self::Whole(h) => h.meta(),
+            Self::Streamed(s) => s.root().meta(),
+        }
+    }
+
+    pub fn surface_count(&self) -> usize {
+        self.meta().surface_count as usize
+    }
+
+    /// The file's materials (a paged file's are not drawn).
+    pub fn materials(&self) -> Option<Materials<'h>> {
+        match self {
+            Self::Whole(h) => h.materials(),
+            Self::Streamed(_) => None,
+        }
+    }
+
+    /// The whole file, if it is one.
+    pub fn whole(&self) -> Option<&Hierarchy<'h>> {
+        match self {
+            Self::Whole(h) => Some(h),
+            Self::Streamed(_) => None,
+        }
+    }
+
+    /// The streamed file, if it is one.
+    pub fn streamed(&self) -> Option<&Streamed<'h>> {
+        match self {
+            Self::Whole(_) => None,
+            Self::Streamed(s) => Some(s),
+        }
+    }
+}
+
+/// Fills a streamed camera's ring for the frame: camera `i`, over the frame's records.
+pub type FillStreamed<'f, 'h> = dyn FnMut(usize, &StreamedHierarchy<'_, '_, 'h, 'h>, &mut CameraState<'h>) -> Result<(), String>
+    + 'f;
 
 /// Where geomorphs are blended, if they are on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -198,6 +291,8 @@ pub struct CameraStats {
     pub refine_ms: f64,
     /// Index emission into the mapped index buffers (and, coloured by depth, the regrouping).
     pub emit_ms: f64,
+    /// Splits waiting for pages (a streamed file).
+    pub deferred: u32,
 }
 
 /// A camera: its front, how it moves, and whether its front is frozen.
@@ -221,7 +316,7 @@ pub struct Frozen {
 
 /// The hierarchy, its cameras and the settings.
 pub struct Scene<'h> {
-    pub h: Hierarchy<'h>,
+    pub h: Records<'h>,
     /// The directory the materials' texture paths are relative to (the input's).
     pub texture_dir: PathBuf,
     pub cameras: Vec<SceneCamera<'h>>,
@@ -235,23 +330,24 @@ impl<'h> Scene<'h> {
     /// words), placed around
     /// the mesh as caveclod's snapshots place them; animated if `animate`.
     pub fn new(
-        h: Hierarchy<'h>,
+        mut h: Records<'h>,
         texture_dir: PathBuf,
         memories: &'h mut [Vec<u32>],
         tolerance_px: f32,
         animate: bool,
     ) -> Result<Self, String> {
-        let m = h.meta();
+        let m = *h.meta();
         let (lo, hi) = (
             caveclod_core::glam::Vec3::from_array(m.bounds_min),
             caveclod_core::glam::Vec3::from_array(m.bounds_max),
         );
         let centre = (lo + hi) * 0.5;
         let radius = ((hi - lo).length() * 0.5).max(1e-6);
-        let looks = caveclod_host::orbit(&h, memories.len());
+        let looks = caveclod_host::orbit_box(m.bounds_min, m.bounds_max, memories.len());
         let mut cameras = Vec::with_capacity(memories.len());
         for (i, (memory, look)) in memories.iter_mut().zip(looks).enumerate() {
-            let state = CameraState::with_config(&h, memory, &camera_config(&h))
+            let state = h
+                .camera(memory)
                 .map_err(|e| format!("camera {}: {e}", i + 1))?;
             cameras.push(SceneCamera {
                 state,
@@ -288,8 +384,14 @@ impl<'h> Scene<'h> {
         }
     }
 
-    /// Refines every camera that is not frozen against its own view in its viewport.
-    pub fn refine(&mut self, viewports: &[Viewport]) -> Result<(), String> {
+    /// Refines every camera that is not frozen against its own view in its viewport; over
+    /// a streamed file `fill` then fills each camera's ring (frozen ones too) while the
+    /// frame's records are at hand, and the pool streams.
+    pub fn refine(
+        &mut self,
+        viewports: &[Viewport],
+        fill: &mut FillStreamed<'_, 'h>,
+    ) -> Result<(), String> {
         let params = RefineParams {
             tolerance_px: self.settings.tolerance_px,
             dt_s: self.dt_s,
@@ -300,29 +402,32 @@ impl<'h> Scene<'h> {
             Morphs::Off => params.without_morphs(),
             Morphs::Vertex | Morphs::Compute => params,
         };
-        for (i, (c, vp)) in self.cameras.iter_mut().zip(viewports).enumerate() {
-            if c.frozen.is_some() {
-                c.stats.operations = 0;
-                c.stats.refine_ms = 0.0;
-                continue;
+        let views: Vec<Option<View>> = self
+            .cameras
+            .iter()
+            .zip(viewports)
+            .map(|(c, vp)| {
+                let view = c.control.look().view(vp.width, vp.height);
+                c.frozen.is_none().then_some(view)
+            })
+            .collect();
+        match &mut self.h {
+            Records::Whole(h) => refine_cameras(&mut self.cameras, h, &views, &params),
+            Records::Streamed(s) => {
+                s.begin_frame();
+                {
+                    let h = s.records();
+                    refine_cameras(&mut self.cameras, &h, &views, &params)?;
+                    for (i, c) in self.cameras.iter_mut().enumerate() {
+                        let start = Instant::now();
+                        fill(i, &h, &mut c.state)?;
+                        c.stats.emit_ms = start.elapsed().as_secs_f64() * 1e3;
+                    }
+                }
+                s.totals.deferred = self.cameras.iter().map(|c| c.stats.deferred).sum();
+                s.end_frame()
             }
-            let view = c.control.look().view(vp.width, vp.height);
-            // A new or reset camera's first pass does not morph (`CameraState::refine`).
-            let params = &params;
-            let start = Instant::now();
-            // Incremental compaction keeps the front's records close in memory, a bounded
-            // step a frame.
-            c.state.compact_as_needed(&self.h, COMPACT_STEP);
-            let stats = c
-                .state
-                .refine(&self.h, &view, params)
-                .map_err(|e| format!("camera {}: refinement: {e}", i + 1))?;
-            c.stats.refine_ms = start.elapsed().as_secs_f64() * 1e3;
-            c.stats.operations = stats.splits + stats.collapses;
-            c.stats.polygons = stats.active_polygons;
-            c.stats.morphing = stats.morphing;
         }
-        Ok(())
     }
 
     /// Freezes the selected camera's front at its current view, or thaws it.
@@ -356,4 +461,36 @@ impl<'h> Scene<'h> {
         c.animated = false;
         Some(c)
     }
+}
+
+/// Refines each camera with a view (the others are frozen) over `h`, compacting its front
+/// a bounded step first, and notes its figures.
+fn refine_cameras<'h>(
+    cameras: &mut [SceneCamera<'h>],
+    h: &impl HierarchyRecords,
+    views: &[Option<View>],
+    params: &RefineParams,
+) -> Result<(), String> {
+    for (i, (c, view)) in cameras.iter_mut().zip(views).enumerate() {
+        let Some(view) = view else {
+            c.stats.operations = 0;
+            c.stats.refine_ms = 0.0;
+            continue;
+        };
+        // A new or reset camera's first pass does not morph (`CameraState::refine`).
+        let start = Instant::now();
+        // Incremental compaction keeps the front's records close in memory, a bounded step
+        // a frame.
+        c.state.compact_as_needed(h, COMPACT_STEP);
+        let stats = c
+            .state
+            .refine(h, view, params)
+            .map_err(|e| format!("camera {}: refinement: {e}", i + 1))?;
+        c.stats.refine_ms = start.elapsed().as_secs_f64() * 1e3;
+        c.stats.operations = stats.splits + stats.collapses;
+        c.stats.polygons = stats.active_polygons;
+        c.stats.morphing = stats.morphing;
+        c.stats.deferred = stats.deferred_splits;
+    }
+    Ok(())
 }

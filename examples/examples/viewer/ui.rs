@@ -59,6 +59,12 @@ fn settings(ui: &mut egui::Ui, scene: &Scene<'_>, info: &PanelInfo<'_>) {
         }
     ));
     ui.label(s.morphs.name());
+    if let Some(t) = scene.h.streamed().map(|s| s.totals) {
+        ui.label(format!(
+            "streaming: {} pages installed, {} evicted, {} splits wait",
+            t.installs, t.evictions, t.deferred
+        ));
+    }
     ui.label(if !info.wireframe_available {
         "wireframe unavailable (no fillModeNonSolid)"
     } else if s.wireframe {

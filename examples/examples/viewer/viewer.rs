@@ -7,7 +7,7 @@ use caveclod_host::{Frames, GpuMaterials, Host, HostDesc, Swapchain, SwapchainDe
 use caveclod_vulkan::ash::vk;
 use caveclod_vulkan::{
     CameraIndices, CameraMorphs, Context, DeviceFeatures, MorphStage, Recorder, RecorderDesc,
-    TargetFormats, VertexBuffer,
+    TargetFormats, VertexBuffer, VertexPool,
 };
 use egui_ash_renderer::allocator::GpuAllocator;
 use egui_ash_renderer::{DynamicRendering, Options, RenderMode};
@@ -17,7 +17,8 @@ use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
 use crate::depth::DepthBands;
-use crate::scene::Scene;
+use crate::scene::{Records, Scene};
+use crate::stream::MAX_INSTALLS;
 
 /// Frames the CPU records while the GPU still renders earlier ones.
 pub const FRAMES_IN_FLIGHT: usize = 2;
@@ -61,12 +62,64 @@ impl Rings {
     }
 }
 
+/// The vertices the cameras draw: a whole file's, or a paged file's resident pages'.
+pub enum Vertices {
+    Whole(VertexBuffer),
+    Pool(VertexPool),
+}
+
+impl Vertices {
+    /// The buffer the draws read.
+    pub fn buffer(&self) -> &VertexBuffer {
+        match self {
+            Self::Whole(v) => v,
+            Self::Pool(p) => p.vertices(),
+        }
+    }
+
+    /// The whole file's, or a pool with its root pages, over `scene`'s records.
+    fn new(ctx: &Context, scene: &Scene<'_>) -> Result<Self, String> {
+        match &scene.h {
+            Records::Whole(h) => VertexBuffer::from_hierarchy(ctx, "mesh", h)
+                .map(Self::Whole)
+                .map_err(|e| format!("vertex buffer: {e}")),
+            Records::Streamed(s) => {
+                let layout = s.vertex_pool().ok_or("a page pool without a vertex pool")?;
+                let made = VertexPool::new(
+                    ctx,
+                    "terrain",
+                    layout,
+                    false,
+                    MAX_INSTALLS as u32,
+                    FRAMES_IN_FLIGHT,
+                );
+                let mut pool = made.map_err(|e| format!("vertex pool: {e}"))?;
+                match pool.upload_roots(ctx, &s.root_vertices()) {
+                    Ok(()) => Ok(Self::Pool(pool)),
+                    Err(e) => {
+                        let _ = pool.destroy(ctx);
+                        Err(format!("vertex pool: {e}"))
+                    }
+                }
+            }
+        }
+    }
+
+    fn destroy(self, ctx: &Context) -> Result<(), String> {
+        match self {
+            Self::Whole(v) => v.destroy(ctx),
+            Self::Pool(p) => p.destroy(ctx),
+        }
+        .map_err(|e| format!("vertices: {e}"))
+    }
+}
+
 /// What the frames draw with, besides the host's device.
 pub struct Resources {
     pub recorder: Recorder,
     /// The file's materials for the recorder, if it has any.
     pub materials: Option<GpuMaterials>,
-    pub vertices: VertexBuffer,
+    pub vertices: Vertices,
     pub rings: Vec<Rings>,
     pub frames: Frames,
     /// Where egui's texture uploads allocate their command buffers.
@@ -124,7 +177,13 @@ impl Viewer {
         let made = host.context().map_err(|e| e.to_string()).and_then(|ctx| {
             let ready = SwapchainDesc::choose(&host, w.vsync)
                 .map_err(|e| e.to_string())
-                .and_then(|desc| Ok((desc, DepthBands::new(&scene.h)?)))
+                .and_then(|desc| {
+                    let bands = match scene.h.whole() {
+                        Some(h) => DepthBands::new(h)?,
+                        None => DepthBands::none(),
+                    };
+                    Ok((desc, bands))
+                })
                 .and_then(|(desc, bands)| {
                     let res = Resources::new(&host, &ctx, scene, desc, &bands, &window)?;
                     Ok((desc, bands, res))
@@ -252,7 +311,11 @@ impl Resources {
             },
         )
         .map_err(|e| format!("caveclod recorder: {e}"))?;
-        let materials = match GpuMaterials::load(ctx, &recorder, &scene.h, &scene.texture_dir) {
+        let loaded = match scene.h.whole() {
+            Some(h) => GpuMaterials::load(ctx, &recorder, h, &scene.texture_dir),
+            None => Ok(None),
+        };
+        let materials = match loaded {
             Ok(m) => m,
             Err(e) => {
                 let _ = recorder.destroy(ctx);
@@ -265,14 +328,14 @@ impl Resources {
             }
             let _ = recorder.destroy(ctx);
         };
-        let vertices = match VertexBuffer::from_hierarchy(ctx, "mesh", &scene.h) {
+        let vertices = match Vertices::new(ctx, scene) {
             Ok(v) => v,
             Err(e) => {
                 undo(materials, recorder);
-                return Err(format!("vertex buffer: {e}"));
+                return Err(e);
             }
         };
-        let rings = match rings(ctx, &recorder, &vertices, scene, bands) {
+        let rings = match rings(ctx, &recorder, vertices.buffer(), scene, bands) {
             Ok(r) => r,
             Err(e) => {
                 let _ = vertices.destroy(ctx);
@@ -337,7 +400,7 @@ impl Resources {
         destroy_frames(host, self.frames, self.upload_pool);
         let mut first = destroy_rings(ctx, self.rings);
         if let Err(e) = self.vertices.destroy(ctx) {
-            first = first.and(Err(format!("vertex buffer: {e}")));
+            first = first.and(Err(e));
         }
         if let Some(m) = self.materials {
             if let Err(e) = m.destroy(ctx) {
@@ -398,7 +461,8 @@ fn egui_renderer(host: &Host, desc: SwapchainDesc) -> Result<EguiRenderer, Strin
     .map_err(|e| format!("egui renderer: {e}"))
 }
 
-/// Each camera's index rings and morph slots.
+/// Each camera's index rings (over a paged file, its index buffer edited in place) and morph
+/// slots.
 fn rings(
     ctx: &Context,
     recorder: &Recorder,
@@ -428,8 +492,35 @@ fn rings(
                 return Err(e);
             }
         };
+        let surfaces = match scene.h.streamed() {
+            None => Ok(CameraIndices::new(
+                &name,
+                scene.h.surface_count(),
+                FRAMES_IN_FLIGHT,
+            )),
+            Some(_) => {
+                let places = c.state.index_places();
+                CameraIndices::edited(
+                    ctx,
+                    &name,
+                    scene.h.surface_count(),
+                    places,
+                    FRAMES_IN_FLIGHT,
+                )
+                .map_err(|e| format!("{name}: index buffer: {e}"))
+            }
+        };
+        let surfaces = match surfaces {
+            Ok(s) => s,
+            Err(e) => {
+                let _ = vertex_morphs.destroy(ctx);
+                let _ = compute_morphs.destroy(ctx);
+                let _ = destroy_rings(ctx, rings);
+                return Err(e);
+            }
+        };
         rings.push(Rings {
-            surfaces: CameraIndices::new(&name, scene.h.surface_count(), FRAMES_IN_FLIGHT),
+            surfaces,
             bands: CameraIndices::new(
                 &format!("{name} depth bands"),
                 bands.band_count(),
