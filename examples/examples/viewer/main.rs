@@ -321,8 +321,9 @@ impl<'a, 'h> App<'a, 'h> {
         );
         if let Some(t) = self.scene.h.streamed().map(|s| s.totals) {
             eprintln!(
-                "streaming: {} pages installed, {} evicted, {} faults, {} splits waiting",
-                t.installs, t.evictions, t.faults, t.deferred
+                "streaming: {} pages installed, {} evicted, {} faults, {} splits waiting, the \
+                 pool's pressure scaling the tolerance by {:.2}",
+                t.installs, t.evictions, t.faults, t.deferred, t.pressure
             );
             if let Some(warm) = self.resources.0 {
                 eprintln!(

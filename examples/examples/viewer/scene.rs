@@ -414,7 +414,7 @@ impl<'h> Scene<'h> {
         match &mut self.h {
             Records::Whole(h) => refine_cameras(&mut self.cameras, h, &views, &params),
             Records::Streamed(s) => {
-                s.begin_frame();
+                let params = s.begin_frame(params);
                 {
                     let h = s.records();
                     refine_cameras(&mut self.cameras, &h, &views, &params)?;
@@ -424,8 +424,13 @@ impl<'h> Scene<'h> {
                         c.stats.emit_ms = start.elapsed().as_secs_f64() * 1e3;
                     }
                 }
-                s.totals.deferred = self.cameras.iter().map(|c| c.stats.deferred).sum();
-                s.end_frame()
+                let deferred = self.cameras.iter().map(|c| c.stats.deferred).sum();
+                let nodes = self
+                    .cameras
+                    .iter()
+                    .map(|c| c.state.active_node_count())
+                    .sum();
+                s.end_frame(deferred, nodes)
             }
         }
     }

@@ -9,10 +9,10 @@ use std::time::Instant;
 
 use caveclod_core::format::paged::PagedRoot;
 use caveclod_core::stream::{
-    FrameLists, PageFault, PageTable, PoolConfig, Residency, StreamedHierarchy, VertexInstall,
-    VertexPoolLayout, Want,
+    FrameLists, PageFault, PageTable, PoolConfig, Pressure, PressureSignal, Residency,
+    StreamedHierarchy, VertexInstall, VertexPoolLayout, Want,
 };
-use caveclod_core::CameraConfig;
+use caveclod_core::{CameraConfig, RefineParams};
 use caveclod_io::pages::ReaderConfig;
 use caveclod_io::{AlignedBytes, PagedFile, Streamer};
 
@@ -26,6 +26,8 @@ const WANTS: usize = 4096;
 const EDIT_LIST: u32 = 16_384;
 /// Polygons a camera holds at most over a paged file: its memory follows this, not the file.
 const CAMERA_POLYGONS: u32 = 400_000;
+/// The most the pool's pressure scales the tolerance by.
+const MAX_PRESSURE: f32 = 16.0;
 
 /// The memory a streamed file's pool and lists borrow, sized once.
 pub struct StreamMemory<'a> {
@@ -76,6 +78,8 @@ pub struct StreamTotals {
     pub faults: u64,
     /// Splits waiting for pages in the last frame, over the cameras.
     pub deferred: u32,
+    /// The scale the pool's pressure puts on the tolerance.
+    pub pressure: f32,
 }
 
 /// A paged file's root, its page pool and the streamer filling it.
@@ -86,6 +90,8 @@ pub struct Streamed<'h> {
     streamer: Streamer,
     faults: Vec<PageFault>,
     started: Instant,
+    /// Coarser fronts while the pool is nearly full or the reads fall behind.
+    pressure: Pressure,
     pub totals: StreamTotals,
 }
 
@@ -124,6 +130,7 @@ impl<'h> Streamed<'h> {
             streamer,
             faults: Vec::new(),
             started: Instant::now(),
+            pressure: Pressure::new().with_max_scale(MAX_PRESSURE),
             totals: StreamTotals::default(),
         })
     }
@@ -146,14 +153,16 @@ impl<'h> Streamed<'h> {
             .with_index_edits(EDIT_LIST)
     }
 
-    /// Starts a frame of the pool.
-    pub fn begin_frame(&mut self) {
+    /// Starts a frame of the pool: the cameras refine with `params` under its pressure.
+    pub fn begin_frame(&mut self, params: RefineParams) -> RefineParams {
         self.pool.begin_frame();
+        self.pressure.params(params)
     }
 
-    /// After the cameras refined: hands the pool what they want and stand on, installs
-    /// what arrived, and starts new reads. A bad page is reported on stderr once.
-    pub fn end_frame(&mut self) -> Result<(), String> {
+    /// After the cameras refined (`deferred` splits waiting, `active_nodes` on their
+    /// fronts): hands the pool what they want and stand on, installs what arrived, starts
+    /// new reads, and updates the pressure. A bad page is reported on stderr once.
+    pub fn end_frame(&mut self, deferred: u32, active_nodes: u32) -> Result<(), String> {
         self.pool
             .apply(&mut self.lists)
             .map_err(|e| format!("page pool: {e}"))?;
@@ -170,6 +179,11 @@ impl<'h> Streamed<'h> {
         self.totals.installs += u64::from(f.installs);
         self.totals.evictions += u64::from(f.schedule.evictions);
         self.totals.faults = self.faults.len() as u64;
+        self.totals.deferred = deferred;
+        let slots = self.pool.config().slots;
+        let stats = self.pool.stats();
+        let signal = PressureSignal::new(slots, &stats, &f.schedule, deferred, active_nodes);
+        self.totals.pressure = self.pressure.update(&signal);
         Ok(())
     }
 

@@ -61,8 +61,8 @@ fn settings(ui: &mut egui::Ui, scene: &Scene<'_>, info: &PanelInfo<'_>) {
     ui.label(s.morphs.name());
     if let Some(t) = scene.h.streamed().map(|s| s.totals) {
         ui.label(format!(
-            "streaming: {} pages installed, {} evicted, {} splits wait",
-            t.installs, t.evictions, t.deferred
+            "streaming: {} pages installed, {} evicted, {} splits wait, tolerance x{:.2}",
+            t.installs, t.evictions, t.deferred, t.pressure
         ));
     }
     ui.label(if !info.wireframe_available {
