@@ -10,7 +10,7 @@
 
 mod vulkan_support;
 
-use caveclod_core::{CameraConfig, CameraState, Hierarchy, IndexEdit, RefineParams, SurfaceDraw};
+use caveclod_core::{CameraConfig, CameraState, Hierarchy, RefineParams};
 use caveclod_tests::bake::bake;
 use caveclod_tests::meshes;
 use caveclod_vulkan::{
@@ -18,7 +18,7 @@ use caveclod_vulkan::{
     RendererDesc, RgbaImage, VertexBuffer,
 };
 use vulkan_support::{
-    assert_clean, ok, plain_camera, quadrants, save, sync_context, terrain_camera,
+    assert_clean, ok, plain_camera, quadrants, save, sync_context, terrain_camera, EditCopy,
 };
 
 const SIZE: u32 = 256;
@@ -46,65 +46,20 @@ enum Fill<'a> {
     /// Morphed emission.
     Emission,
     /// Lists in the order of each twin's copy of its edited buffer.
-    Copies(&'a [Copy]),
+    Copies(&'a [EditCopy]),
 }
 
-/// A twin camera's index buffer, kept in memory by applying its edits.
-struct Copy {
-    places: Vec<[u32; 3]>,
-    draws: Vec<SurfaceDraw>,
-    edits: Vec<IndexEdit>,
-}
-
-impl Copy {
-    fn new(h: &Hierarchy<'_>, cam: &CameraState<'_>) -> Self {
-        Self {
-            places: vec![[0; 3]; cam.index_places()],
-            draws: vec![SurfaceDraw::default(); h.surface_count()],
-            edits: Vec::new(),
-        }
-    }
-
-    /// Takes the twin's edits and applies them.
-    fn update(&mut self, h: &Hierarchy<'_>, twin: &mut CameraState<'_>) {
-        self.edits
-            .resize(twin.index_edits_needed(MOVES), IndexEdit::default());
-        let e = ok(
-            twin.index_edits(h, MOVES, &mut self.edits, &mut self.draws),
-            "edits",
-        );
-        for x in &self.edits[..e.edits] {
-            self.places[x.place as usize] = x.indices;
-        }
-    }
-
-    /// Each surface's drawn places as an index list, holes included.
-    fn lists(&self) -> Vec<Vec<u32>> {
-        self.draws
-            .iter()
-            .map(|d| {
-                let first = d.first_index as usize / 3;
-                self.places[first..first + d.index_count as usize / 3]
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// Each surface's triangles, holes left out, sorted.
-    fn triangles(&self) -> Vec<Vec<[u32; 3]>> {
-        self.lists()
-            .iter()
-            .map(|l| {
-                sorted(
-                    l.chunks_exact(3)
-                        .filter(|t| !(t[0] == t[1] && t[1] == t[2])),
-                )
-            })
-            .collect()
-    }
+/// Each surface's triangles in `copy`, holes left out, sorted.
+fn triangles(copy: &EditCopy) -> Vec<Vec<[u32; 3]>> {
+    copy.lists()
+        .iter()
+        .map(|l| {
+            sorted(
+                l.chunks_exact(3)
+                    .filter(|t| !(t[0] == t[1] && t[1] == t[2])),
+            )
+        })
+        .collect()
 }
 
 /// Triangles, sorted.
@@ -284,7 +239,10 @@ fn fly(ctx: &Context, h: &Hierarchy<'_>, vertices: &VertexBuffer, in_flight: usi
     let mut twin_memory = vec![vec![0u32; words]; 4];
     let mut cams = cameras(h, &mut memory, &config);
     let mut twins = cameras(h, &mut twin_memory, &config);
-    let mut copies: Vec<Copy> = twins.iter().map(|t| Copy::new(h, t)).collect();
+    let mut copies: Vec<EditCopy> = twins
+        .iter()
+        .map(|t| EditCopy::new(h.surface_count(), t))
+        .collect();
     let mut edited = Side::new(ctx, h, vertices, &cams, in_flight, true);
     let mut listed = Side::new(ctx, h, vertices, &cams, in_flight, false);
     let mut emitted_side = Side::new(ctx, h, vertices, &cams, in_flight, false);
@@ -304,9 +262,9 @@ fn fly(ctx: &Context, h: &Hierarchy<'_>, vertices: &VertexBuffer, in_flight: usi
             let view = l.view(v.width, v.height);
             ok(cams[c].refine(h, &view, &params), "refine");
             ok(twins[c].refine(h, &view, &params), "refine twin");
-            copies[c].update(h, &mut twins[c]);
+            copies[c].update(h, &mut twins[c], MOVES);
             assert_eq!(
-                copies[c].triangles(),
+                triangles(&copies[c]),
                 emitted(h, &twins[c]),
                 "frame {f}, camera {c}"
             );

@@ -12,13 +12,13 @@ mod vulkan_support;
 use caveclod_core::format::Vertex;
 use caveclod_core::glam::Vec3;
 use caveclod_core::stream::{FrameLists, StreamedHierarchy, VertexInstall, Want};
-use caveclod_core::{CameraConfig, CameraState, IndexEdit, LookAt, RefineParams, SurfaceDraw};
+use caveclod_core::{CameraConfig, CameraState, LookAt, RefineParams};
 use caveclod_tests::paged::{load, paged_terrain, PoolMemory};
 use caveclod_vulkan::{
     CameraIndices, CameraMorphs, Context, IndexSource, MorphStage, RecordCamera, Renderer,
     RendererDesc, RgbaImage, VertexBuffer, VertexPool,
 };
-use vulkan_support::{assert_clean, ok, plain_camera, quadrants, save, sync_context};
+use vulkan_support::{assert_clean, ok, plain_camera, quadrants, save, sync_context, EditCopy};
 
 const SIZE: u32 = 256;
 const FRAMES: usize = 240;
@@ -50,43 +50,6 @@ fn look(size: f32, c: usize, f: usize) -> LookAt {
         fov_y: 1.0,
         near: 0.01 * size,
         far: 2.0 * size,
-    }
-}
-
-/// A twin camera's index buffer, kept in memory by applying its edits: the order the
-/// device buffer holds.
-struct Copy {
-    places: Vec<[u32; 3]>,
-    draws: Vec<SurfaceDraw>,
-    edits: Vec<IndexEdit>,
-}
-
-impl Copy {
-    fn update(&mut self, h: &StreamedHierarchy<'_, '_, '_, '_>, twin: &mut CameraState<'_>) {
-        self.edits
-            .resize(twin.index_edits_needed(MOVES), IndexEdit::default());
-        let e = ok(
-            twin.index_edits(h, MOVES, &mut self.edits, &mut self.draws),
-            "edits",
-        );
-        for x in &self.edits[..e.edits] {
-            self.places[x.place as usize] = x.indices;
-        }
-    }
-
-    fn lists(&self) -> Vec<Vec<u32>> {
-        self.draws
-            .iter()
-            .map(|d| {
-                let first = d.first_index as usize / 3;
-                let n = d.index_count as usize / 3;
-                self.places[first..first + n]
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .collect()
-            })
-            .collect()
     }
 }
 
@@ -178,14 +141,7 @@ fn fly(in_flight: usize) {
         (all, twins)
     };
     let surfaces = root.meta().surface_count as usize;
-    let mut copies: Vec<Copy> = twins
-        .iter()
-        .map(|t| Copy {
-            places: vec![[0; 3]; t.index_places()],
-            draws: vec![SurfaceDraw::default(); surfaces],
-            edits: Vec::new(),
-        })
-        .collect();
+    let mut copies: Vec<EditCopy> = twins.iter().map(|t| EditCopy::new(surfaces, t)).collect();
     let desc = |frames_in_flight| RendererDesc {
         refine_morphs: true,
         frames_in_flight,
@@ -238,7 +194,7 @@ fn fly(in_flight: usize) {
                 let view = l.view(v.width, v.height);
                 ok(cams[c].refine(&h, &view, &params), "refine");
                 ok(twins[c].refine(&h, &view, &params), "refine twin");
-                copies[c].update(&h, &mut twins[c]);
+                copies[c].update(&h, &mut twins[c], MOVES);
                 ok(
                     indices[c].fill_edits(&ctx, slot, &h, &mut cams[c], MOVES),
                     "fill edits",

@@ -162,3 +162,33 @@ pub(crate) fn reserve_host(
     }
     Ok(true)
 }
+
+/// Records `copies` (into `cmd`, outside rendering) between two barriers: the reads
+/// (`reads` stages) and copies of every earlier submission on the queue before them, so a
+/// frame in flight never sees what they overwrite; and the copies before this frame's reads
+/// (`reads`, `access`).
+pub(crate) fn copies_between_barriers(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    (reads, access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    copies: impl FnOnce(&ash::Device),
+) {
+    let before = [vk::MemoryBarrier2::default()
+        .src_stage_mask(reads | vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
+    let after = [vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(reads)
+        .dst_access_mask(access)];
+    let d = &ctx.device;
+    // SAFETY: `cmd` is recording outside rendering (the callers' contract).
+    unsafe {
+        d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&before))
+    };
+    copies(d);
+    // SAFETY: as above.
+    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&after)) };
+}

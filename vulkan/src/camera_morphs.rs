@@ -40,6 +40,13 @@ struct Slot {
     count: u32,
 }
 
+/// A frame slot's parts that a fill writes.
+struct SlotParts<'a> {
+    words: &'a mut [MorphVertex],
+    blended: &'a mut Buffer,
+    count: &'a mut u32,
+}
+
 /// A camera's morphing vertices on the GPU: a ring over the caller's frames in flight of
 /// its [`MorphVertex`] slots (and, for [`MorphStage::Compute`] and [`MorphStage::Host`], the
 /// blended vertices), with the descriptor sets that name them next to the persistent vertex
@@ -170,14 +177,9 @@ impl CameraMorphs {
                 self.capacity
             )));
         }
-        let (stage, frames) = (self.stage, self.ring.len());
-        let slot = self.ring.get_mut(frame).ok_or_else(|| {
-            Error::InvalidArgument(format!("frame slot {frame} of a morph ring of {frames}"))
-        })?;
-        let words = slot.slots.mapped_mut().ok_or_else(not_mapped)?;
-        let words: &mut [MorphVertex] = bytemuck::try_cast_slice_mut(words)
-            .map_err(|e| Error::InvalidArgument(format!("morph slot mapping: {e}")))?;
-        words[..live.len()].copy_from_slice(live);
+        let stage = self.stage;
+        let slot = self.slot_words(frame)?;
+        slot.words[..live.len()].copy_from_slice(live);
         if stage == MorphStage::Host {
             let out = slot.blended.mapped_mut().ok_or_else(not_mapped)?;
             let out: &mut [Vertex] = bytemuck::try_cast_slice_mut(out)
@@ -192,8 +194,8 @@ impl CameraMorphs {
                 }
             }
         }
-        slot.count = live.len() as u32;
-        Ok(slot.count)
+        *slot.count = live.len() as u32;
+        Ok(*slot.count)
     }
 
     /// Writes `camera`'s morph slots as the device reads them over `hierarchy`
@@ -213,16 +215,31 @@ impl CameraMorphs {
                 "host-blended morphs read a whole file's vertices: fill them with `fill`".into(),
             ));
         }
+        let slot = self.slot_words(frame)?;
+        let n = camera.device_morph_vertices(hierarchy, slot.words)?;
+        *slot.count = n as u32;
+        Ok(*slot.count)
+    }
+
+    /// Frame slot `frame`'s mapped morph slots, its blended buffer and its count.
+    fn slot_words(&mut self, frame: usize) -> Result<SlotParts<'_>> {
         let frames = self.ring.len();
-        let slot = self.ring.get_mut(frame).ok_or_else(|| {
+        let Slot {
+            slots,
+            blended,
+            count,
+            ..
+        } = self.ring.get_mut(frame).ok_or_else(|| {
             Error::InvalidArgument(format!("frame slot {frame} of a morph ring of {frames}"))
         })?;
-        let words = slot.slots.mapped_mut().ok_or_else(not_mapped)?;
+        let words = slots.mapped_mut().ok_or_else(not_mapped)?;
         let words: &mut [MorphVertex] = bytemuck::try_cast_slice_mut(words)
             .map_err(|e| Error::InvalidArgument(format!("morph slot mapping: {e}")))?;
-        let n = camera.device_morph_vertices(hierarchy, words)?;
-        slot.count = n as u32;
-        Ok(slot.count)
+        Ok(SlotParts {
+            words,
+            blended,
+            count,
+        })
     }
 
     /// Refuses a draw over another vertex buffer than the one it was made for.

@@ -5,7 +5,7 @@
 use ash::vk;
 use caveclod_core::{CameraState, HierarchyRecords, IndexEdit, IndexEdits, SurfaceDraw};
 
-use crate::buffer::{reserve_host, Buffer, BufferDesc};
+use crate::buffer::{copies_between_barriers, reserve_host, Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
 
@@ -133,25 +133,15 @@ impl EditedBuffer {
         let Some(staging) = slot.staging.as_ref().filter(|_| !slot.copies.is_empty()) else {
             return 0;
         };
-        let before = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::INDEX_INPUT | vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
-        let after = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::INDEX_INPUT)
-            .dst_access_mask(vk::AccessFlags2::INDEX_READ)];
-        let d = &ctx.device;
-        // SAFETY: `cmd` is recording outside rendering (the caller's contract); both buffers
-        // are alive, every region lies inside them (a staging entry per edit, a place below
-        // the device buffer's places, checked at fill).
-        unsafe {
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&before));
-            d.cmd_copy_buffer(cmd, staging.raw, self.device.raw, &slot.copies);
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&after));
-        }
+        let reads = (
+            vk::PipelineStageFlags2::INDEX_INPUT,
+            vk::AccessFlags2::INDEX_READ,
+        );
+        copies_between_barriers(ctx, cmd, reads, |d| {
+            // SAFETY: both buffers are alive, every region lies inside them (a staging entry
+            // per edit, a place below the device buffer's places, checked at fill).
+            unsafe { d.cmd_copy_buffer(cmd, staging.raw, self.device.raw, &slot.copies) };
+        });
         slot.copies.len() as u64 * TRIANGLE_BYTES
     }
 

@@ -4,7 +4,7 @@ use ash::vk;
 use caveclod_core::format::Vertex;
 use caveclod_core::stream::{VertexInstall, VertexPoolLayout};
 
-use crate::buffer::{Buffer, BufferDesc};
+use crate::buffer::{copies_between_barriers, Buffer, BufferDesc};
 use crate::device::Context;
 use crate::error::{Error, Result};
 use crate::mesh::{VertexBuffer, VERTEX_STRIDE};
@@ -256,29 +256,18 @@ impl VertexPool {
         let reads = vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT
             | vk::PipelineStageFlags2::VERTEX_SHADER
             | vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let before = [vk::MemoryBarrier2::default()
-            .src_stage_mask(reads | vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
-        let after = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COPY)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(reads)
-            .dst_access_mask(
-                vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::SHADER_STORAGE_READ,
-            )];
-        let d = &ctx.device;
-        // SAFETY: `cmd` is recording outside rendering (the caller's contract); the buffers
-        // are alive and every region lies inside them (checked when staged).
-        unsafe {
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&before));
-            d.cmd_copy_buffer(cmd, staging.raw, self.vertices.buffer.raw, copies);
-            if let (Some(c), false) = (&self.vertices.colours, colour_copies.is_empty()) {
-                d.cmd_copy_buffer(cmd, staging.raw, c.raw, colour_copies);
+        let access =
+            vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::SHADER_STORAGE_READ;
+        copies_between_barriers(ctx, cmd, (reads, access), |d| {
+            // SAFETY: the buffers are alive and every region lies inside them (checked when
+            // staged).
+            unsafe {
+                d.cmd_copy_buffer(cmd, staging.raw, self.vertices.buffer.raw, copies);
+                if let (Some(c), false) = (&self.vertices.colours, colour_copies.is_empty()) {
+                    d.cmd_copy_buffer(cmd, staging.raw, c.raw, colour_copies);
+                }
             }
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&after));
-        }
+        });
         copies.iter().chain(colour_copies).map(|c| c.size).sum()
     }
 }

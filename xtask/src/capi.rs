@@ -18,7 +18,7 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::process::{cmd, run, show, succeeds, workspace_root};
+use crate::process::{cmd, example_args, run, show, succeeds, workspace_root};
 
 /// The mesh the C programs refine (baked on the fly).
 const INPUT: &str = "data/spot/spot_triangulated.obj";
@@ -377,18 +377,7 @@ fn arena_c_against_its_twin(b: &Built) -> Result<(), String> {
     let mut c_run = Command::new(&b.arena_c);
     c_run.arg(&b.clod).args(&e).args(&t).arg(BUDGET);
     let from_c = output(c_run)?;
-    let mut twin = cmd(
-        "cargo",
-        &[
-            "run",
-            "--quiet",
-            "-p",
-            "caveclod-examples",
-            "--example",
-            "fixed_arena",
-            "--",
-        ],
-    );
+    let mut twin = cmd("cargo", &example_args("fixed_arena"));
     twin.arg(&b.clod).args(&e).args(&t).arg(BUDGET);
     let from_rust = output(twin)?;
     print!("arena.c:     {from_c}fixed_arena: {from_rust}");

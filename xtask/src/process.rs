@@ -15,6 +15,20 @@ pub fn workspace_root() -> PathBuf {
     manifest.parent().unwrap_or(manifest).to_path_buf()
 }
 
+/// `cargo`'s arguments that run caveclod's example `name` (debug build), before the
+/// example's own.
+pub fn example_args(name: &str) -> [&str; 7] {
+    [
+        "run",
+        "--quiet",
+        "-p",
+        "caveclod-examples",
+        "--example",
+        name,
+        "--",
+    ]
+}
+
 /// A command run from the workspace root, with the variables that `cargo run` and the
 /// rustup proxy set for this process removed, so a nested `cargo +toolchain` picks its own
 /// toolchain and tools.

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use crate::capi;
 use crate::limits;
 use crate::miri;
-use crate::process::{cmd, run, workspace_root, NIGHTLY, NO_STD_TARGET};
+use crate::process::{cmd, example_args, run, workspace_root, NIGHTLY, NO_STD_TARGET};
 use crate::setup::setup;
 use crate::shaders::check_shaders;
 
@@ -181,34 +181,20 @@ fn viewer_streamed_check() -> Result<(), String> {
     run(cmd("cargo", &[&cli[..], &generate[..]].concat()))?;
     let bake = ["bake", &ply, "-o", &clod, "--page-size", PAGED_PAGE_SIZE];
     run(cmd("cargo", &[&cli[..], &bake[..]].concat()))?;
-    run(cmd(
-        "xvfb-run",
-        &[
-            "-a",
-            "-s",
-            "-screen 0 1280x720x24",
-            "cargo",
-            "run",
-            "--quiet",
-            "-p",
-            "caveclod-examples",
-            "--example",
-            "viewer",
-            "--",
-            &clod,
-            "--cameras",
-            "4",
-            "--frames",
-            "300",
-            "--validation",
-            "--vertex-pool",
-            PAGED_VERTEX_POOL,
-            "--screenshot",
-            &shot,
-            "--min-coverage",
-            "0.1",
-        ],
-    ))?;
+    run_viewer(&[
+        &clod,
+        "--cameras",
+        "4",
+        "--frames",
+        "300",
+        "--validation",
+        "--vertex-pool",
+        PAGED_VERTEX_POOL,
+        "--screenshot",
+        &shot,
+        "--min-coverage",
+        "0.1",
+    ])?;
     println!("paged viewer screenshot: {shot}");
     Ok(())
 }
@@ -222,34 +208,27 @@ fn viewer_streamed_check() -> Result<(), String> {
 fn viewer_check() -> Result<(), String> {
     let shot = env::temp_dir().join(VIEWER_SCREENSHOT);
     let shot = shot.to_string_lossy();
-    run(cmd(
-        "xvfb-run",
-        &[
-            "-a",
-            "-s",
-            "-screen 0 1280x720x24",
-            "cargo",
-            "run",
-            "--quiet",
-            "-p",
-            "caveclod-examples",
-            "--example",
-            "viewer",
-            "--",
-            VIEWER_INPUT,
-            "--cameras",
-            "4",
-            "--frames",
-            "300",
-            "--validation",
-            "--screenshot",
-            &shot,
-            "--min-coverage",
-            "0.1",
-            "--resize-every",
-            "12",
-        ],
-    ))?;
+    run_viewer(&[
+        VIEWER_INPUT,
+        "--cameras",
+        "4",
+        "--frames",
+        "300",
+        "--validation",
+        "--screenshot",
+        &shot,
+        "--min-coverage",
+        "0.1",
+        "--resize-every",
+        "12",
+    ])?;
     println!("viewer screenshot: {shot}");
     Ok(())
+}
+
+/// Runs the viewer (debug build) with `args` in a virtual X server.
+fn run_viewer(args: &[&str]) -> Result<(), String> {
+    let xvfb = ["-a", "-s", "-screen 0 1280x720x24", "cargo"];
+    let viewer = example_args("viewer");
+    run(cmd("xvfb-run", &[&xvfb[..], &viewer[..], args].concat()))
 }

@@ -6,7 +6,9 @@ pub mod host_frame;
 
 use caveclod_core::format::Vertex;
 use caveclod_core::gpu::MorphInstance;
-use caveclod_core::{CameraState, Hierarchy, RefineParams};
+use caveclod_core::{
+    CameraState, Hierarchy, HierarchyRecords, IndexEdit, RefineParams, SurfaceDraw,
+};
 use caveclod_host::{Host, HostDesc};
 use caveclod_tests::meshes::TestMesh;
 use caveclod_vulkan::{
@@ -250,4 +252,52 @@ pub fn place(mut v: Vertex, inst: &MorphInstance) -> Vertex {
         v.position[2] * s + oz,
     ];
     v
+}
+
+/// A twin camera's index buffer, kept in memory by applying its edits: the order a device
+/// buffer edited alike holds.
+pub struct EditCopy {
+    pub places: Vec<[u32; 3]>,
+    pub draws: Vec<SurfaceDraw>,
+    edits: Vec<IndexEdit>,
+}
+
+impl EditCopy {
+    /// An empty copy for `cam`'s places over `surfaces` surfaces.
+    pub fn new(surfaces: usize, cam: &CameraState<'_>) -> Self {
+        Self {
+            places: vec![[0; 3]; cam.index_places()],
+            draws: vec![SurfaceDraw::default(); surfaces],
+            edits: Vec::new(),
+        }
+    }
+
+    /// Takes the twin's edits (closing at most `moves` holes) and applies them.
+    pub fn update(&mut self, h: &impl HierarchyRecords, twin: &mut CameraState<'_>, moves: u32) {
+        self.edits
+            .resize(twin.index_edits_needed(moves), IndexEdit::default());
+        let e = ok(
+            twin.index_edits(h, moves, &mut self.edits, &mut self.draws),
+            "edits",
+        );
+        for x in &self.edits[..e.edits] {
+            self.places[x.place as usize] = x.indices;
+        }
+    }
+
+    /// Each surface's drawn places as an index list, holes included.
+    pub fn lists(&self) -> Vec<Vec<u32>> {
+        self.draws
+            .iter()
+            .map(|d| {
+                let first = d.first_index as usize / 3;
+                let n = d.index_count as usize / 3;
+                self.places[first..first + n]
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect()
+            })
+            .collect()
+    }
 }
