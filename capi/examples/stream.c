@@ -10,7 +10,10 @@
  * the host reads them with fseek and fread and hands them back, and the pool checks each
  * one. A page that fails is reported once and stays absent; the frames go on. When the pool
  * is too small for what the camera wants, a pressure scales its tolerance up, so it leaves
- * pages to be evicted for the ones it wants now. Prints one JSON line with the totals. */
+ * pages to be evicted for the ones it wants now. Beside the pool, a device vertex pool
+ * (kept here in host memory, as a renderer keeps its vertex buffer) receives the root
+ * pages' vertices once and each installed page's in its slot; every index the camera
+ * emits must name a vertex copied there. Prints one JSON line with the totals. */
 
 #include "caveclod.h"
 
@@ -22,6 +25,28 @@
 
 #define WANTS 256
 #define PI 3.14159265f
+#define VERTEX_BYTES 32
+#define MAX_POLYGONS 20000
+
+/* Copies `install`'s vertices into the device pool `device`, after marking its slot's
+ * `slot_vertices` places unwritten (0xff bytes) when it is a page's. */
+static void copy_install(unsigned char *device, const CaveclodVertexInstall *install,
+                         uint32_t slot_vertices) {
+    unsigned char *at = device + (size_t)install->first * VERTEX_BYTES;
+    if (slot_vertices > 0) {
+        memset(at, 0xff, (size_t)slot_vertices * VERTEX_BYTES);
+    }
+    memcpy(at, install->vertices, (size_t)install->count * VERTEX_BYTES);
+}
+
+/* Whether device vertex `i` of `count` was written by a copy. */
+static int written(const unsigned char *device, uint32_t count, uint32_t i) {
+    static const unsigned char unwritten[VERTEX_BYTES] = {
+        0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
+        0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
+        0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff};
+    return i < count && memcmp(device + (size_t)i * VERTEX_BYTES, unwritten, VERTEX_BYTES) != 0;
+}
 
 static int fail(const char *what, CaveclodStatus status) {
     printf("{\"error\": \"%s\", \"status\": %d, \"message\": \"%s\"}\n", what, (int)status,
@@ -98,6 +123,7 @@ int main(int argc, char **argv) {
     CaveclodPressure pressure;
     float scale = 1.0f, max_scale = 1.0f;
     CaveclodStreamedReads reads;
+    CaveclodVertexInstall install;
     CaveclodView view;
     CaveclodStatus s;
     FILE *f;
@@ -105,7 +131,10 @@ int main(int argc, char **argv) {
     void *root_block = NULL, *memory_block, *pool_block, *lists_block, *camera_block;
     size_t root_len = 0, memory_len = 0, lists_len = 0, camera_len = 0;
     unsigned long frames = 200, installs = 0, evictions = 0, faults = 0, deferred = 0, frame;
-    unsigned long polygons = 0;
+    unsigned long polygons = 0, vertex_installs = 0, stale_indices = 0;
+    unsigned char *device;
+    uint32_t *indices, *offsets;
+    size_t total, k;
     uint32_t file, i, streamed, waited;
 
     if (argc < 2 || argc > 4) {
@@ -132,6 +161,9 @@ int main(int argc, char **argv) {
     config.files = 1;
     config.pages = counts.pages;
     config.max_requests = 1024;
+    /* The device vertex pool: a slot's place per slot, then the root pages' vertices. */
+    config.slot_vertices = counts.most_page_vertices;
+    config.vertex_pool_vertices = config.slots * config.slot_vertices + counts.root_vertices;
     if ((s = caveclod_pool_memory_size(&config, &memory_len)) != CAVECLOD_STATUS_OK) {
         return fail("caveclod_pool_memory_size", s);
     }
@@ -145,8 +177,22 @@ int main(int argc, char **argv) {
     if ((s = caveclod_pool_add_file(&pool, &root, &file)) != CAVECLOD_STATUS_OK) {
         return fail("caveclod_pool_add_file", s);
     }
+    device = malloc((size_t)config.vertex_pool_vertices * VERTEX_BYTES);
+    indices = malloc(3 * sizeof *indices * MAX_POLYGONS);
+    offsets = malloc(sizeof *offsets * (counts.surfaces + 1));
+    if (device == NULL || indices == NULL || offsets == NULL) {
+        return fail("malloc", CAVECLOD_STATUS_MEMORY_TOO_SMALL);
+    }
+    memset(device, 0xff, (size_t)config.vertex_pool_vertices * VERTEX_BYTES);
+    for (i = 0; i < counts.root_pages; ++i) {
+        if ((s = caveclod_pool_root_vertices(&pool, &root, file, i, &install)) != CAVECLOD_STATUS_OK) {
+            return fail("caveclod_pool_root_vertices", s);
+        }
+        copy_install(device, &install, 0);
+    }
 
-    /* The frame's lists, and a camera of at most 20,000 polygons over the streamed file. */
+    /* The frame's lists, and a camera of at most MAX_POLYGONS polygons over the streamed
+     * file. */
     if ((s = caveclod_frame_lists_memory_size(&pool, WANTS, &lists_len)) != CAVECLOD_STATUS_OK) {
         return fail("caveclod_frame_lists_memory_size", s);
     }
@@ -159,7 +205,7 @@ int main(int argc, char **argv) {
     streamed_file.pool = &pool;
     streamed_file.file = file;
     streamed_file.lists = &lists;
-    caveclod_camera_config_polygon_budget_streamed(&streamed_file, 20000, &camera_config);
+    caveclod_camera_config_polygon_budget_streamed(&streamed_file, MAX_POLYGONS, &camera_config);
     s = caveclod_camera_memory_size_streamed(&streamed_file, &camera_config, &camera_len);
     if (s != CAVECLOD_STATUS_OK) {
         return fail("caveclod_camera_memory_size_streamed", s);
@@ -185,6 +231,15 @@ int main(int argc, char **argv) {
         }
         deferred += waited;
         polygons = rs.active_polygons;
+        /* Its indices name the device pool's vertices: each must have been copied there. */
+        s = caveclod_camera_emit_packed_streamed(&cam, &streamed_file, indices, 3 * MAX_POLYGONS,
+                                                 offsets, counts.surfaces + 1, false, &total);
+        if (s != CAVECLOD_STATUS_OK) {
+            return fail("caveclod_camera_emit_packed_streamed", s);
+        }
+        for (k = 0; k < total; ++k) {
+            stale_indices += !written(device, config.vertex_pool_vertices, indices[k]);
+        }
         /* The lists go to the pool: wanted pages, and the pages the front stands on. */
         if ((s = caveclod_pool_apply(&pool, &lists)) != CAVECLOD_STATUS_OK) {
             return fail("caveclod_pool_apply", s);
@@ -204,6 +259,13 @@ int main(int argc, char **argv) {
                         : (caveclod_pool_fail(&pool, loads[i].slot, &fault), CAVECLOD_STATUS_BAD_PAGE);
             if (s == CAVECLOD_STATUS_OK) {
                 installs += 1;
+                /* Its vertices go to its slot's place in the device pool. */
+                s = caveclod_pool_page_vertices(&pool, loads[i].file, loads[i].page, &install);
+                if (s != CAVECLOD_STATUS_OK) {
+                    return fail("caveclod_pool_page_vertices", s);
+                }
+                copy_install(device, &install, config.slot_vertices);
+                vertex_installs += 1;
             } else if (s == CAVECLOD_STATUS_BAD_PAGE) {
                 faults += 1;
                 fprintf(stderr, "%s: page %u: %s (kind %u)\n", argv[1], fault.page,
@@ -221,10 +283,15 @@ int main(int argc, char **argv) {
     caveclod_frame_lists_reads(&lists, &reads);
     printf("{\"frames\": %lu, \"pages\": %u, \"slots\": %u, \"installs\": %lu, "
            "\"evictions\": %lu, \"faults\": %lu, \"deferred\": %lu, \"polygons\": %lu, "
-           "\"absent_reads\": %llu, \"max_scale\": %.2f}\n",
+           "\"absent_reads\": %llu, \"max_scale\": %.2f, \"vertex_installs\": %lu, "
+           "\"stale_indices\": %lu}\n",
            frames, counts.pages, config.slots, installs, evictions, faults, deferred, polygons,
-           (unsigned long long)reads.absent_reads, (double)max_scale);
+           (unsigned long long)reads.absent_reads, (double)max_scale, vertex_installs,
+           stale_indices);
     fclose(f);
+    free(offsets);
+    free(indices);
+    free(device);
     free(camera_block);
     free(lists_block);
     free(pool_block);

@@ -15,7 +15,7 @@
 // A program built against a header checks `caveclod_abi_version() >> 16` against
 // `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 // a higher minor version only adds calls or status values.
-#define CAVECLOD_ABI_VERSION ((1 << 16) | 5)
+#define CAVECLOD_ABI_VERSION (2 << 16)
 
 // Words (of 8 bytes) of a `CaveclodCamera`.
 #define CAVECLOD_CAMERA_WORDS 128
@@ -427,6 +427,10 @@ typedef struct CaveclodPagedCounts {
     uint32_t largest_page;
     // Surfaces (index lists).
     uint32_t surfaces;
+    // The most vertices a streamed page holds: a device vertex pool's `slot_vertices`.
+    uint32_t most_page_vertices;
+    // The root pages' vertices: what the file needs of a device vertex pool past its slots.
+    uint32_t root_vertices;
     // The root's bytes.
     uint64_t root_bytes;
     // The whole file's bytes.
@@ -461,6 +465,13 @@ typedef struct CaveclodPoolConfig {
     uint32_t pages;
     // Pages that may be wanted in one frame.
     uint32_t max_requests;
+    // Vertex places per slot of a device vertex pool beside the pool (at least the
+    // `most_page_vertices` of every file); 0: the pool feeds no device vertex pool, and
+    // index lists name vertices by their ids.
+    uint32_t slot_vertices;
+    // The device vertex pool's vertices: `slots * slot_vertices` for the slots, then room
+    // for every file's `root_vertices`. Morph slots are numbered past them.
+    uint32_t vertex_pool_vertices;
 } CaveclodPoolConfig;
 
 // A page pool: an opaque value the caller places anywhere and `caveclod_pool_init` fills,
@@ -559,6 +570,20 @@ typedef struct CaveclodStreamedFile {
 typedef struct CaveclodPressure {
     uint64_t opaque[CAVECLOD_PRESSURE_WORDS];
 } CaveclodPressure;
+
+// Vertices to copy into the device vertex pool: `count` of them from `vertices` to places
+// `first..first + count`, and their colours from `colours` if the page has them.
+typedef struct CaveclodVertexInstall {
+    // The device pool index of the first vertex.
+    uint32_t first;
+    // Vertices.
+    uint32_t count;
+    // `count` vertices of 32 bytes (position, normal, uv), in the pool's bytes (for a page:
+    // valid until the pool reuses its slot) or the root's.
+    const void *vertices;
+    // `count` RGBA8 colours (sRGB colour, linear alpha), or null.
+    const void *colours;
+} CaveclodVertexInstall;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1328,6 +1353,55 @@ enum CaveclodStatus caveclod_pressure_update(struct CaveclodPressure *pressure,
                                              uint32_t deferred_splits,
                                              uint32_t active_nodes,
                                              float *scale);
+
+// Writes to `out` the vertices of page (`file`, `page`), streamed and resident in pool `p`,
+// and where they go in its device vertex pool: copy them there before a frame's fronts may
+// use the page (in the frame that installed it). `CAVECLOD_STATUS_INVALID_ARGUMENT` without
+// a vertex pool (`slot_vertices` 0) or for a page that is not streamed and resident.
+//
+// Thread-safety: any thread, while nothing changes the pool.
+//
+// # Safety
+// `p` is null or an initialised pool nothing writes during the call; `out` is null or
+// writable.
+enum CaveclodStatus caveclod_pool_page_vertices(const struct CaveclodPool *p,
+                                                uint32_t file,
+                                                uint32_t page,
+                                                struct CaveclodVertexInstall *out);
+
+// Writes to `out` the vertices of root page `page` of file `file` (whose root is `r`) and
+// where they go in pool `p`'s device vertex pool: copy every root page's once, when the
+// pool is made. `CAVECLOD_STATUS_INVALID_ARGUMENT` without a vertex pool or for a page
+// that is not one of the file's root pages.
+//
+// Thread-safety: any thread, while nothing changes the pool.
+//
+// # Safety
+// `p` is null or an initialised pool nothing writes during the call; `r` is null or the
+// opened root of file `file`; `out` is null or writable.
+enum CaveclodStatus caveclod_pool_root_vertices(const struct CaveclodPool *p,
+                                                const struct CaveclodPagedRoot *r,
+                                                uint32_t file,
+                                                uint32_t page,
+                                                struct CaveclodVertexInstall *out);
+
+// Writes the morph slots of `cam` over the streamed file `f` as the device reads them
+// (every vertex at its place in the device vertex pool, a chained `from` past the pool's
+// vertices) to `out[0..n]` and `n` to `written`; `CAVECLOD_STATUS_OUTPUT_TOO_SMALL` if
+// `capacity` is less than the slots in use.
+//
+// Thread-safety: the thread that owns `cam` and `f`'s lists, while nothing changes the
+// pool.
+//
+// # Safety
+// `cam` is null or a camera over `f` nothing else uses during the call; `f` is null or a
+// readable `CaveclodStreamedFile` of initialised handles; `out` is null or writable for
+// `capacity` records; `written` is null or writable.
+enum CaveclodStatus caveclod_camera_device_morph_vertices_streamed(struct CaveclodCamera *cam,
+                                                                   const struct CaveclodStreamedFile *f,
+                                                                   struct CaveclodMorphVertex *out,
+                                                                   size_t capacity,
+                                                                   size_t *written);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -47,6 +47,7 @@ mod pool;
 mod status;
 mod streamed;
 mod types;
+mod vertex_pool;
 
 pub use arena::*;
 pub use camera::*;
@@ -59,12 +60,13 @@ pub use pool::*;
 pub use status::{caveclod_status_message, CaveclodStatus};
 pub use streamed::*;
 pub use types::*;
+pub use vertex_pool::*;
 
 /// The version of this C ABI: the major version in the high 16 bits, the minor in the low.
 /// A program built against a header checks `caveclod_abi_version() >> 16` against
 /// `CAVECLOD_ABI_VERSION >> 16`: a different major version changes a struct or a signature;
 /// a higher minor version only adds calls or status values.
-pub const CAVECLOD_ABI_VERSION: u32 = (1 << 16) | 5;
+pub const CAVECLOD_ABI_VERSION: u32 = 2 << 16;
 
 /// The ABI version of the linked library (`CAVECLOD_ABI_VERSION` of the header it was built
 /// with).

@@ -35,6 +35,10 @@ pub struct CaveclodPagedCounts {
     pub largest_page: u32,
     /// Surfaces (index lists).
     pub surfaces: u32,
+    /// The most vertices a streamed page holds: a device vertex pool's `slot_vertices`.
+    pub most_page_vertices: u32,
+    /// The root pages' vertices: what the file needs of a device vertex pool past its slots.
+    pub root_vertices: u32,
     /// The root's bytes.
     pub root_bytes: u64,
     /// The whole file's bytes.
@@ -127,6 +131,9 @@ pub unsafe extern "C" fn caveclod_paged_root_counts(
             root_pages: p.root_pages,
             largest_page: p.largest_page,
             surfaces: r.meta().surface_count,
+            most_page_vertices: r.table().most_vertices_from(p.root_pages),
+            root_vertices: u32::try_from(r.table().vertices_before(p.root_pages))
+                .unwrap_or(u32::MAX),
             root_bytes: r.bytes().len() as u64,
             file_bytes: p.file_len,
         };

@@ -5,7 +5,7 @@
 use caveclod_core::format::paged::PageTable;
 use caveclod_core::stream::{
     FaultKind, InstallError, LoadRequest, PageFault, PageKey, PoolConfig, PoolError, Residency,
-    ScheduleStats, Wanted,
+    ScheduleStats, VertexPoolLayout, Wanted,
 };
 
 use crate::camera::CAVECLOD_MEMORY_ALIGN;
@@ -49,6 +49,13 @@ pub struct CaveclodPoolConfig {
     pub pages: u32,
     /// Pages that may be wanted in one frame.
     pub max_requests: u32,
+    /// Vertex places per slot of a device vertex pool beside the pool (at least the
+    /// `most_page_vertices` of every file); 0: the pool feeds no device vertex pool, and
+    /// index lists name vertices by their ids.
+    pub slot_vertices: u32,
+    /// The device vertex pool's vertices: `slots * slot_vertices` for the slots, then room
+    /// for every file's `root_vertices`. Morph slots are numbered past them.
+    pub vertex_pool_vertices: u32,
 }
 
 /// What `caveclod_pool_want` found.
@@ -147,7 +154,10 @@ fn config_of(c: &CaveclodPoolConfig) -> PoolConfig {
         files: c.files,
         pages: c.pages,
         max_requests: c.max_requests,
-        vertex_pool: None,
+        vertex_pool: (c.slot_vertices > 0).then_some(VertexPoolLayout {
+            slot_vertices: c.slot_vertices,
+            vertices: c.vertex_pool_vertices,
+        }),
     }
 }
 

@@ -231,7 +231,7 @@ pub unsafe extern "C" fn caveclod_pool_apply(
 /// # Safety
 /// `f` is null or readable, and names an opened root, an initialised pool nothing changes
 /// during `'a`, and initialised lists nothing else uses during `'a`.
-unsafe fn parts<'a>(
+pub(crate) unsafe fn parts<'a>(
     f: *const CaveclodStreamedFile,
 ) -> Result<(&'a PagedRoot<'static>, &'a Pool, u32, &'a mut Lists)> {
     // SAFETY: the caller's contract.

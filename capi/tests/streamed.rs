@@ -2,7 +2,10 @@
 //! made, refined and emitted over the streamed file, the lists applied, pages loaded from
 //! the file's bytes and installed, and a pressure on the tolerance. Splits wait for their
 //! pages at first, nothing reads an absent page, the front grows as pages arrive, emission
-//! writes three indices per polygon, and the frame loop allocates nothing.
+//! writes three indices per polygon, and the frame loop allocates nothing. A device vertex
+//! pool beside the page pool, kept here as a renderer keeps it (the roots' vertices once,
+//! each installed page's in its slot), holds every vertex that emission and the morph slots
+//! name.
 
 #[path = "../../core/tests/counting/mod.rs"]
 mod counting;
@@ -26,6 +29,26 @@ fn aligned(len: usize) -> (Vec<u64>, *mut u8) {
     let skip = p.align_offset(64);
     // SAFETY: `skip < 64` bytes into an allocation of at least `len + 72` bytes.
     (v, unsafe { p.add(skip) })
+}
+
+/// A device pool's vertex that no copy wrote.
+const STALE: [u8; 32] = [0xff; 32];
+
+/// Copies `install`'s vertices into `device` at their place.
+///
+/// # Safety
+/// `install` is as a pool call wrote it, its vertices alive.
+unsafe fn copy_install(device: &mut [[u8; 32]], install: &CaveclodVertexInstall) {
+    // SAFETY: the caller's contract: `count` vertices of 32 bytes.
+    let from = unsafe {
+        std::slice::from_raw_parts(install.vertices.cast::<[u8; 32]>(), install.count as usize)
+    };
+    device[install.first as usize..][..from.len()].copy_from_slice(from);
+}
+
+/// Whether `device` holds a vertex a copy wrote at `i`.
+fn written(device: &[[u8; 32]], i: u32) -> bool {
+    device.get(i as usize).is_some_and(|v| *v != STALE)
 }
 
 /// A generated terrain's paged form: its bytes.
@@ -54,12 +77,15 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
     ok(unsafe { caveclod_paged_root_counts(root.as_ptr(), &mut counts) });
     assert!(counts.pages > counts.root_pages + 4, "{counts:?}");
 
+    let slots = (counts.pages - counts.root_pages) / 3 + 1;
     let config = CaveclodPoolConfig {
         slot_bytes: counts.largest_page.next_multiple_of(64),
-        slots: (counts.pages - counts.root_pages) / 3 + 1,
+        slots,
         files: 1,
         pages: counts.pages,
         max_requests: 256,
+        slot_vertices: counts.most_page_vertices,
+        vertex_pool_vertices: slots * counts.most_page_vertices + counts.root_vertices,
     };
     let mut memory_len = 0;
     // SAFETY: readable config, writable size.
@@ -82,6 +108,17 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
     let mut file_index = 0;
     // SAFETY: initialised handles; writable index.
     ok(unsafe { caveclod_pool_add_file(pool.as_mut_ptr(), root.as_ptr(), &mut file_index) });
+    // The device pool, each vertex a position no page holds until a copy writes it.
+    let mut device = vec![STALE; config.vertex_pool_vertices as usize];
+    for page in 0..counts.root_pages {
+        let mut install = MaybeUninit::<CaveclodVertexInstall>::uninit();
+        // SAFETY: initialised handles; writable install.
+        ok(unsafe {
+            caveclod_pool_root_vertices(pool.as_ptr(), root.as_ptr(), 0, page, install.as_mut_ptr())
+        });
+        // SAFETY: written above; its vertices lie in the root's bytes.
+        unsafe { copy_install(&mut device, &install.assume_init()) };
+    }
 
     let mut lists_len = 0;
     // SAFETY: initialised pool; writable size.
@@ -110,7 +147,11 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
         caveclod_camera_config_polygon_budget_streamed(&streamed, 4000, camera_config.as_mut_ptr())
     });
     // SAFETY: written above.
-    let camera_config = unsafe { camera_config.assume_init() };
+    let budget = unsafe { camera_config.assume_init() };
+    let camera_config = CaveclodCameraConfig {
+        max_morphs: 512,
+        ..budget
+    };
     let mut camera_len = 0;
     // SAFETY: as above.
     ok(unsafe { caveclod_camera_memory_size_streamed(&streamed, &camera_config, &mut camera_len) });
@@ -144,7 +185,14 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
     let mut offsets = vec![0u32; counts.surfaces as usize + 1];
     let mut loads = [CaveclodLoadRequest::default(); 16];
     let mut evicted = [CaveclodPageKey::default(); 16];
-    let (mut first_deferred, mut installs, mut polygons) = (0, 0, 0);
+    let idle = CaveclodMorphVertex {
+        from: u32::MAX,
+        to: u32::MAX,
+        t: 0.0,
+        coarse: u32::MAX,
+    };
+    let mut morphs = vec![idle; 2 * camera_config.max_morphs as usize];
+    let (mut first_deferred, mut installs, mut polygons, mut morphing) = (0, 0, 0, 0);
     let before = allocations();
     for frame in 0..120 {
         // SAFETY: every handle is initialised and used by this thread alone; every pointer
@@ -178,6 +226,24 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
                 &mut total,
             ));
             assert_eq!(total, 3 * stats.active_polygons as usize, "frame {frame}");
+            for &i in &out[..total] {
+                assert!(
+                    written(&device, i),
+                    "frame {frame}: index {i} names no vertex"
+                );
+            }
+            let mut n = 0;
+            ok(caveclod_camera_device_morph_vertices_streamed(
+                cam.as_mut_ptr(),
+                &streamed,
+                morphs.as_mut_ptr(),
+                morphs.len(),
+                &mut n,
+            ));
+            for m in morphs[..n].iter().filter(|m| m.to != u32::MAX) {
+                assert!(written(&device, m.to) && written(&device, m.coarse));
+                morphing += 1;
+            }
             ok(caveclod_pool_apply(pool.as_mut_ptr(), lists.as_mut_ptr()));
             let mut schedule = CaveclodScheduleStats::default();
             ok(caveclod_pool_schedule(
@@ -206,6 +272,17 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
                     &mut fault,
                 ));
                 installs += 1;
+                let mut install = MaybeUninit::<CaveclodVertexInstall>::uninit();
+                ok(caveclod_pool_page_vertices(
+                    pool.as_ptr(),
+                    l.file,
+                    l.page,
+                    install.as_mut_ptr(),
+                ));
+                let install = install.assume_init();
+                let slot_places = config.slot_vertices as usize;
+                device[install.first as usize..][..slot_places].fill(STALE);
+                copy_install(&mut device, &install);
             }
             let mut scale = 1.0;
             ok(caveclod_pressure_update(
@@ -229,8 +306,8 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
         "the root alone does not hold the wanted front"
     );
     assert!(
-        installs > 0 && polygons > 100,
-        "{installs} installs, {polygons} polygons"
+        installs > 0 && polygons > 100 && morphing > 0,
+        "{installs} installs, {polygons} polygons, {morphing} morphing vertices"
     );
 
     // A pool that does not serve the root's file is refused.

@@ -407,7 +407,8 @@ fn arena_c_against_its_twin(b: &Built) -> Result<(), String> {
 }
 
 /// `stream.c` refines a camera over the paged Spot streaming through a pool of a few slots:
-/// pages are installed and evicted, none fails, nothing reads an absent page; with the first
+/// pages are installed (their vertices copied to a device vertex pool) and evicted, none
+/// fails, nothing reads an absent page, every index names a vertex copied; with the first
 /// streamed page's bytes flipped, that page fails once and the pages outside its subtree
 /// stream on.
 fn stream_c_through_a_small_pool(b: &Built) -> Result<(), String> {
@@ -421,10 +422,13 @@ fn stream_c_through_a_small_pool(b: &Built) -> Result<(), String> {
         || field(&text, "faults") != Some(0)
         || field(&text, "absent_reads") != Some(0)
         || field(&text, "deferred").is_none_or(|n| n == 0)
+        || field(&text, "vertex_installs") != installs
+        || field(&text, "stale_indices") != Some(0)
     {
         return Err(
-            "stream.c: expected installs, evictions, deferred splits, no fault and no read of \
-             an absent page"
+            "stream.c: expected installs (each copied to the device vertex pool), evictions, \
+             deferred splits, no fault, no read of an absent page and no index naming a \
+             vertex not copied"
                 .into(),
         );
     }
