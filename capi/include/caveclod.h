@@ -1354,6 +1354,50 @@ enum CaveclodStatus caveclod_pressure_update(struct CaveclodPressure *pressure,
                                              uint32_t active_nodes,
                                              float *scale);
 
+// `caveclod_camera_memory_size_edited` for a camera over the streamed file `f`.
+//
+// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool.
+//
+// # Safety
+// `f` is null or a readable `CaveclodStreamedFile` of initialised handles; `config` is null
+// or readable; `bytes` is null or writable.
+enum CaveclodStatus caveclod_camera_memory_size_edited_streamed(const struct CaveclodStreamedFile *f,
+                                                                const struct CaveclodCameraConfig *config,
+                                                                uint32_t edit_list,
+                                                                size_t *bytes);
+
+// `caveclod_camera_init_edited` for a camera over the streamed file `f`, at its base mesh.
+//
+// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool; `out`
+// and `memory` must not be used by another thread during the call.
+//
+// # Safety
+// As `caveclod_camera_init_streamed`'s.
+enum CaveclodStatus caveclod_camera_init_edited_streamed(const struct CaveclodStreamedFile *f,
+                                                         const struct CaveclodCameraConfig *config,
+                                                         uint32_t edit_list,
+                                                         void *memory,
+                                                         size_t bytes,
+                                                         struct CaveclodCamera *out);
+
+// `caveclod_camera_index_edits` for a camera over the streamed file `f`: with a device
+// vertex pool beside `f`'s pool, the edits' indices name its places.
+//
+// Thread-safety: the thread that owns `cam` and `f`'s lists, while nothing changes the
+// pool.
+//
+// # Safety
+// As `caveclod_camera_index_edits`'s, with `f` a readable `CaveclodStreamedFile` of
+// initialised handles.
+enum CaveclodStatus caveclod_camera_index_edits_streamed(struct CaveclodCamera *cam,
+                                                         const struct CaveclodStreamedFile *f,
+                                                         uint32_t max_moves,
+                                                         struct CaveclodIndexEdit *out,
+                                                         size_t capacity,
+                                                         struct CaveclodSurfaceDraw *draws,
+                                                         size_t draw_count,
+                                                         struct CaveclodIndexEdits *result);
+
 // Writes to `out` the vertices of page (`file`, `page`), streamed and resident in pool `p`,
 // and where they go in its device vertex pool: copy them there before a frame's fronts may
 // use the page (in the frame that installed it). `CAVECLOD_STATUS_INVALID_ARGUMENT` without

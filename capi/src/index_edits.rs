@@ -2,7 +2,7 @@
 //! index buffer, and per frame the places that changed, so an engine patches its buffer
 //! instead of rewriting it (the core's `CameraState::index_edits`).
 
-use caveclod_core::{CameraConfig, IndexEdit, IndexEdits, SurfaceDraw};
+use caveclod_core::{CameraConfig, HierarchyRecords, IndexEdit, IndexEdits, SurfaceDraw};
 
 use crate::camera::{camera, camera_memory_size, init_camera, Camera, CaveclodCamera};
 use crate::ffi::{self, guarded, Result};
@@ -68,8 +68,8 @@ impl From<IndexEdits> for CaveclodIndexEdits {
 
 /// The core's configuration of `config` over `h`, keeping index edits with a list of
 /// `edit_list` changed places (at least 1; the index cache must be on).
-fn edited_config(
-    h: &impl caveclod_core::HierarchyRecords,
+pub(crate) fn edited_config(
+    h: &impl HierarchyRecords,
     config: &CaveclodCameraConfig,
     edit_list: u32,
 ) -> Result<CameraConfig> {
@@ -215,19 +215,46 @@ pub unsafe extern "C" fn caveclod_camera_index_edits(
         let h = unsafe { hierarchy(h) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera(cam) }?;
-        if out.is_null() || draws.is_null() {
-            return Err(CaveclodStatus::NullPointer);
-        }
-        // SAFETY: non-null, valid and disjoint (the caller's contract); the records have the
-        // core's layout (asserted).
-        let (out, draws) = unsafe {
-            (
-                ffi::slice_mut(out.cast::<IndexEdit>(), capacity)?,
-                ffi::slice_mut(draws.cast::<SurfaceDraw>(), draw_count)?,
-            )
-        };
-        let e = cam.state.index_edits(h, max_moves, out, draws)?;
         // SAFETY: the caller's contract.
-        unsafe { ffi::output(result, e.into()) }
+        unsafe {
+            write_edits(
+                cam,
+                h,
+                max_moves,
+                (out, capacity),
+                (draws, draw_count),
+                result,
+            )
+        }
     })
+}
+
+/// `cam`'s index edits over `h` into `out` and `draws` (pointer and length each), and what
+/// they were into `result`.
+///
+/// # Safety
+/// `out` and `draws` are null or valid and disjoint for their lengths; `result` is null or
+/// writable.
+pub(crate) unsafe fn write_edits(
+    cam: &mut Camera,
+    h: &impl HierarchyRecords,
+    max_moves: u32,
+    (out, capacity): (*mut CaveclodIndexEdit, usize),
+    (draws, draw_count): (*mut CaveclodSurfaceDraw, usize),
+    result: *mut CaveclodIndexEdits,
+) -> Result<()> {
+    if out.is_null() || draws.is_null() {
+        return Err(CaveclodStatus::NullPointer);
+    }
+    // SAFETY: non-null, valid and disjoint (the caller's contract); the records have the
+    // core's layout (asserted).
+    let (out, draws) = unsafe {
+        (
+            ffi::slice_mut(out.cast::<IndexEdit>(), capacity)?,
+            ffi::slice_mut(draws.cast::<SurfaceDraw>(), draw_count)?,
+        )
+    };
+    let e = cam.state.index_edits(h, max_moves, out, draws)?;
+    // SAFETY: the caller's contract.
+    unsafe { ffi::output(result, e.into()) }
 }

@@ -46,6 +46,7 @@ mod paged_root;
 mod pool;
 mod status;
 mod streamed;
+mod streamed_edits;
 mod types;
 mod vertex_pool;
 
@@ -59,6 +60,7 @@ pub use paged_root::*;
 pub use pool::*;
 pub use status::{caveclod_status_message, CaveclodStatus};
 pub use streamed::*;
+pub use streamed_edits::*;
 pub use types::*;
 pub use vertex_pool::*;
 

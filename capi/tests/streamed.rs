@@ -5,7 +5,7 @@
 //! writes three indices per polygon, and the frame loop allocates nothing. A device vertex
 //! pool beside the page pool, kept here as a renderer keeps it (the roots' vertices once,
 //! each installed page's in its slot), holds every vertex that emission and the morph slots
-//! name.
+//! name, and so does its device index buffer, patched each frame with the camera's edits.
 
 #[path = "../../core/tests/counting/mod.rs"]
 mod counting;
@@ -30,6 +30,10 @@ fn aligned(len: usize) -> (Vec<u64>, *mut u8) {
     // SAFETY: `skip < 64` bytes into an allocation of at least `len + 72` bytes.
     (v, unsafe { p.add(skip) })
 }
+
+/// Changed places a camera lists between two edits, and holes closed a frame.
+const EDIT_LIST: u32 = 1024;
+const EDIT_MOVES: u32 = 16;
 
 /// A device pool's vertex that no copy wrote.
 const STALE: [u8; 32] = [0xff; 32];
@@ -154,14 +158,22 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
     };
     let mut camera_len = 0;
     // SAFETY: as above.
-    ok(unsafe { caveclod_camera_memory_size_streamed(&streamed, &camera_config, &mut camera_len) });
+    ok(unsafe {
+        caveclod_camera_memory_size_edited_streamed(
+            &streamed,
+            &camera_config,
+            EDIT_LIST,
+            &mut camera_len,
+        )
+    });
     let (_camera_words, camera_memory) = aligned(camera_len);
     let mut cam = MaybeUninit::<CaveclodCamera>::uninit();
     // SAFETY: the memory outlives the camera; `cam` is writable.
     ok(unsafe {
-        caveclod_camera_init_streamed(
+        caveclod_camera_init_edited_streamed(
             &streamed,
             &camera_config,
+            EDIT_LIST,
             camera_memory.cast(),
             camera_len,
             cam.as_mut_ptr(),
@@ -192,6 +204,13 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
         coarse: u32::MAX,
     };
     let mut morphs = vec![idle; 2 * camera_config.max_morphs as usize];
+    // The camera's device index buffer, patched with its edits.
+    let mut places_len = 0;
+    // SAFETY: an initialised camera; writable count.
+    ok(unsafe { caveclod_camera_index_places(cam.as_mut_ptr(), &mut places_len) });
+    let mut places = vec![[u32::MAX - 1; 3]; places_len];
+    let mut edits = vec![CaveclodIndexEdit::default(); places_len + EDIT_MOVES as usize];
+    let mut draws = vec![CaveclodSurfaceDraw::default(); counts.surfaces as usize];
     let (mut first_deferred, mut installs, mut polygons, mut morphing) = (0, 0, 0, 0);
     let before = allocations();
     for frame in 0..120 {
@@ -244,6 +263,39 @@ fn a_camera_refines_over_a_streamed_file_through_the_c_calls() {
                 assert!(written(&device, m.to) && written(&device, m.coarse));
                 morphing += 1;
             }
+            let mut e = CaveclodIndexEdits::default();
+            ok(caveclod_camera_index_edits_streamed(
+                cam.as_mut_ptr(),
+                &streamed,
+                EDIT_MOVES,
+                edits.as_mut_ptr(),
+                edits.len(),
+                draws.as_mut_ptr(),
+                draws.len(),
+                &mut e,
+            ));
+            for x in &edits[..e.edits] {
+                places[x.place as usize] = x.indices;
+            }
+            // The patched buffer draws every polygon, at pool vertices or morph slots.
+            let slots_end = config.vertex_pool_vertices + n as u32;
+            let mut drawn = 0;
+            for d in &draws {
+                let first = d.first_index as usize / 3;
+                for t in &places[first..first + d.index_count as usize / 3] {
+                    if t[0] == t[1] && t[1] == t[2] {
+                        continue;
+                    }
+                    drawn += 1;
+                    for &i in t {
+                        assert!(
+                            written(&device, i)
+                                || (config.vertex_pool_vertices..slots_end).contains(&i)
+                        );
+                    }
+                }
+            }
+            assert_eq!(drawn, stats.active_polygons, "frame {frame}");
             ok(caveclod_pool_apply(pool.as_mut_ptr(), lists.as_mut_ptr()));
             let mut schedule = CaveclodScheduleStats::default();
             ok(caveclod_pool_schedule(
