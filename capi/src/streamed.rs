@@ -231,7 +231,7 @@ pub unsafe extern "C" fn caveclod_pool_apply(
 /// # Safety
 /// `f` is null or readable, and names an opened root, an initialised pool nothing changes
 /// during `'a`, and initialised lists nothing else uses during `'a`.
-pub(crate) unsafe fn parts<'a>(
+unsafe fn parts<'a>(
     f: *const CaveclodStreamedFile,
 ) -> Result<(&'a PagedRoot<'static>, &'a Pool, u32, &'a mut Lists)> {
     // SAFETY: the caller's contract.
@@ -250,6 +250,58 @@ pub(crate) unsafe fn parts<'a>(
     Ok((root, pool, f.file, lists))
 }
 
+/// The records `f` names for this call: its root and the pages resident in its pool, what
+/// the cameras want going to its lists.
+///
+/// # Safety
+/// As [`parts`].
+pub(crate) unsafe fn records<'a>(
+    f: *const CaveclodStreamedFile,
+) -> Result<StreamedHierarchy<'a, 'a, 'static, 'static>> {
+    // SAFETY: the caller's contract.
+    let (root, pool, file, lists) = unsafe { parts(f) }?;
+    Ok(StreamedHierarchy::new(root, pool, file, lists))
+}
+
+/// Writes to `bytes` the memory a camera over `f` needs, its configuration made by `config`
+/// over `f`'s records.
+///
+/// # Safety
+/// As [`parts`]; `bytes` is null or writable.
+pub(crate) unsafe fn memory_size_over(
+    f: *const CaveclodStreamedFile,
+    config: impl FnOnce(&StreamedHierarchy<'_, '_, '_, '_>) -> Result<CameraConfig>,
+    bytes: *mut usize,
+) -> Result<()> {
+    // SAFETY: the caller's contract.
+    let h = unsafe { records(f) }?;
+    let config = config(&h)?;
+    // SAFETY: the caller's contract.
+    unsafe { camera_memory_size(&h, &config, bytes) }
+}
+
+/// Makes `out` a camera over `f` in `memory`, its configuration made by `config` over
+/// `f`'s records; `out` is left a handle every other call refuses if that fails.
+///
+/// # Safety
+/// As `caveclod_camera_init_streamed`'s.
+pub(crate) unsafe fn init_over(
+    f: *const CaveclodStreamedFile,
+    config: impl FnOnce(&StreamedHierarchy<'_, '_, '_, '_>) -> Result<CameraConfig>,
+    memory: *mut core::ffi::c_void,
+    bytes: usize,
+    out: *mut CaveclodCamera,
+) -> Result<()> {
+    let out = ffi::checked(out.cast_const())?.cast_mut();
+    // SAFETY: `out` is non-null, aligned and writable (the caller's contract).
+    unsafe { ffi::clear_tag::<_, crate::camera::Camera>(out) };
+    // SAFETY: the caller's contract.
+    let h = unsafe { records(f) }?;
+    let config = config(&h)?;
+    // SAFETY: the caller's contract.
+    unsafe { init_camera(&h, &config, memory, bytes, out) }
+}
+
 /// `caveclod_camera_config_polygon_budget` for a camera over the streamed file `f`.
 ///
 /// Thread-safety: the thread that owns `f`'s lists, while nothing changes the pool.
@@ -265,8 +317,7 @@ pub unsafe extern "C" fn caveclod_camera_config_polygon_budget_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         let config = CameraConfig::with_polygon_budget(&h, max_active_polygons);
         // SAFETY: the caller's contract.
         unsafe { ffi::output(out, config.into()) }
@@ -291,11 +342,7 @@ pub unsafe extern "C" fn caveclod_camera_memory_size_streamed(
         // SAFETY: the caller's contract.
         let config = unsafe { ffi::input(config) }?;
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
-        let config = config.to_config(&h)?;
-        // SAFETY: the caller's contract.
-        unsafe { camera_memory_size(&h, &config, bytes) }
+        unsafe { memory_size_over(f, |h| config.to_config(h), bytes) }
     })
 }
 
@@ -317,17 +364,10 @@ pub unsafe extern "C" fn caveclod_camera_init_streamed(
     out: *mut CaveclodCamera,
 ) -> CaveclodStatus {
     guarded(|| {
-        let out = ffi::checked(out.cast_const())?.cast_mut();
-        // SAFETY: `out` is non-null, aligned and writable (the caller's contract).
-        unsafe { ffi::clear_tag::<_, crate::camera::Camera>(out) };
         // SAFETY: the caller's contract.
         let config = unsafe { ffi::input(config) }?;
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
-        let config = config.to_config(&h)?;
-        // SAFETY: the caller's contract.
-        unsafe { init_camera(&h, &config, memory, bytes, out) }
+        unsafe { init_over(f, |h| config.to_config(h), memory, bytes, out) }
     })
 }
 
@@ -354,8 +394,7 @@ pub unsafe extern "C" fn caveclod_camera_refine_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, &h) }?;
         // SAFETY: the caller's contract.
@@ -380,8 +419,7 @@ pub unsafe extern "C" fn caveclod_camera_reset_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, &h) }?;
         cam.state.reset(&h);
@@ -418,8 +456,7 @@ pub unsafe extern "C" fn caveclod_camera_emit_packed_streamed(
             total,
         };
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, &h) }?;
         // SAFETY: the caller's contract.

@@ -2,15 +2,13 @@
 //! `CaveclodStreamedFile` that keeps each polygon's place in a device index buffer, whose
 //! edits name vertices in the pool's device vertex pool when it has one.
 
-use caveclod_core::stream::StreamedHierarchy;
-
-use crate::camera::{camera_for, camera_memory_size, init_camera, Camera, CaveclodCamera};
+use crate::camera::{camera_for, CaveclodCamera};
 use crate::ffi::{self, guarded};
 use crate::index_edits::{
     edited_config, write_edits, CaveclodIndexEdit, CaveclodIndexEdits, CaveclodSurfaceDraw,
 };
 use crate::status::CaveclodStatus;
-use crate::streamed::{parts, CaveclodStreamedFile};
+use crate::streamed::{init_over, memory_size_over, records, CaveclodStreamedFile};
 use crate::types::CaveclodCameraConfig;
 
 /// `caveclod_camera_memory_size_edited` for a camera over the streamed file `f`.
@@ -29,12 +27,9 @@ pub unsafe extern "C" fn caveclod_camera_memory_size_edited_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let config = unsafe { ffi::input(config) }?;
         // SAFETY: the caller's contract.
-        let config = edited_config(&h, unsafe { ffi::input(config) }?, edit_list)?;
-        // SAFETY: the caller's contract.
-        unsafe { camera_memory_size(&h, &config, bytes) }
+        unsafe { memory_size_over(f, |h| edited_config(h, config, edit_list), bytes) }
     })
 }
 
@@ -55,16 +50,18 @@ pub unsafe extern "C" fn caveclod_camera_init_edited_streamed(
     out: *mut CaveclodCamera,
 ) -> CaveclodStatus {
     guarded(|| {
-        let out = ffi::checked(out.cast_const())?.cast_mut();
-        // SAFETY: `out` is non-null, aligned and writable (the caller's contract).
-        unsafe { ffi::clear_tag::<_, Camera>(out) };
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let config = unsafe { ffi::input(config) }?;
         // SAFETY: the caller's contract.
-        let config = edited_config(&h, unsafe { ffi::input(config) }?, edit_list)?;
-        // SAFETY: the caller's contract.
-        unsafe { init_camera(&h, &config, memory, bytes, out) }
+        unsafe {
+            init_over(
+                f,
+                |h| edited_config(h, config, edit_list),
+                memory,
+                bytes,
+                out,
+            )
+        }
     })
 }
 
@@ -90,8 +87,7 @@ pub unsafe extern "C" fn caveclod_camera_index_edits_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, &h) }?;
         // SAFETY: the caller's contract.

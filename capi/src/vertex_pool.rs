@@ -2,7 +2,7 @@
 //! page's vertices go in the host's vertex buffer, the roots' once, and a streamed camera's
 //! morph slots as the device reads them.
 
-use caveclod_core::stream::{PageKey, StreamedHierarchy, VertexInstall};
+use caveclod_core::stream::{PageKey, VertexInstall};
 
 use crate::camera::{camera_for, CaveclodCamera};
 use crate::emit::CaveclodMorphVertex;
@@ -10,7 +10,7 @@ use crate::ffi::{self, guarded};
 use crate::paged_root::{paged_root, CaveclodPagedRoot};
 use crate::pool::{pool_ref, CaveclodPool};
 use crate::status::CaveclodStatus;
-use crate::streamed::{parts, CaveclodStreamedFile};
+use crate::streamed::{records, CaveclodStreamedFile};
 
 /// Vertices to copy into the device vertex pool: `count` of them from `vertices` to places
 /// `first..first + count`, and their colours from `colours` if the page has them.
@@ -118,8 +118,7 @@ pub unsafe extern "C" fn caveclod_camera_device_morph_vertices_streamed(
 ) -> CaveclodStatus {
     guarded(|| {
         // SAFETY: the caller's contract.
-        let (root, pool, file, lists) = unsafe { parts(f) }?;
-        let h = StreamedHierarchy::new(root, pool, file, lists);
+        let h = unsafe { records(f) }?;
         // SAFETY: the caller's contract.
         let cam = unsafe { camera_for(cam, &h) }?;
         // SAFETY: the caller's contract; `CaveclodMorphVertex` has `MorphVertex`'s layout

@@ -144,6 +144,23 @@ impl VertexPoolLayout {
         Some((layout, slots))
     }
 
+    /// [`for_bytes`](Self::for_bytes) for a file of `table`, its first `pinned` pages its
+    /// roots: slots of its largest streamed page's vertices, room for its roots' vertices.
+    pub fn for_file(bytes: u64, table: &PageTable<'_>, pinned: u32) -> Option<(Self, u32)> {
+        let roots = table.vertices_before(pinned);
+        Self::for_bytes(bytes, table.most_vertices_from(pinned), roots)
+    }
+
+    /// The device pool index of vertex `index` of the page in slot `slot`; `None` past the
+    /// slot's vertices.
+    #[inline]
+    pub fn slot_place(&self, slot: u32, index: u32) -> Option<u32> {
+        if index >= self.slot_vertices {
+            return None;
+        }
+        slot.checked_mul(self.slot_vertices)?.checked_add(index)
+    }
+
     /// The device pool's bytes.
     pub fn bytes(&self) -> u64 {
         u64::from(self.vertices) * VERTEX_BYTES

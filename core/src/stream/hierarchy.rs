@@ -17,6 +17,7 @@ use core::cell::Cell;
 
 use bytemuck::Pod;
 
+use super::config::VertexPoolLayout;
 use super::frame_lists::{FrameLists, StreamedReads, Want};
 use super::residency::Residency;
 use crate::format::paged::{PageArray, PageContext, PageView, PagedRoot, RecordKind, SegmentedId};
@@ -49,6 +50,8 @@ pub struct StreamedHierarchy<'s, 'w, 'a, 'm> {
     root_views: [Option<PageView<'s>>; ROOT_VIEWS],
     /// The first root pages' first vertex in the device vertex pool, and their vertices.
     root_vertices: [(u32, u32); ROOT_VIEWS],
+    /// The pool's device vertex pool.
+    vertex_pool: Option<VertexPoolLayout>,
     wants: &'w [Cell<Want>],
     want_len: &'w Cell<u32>,
     deltas: &'w [Cell<u32>],
@@ -84,6 +87,7 @@ impl<'s, 'w, 'a, 'm> StreamedHierarchy<'s, 'w, 'a, 'm> {
             root_vertices: core::array::from_fn(|p| {
                 pool.root_vertex_start(file, p as u32).unwrap_or((0, 0))
             }),
+            vertex_pool: pool.vertex_pool(),
             wants: Cell::from_mut(&mut *lists.wants).as_slice_of_cells(),
             want_len: Cell::from_mut(&mut lists.want_len),
             deltas: Cell::from_mut(&mut *lists.deltas).as_slice_of_cells(),
@@ -228,9 +232,9 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
     /// pool without a device vertex pool.
     #[inline]
     fn device_vertex(&self, vertex: u32) -> Option<u32> {
-        if self.pool.vertex_pool().is_none() {
+        let Some(layout) = self.vertex_pool else {
             return Some(vertex);
-        }
+        };
         let page = self.ids.page(vertex);
         let index = self.ids.index(vertex);
         if page < self.root_pages {
@@ -243,12 +247,14 @@ impl HierarchyRecords for StreamedHierarchy<'_, '_, '_, '_> {
         if page as usize >= self.pages {
             return None;
         }
-        self.pool
-            .slot_vertex(self.first_page + page as usize, index)
+        let slot = self
+            .pool
+            .resident_slot_at(self.first_page + page as usize)?;
+        layout.slot_place(slot, index)
     }
 
     fn device_vertex_bound(&self) -> usize {
-        match self.pool.vertex_pool() {
+        match self.vertex_pool {
             Some(layout) => layout.vertices as usize,
             None => self.id_bound,
         }

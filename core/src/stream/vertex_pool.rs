@@ -50,7 +50,7 @@ impl Residency<'_, '_> {
         let layout_of_page = self.table(key.file)?.layout(key.page)?;
         let view = PageView::cast(self.page_bytes(key)?, &layout_of_page).ok()?;
         Some(VertexInstall {
-            first: slot.checked_mul(layout.slot_vertices)?,
+            first: layout.slot_place(slot, 0)?,
             vertices: view.vertices,
             colours: (!view.colours.is_empty()).then_some(view.colours),
         })
@@ -88,18 +88,6 @@ impl Residency<'_, '_> {
             + table.vertices_before(page);
         let count = table.entry(page)?.counts[RecordKind::Vertices as usize];
         Some((u32::try_from(start).ok()?, count))
-    }
-
-    /// The device pool index of vertex `index` of the streamed page resident at global
-    /// index `g`.
-    #[inline]
-    pub(crate) fn slot_vertex(&self, g: usize, index: u32) -> Option<u32> {
-        let layout = self.config.vertex_pool?;
-        if index >= layout.slot_vertices {
-            return None;
-        }
-        let slot = self.resident_slot_at(g)?;
-        Some(slot * layout.slot_vertices + index)
     }
 
     /// Reserves room for a new file's root vertices in the device vertex pool, and checks

@@ -44,17 +44,13 @@ impl<'a> StreamMemory<'a> {
     /// hold the file's largest page's vertices, and the page pool has as many slots.
     pub fn new(root: &PagedRoot<'a>, vertex_pool_bytes: u64) -> Result<Self, String> {
         let (table, pinned) = (root.table(), root.paged().root_pages);
-        let (layout, slots) = VertexPoolLayout::for_bytes(
-            vertex_pool_bytes,
-            table.most_vertices_from(pinned),
-            table.vertices_before(pinned),
-        )
-        .ok_or_else(|| {
-            format!(
-                "a vertex pool of {} MiB holds not even the root and one page",
-                vertex_pool_bytes >> 20
-            )
-        })?;
+        let (layout, slots) = VertexPoolLayout::for_file(vertex_pool_bytes, &table, pinned)
+            .ok_or_else(|| {
+                format!(
+                    "a vertex pool of {} MiB holds not even the root and one page",
+                    vertex_pool_bytes >> 20
+                )
+            })?;
         let slot_bytes = root.paged().largest_page.next_multiple_of(64);
         let pool_bytes = u64::from(slots) * u64::from(slot_bytes);
         let config =
